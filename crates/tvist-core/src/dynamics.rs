@@ -1,0 +1,82 @@
+//! Dynamics providers: where a time-varying shaper gets its modes from each cycle.
+
+use crate::error::{Error, Status};
+use crate::shaper::Mode;
+
+/// Supplies the modes `(ω_n, ζ)` to shape for, given the configuration `q` (the previous
+/// final shaped output, `q**_{n−1}`).
+///
+/// `modes` runs in the real-time path: implementations must not allocate, lock or panic.
+/// Invalid modes may be written (the filter then holds its last valid mode); a provider may
+/// also report its own status bits.
+pub trait Dynamics {
+    /// Number of modes (one cascaded filter each), fixed for the provider's lifetime.
+    fn n_modes(&self) -> usize;
+
+    /// Writes `n_modes()` modes for configuration `q` into `out`.
+    fn modes(&mut self, q: &[f64], out: &mut [Mode]) -> Status;
+
+    /// For sizing delay lines: the slowest mode `index` can be (lowest `ω_n`, with the highest
+    /// `ζ` it can take), or `None` if unknown.
+    fn slowest_mode(&self, index: usize) -> Option<Mode>;
+
+    /// The number of joints the provider expects in `q`, if it cares.
+    fn n_dof(&self) -> Option<usize> {
+        None
+    }
+}
+
+/// Fixed modes, independent of the configuration (time-invariant multi-mode shaping).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConstantModes {
+    modes: Vec<Mode>,
+}
+
+impl ConstantModes {
+    /// Validates every mode (finite, `ω_n > 0`, `0 <= ζ < 1`); at least one is required.
+    pub fn new(modes: Vec<Mode>) -> Result<ConstantModes, Error> {
+        if modes.is_empty() {
+            return Err(Error::InvalidParameter("at least one mode is required".into()));
+        }
+        for (i, m) in modes.iter().enumerate() {
+            m.validate(i)?;
+        }
+        Ok(ConstantModes { modes })
+    }
+
+    pub fn modes_list(&self) -> &[Mode] {
+        &self.modes
+    }
+}
+
+impl Dynamics for ConstantModes {
+    fn n_modes(&self) -> usize {
+        self.modes.len()
+    }
+
+    fn modes(&mut self, _q: &[f64], out: &mut [Mode]) -> Status {
+        for (o, m) in out.iter_mut().zip(&self.modes) {
+            *o = *m;
+        }
+        Status::OK
+    }
+
+    fn slowest_mode(&self, index: usize) -> Option<Mode> {
+        self.modes.get(index).copied()
+    }
+}
+
+impl<D: Dynamics + ?Sized> Dynamics for Box<D> {
+    fn n_modes(&self) -> usize {
+        (**self).n_modes()
+    }
+    fn modes(&mut self, q: &[f64], out: &mut [Mode]) -> Status {
+        (**self).modes(q, out)
+    }
+    fn slowest_mode(&self, index: usize) -> Option<Mode> {
+        (**self).slowest_mode(index)
+    }
+    fn n_dof(&self) -> Option<usize> {
+        (**self).n_dof()
+    }
+}

@@ -1,0 +1,221 @@
+//! Multi-mode FD-TVIST (Fig. 5): a cascade of [`ModeFilter`]s, one per mode, all channels each.
+//!
+//! Every cycle the provider is asked for all modes at `q**_{n−1}`, the *previous final output*
+//! of the cascade (it stands in for where the robot is), and filter `m` uses mode `m`. Chaining
+//! filters that each update from their own input would be wrong.
+
+use crate::delay_line::Interpolation;
+use crate::dynamics::Dynamics;
+use crate::error::{Error, Status};
+use crate::shaper::{Mode, ShaperKind};
+use crate::tvist::ModeFilter;
+
+/// Default delay-line safety factor over the largest expected delay.
+pub const DEFAULT_SAFETY_FACTOR: f64 = 1.5;
+
+/// Setup of a [`TvShaper`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct TvShaperConfig {
+    /// Control period, s.
+    pub dt_s: f64,
+    /// Number of joint channels.
+    pub n_dof: usize,
+    pub shaper: ShaperKind,
+    pub interp: Interpolation,
+    /// Largest delay any single mode filter must hold, s. `None`: derived from the provider's
+    /// slowest modes times `safety_factor`.
+    pub max_delay_s: Option<f64>,
+    /// Multiplies the provider-derived delay bound (ignored when `max_delay_s` is set).
+    pub safety_factor: f64,
+}
+
+impl TvShaperConfig {
+    pub fn new(dt_s: f64, n_dof: usize, shaper: ShaperKind) -> Self {
+        TvShaperConfig {
+            dt_s,
+            n_dof,
+            shaper,
+            interp: Interpolation::Linear,
+            max_delay_s: None,
+            safety_factor: DEFAULT_SAFETY_FACTOR,
+        }
+    }
+}
+
+/// The multi-mode time-varying input shaper: streaming (`step`) with a fixed memory footprint.
+#[derive(Debug)]
+pub struct TvShaper<D: Dynamics> {
+    dynamics: D,
+    filters: Vec<ModeFilter>,
+    /// Scratch for the provider's modes, one per filter.
+    modes: Vec<Mode>,
+    /// Last valid input sample (held when a non-finite sample arrives).
+    input: Vec<f64>,
+    /// `q**_{n−1}`: the previous final output.
+    previous_output: Vec<f64>,
+    started: bool,
+    n_dof: usize,
+    dt_s: f64,
+}
+
+impl<D: Dynamics> TvShaper<D> {
+    /// Validates the configuration and allocates all state.
+    pub fn new(dynamics: D, config: &TvShaperConfig) -> Result<TvShaper<D>, Error> {
+        let TvShaperConfig { dt_s, n_dof, shaper, interp, max_delay_s, safety_factor } = *config;
+        if !(dt_s.is_finite() && dt_s > 0.0) {
+            return Err(Error::InvalidParameter(format!("dt_s = {dt_s} must be finite and > 0")));
+        }
+        if n_dof == 0 {
+            return Err(Error::InvalidParameter("n_dof must be at least 1".into()));
+        }
+        if let Some(expected) = dynamics.n_dof() {
+            if expected != n_dof {
+                return Err(Error::DimensionMismatch {
+                    what: "n_dof of the dynamics provider",
+                    expected,
+                    got: n_dof,
+                });
+            }
+        }
+        if !(safety_factor.is_finite() && safety_factor >= 1.0) {
+            return Err(Error::InvalidParameter(format!(
+                "safety_factor = {safety_factor} must be >= 1"
+            )));
+        }
+        let n_modes = dynamics.n_modes();
+        let mut filters = Vec::with_capacity(n_modes);
+        for m in 0..n_modes {
+            let max_delay = match max_delay_s {
+                Some(d) => d,
+                None => {
+                    let slowest = dynamics.slowest_mode(m).ok_or(Error::UnknownDelayBound)?;
+                    slowest.validate(m)?;
+                    safety_factor * shaper.design(slowest).duration_s()
+                }
+            };
+            filters.push(ModeFilter::new(shaper, n_dof, dt_s, max_delay, interp)?);
+        }
+        Ok(TvShaper {
+            dynamics,
+            filters,
+            modes: vec![Mode::new(f64::NAN, f64::NAN); n_modes],
+            input: vec![0.0; n_dof],
+            previous_output: vec![0.0; n_dof],
+            started: false,
+            n_dof,
+            dt_s,
+        })
+    }
+
+    /// Puts the shaper at rest at `q0` (history and previous output equal `q0`).
+    /// Non-finite entries of `q0` are taken as 0. Modes are re-read on the next step.
+    pub fn reset(&mut self, q0: &[f64]) {
+        for (dst, &src) in self.input.iter_mut().zip(q0) {
+            *dst = if src.is_finite() { src } else { 0.0 };
+        }
+        self.previous_output.copy_from_slice(&self.input);
+        for f in &mut self.filters {
+            f.reset(&self.input);
+            f.forget_mode();
+        }
+        self.started = true;
+    }
+
+    /// Forgets all history: the next `step` starts at rest on its input.
+    pub fn clear(&mut self) {
+        self.started = false;
+        for f in &mut self.filters {
+            f.forget_mode();
+        }
+    }
+
+    /// One control cycle: shapes `input` (length `n_dof`) into `output` (length `n_dof`).
+    ///
+    /// Never allocates or panics. Non-finite input values hold the last valid sample
+    /// ([`Status::INPUT_HELD`]); on a length mismatch nothing is computed and
+    /// [`Status::BAD_LENGTH`] is returned.
+    pub fn step(&mut self, input: &[f64], output: &mut [f64]) -> Status {
+        if input.len() != self.n_dof || output.len() != self.n_dof {
+            return Status::BAD_LENGTH;
+        }
+        let mut status = Status::OK;
+        if input.iter().all(|v| v.is_finite()) {
+            self.input.copy_from_slice(input);
+        } else {
+            status |= Status::INPUT_HELD;
+        }
+        if !self.started {
+            // At rest on the first sample (zeros if that sample was non-finite).
+            self.start_at_input();
+        }
+        status |= self.dynamics.modes(&self.previous_output, &mut self.modes);
+        for i in 0..self.filters.len() {
+            let (done, rest) = self.filters.split_at_mut(i);
+            let src: &[f64] = match done.last() {
+                Some(prev) => prev.output(),
+                None => &self.input,
+            };
+            if let (Some(filter), Some(&mode)) = (rest.first_mut(), self.modes.get(i)) {
+                status |= filter.step(src, mode);
+            }
+        }
+        let last: &[f64] = match self.filters.last() {
+            Some(f) => f.output(),
+            None => &self.input,
+        };
+        output.copy_from_slice(last);
+        self.previous_output.copy_from_slice(last);
+        status
+    }
+
+    fn start_at_input(&mut self) {
+        self.previous_output.copy_from_slice(&self.input);
+        for f in &mut self.filters {
+            f.reset(&self.input);
+        }
+        self.started = true;
+    }
+
+    /// Shapes a block of samples in `(n_samples, n_dof)` row-major layout, continuing the
+    /// streaming state. Returns the union of all step statuses.
+    pub fn shape_into(&mut self, input: &[f64], output: &mut [f64]) -> Status {
+        if input.len() != output.len() || input.len() % self.n_dof != 0 {
+            return Status::BAD_LENGTH;
+        }
+        let mut status = Status::OK;
+        for (x, y) in input.chunks_exact(self.n_dof).zip(output.chunks_exact_mut(self.n_dof)) {
+            status |= self.step(x, y);
+        }
+        status
+    }
+
+    /// Current total delay of the cascade (sum of the filters' last impulse times), s.
+    pub fn delay_s(&self) -> f64 {
+        self.filters.iter().map(ModeFilter::delay_s).sum()
+    }
+
+    /// The modes used in the latest cycle, as returned by the provider (possibly invalid).
+    pub fn current_modes(&self) -> &[Mode] {
+        &self.modes
+    }
+
+    pub fn filters(&self) -> &[ModeFilter] {
+        &self.filters
+    }
+
+    pub fn dynamics(&self) -> &D {
+        &self.dynamics
+    }
+
+    pub fn dynamics_mut(&mut self) -> &mut D {
+        &mut self.dynamics
+    }
+
+    pub fn n_dof(&self) -> usize {
+        self.n_dof
+    }
+
+    pub fn dt_s(&self) -> f64 {
+        self.dt_s
+    }
+}

@@ -1,0 +1,393 @@
+//! The shaper library: impulse sequences as data.
+//!
+//! Every sequence is normalized to `Σ A_i = 1` (so the final position is kept) with
+//! non-decreasing times in seconds starting at `t_0 = 0`. Formulas:
+//! - ZV / ZVD / ZVDD: closed forms, e.g. ZV `A = [1, K]/(1+K)`, `t = [0, π/ω_d]`,
+//!   `K = exp(−ζπ/√(1−ζ²))`.
+//! - MZV: three impulses at `[0, 3/8, 3/4]·T_d` with the damped amplitudes of the standard
+//!   modified-ZV form.
+//! - EI, 2-hump EI, 3-hump EI: the standard polynomial-in-ζ approximations (the same ones
+//!   3D-printer firmware uses); EI's vibration tolerance is a parameter (default 5 %), the
+//!   2- and 3-hump forms are tabulated for 5 %.
+//!
+//! [`ShaperKind::design`] is allocation-free and used every control cycle; [`Impulses`] is the
+//! heap-backed set used offline (custom sets, convolution, analysis).
+
+use crate::error::Error;
+use core::f64::consts::PI;
+
+/// The largest impulse count of a registry shaper (3-hump EI has five).
+pub const MAX_IMPULSES: usize = 5;
+
+/// Registry names, in the order documented to users.
+pub const SHAPER_NAMES: [&str; 7] = ["zv", "zvd", "zvdd", "mzv", "ei", "2hump_ei", "3hump_ei"];
+
+/// Default vibration tolerance of the EI shaper (5 %).
+pub const DEFAULT_EI_TOLERANCE: f64 = 0.05;
+
+/// A named shaper family; `design` turns it into impulses for one mode.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ShaperKind {
+    Zv,
+    Zvd,
+    Zvdd,
+    Mzv,
+    /// Extra-insensitive shaper with vibration tolerance `v_tol` (fraction, e.g. 0.05).
+    Ei { v_tol: f64 },
+    Ei2Hump,
+    Ei3Hump,
+}
+
+/// A mode of vibration: undamped natural frequency (rad/s) and damping ratio.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Mode {
+    pub wn_rad_s: f64,
+    pub zeta: f64,
+}
+
+impl Mode {
+    pub const fn new(wn_rad_s: f64, zeta: f64) -> Self {
+        Self { wn_rad_s, zeta }
+    }
+
+    /// True if `wn` is finite and positive and `0 <= zeta < 1` (an underdamped mode).
+    #[inline]
+    pub fn is_valid(&self) -> bool {
+        self.wn_rad_s.is_finite() && self.wn_rad_s > 0.0 && self.zeta >= 0.0 && self.zeta < 1.0
+    }
+
+    /// Damped natural frequency `ω_d = ω_n √(1−ζ²)` in rad/s.
+    #[inline]
+    pub fn wd_rad_s(&self) -> f64 {
+        self.wn_rad_s * (1.0 - self.zeta * self.zeta).sqrt()
+    }
+
+    /// Checks validity, naming the mode by `index` in the error.
+    pub fn validate(&self, index: usize) -> Result<(), Error> {
+        if self.is_valid() {
+            Ok(())
+        } else {
+            Err(Error::InvalidMode { index, wn_rad_s: self.wn_rad_s, zeta: self.zeta })
+        }
+    }
+}
+
+/// A fixed-capacity impulse sequence (no heap), as produced each cycle by [`ShaperKind::design`].
+///
+/// Invariant: `len <= MAX_IMPULSES`; entries past `len` are zero.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImpulseArray {
+    len: usize,
+    amplitudes: [f64; MAX_IMPULSES],
+    times_s: [f64; MAX_IMPULSES],
+}
+
+impl ImpulseArray {
+    /// The identity sequence: one unit impulse at `t = 0` (no shaping).
+    pub const IDENTITY: ImpulseArray = ImpulseArray {
+        len: 1,
+        amplitudes: [1.0, 0.0, 0.0, 0.0, 0.0],
+        times_s: [0.0; MAX_IMPULSES],
+    };
+
+    /// Builds a sequence from raw (unnormalized) amplitudes and times; normalizes `Σ A = 1`.
+    /// `raw_a` and `raw_t` have equal length `<= MAX_IMPULSES` by construction at every call site.
+    fn normalized(raw_a: &[f64], raw_t: &[f64]) -> ImpulseArray {
+        let mut out = ImpulseArray { len: 0, amplitudes: [0.0; MAX_IMPULSES], times_s: [0.0; MAX_IMPULSES] };
+        let sum: f64 = raw_a.iter().sum();
+        for ((a, t), (oa, ot)) in raw_a
+            .iter()
+            .zip(raw_t)
+            .zip(out.amplitudes.iter_mut().zip(out.times_s.iter_mut()))
+        {
+            *oa = a / sum;
+            *ot = *t;
+            out.len += 1;
+        }
+        out
+    }
+
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    #[inline]
+    pub fn amplitudes(&self) -> &[f64] {
+        &self.amplitudes[..self.len]
+    }
+
+    #[inline]
+    pub fn times_s(&self) -> &[f64] {
+        &self.times_s[..self.len]
+    }
+
+    /// Time of the last impulse: the delay this sequence adds, in seconds.
+    #[inline]
+    pub fn duration_s(&self) -> f64 {
+        self.times_s().last().copied().unwrap_or(0.0)
+    }
+}
+
+/// Evaluates `Σ_k c[k] ζ^k` (Horner) for the tabulated EI expansions.
+#[inline]
+fn poly(c: &[f64; 4], zeta: f64) -> f64 {
+    ((c[3] * zeta + c[2]) * zeta + c[1]) * zeta + c[0]
+}
+
+// Expansion coefficients (times in undamped periods, amplitudes unnormalized) of the 5 %
+// 2-hump and 3-hump EI shapers, as polynomials in ζ up to ζ³.
+const EI2_T: [[f64; 4]; 4] = [
+    [0.0, 0.0, 0.0, 0.0],
+    [0.49890, 0.16270, -0.54262, 6.16180],
+    [0.99748, 0.18382, -1.58270, 8.17120],
+    [1.49920, -0.09297, -0.28338, 1.85710],
+];
+const EI2_A: [[f64; 4]; 4] = [
+    [0.16054, 0.76699, 2.26560, -1.22750],
+    [0.33911, 0.45081, -2.58080, 1.73650],
+    [0.34089, -0.61533, -0.68765, 0.42261],
+    [0.15997, -0.60246, 1.00280, -0.93145],
+];
+const EI3_T: [[f64; 4]; 5] = [
+    [0.0, 0.0, 0.0, 0.0],
+    [0.49974, 0.23834, 0.44559, 12.4720],
+    [0.99849, 0.29808, -2.36460, 23.3990],
+    [1.49870, 0.10306, -2.01390, 17.0320],
+    [1.99960, -0.28231, 0.61536, 5.40450],
+];
+const EI3_A: [[f64; 4]; 5] = [
+    [0.11275, 0.76632, 3.29160, -1.44380],
+    [0.23698, 0.61164, -2.57850, 4.85220],
+    [0.30008, -0.19062, -2.14560, 0.13744],
+    [0.23775, -0.73297, 0.46885, -2.08650],
+    [0.11244, -0.45439, 0.96382, -1.46000],
+];
+
+impl ShaperKind {
+    /// Looks a shaper up by registry name. `ei_tolerance` applies to `"ei"` only
+    /// (`None` = 5 %); it must lie in `(0, 0.2]`, the range of the polynomial fit.
+    pub fn from_name(name: &str, ei_tolerance: Option<f64>) -> Result<ShaperKind, Error> {
+        let kind = match name {
+            "zv" => ShaperKind::Zv,
+            "zvd" => ShaperKind::Zvd,
+            "zvdd" => ShaperKind::Zvdd,
+            "mzv" => ShaperKind::Mzv,
+            "ei" => {
+                let v_tol = ei_tolerance.unwrap_or(DEFAULT_EI_TOLERANCE);
+                if !(v_tol > 0.0 && v_tol <= 0.2) {
+                    return Err(Error::InvalidParameter(format!(
+                        "EI vibration tolerance {v_tol} outside (0, 0.2]"
+                    )));
+                }
+                ShaperKind::Ei { v_tol }
+            }
+            "2hump_ei" => ShaperKind::Ei2Hump,
+            "3hump_ei" => ShaperKind::Ei3Hump,
+            other => return Err(Error::UnknownShaper(other.to_string())),
+        };
+        if ei_tolerance.is_some() && !matches!(kind, ShaperKind::Ei { .. }) {
+            return Err(Error::InvalidParameter(format!(
+                "the vibration tolerance option applies to \"ei\" only, not {name:?}"
+            )));
+        }
+        Ok(kind)
+    }
+
+    /// The registry name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            ShaperKind::Zv => "zv",
+            ShaperKind::Zvd => "zvd",
+            ShaperKind::Zvdd => "zvdd",
+            ShaperKind::Mzv => "mzv",
+            ShaperKind::Ei { .. } => "ei",
+            ShaperKind::Ei2Hump => "2hump_ei",
+            ShaperKind::Ei3Hump => "3hump_ei",
+        }
+    }
+
+    /// Largest damping ratio for which the family's published approximation is meant.
+    pub fn max_zeta(&self) -> f64 {
+        match self {
+            ShaperKind::Ei { .. } => 0.4,
+            ShaperKind::Ei2Hump => 0.3,
+            ShaperKind::Ei3Hump => 0.2,
+            _ => 0.99,
+        }
+    }
+
+    /// The impulse sequence for `mode`. Allocation-free; the caller guarantees
+    /// `mode.is_valid()` (checked at setup, or held by the time-varying filter).
+    pub fn design(&self, mode: Mode) -> ImpulseArray {
+        let zeta = mode.zeta;
+        let df = (1.0 - zeta * zeta).sqrt();
+        let td = 2.0 * PI / (mode.wn_rad_s * df); // damped period, s
+        let k = (-zeta * PI / df).exp();
+        match *self {
+            ShaperKind::Zv => ImpulseArray::normalized(&[1.0, k], &[0.0, 0.5 * td]),
+            ShaperKind::Zvd => {
+                ImpulseArray::normalized(&[1.0, 2.0 * k, k * k], &[0.0, 0.5 * td, td])
+            }
+            ShaperKind::Zvdd => ImpulseArray::normalized(
+                &[1.0, 3.0 * k, 3.0 * k * k, k * k * k],
+                &[0.0, 0.5 * td, td, 1.5 * td],
+            ),
+            ShaperKind::Mzv => {
+                let km = (-0.75 * zeta * PI / df).exp();
+                let a1 = 1.0 - core::f64::consts::FRAC_1_SQRT_2;
+                let a2 = (core::f64::consts::SQRT_2 - 1.0) * km;
+                let a3 = a1 * km * km;
+                ImpulseArray::normalized(&[a1, a2, a3], &[0.0, 0.375 * td, 0.75 * td])
+            }
+            ShaperKind::Ei { v_tol: v } => {
+                let z = zeta;
+                let a1 = (0.24968 + 0.24961 * v)
+                    + ((0.80008 + 1.23328 * v) + (0.49599 + 3.17316 * v) * z) * z;
+                let a3 = (0.25149 + 0.21474 * v)
+                    + ((-0.83249 + 1.41498 * v) + (0.85181 - 4.90094 * v) * z) * z;
+                let a2 = 1.0 - a1 - a3;
+                let t2 = 0.4999
+                    + (((0.46159 + 8.57843 * v) * v)
+                        + (((4.26169 - 108.644 * v) * v) + ((1.75601 + 336.989 * v) * v) * z)
+                            * z)
+                        * z;
+                ImpulseArray::normalized(&[a1, a2, a3], &[0.0, t2 * td, td])
+            }
+            ShaperKind::Ei2Hump => expansion(&EI2_A, &EI2_T, mode),
+            ShaperKind::Ei3Hump => expansion(&EI3_A, &EI3_T, mode),
+        }
+    }
+}
+
+/// Shaper from ζ-expansion tables; times are in undamped periods `2π/ω_n`.
+fn expansion<const N: usize>(a: &[[f64; 4]; N], t: &[[f64; 4]; N], mode: Mode) -> ImpulseArray {
+    let period = 2.0 * PI / mode.wn_rad_s;
+    let mut raw_a = [0.0; MAX_IMPULSES];
+    let mut raw_t = [0.0; MAX_IMPULSES];
+    for (i, (ca, ct)) in a.iter().zip(t).enumerate().take(MAX_IMPULSES) {
+        raw_a[i] = poly(ca, mode.zeta);
+        raw_t[i] = poly(ct, mode.zeta) * period;
+    }
+    let n = N.min(MAX_IMPULSES);
+    ImpulseArray::normalized(&raw_a[..n], &raw_t[..n])
+}
+
+/// A heap-backed, validated impulse sequence (custom sets, convolutions, analysis).
+///
+/// Invariants: non-empty, all values finite, times non-decreasing and `>= 0`, `Σ A = 1`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Impulses {
+    amplitudes: Vec<f64>,
+    times_s: Vec<f64>,
+}
+
+impl Impulses {
+    /// Validates and normalizes a custom set. Rejects empty or mismatched inputs,
+    /// non-finite values, negative or decreasing times, and `Σ A = 0`.
+    pub fn new(amplitudes: Vec<f64>, times_s: Vec<f64>) -> Result<Impulses, Error> {
+        if amplitudes.is_empty() {
+            return Err(Error::InvalidImpulses("the set is empty".into()));
+        }
+        if amplitudes.len() != times_s.len() {
+            return Err(Error::InvalidImpulses(format!(
+                "{} amplitudes but {} times",
+                amplitudes.len(),
+                times_s.len()
+            )));
+        }
+        if let Some(i) = amplitudes.iter().chain(&times_s).position(|v| !v.is_finite()) {
+            let (what, idx) = if i < amplitudes.len() {
+                ("amplitude", i)
+            } else {
+                ("time", i - amplitudes.len())
+            };
+            return Err(Error::InvalidImpulses(format!("{what} {idx} is not finite")));
+        }
+        if times_s[0] < 0.0 {
+            return Err(Error::InvalidImpulses(format!("time 0 is negative ({})", times_s[0])));
+        }
+        if let Some(i) = times_s.windows(2).position(|w| w[1] < w[0]) {
+            return Err(Error::InvalidImpulses(format!(
+                "times must be non-decreasing: time {} ({}) < time {} ({})",
+                i + 1,
+                times_s[i + 1],
+                i,
+                times_s[i]
+            )));
+        }
+        let sum: f64 = amplitudes.iter().sum();
+        if sum.abs() < 1e-12 {
+            return Err(Error::InvalidImpulses("amplitudes sum to zero".into()));
+        }
+        let amplitudes = amplitudes.into_iter().map(|a| a / sum).collect();
+        Ok(Impulses { amplitudes, times_s })
+    }
+
+    /// The registry shaper `kind` designed for `mode` (validated).
+    pub fn design(kind: ShaperKind, mode: Mode) -> Result<Impulses, Error> {
+        mode.validate(0)?;
+        Ok(Impulses::from(&kind.design(mode)))
+    }
+
+    pub fn amplitudes(&self) -> &[f64] {
+        &self.amplitudes
+    }
+
+    pub fn times_s(&self) -> &[f64] {
+        &self.times_s
+    }
+
+    pub fn len(&self) -> usize {
+        self.amplitudes.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.amplitudes.is_empty()
+    }
+
+    /// The delay the set adds: its last impulse time, in seconds.
+    pub fn duration_s(&self) -> f64 {
+        self.times_s.last().copied().unwrap_or(0.0)
+    }
+
+    /// Convolution of sequences (eq. 53): all pairwise products, times added, sorted by time,
+    /// coincident times (within 1e-12 s) merged.
+    pub fn convolve(sets: &[&Impulses]) -> Result<Impulses, Error> {
+        let Some((first, rest)) = sets.split_first() else {
+            return Err(Error::InvalidImpulses("nothing to convolve".into()));
+        };
+        let mut pairs: Vec<(f64, f64)> =
+            first.times_s.iter().copied().zip(first.amplitudes.iter().copied()).collect();
+        for set in rest {
+            let mut next = Vec::with_capacity(pairs.len() * set.len());
+            for &(t0, a0) in &pairs {
+                for (&t1, &a1) in set.times_s.iter().zip(&set.amplitudes) {
+                    next.push((t0 + t1, a0 * a1));
+                }
+            }
+            next.sort_by(|x, y| x.0.total_cmp(&y.0));
+            let mut merged: Vec<(f64, f64)> = Vec::with_capacity(next.len());
+            for (t, a) in next {
+                match merged.last_mut() {
+                    Some(last) if (t - last.0).abs() <= 1e-12 => last.1 += a,
+                    _ => merged.push((t, a)),
+                }
+            }
+            pairs = merged;
+        }
+        let (times, amps) = pairs.into_iter().unzip();
+        Impulses::new(amps, times)
+    }
+}
+
+impl From<&ImpulseArray> for Impulses {
+    fn from(a: &ImpulseArray) -> Self {
+        Impulses { amplitudes: a.amplitudes().to_vec(), times_s: a.times_s().to_vec() }
+    }
+}

@@ -1,0 +1,463 @@
+//! Thin PyO3 bindings of `tvist-core`: numpy in/out, errors mapped to `ValueError`.
+//! No algorithm lives here.
+
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use tvist_core as core;
+use tvist_core::{Dynamics, Mode, Status};
+
+fn value_error(e: core::Error) -> PyErr {
+    PyValueError::new_err(e.to_string())
+}
+
+fn modes_from_pairs(pairs: Vec<(f64, f64)>) -> Vec<Mode> {
+    pairs.into_iter().map(|(wn, z)| Mode::new(wn, z)).collect()
+}
+
+/// A validated impulse sequence, normalized to sum(amplitudes) == 1.
+#[pyclass(name = "Impulses", module = "tvist._core", frozen)]
+#[derive(Clone)]
+struct PyImpulses {
+    inner: core::Impulses,
+}
+
+#[pymethods]
+impl PyImpulses {
+    #[new]
+    fn new(amplitudes: Vec<f64>, times_s: Vec<f64>) -> PyResult<Self> {
+        Ok(PyImpulses { inner: core::Impulses::new(amplitudes, times_s).map_err(value_error)? })
+    }
+
+    /// Amplitudes (sum to 1).
+    #[getter]
+    fn amplitudes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.inner.amplitudes().to_vec().into_pyarray(py)
+    }
+
+    /// Impulse times in seconds, non-decreasing, first one >= 0.
+    #[getter]
+    fn times_s<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.inner.times_s().to_vec().into_pyarray(py)
+    }
+
+    /// The delay the sequence adds (its last impulse time), s.
+    #[getter]
+    fn duration_s(&self) -> f64 {
+        self.inner.duration_s()
+    }
+
+    fn __len__(&self) -> usize {
+        self.inner.len()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Impulses(amplitudes={:?}, times_s={:?})",
+            self.inner.amplitudes(),
+            self.inner.times_s()
+        )
+    }
+}
+
+/// Designs registry shaper `name` for mode (wn_rad_s, zeta).
+#[pyfunction]
+#[pyo3(signature = (name, wn_rad_s, zeta=0.0, tolerance=None))]
+fn design_shaper(name: &str, wn_rad_s: f64, zeta: f64, tolerance: Option<f64>) -> PyResult<PyImpulses> {
+    let kind = core::ShaperKind::from_name(name, tolerance).map_err(value_error)?;
+    let inner = core::Impulses::design(kind, Mode::new(wn_rad_s, zeta)).map_err(value_error)?;
+    Ok(PyImpulses { inner })
+}
+
+/// Convolution of impulse sequences (multi-mode shaper, eq. 53).
+#[pyfunction]
+#[pyo3(signature = (*sets))]
+fn convolve(sets: Vec<PyRef<'_, PyImpulses>>) -> PyResult<PyImpulses> {
+    let refs: Vec<&core::Impulses> = sets.iter().map(|s| &s.inner).collect();
+    Ok(PyImpulses { inner: core::Impulses::convolve(&refs).map_err(value_error)? })
+}
+
+/// Residual-vibration fraction of `impulses` for flat arrays of modes (same length).
+#[pyfunction]
+fn prv_flat<'py>(
+    py: Python<'py>,
+    impulses: PyRef<'_, PyImpulses>,
+    wn_rad_s: PyReadonlyArray1<'py, f64>,
+    zeta: PyReadonlyArray1<'py, f64>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let (wn, z) = (wn_rad_s.as_slice()?, zeta.as_slice()?);
+    if wn.len() != z.len() {
+        return Err(PyValueError::new_err("wn_rad_s and zeta must have the same length"));
+    }
+    let (a, t) = (impulses.inner.amplitudes(), impulses.inner.times_s());
+    let out: Vec<f64> = wn.iter().zip(z).map(|(&w, &zz)| core::prv(a, t, w, zz)).collect();
+    Ok(out.into_pyarray(py))
+}
+
+/// Constant modes [(wn_rad_s, zeta), ...]: time-invariant multi-mode shaping.
+#[pyclass(name = "ConstantModes", module = "tvist._core", frozen)]
+#[derive(Clone)]
+struct PyConstantModes {
+    inner: core::ConstantModes,
+}
+
+#[pymethods]
+impl PyConstantModes {
+    #[new]
+    fn new(modes: Vec<(f64, f64)>) -> PyResult<Self> {
+        Ok(PyConstantModes {
+            inner: core::ConstantModes::new(modes_from_pairs(modes)).map_err(value_error)?,
+        })
+    }
+
+    /// The modes as [(wn_rad_s, zeta), ...].
+    #[getter]
+    fn modes(&self) -> Vec<(f64, f64)> {
+        self.inner.modes_list().iter().map(|m| (m.wn_rad_s, m.zeta)).collect()
+    }
+
+    fn __repr__(&self) -> String {
+        format!("ConstantModes({:?})", self.modes())
+    }
+}
+
+/// A Python callable `f(q) -> [(wn_rad_s, zeta), ...]` used as a provider (slow research
+/// path: it takes the interpreter lock every cycle). A raised exception is kept and re-raised
+/// after the step; invalid modes are held like any provider's.
+struct CallableModes {
+    func: Py<PyAny>,
+    n_modes: usize,
+    n_dof: usize,
+    error: Option<PyErr>,
+}
+
+impl CallableModes {
+    fn call(&self, py: Python<'_>, q: &[f64], out: &mut [Mode]) -> PyResult<()> {
+        let arg = q.to_vec().into_pyarray(py);
+        let result = self.func.bind(py).call1((arg,))?;
+        let pairs: Vec<(f64, f64)> = result.extract().map_err(|_| {
+            PyTypeError::new_err("the dynamics callable must return a sequence of (wn_rad_s, zeta)")
+        })?;
+        if pairs.len() != out.len() {
+            return Err(PyValueError::new_err(format!(
+                "the dynamics callable returned {} modes, expected {}",
+                pairs.len(),
+                out.len()
+            )));
+        }
+        for (o, (wn, z)) in out.iter_mut().zip(pairs) {
+            *o = Mode::new(wn, z);
+        }
+        Ok(())
+    }
+}
+
+impl Dynamics for CallableModes {
+    fn n_modes(&self) -> usize {
+        self.n_modes
+    }
+
+    fn modes(&mut self, q: &[f64], out: &mut [Mode]) -> Status {
+        let result = Python::attach(|py| self.call(py, q, out));
+        if let Err(e) = result {
+            out.fill(Mode::new(f64::NAN, f64::NAN));
+            if self.error.is_none() {
+                self.error = Some(e);
+            }
+        }
+        Status::OK
+    }
+
+    fn slowest_mode(&self, _index: usize) -> Option<Mode> {
+        None
+    }
+
+    fn n_dof(&self) -> Option<usize> {
+        Some(self.n_dof)
+    }
+}
+
+/// Every provider the Python API accepts.
+enum Provider {
+    Constant(core::ConstantModes),
+    Callable(CallableModes),
+}
+
+impl Dynamics for Provider {
+    fn n_modes(&self) -> usize {
+        match self {
+            Provider::Constant(p) => p.n_modes(),
+            Provider::Callable(p) => p.n_modes(),
+        }
+    }
+    fn modes(&mut self, q: &[f64], out: &mut [Mode]) -> Status {
+        match self {
+            Provider::Constant(p) => p.modes(q, out),
+            Provider::Callable(p) => p.modes(q, out),
+        }
+    }
+    fn slowest_mode(&self, index: usize) -> Option<Mode> {
+        match self {
+            Provider::Constant(p) => p.slowest_mode(index),
+            Provider::Callable(p) => p.slowest_mode(index),
+        }
+    }
+    fn n_dof(&self) -> Option<usize> {
+        match self {
+            Provider::Constant(p) => p.n_dof(),
+            Provider::Callable(p) => p.n_dof(),
+        }
+    }
+}
+
+/// Per-flag counters of the statuses seen since construction.
+#[derive(Default, Clone, Copy)]
+struct StatusCounts {
+    input_held: u64,
+    modes_held: u64,
+    delay_clamped: u64,
+    unshaped: u64,
+}
+
+impl StatusCounts {
+    fn add(&mut self, s: Status) {
+        self.input_held += u64::from(s.contains(Status::INPUT_HELD));
+        self.modes_held += u64::from(s.contains(Status::MODES_HELD));
+        self.delay_clamped += u64::from(s.contains(Status::DELAY_CLAMPED));
+        self.unshaped += u64::from(s.contains(Status::UNSHAPED));
+    }
+}
+
+/// Multi-mode FD-TVIST shaper (streaming and batch).
+#[pyclass(name = "TvShaper", module = "tvist._core")]
+struct PyTvShaper {
+    inner: core::TvShaper<Provider>,
+    last_status: Status,
+    counts: StatusCounts,
+}
+
+impl PyTvShaper {
+    fn take_callable_error(&mut self) -> PyResult<()> {
+        if let Provider::Callable(p) = self.inner.dynamics_mut() {
+            if let Some(e) = p.error.take() {
+                return Err(e);
+            }
+        }
+        Ok(())
+    }
+}
+
+#[pymethods]
+impl PyTvShaper {
+    #[new]
+    #[pyo3(signature = (dynamics, dt_s, n_dof, shaper="zv", interp="linear", max_delay_s=None, safety_factor=1.5, tolerance=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        dynamics: &Bound<'_, PyAny>,
+        dt_s: f64,
+        n_dof: usize,
+        shaper: &str,
+        interp: &str,
+        max_delay_s: Option<f64>,
+        safety_factor: f64,
+        tolerance: Option<f64>,
+    ) -> PyResult<Self> {
+        let provider = if let Ok(c) = dynamics.cast::<PyConstantModes>() {
+            Provider::Constant(c.get().inner.clone())
+        } else if dynamics.is_callable() {
+            if max_delay_s.is_none() {
+                return Err(PyValueError::new_err(
+                    "a callable dynamics provider needs max_delay_s (the longest delay of one \
+                     mode filter, s) to size the delay lines",
+                ));
+            }
+            let probe = vec![0.0; n_dof].into_pyarray(py);
+            let pairs: Vec<(f64, f64)> = dynamics.call1((probe,))?.extract().map_err(|_| {
+                PyTypeError::new_err("the dynamics callable must return a sequence of (wn_rad_s, zeta)")
+            })?;
+            if pairs.is_empty() {
+                return Err(PyValueError::new_err("the dynamics callable returned no modes"));
+            }
+            Provider::Callable(CallableModes {
+                func: dynamics.clone().unbind(),
+                n_modes: pairs.len(),
+                n_dof,
+                error: None,
+            })
+        } else {
+            return Err(PyTypeError::new_err(
+                "dynamics must be a tvist provider (ConstantModes, MapDynamics) or a callable f(q) -> [(wn_rad_s, zeta), ...]",
+            ));
+        };
+        let config = core::TvShaperConfig {
+            dt_s,
+            n_dof,
+            shaper: core::ShaperKind::from_name(shaper, tolerance).map_err(value_error)?,
+            interp: core::Interpolation::from_name(interp).map_err(value_error)?,
+            max_delay_s,
+            safety_factor,
+        };
+        let inner = core::TvShaper::new(provider, &config).map_err(value_error)?;
+        Ok(PyTvShaper { inner, last_status: Status::OK, counts: StatusCounts::default() })
+    }
+
+    /// One control cycle: q (n_dof,) -> shaped q (n_dof,).
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        q: PyReadonlyArray1<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let q = q.as_slice()?;
+        if q.len() != self.inner.n_dof() {
+            return Err(PyValueError::new_err(format!(
+                "q has {} values, expected n_dof = {}",
+                q.len(),
+                self.inner.n_dof()
+            )));
+        }
+        let mut out = vec![0.0; q.len()];
+        let status = self.inner.step(q, &mut out);
+        self.last_status = status;
+        self.counts.add(status);
+        self.take_callable_error()?;
+        Ok(out.into_pyarray(py))
+    }
+
+    /// Shapes a (n_samples, n_dof) array, continuing the streaming state. Releases the GIL.
+    fn shape<'py>(
+        &mut self,
+        py: Python<'py>,
+        q: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let shape = q.shape();
+        let (n, d) = (shape[0], shape[1]);
+        if d != self.inner.n_dof() {
+            return Err(PyValueError::new_err(format!(
+                "Q has shape ({n}, {d}); expected (n_samples, {})",
+                self.inner.n_dof()
+            )));
+        }
+        let input: Vec<f64> = match q.as_slice() {
+            Ok(s) => s.to_vec(),
+            Err(_) => q.as_array().iter().copied().collect(),
+        };
+        let mut output = vec![0.0; input.len()];
+        let inner = &mut self.inner;
+        let mut counts = self.counts;
+        let last = py.detach(|| {
+            let mut last = Status::OK;
+            for (x, y) in input.chunks_exact(d).zip(output.chunks_exact_mut(d)) {
+                last = inner.step(x, y);
+                counts.add(last);
+            }
+            last
+        });
+        self.counts = counts;
+        self.last_status = last;
+        self.take_callable_error()?;
+        let arr = numpy::ndarray::Array2::from_shape_vec((n, d), output)
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        Ok(arr.into_pyarray(py))
+    }
+
+    /// Puts the filter at rest at q0, or (None) forgets history so the next sample starts it.
+    #[pyo3(signature = (q0=None))]
+    fn reset(&mut self, q0: Option<PyReadonlyArray1<'_, f64>>) -> PyResult<()> {
+        match q0 {
+            Some(q0) => {
+                let q0 = q0.as_slice()?;
+                if q0.len() != self.inner.n_dof() {
+                    return Err(PyValueError::new_err(format!(
+                        "q0 has {} values, expected n_dof = {}",
+                        q0.len(),
+                        self.inner.n_dof()
+                    )));
+                }
+                if q0.iter().any(|v| !v.is_finite()) {
+                    return Err(PyValueError::new_err("q0 must be finite"));
+                }
+                self.inner.reset(q0);
+            }
+            None => self.inner.clear(),
+        }
+        Ok(())
+    }
+
+    /// Current total delay of the cascade (sum over modes of the last impulse time), s.
+    #[getter]
+    fn delay_s(&self) -> f64 {
+        self.inner.delay_s()
+    }
+
+    /// Modes used in the latest cycle [(wn_rad_s, zeta), ...] (as returned by the provider).
+    #[getter]
+    fn current_modes(&self) -> Vec<(f64, f64)> {
+        self.inner.current_modes().iter().map(|m| (m.wn_rad_s, m.zeta)).collect()
+    }
+
+    /// Status bits of the latest step (see tvist.Status).
+    #[getter]
+    fn last_status(&self) -> i32 {
+        self.last_status.0
+    }
+
+    /// How many steps reported each status flag since construction.
+    #[getter]
+    fn status_counts(&self) -> std::collections::BTreeMap<&'static str, u64> {
+        let c = self.counts;
+        [
+            ("input_held", c.input_held),
+            ("modes_held", c.modes_held),
+            ("delay_clamped", c.delay_clamped),
+            ("unshaped", c.unshaped),
+        ]
+        .into_iter()
+        .collect()
+    }
+
+    /// Longest delay each mode filter can hold, s.
+    #[getter]
+    fn max_delay_s(&self) -> Vec<f64> {
+        self.inner.filters().iter().map(|f| f.max_delay_s()).collect()
+    }
+
+    #[getter]
+    fn n_dof(&self) -> usize {
+        self.inner.n_dof()
+    }
+
+    #[getter]
+    fn dt_s(&self) -> f64 {
+        self.inner.dt_s()
+    }
+
+    #[getter]
+    fn n_modes(&self) -> usize {
+        self.inner.filters().len()
+    }
+}
+
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyImpulses>()?;
+    m.add_class::<PyConstantModes>()?;
+    m.add_class::<PyTvShaper>()?;
+    m.add_function(wrap_pyfunction!(design_shaper, m)?)?;
+    m.add_function(wrap_pyfunction!(convolve, m)?)?;
+    m.add_function(wrap_pyfunction!(prv_flat, m)?)?;
+    m.add("SHAPERS", core::SHAPER_NAMES.to_vec())?;
+    m.add(
+        "STATUS_FLAGS",
+        [
+            ("INPUT_HELD", Status::INPUT_HELD.0),
+            ("MODES_HELD", Status::MODES_HELD.0),
+            ("DELAY_CLAMPED", Status::DELAY_CLAMPED.0),
+            ("UNSHAPED", Status::UNSHAPED.0),
+            ("BAD_LENGTH", Status::BAD_LENGTH.0),
+        ]
+        .into_iter()
+        .collect::<std::collections::BTreeMap<_, _>>(),
+    )?;
+    Ok(())
+}

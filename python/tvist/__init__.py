@@ -1,0 +1,73 @@
+"""tvist: time-varying multi-mode input shaping that stops robot arms from ringing.
+
+Array layout everywhere: ``(n_samples, n_dof)``, time along rows. SI units, radians; the unit
+is in the name (``dt_s``, ``wn_rad_s``, ``zeta``, ``payload_kg``).
+"""
+
+from __future__ import annotations
+
+import enum
+
+import numpy as np
+
+from tvist import _core
+from tvist._core import ConstantModes, Impulses, TvShaper
+
+__all__ = [
+    "SHAPERS",
+    "ConstantModes",
+    "Impulses",
+    "Status",
+    "TvShaper",
+    "convolve",
+    "prv",
+    "shaper",
+]
+
+#: Names of the registry shapers, for :func:`shaper` and ``TvShaper(shaper=...)``.
+SHAPERS: tuple[str, ...] = tuple(_core.SHAPERS)
+
+#: Per-step status flags reported by ``TvShaper.last_status`` (values fixed by the core).
+Status = enum.IntFlag("Status", {"OK": 0, **_core.STATUS_FLAGS})
+
+
+def shaper(
+    name: str, wn_rad_s: float, zeta: float = 0.0, *, tolerance: float | None = None
+) -> Impulses:
+    """Design registry shaper ``name`` for the mode ``(wn_rad_s, zeta)``.
+
+    Parameters
+    ----------
+    name
+        One of :data:`SHAPERS`.
+    wn_rad_s
+        Undamped natural frequency, rad/s (> 0).
+    zeta
+        Damping ratio, ``0 <= zeta < 1``.
+    tolerance
+        EI only: vibration tolerance as a fraction (default 0.05).
+
+    Returns
+    -------
+    Impulses
+        Amplitudes summing to 1 and non-decreasing times in seconds.
+    """
+    return _core.design_shaper(name, float(wn_rad_s), float(zeta), tolerance)
+
+
+def convolve(*impulses: Impulses) -> Impulses:
+    """Convolve impulse sequences (the multi-mode shaper of eq. 53)."""
+    return _core.convolve(*impulses)
+
+
+def prv(impulses: Impulses, wn_rad_s, zeta=0.0):
+    """Percent residual vibration (as a fraction, eqs. 52-55) of ``impulses`` on a mode.
+
+    ``wn_rad_s`` and ``zeta`` broadcast against each other like numpy arrays. Returns a float
+    for scalar inputs, otherwise an array of the broadcast shape. Invalid modes give NaN.
+    """
+    wn, z = np.broadcast_arrays(np.asarray(wn_rad_s, dtype=float), np.asarray(zeta, dtype=float))
+    out = _core.prv_flat(impulses, np.ascontiguousarray(wn).ravel(), np.ascontiguousarray(z).ravel())
+    if wn.ndim == 0:
+        return float(out[0])
+    return out.reshape(wn.shape)
