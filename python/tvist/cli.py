@@ -1,0 +1,42 @@
+"""The ``tvist`` command line. Each subcommand lives in its own ``_cmd_*`` function and is
+registered in ``COMMANDS``; heavy imports happen inside the command that needs them."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from tvist.demo_linear import run_linear_demo
+
+    run_linear_demo(out_dir=args.out, quick=args.quick)
+    return 0
+
+
+def _add_demo(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("demo", help="run the main demo and write a report")
+    p.add_argument("--out", default="out/demo", help="output folder (default out/demo)")
+    p.add_argument("--quick", action="store_true", help="shortened run (used by the tests)")
+    p.set_defaults(func=_cmd_demo)
+
+
+#: (name, adder) pairs; an adder registers one subparser and sets ``func``.
+COMMANDS = [("demo", _add_demo)]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="tvist", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    for _, add in COMMANDS:
+        add(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    return int(args.func(args) or 0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
