@@ -10,18 +10,25 @@ import enum
 
 import numpy as np
 
-from tvist import _core
+from tvist import _core, robots
 from tvist._core import ConstantModes, Impulses, TvShaper
+from tvist.dynmap import DynamicMap, MapDynamics
+from tvist.zero_delay import ZeroDelayResult, zero_delay
 
 __all__ = [
     "SHAPERS",
     "ConstantModes",
+    "DynamicMap",
     "Impulses",
+    "MapDynamics",
     "Status",
     "TvShaper",
+    "ZeroDelayResult",
     "convolve",
     "prv",
+    "robots",
     "shaper",
+    "zero_delay",
 ]
 
 #: Names of the registry shapers, for :func:`shaper` and ``TvShaper(shaper=...)``.

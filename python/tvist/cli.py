@@ -21,8 +21,25 @@ def _add_demo(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_cmd_demo)
 
 
+def _cmd_zero_delay(args: argparse.Namespace) -> int:
+    from tvist.zero_delay_benchmark import run_from_args
+
+    return run_from_args(args)
+
+
+def _add_zero_delay(sub: argparse._SubParsersAction) -> None:
+    from tvist.zero_delay_benchmark import add_arguments
+
+    p = sub.add_parser(
+        "zero-delay",
+        help="benchmark unshaped / IS / ZTDIS / modified ZTDIS on the 2.55 Hz payload",
+    )
+    add_arguments(p)
+    p.set_defaults(func=_cmd_zero_delay)
+
+
 #: (name, adder) pairs; an adder registers one subparser and sets ``func``.
-COMMANDS = [("demo", _add_demo)]
+COMMANDS = [("demo", _add_demo), ("zero-delay", _add_zero_delay)]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -103,7 +103,10 @@ impl DelayLine {
     /// Appends one sample (all channels), overwriting the oldest.
     #[inline]
     pub fn push(&mut self, x: &[f64]) {
-        self.head = (self.head + 1) % self.capacity;
+        self.head += 1;
+        if self.head >= self.capacity {
+            self.head = 0;
+        }
         let start = self.head * self.n_channels;
         if let Some(slot) = self.buf.get_mut(start..start + self.n_channels) {
             for (dst, &src) in slot.iter_mut().zip(x) {
@@ -149,11 +152,16 @@ impl DelayLine {
         clamped
     }
 
-    /// `out += w · sample(age)`; `age < capacity` is guaranteed by the clamping in
-    /// `accumulate`, and the slot index is reduced modulo the capacity regardless.
+    /// `out += w · sample(age)`. `age < capacity` is guaranteed by the clamping in
+    /// `accumulate`; an older age would still give an in-bounds slot (and `get` checks).
     #[inline]
     fn add_sample(&self, age: usize, w: f64, out: &mut [f64]) {
-        let slot = (self.head + self.capacity - age % self.capacity) % self.capacity;
+        debug_assert!(age < self.capacity);
+        let slot = if age <= self.head {
+            self.head - age
+        } else {
+            (self.head + self.capacity).saturating_sub(age)
+        };
         let start = slot * self.n_channels;
         if let Some(s) = self.buf.get(start..start + self.n_channels) {
             for (o, &v) in out.iter_mut().zip(s) {

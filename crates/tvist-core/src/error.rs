@@ -75,6 +75,9 @@ impl Status {
     pub const UNSHAPED: Status = Status(8);
     /// Input or output slice of the wrong length: nothing was computed.
     pub const BAD_LENGTH: Status = Status(16);
+    /// A mode's damping ratio exceeded the range of the shaper's published approximation
+    /// ([`crate::shaper::ShaperKind::max_zeta`]); the shaper was designed at that limit.
+    pub const ZETA_CLAMPED: Status = Status(32);
 
     /// True if every bit of `flag` is set.
     #[inline]

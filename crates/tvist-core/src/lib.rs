@@ -5,6 +5,7 @@
 //! - [`delay_line`]: circular buffer with fractional-delay (Lagrange) reads.
 //! - [`tvist`]: the single-mode time-varying filter (eq. 7).
 //! - [`multimode`]: the multi-mode cascade driven by a [`dynamics::Dynamics`] provider.
+//! - [`ztdis`]: zero-time-delay shaping: time scales and the modified-ZTDIS compensator.
 //!
 //! Conventions: SI units with the unit in the name (`dt_s`, `wn_rad_s`); block data is
 //! row-major `(n_samples, n_dof)`. Setup returns `Result<_, Error>`; per-step calls return a
@@ -12,16 +13,24 @@
 
 pub mod delay_line;
 pub mod dynamics;
+pub mod dynmap;
 pub mod error;
+pub mod map_dynamics;
 pub mod multimode;
 pub mod prv;
+pub mod robot;
 pub mod shaper;
 pub mod tvist;
+pub mod ztdis;
 
 pub use delay_line::{DelayLine, Interpolation};
 pub use dynamics::{ConstantModes, Dynamics};
+pub use dynmap::{DynamicMap, MapCoefficients, ModeMap};
 pub use error::{Error, Status};
+pub use map_dynamics::MapDynamics;
 pub use multimode::{TvShaper, TvShaperConfig};
 pub use prv::prv;
+pub use robot::{DhJoint, RigidBody, Robot};
 pub use shaper::{ImpulseArray, Impulses, Mode, ShaperKind, SHAPER_NAMES};
 pub use tvist::ModeFilter;
+pub use ztdis::{Compensator, Discretization};

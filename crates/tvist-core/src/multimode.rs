@@ -83,13 +83,29 @@ impl<D: Dynamics> TvShaper<D> {
             )));
         }
         let n_modes = dynamics.n_modes();
+        if n_modes == 0 {
+            return Err(Error::InvalidParameter(
+                "the dynamics provider has no modes; at least one is required".into(),
+            ));
+        }
         let mut filters = Vec::with_capacity(n_modes);
         for m in 0..n_modes {
+            if let Some(slowest) = dynamics.slowest_mode(m) {
+                slowest.validate(m)?;
+                if slowest.zeta > shaper.max_zeta() {
+                    return Err(Error::InvalidParameter(format!(
+                        "mode {m} has zeta = {} beyond the range of the {:?} shaper's \
+                         approximation (zeta <= {})",
+                        slowest.zeta,
+                        shaper.name(),
+                        shaper.max_zeta()
+                    )));
+                }
+            }
             let max_delay = match max_delay_s {
                 Some(d) => d,
                 None => {
                     let slowest = dynamics.slowest_mode(m).ok_or(Error::UnknownDelayBound)?;
-                    slowest.validate(m)?;
                     safety_factor * shaper.design(slowest).duration_s()
                 }
             };

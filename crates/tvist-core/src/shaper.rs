@@ -50,10 +50,11 @@ impl Mode {
         Self { wn_rad_s, zeta }
     }
 
-    /// True if `wn` is finite and positive and `0 <= zeta < 1` (an underdamped mode).
+    /// True if `wn` is a positive normal float (finite, not subnormal, so `2π/ω_n` is finite)
+    /// and `0 <= zeta < 1` (an underdamped mode).
     #[inline]
     pub fn is_valid(&self) -> bool {
-        self.wn_rad_s.is_finite() && self.wn_rad_s > 0.0 && self.zeta >= 0.0 && self.zeta < 1.0
+        self.wn_rad_s.is_normal() && self.wn_rad_s > 0.0 && self.zeta >= 0.0 && self.zeta < 1.0
     }
 
     /// Damped natural frequency `ω_d = ω_n √(1−ζ²)` in rad/s.
@@ -212,13 +213,29 @@ impl ShaperKind {
         }
     }
 
-    /// Largest damping ratio for which the family's published approximation is meant.
+    /// Largest damping ratio the family's published approximation covers. The closed forms
+    /// (ZV, ZVD, ZVDD, MZV) are exact for every underdamped mode and return 1 (exclusive).
+    /// Beyond the limit the EI polynomials give negative amplitudes and, further out, times
+    /// that are no longer sorted, so [`Impulses::design`] rejects such modes and the
+    /// time-varying filter designs at the limit instead.
     pub fn max_zeta(&self) -> f64 {
         match self {
             ShaperKind::Ei { .. } => 0.4,
             ShaperKind::Ei2Hump => 0.3,
             ShaperKind::Ei3Hump => 0.2,
-            _ => 0.99,
+            _ => 1.0,
+        }
+    }
+
+    /// `mode` with its damping ratio limited to [`Self::max_zeta`]; the flag says whether it
+    /// was limited.
+    #[inline]
+    pub fn within_range(&self, mode: Mode) -> (Mode, bool) {
+        let max = self.max_zeta();
+        if mode.zeta > max {
+            (Mode::new(mode.wn_rad_s, max), true)
+        } else {
+            (mode, false)
         }
     }
 
@@ -329,9 +346,18 @@ impl Impulses {
         Ok(Impulses { amplitudes, times_s })
     }
 
-    /// The registry shaper `kind` designed for `mode` (validated).
+    /// The registry shaper `kind` designed for `mode` (validated, including the damping range
+    /// of the family's published approximation, [`ShaperKind::max_zeta`]).
     pub fn design(kind: ShaperKind, mode: Mode) -> Result<Impulses, Error> {
         mode.validate(0)?;
+        if mode.zeta > kind.max_zeta() {
+            return Err(Error::InvalidParameter(format!(
+                "zeta = {} is beyond the range of the {:?} shaper's approximation (zeta <= {})",
+                mode.zeta,
+                kind.name(),
+                kind.max_zeta()
+            )));
+        }
         Ok(Impulses::from(&kind.design(mode)))
     }
 

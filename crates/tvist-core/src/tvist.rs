@@ -6,7 +6,7 @@
 
 use crate::delay_line::{DelayLine, Interpolation};
 use crate::error::{Error, Status};
-use crate::shaper::{ImpulseArray, Mode, ShaperKind};
+use crate::shaper::{ImpulseArray, Mode, ShaperKind, MAX_IMPULSES};
 
 /// One time-varying shaper for one mode, applied to all channels.
 #[derive(Debug, Clone)]
@@ -16,8 +16,12 @@ pub struct ModeFilter {
     line: DelayLine,
     /// Last valid mode seen; `None` until the first one (the filter then passes through).
     held: Option<Mode>,
-    /// The sequence used in the latest cycle.
+    /// The sequence used in the latest cycle, designed for `held`.
     impulses: ImpulseArray,
+    /// `impulses.times_s() / dt_s`: the delays in samples (entries past its length are 0).
+    delays_samples: [f64; MAX_IMPULSES],
+    /// True if `impulses` was designed with ζ limited to the shaper's range.
+    zeta_clamped: bool,
     /// Output of the latest cycle, one value per channel.
     output: Vec<f64>,
 }
@@ -45,6 +49,8 @@ impl ModeFilter {
             line: DelayLine::new(n_channels, max_delay_s / dt_s, interp)?,
             held: None,
             impulses: ImpulseArray::IDENTITY,
+            delays_samples: [0.0; MAX_IMPULSES],
+            zeta_clamped: false,
             output: vec![0.0; n_channels],
         })
     }
@@ -60,26 +66,46 @@ impl ModeFilter {
     /// Forgets the held mode (used when a shaper is reset).
     pub fn forget_mode(&mut self) {
         self.held = None;
-        self.impulses = ImpulseArray::IDENTITY;
+        self.zeta_clamped = false;
+        self.set_impulses(ImpulseArray::IDENTITY);
+    }
+
+    fn set_impulses(&mut self, impulses: ImpulseArray) {
+        self.impulses = impulses;
+        self.delays_samples = [0.0; MAX_IMPULSES];
+        for (d, &t) in self.delays_samples.iter_mut().zip(impulses.times_s()) {
+            *d = t / self.dt_s;
+        }
     }
 
     /// One cycle: push `input`, design the sequence for `mode` (or hold the last valid one),
     /// and compute [`Self::output`]. Allocation-free.
+    ///
+    /// The sequence is redesigned only when the mode differs from the held one. A damping
+    /// ratio beyond [`ShaperKind::max_zeta`] is limited to it ([`Status::ZETA_CLAMPED`]).
     pub fn step(&mut self, input: &[f64], mode: Mode) -> Status {
         let mut status = Status::OK;
         if mode.is_valid() {
-            self.held = Some(mode);
-            self.impulses = self.kind.design(mode);
+            if self.held != Some(mode) {
+                let (design_mode, limited) = self.kind.within_range(mode);
+                self.zeta_clamped = limited;
+                self.set_impulses(self.kind.design(design_mode));
+                self.held = Some(mode);
+            }
         } else {
             status |= Status::MODES_HELD;
             if self.held.is_none() {
                 status |= Status::UNSHAPED;
             }
         }
+        if self.zeta_clamped {
+            status |= Status::ZETA_CLAMPED;
+        }
         self.line.push(input);
         self.output.fill(0.0);
-        for (&a, &t) in self.impulses.amplitudes().iter().zip(self.impulses.times_s()) {
-            if self.line.accumulate(t / self.dt_s, a, &mut self.output) {
+        let n = self.impulses.len();
+        for (&a, &d) in self.impulses.amplitudes().iter().zip(&self.delays_samples[..n]) {
+            if self.line.accumulate(d, a, &mut self.output) {
                 status |= Status::DELAY_CLAMPED;
             }
         }

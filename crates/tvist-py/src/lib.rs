@@ -7,6 +7,10 @@ use pyo3::prelude::*;
 use tvist_core as core;
 use tvist_core::{Dynamics, Mode, Status};
 
+mod robot;
+
+mod ztdis;
+
 fn value_error(e: core::Error) -> PyErr {
     PyValueError::new_err(e.to_string())
 }
@@ -181,6 +185,7 @@ impl Dynamics for CallableModes {
 enum Provider {
     Constant(core::ConstantModes),
     Callable(CallableModes),
+    Map(core::MapDynamics),
 }
 
 impl Dynamics for Provider {
@@ -188,24 +193,28 @@ impl Dynamics for Provider {
         match self {
             Provider::Constant(p) => p.n_modes(),
             Provider::Callable(p) => p.n_modes(),
+            Provider::Map(p) => p.n_modes(),
         }
     }
     fn modes(&mut self, q: &[f64], out: &mut [Mode]) -> Status {
         match self {
             Provider::Constant(p) => p.modes(q, out),
             Provider::Callable(p) => p.modes(q, out),
+            Provider::Map(p) => p.modes(q, out),
         }
     }
     fn slowest_mode(&self, index: usize) -> Option<Mode> {
         match self {
             Provider::Constant(p) => p.slowest_mode(index),
             Provider::Callable(p) => p.slowest_mode(index),
+            Provider::Map(p) => p.slowest_mode(index),
         }
     }
     fn n_dof(&self) -> Option<usize> {
         match self {
             Provider::Constant(p) => p.n_dof(),
             Provider::Callable(p) => p.n_dof(),
+            Provider::Map(p) => p.n_dof(),
         }
     }
 }
@@ -217,6 +226,7 @@ struct StatusCounts {
     modes_held: u64,
     delay_clamped: u64,
     unshaped: u64,
+    zeta_clamped: u64,
 }
 
 impl StatusCounts {
@@ -225,6 +235,7 @@ impl StatusCounts {
         self.modes_held += u64::from(s.contains(Status::MODES_HELD));
         self.delay_clamped += u64::from(s.contains(Status::DELAY_CLAMPED));
         self.unshaped += u64::from(s.contains(Status::UNSHAPED));
+        self.zeta_clamped += u64::from(s.contains(Status::ZETA_CLAMPED));
     }
 }
 
@@ -265,6 +276,8 @@ impl PyTvShaper {
     ) -> PyResult<Self> {
         let provider = if let Ok(c) = dynamics.cast::<PyConstantModes>() {
             Provider::Constant(c.get().inner.clone())
+        } else if let Ok(m) = dynamics.cast::<robot::PyMapDynamics>() {
+            Provider::Map(m.borrow().inner.clone())
         } else if dynamics.is_callable() {
             if max_delay_s.is_none() {
                 return Err(PyValueError::new_err(
@@ -308,7 +321,7 @@ impl PyTvShaper {
         py: Python<'py>,
         q: PyReadonlyArray1<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let q = q.as_slice()?;
+        let q: Vec<f64> = q.as_array().iter().copied().collect();
         if q.len() != self.inner.n_dof() {
             return Err(PyValueError::new_err(format!(
                 "q has {} values, expected n_dof = {}",
@@ -317,7 +330,7 @@ impl PyTvShaper {
             )));
         }
         let mut out = vec![0.0; q.len()];
-        let status = self.inner.step(q, &mut out);
+        let status = self.inner.step(&q, &mut out);
         self.last_status = status;
         self.counts.add(status);
         self.take_callable_error()?;
@@ -350,6 +363,12 @@ impl PyTvShaper {
             for (x, y) in input.chunks_exact(d).zip(output.chunks_exact_mut(d)) {
                 last = inner.step(x, y);
                 counts.add(last);
+                // A raising callable ends the block: its exception is re-raised below.
+                if let Provider::Callable(p) = inner.dynamics() {
+                    if p.error.is_some() {
+                        break;
+                    }
+                }
             }
             last
         });
@@ -411,6 +430,7 @@ impl PyTvShaper {
             ("modes_held", c.modes_held),
             ("delay_clamped", c.delay_clamped),
             ("unshaped", c.unshaped),
+            ("zeta_clamped", c.zeta_clamped),
         ]
         .into_iter()
         .collect()
@@ -443,9 +463,11 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyImpulses>()?;
     m.add_class::<PyConstantModes>()?;
     m.add_class::<PyTvShaper>()?;
+    robot::register(m)?;
     m.add_function(wrap_pyfunction!(design_shaper, m)?)?;
     m.add_function(wrap_pyfunction!(convolve, m)?)?;
     m.add_function(wrap_pyfunction!(prv_flat, m)?)?;
+    ztdis::register(m)?;
     m.add("SHAPERS", core::SHAPER_NAMES.to_vec())?;
     m.add(
         "STATUS_FLAGS",
@@ -455,6 +477,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
             ("DELAY_CLAMPED", Status::DELAY_CLAMPED.0),
             ("UNSHAPED", Status::UNSHAPED.0),
             ("BAD_LENGTH", Status::BAD_LENGTH.0),
+            ("ZETA_CLAMPED", Status::ZETA_CLAMPED.0),
         ]
         .into_iter()
         .collect::<std::collections::BTreeMap<_, _>>(),

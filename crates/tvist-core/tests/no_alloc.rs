@@ -1,0 +1,178 @@
+//! The real-time path never allocates after construction.
+//!
+//! This file is its own test binary with a counting global allocator. Only allocations made
+//! by the measuring thread inside a measured window are counted (a const thread-local flag,
+//! which itself never allocates), so the harness' other threads cannot disturb the count.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use tvist_core::{
+    ConstantModes, DelayLine, Dynamics, Interpolation, Mode, ModeFilter, ShaperKind, Status,
+    TvShaper, TvShaperConfig, SHAPER_NAMES,
+};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+thread_local! {
+    static MEASURING: Cell<bool> = const { Cell::new(false) };
+}
+
+fn count() {
+    if MEASURING.with(Cell::get) {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+    }
+}
+
+// SAFETY: forwards to the system allocator unchanged; only counts calls.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        count();
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        count();
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        count();
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Runs `f` and returns how many allocations it made.
+fn allocations_in(f: impl FnOnce()) -> usize {
+    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    MEASURING.with(|m| m.set(true));
+    f();
+    MEASURING.with(|m| m.set(false));
+    ALLOCATIONS.load(Ordering::SeqCst) - before
+}
+
+#[test]
+fn the_real_time_path_never_allocates() {
+    the_counter_sees_allocations();
+    tv_shaper_step_never_allocates();
+    mode_filter_delay_line_and_design_never_allocate();
+}
+
+fn the_counter_sees_allocations() {
+    // Guards against a vacuous pass: an allocation in the window is counted.
+    let n = allocations_in(|| {
+        let v: Vec<f64> = std::hint::black_box(vec![1.0; 16]);
+        drop(v);
+    });
+    assert!(n >= 1);
+}
+
+/// A provider whose modes change every cycle (frequency sweep, damping wobble, the odd
+/// invalid mode): every code path of the time-varying step runs.
+struct Sweep {
+    k: u64,
+}
+
+impl Dynamics for Sweep {
+    fn n_modes(&self) -> usize {
+        2
+    }
+    fn modes(&mut self, q: &[f64], out: &mut [Mode]) -> Status {
+        self.k += 1;
+        let s = (self.k % 400) as f64 / 400.0 + q.first().copied().unwrap_or(0.0).abs() * 1e-3;
+        out[0] = Mode::new(
+            2.0 * core::f64::consts::PI * (6.0 + 16.0 * s),
+            0.05 + 0.3 * s,
+        );
+        out[1] = if self.k % 97 == 0 {
+            Mode::new(f64::NAN, 0.1)
+        } else {
+            Mode::new(60.0 + 40.0 * s, 0.45 * s)
+        };
+        Status::OK
+    }
+    fn slowest_mode(&self, _index: usize) -> Option<Mode> {
+        None
+    }
+}
+
+fn tv_shaper_step_never_allocates() {
+    for name in SHAPER_NAMES {
+        let kind = ShaperKind::from_name(name, None).expect("registry");
+        for interp in [Interpolation::Linear, Interpolation::Cubic] {
+            // Time-varying provider, with delays that sometimes exceed the buffer.
+            let mut cfg = TvShaperConfig::new(0.002, 6, kind);
+            cfg.interp = interp;
+            cfg.max_delay_s = Some(0.12);
+            let mut shaper = TvShaper::new(Sweep { k: 0 }, &cfg).expect("valid");
+            let mut y = [0.0; 6];
+            let n = allocations_in(|| {
+                for i in 0..2000 {
+                    let v = (i as f64 * 0.01).sin();
+                    let x = if i % 333 == 7 { [f64::NAN; 6] } else { [v; 6] };
+                    let _ = shaper.step(&x, &mut y);
+                }
+                let _ = shaper.step(&[0.0; 5], &mut y); // BAD_LENGTH path
+                shaper.reset(&[0.1; 6]);
+                let _ = shaper.step(&[0.2; 6], &mut y);
+                shaper.clear();
+                let _ = shaper.step(&[0.3; 6], &mut y);
+            });
+            assert_eq!(n, 0, "{name} {interp:?}: {n} allocations");
+
+            // Constant modes, block API.
+            let modes = ConstantModes::new(vec![Mode::new(50.0, 0.15), Mode::new(43.0, 0.1)])
+                .expect("valid");
+            let mut cfg = TvShaperConfig::new(0.002, 6, kind);
+            cfg.interp = interp;
+            let mut shaper = TvShaper::new(modes, &cfg).expect("valid");
+            let x: Vec<f64> = (0..6000).map(|i| (i as f64 * 1e-3).cos()).collect();
+            let mut out = vec![0.0; x.len()];
+            let n = allocations_in(|| {
+                let _ = shaper.shape_into(&x, &mut out);
+            });
+            assert_eq!(n, 0, "{name} {interp:?} shape_into: {n} allocations");
+        }
+    }
+}
+
+fn mode_filter_delay_line_and_design_never_allocate() {
+    for interp in [Interpolation::Linear, Interpolation::Cubic] {
+        let mut filter = ModeFilter::new(ShaperKind::Zvd, 3, 0.002, 0.3, interp).expect("valid");
+        let mut line = DelayLine::new(3, 40.0, interp).expect("valid");
+        let mut acc = [0.0; 3];
+        let n = allocations_in(|| {
+            filter.reset(&[1.0, 2.0, 3.0]);
+            for i in 0..1000 {
+                let x = [i as f64, -(i as f64), 0.5];
+                let _ = filter.step(&x, Mode::new(20.0 + (i % 50) as f64, 0.1));
+                line.push(&x);
+                for d in [0.0, 0.5, 3.25, 39.9, 1e9, f64::NAN, -2.0] {
+                    let _ = line.accumulate(d, 0.3, &mut acc);
+                }
+            }
+            line.fill(&[0.0; 3]);
+            filter.forget_mode();
+        });
+        assert_eq!(n, 0, "{interp:?}: {n} allocations");
+    }
+    let n = allocations_in(|| {
+        for name in SHAPER_NAMES {
+            let kind = ShaperKind::from_name(name, None).expect("registry");
+            for z in [0.0, 0.1, 0.2] {
+                std::hint::black_box(kind.design(Mode::new(30.0, z)));
+            }
+        }
+    });
+    assert_eq!(n, 0);
+}

@@ -1,0 +1,38 @@
+"""Measures of vibration and smoothness for moves and shapers.
+
+- :func:`residual_vibration`: amplitude of the tool acceleration when the motion stops,
+  from the log decay of the peaks after it (paper section 6.2).
+- :func:`energy_spectrum`: vibration energy per frequency bin (eq. 56).
+- :func:`settling_time`, :func:`peak_velocity`, :func:`peak_acceleration`, :func:`peak_jerk`,
+  :func:`count_velocity_peaks`: scalar measures of a move.
+- :func:`sensitivity_grid`: percent residual vibration of a shaper over a grid of modes.
+
+Signals are ``(n_samples,)`` or ``(n_samples, k)``, time along rows.
+"""
+
+from __future__ import annotations
+
+from tvist.analysis.metrics import (
+    count_velocity_peaks,
+    peak_acceleration,
+    peak_jerk,
+    peak_velocity,
+    settling_time,
+)
+from tvist.analysis.residual import ResidualVibration, estimate_noise_std, residual_vibration
+from tvist.analysis.sensitivity import sensitivity_grid
+from tvist.analysis.spectrum import EnergySpectrum, energy_spectrum
+
+__all__ = [
+    "EnergySpectrum",
+    "ResidualVibration",
+    "count_velocity_peaks",
+    "energy_spectrum",
+    "estimate_noise_std",
+    "peak_acceleration",
+    "peak_jerk",
+    "peak_velocity",
+    "residual_vibration",
+    "sensitivity_grid",
+    "settling_time",
+]

@@ -1,0 +1,273 @@
+"""The dynamic map (paper eqs. 42-51) as data: build, evaluate, save and load.
+
+The equations live in the Rust core (``tvist-core/src/dynmap.rs``). Per mode, with ``J_f`` the
+inertia of the frequency joint, ``J_d`` that of the damping joint, ``τ_f`` the gravity torque of
+the frequency joint and ``K = k_0 + k_J J_f + k_g |τ_f|``::
+
+    ω_n = √(1 + k_p/J_f) · √(K / J_f)
+    ζ   = (1 + k_p/J_d)^e_d · (1 + k_p/J_f)^e_f · (c_0 + c_1 √J_d + c_2 J_d)(1 + c_τ J_d)
+          / (2 √(K J_f))
+
+The general map (eqs. 42-43) has ``J_f = J_d`` and ``(e_d, e_f) = (1/2, 0)``; the paper's UR5e
+base mode (eqs. 47-48) has ``J_f = J_1``, ``J_d = J_0`` and ``(e_d, e_f) = (1, -1/2)``.
+
+Map files are JSON::
+
+    {"schema_version": 1, "kind": "tvist.dynamic_map",
+     "metadata": {"robot": "ur5e", "payload": {...} | null, "source": "...",
+                  "fit_statistics": {...} | null},
+     "modes": [{"k_0": ..., "k_j": ..., "k_g": ..., "k_p": ..., "c_0": ..., "c_1": ...,
+                "c_2": ..., "c_tau": ..., "frequency_joint": 1, "damping_joint": 0,
+                "damping_gain_exponent": 1.0, "frequency_gain_exponent": -0.5}, ...]}
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tvist import _core
+from tvist.robots import Payload, Robot
+
+SCHEMA_VERSION = 1
+KIND = "tvist.dynamic_map"
+#: Fields of one mode, all required in a map file.
+MODE_FIELDS: tuple[str, ...] = tuple(_core.MODE_MAP_FIELDS)
+_INTEGER_FIELDS = ("frequency_joint", "damping_joint")
+_METADATA_FIELDS = ("robot", "payload", "source", "fit_statistics")
+
+
+def _number(value: Any, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"{where}: must be a number, got {value!r}")
+    if not math.isfinite(float(value)):
+        raise ValueError(f"{where}: must be finite, got {value!r}")
+    return float(value)
+
+
+def _validate_mode(mode: Any, where: str) -> dict[str, float | int]:
+    if not isinstance(mode, Mapping):
+        raise ValueError(f"{where}: must be an object with fields {', '.join(MODE_FIELDS)}")
+    unknown = sorted(set(mode) - set(MODE_FIELDS))
+    if unknown:
+        raise ValueError(f"{where}: unknown field(s) {', '.join(unknown)}")
+    out: dict[str, float | int] = {}
+    for key in MODE_FIELDS:
+        if key not in mode:
+            raise ValueError(f"{where}.{key}: missing")
+        value = mode[key]
+        if key in _INTEGER_FIELDS:
+            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+                raise ValueError(f"{where}.{key}: must be a joint index >= 0, got {value!r}")
+            out[key] = value
+        else:
+            out[key] = _number(value, f"{where}.{key}")
+    return out
+
+
+def _validate_metadata(metadata: Any) -> dict[str, Any]:
+    if metadata is None:
+        return {key: None for key in _METADATA_FIELDS}
+    if not isinstance(metadata, Mapping):
+        raise ValueError("metadata: must be an object")
+    out = dict(metadata)
+    for key in _METADATA_FIELDS:
+        out.setdefault(key, None)
+    if out["robot"] is not None and not isinstance(out["robot"], str):
+        raise ValueError(f"metadata.robot: must be a string or null, got {out['robot']!r}")
+    if out["source"] is not None and not isinstance(out["source"], str):
+        raise ValueError(f"metadata.source: must be a string or null, got {out['source']!r}")
+    payload = out["payload"]
+    if isinstance(payload, Payload):
+        out["payload"] = payload.to_dict()
+    elif payload is not None:
+        if not isinstance(payload, Mapping):
+            raise ValueError("metadata.payload: must be an object or null")
+        try:
+            out["payload"] = Payload(**payload).to_dict()
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"metadata.payload: {exc}") from None
+    stats = out["fit_statistics"]
+    if stats is not None and not isinstance(stats, Mapping):
+        raise ValueError("metadata.fit_statistics: must be an object or null")
+    return out
+
+
+def general_mode(joint: int, **coefficients: float) -> dict[str, float | int]:
+    """One mode of the general map (eqs. 42-43) driven by ``J = J_joint``.
+
+    ``coefficients`` are ``k_0, k_j, k_g, k_p, c_0, c_1, c_2, c_tau``; ``k_g`` and ``c_1``
+    default to 0 (the reduced map, eqs. 44-45), the others are required.
+    """
+    mode = {"k_g": 0.0, "c_1": 0.0, **coefficients}
+    mode.update(
+        frequency_joint=joint,
+        damping_joint=joint,
+        damping_gain_exponent=0.5,
+        frequency_gain_exponent=0.0,
+    )
+    return _validate_mode(mode, f"mode for joint {joint}")
+
+
+class DynamicMap:
+    """A dynamic map: modes ``(ω_n, ζ)`` of the arm as functions of its joint inertias.
+
+    Parameters
+    ----------
+    modes
+        One mapping per mode (cascade order) with the fields :data:`MODE_FIELDS`.
+    metadata
+        ``robot`` (name), ``payload`` (:class:`~tvist.robots.Payload` or its dict),
+        ``source`` (text) and ``fit_statistics`` (mapping); other keys are kept as given.
+
+    Raises
+    ------
+    ValueError
+        Naming the offending field, for missing, unknown or non-finite values.
+    """
+
+    def __init__(
+        self, modes: Sequence[Mapping[str, Any]], metadata: Mapping[str, Any] | None = None
+    ) -> None:
+        if isinstance(modes, (str, bytes)) or not isinstance(modes, Sequence) or not modes:
+            raise ValueError("modes: must be a non-empty list of mode objects")
+        checked = [_validate_mode(m, f"modes[{i}]") for i, m in enumerate(modes)]
+        self._core = _core.DynamicMap(checked)
+        self.metadata: dict[str, Any] = _validate_metadata(metadata)
+
+    @classmethod
+    def paper_ur5e(cls) -> DynamicMap:
+        """The paper's UR5e map: Table 1 (base, eqs. 47-48) and Table 2 (shoulder, eqs. 50-51)."""
+        modes = _core.DynamicMap.paper_ur5e().modes
+        metadata = {
+            "robot": "ur5e",
+            "payload": None,
+            "source": (
+                "Thomsen et al. 2020, Mechanism and Machine Theory: Tables 1-2, eqs. 47-48 "
+                "(base mode: frequency from J_1, damping from J_0) and 50-51 (shoulder mode); "
+                "identified over payloads 0, 1, 3 and 5 kg"
+            ),
+            "fit_statistics": None,
+        }
+        return cls(modes, metadata)
+
+    @property
+    def core(self) -> _core.DynamicMap:
+        """The Rust map (pass-through for :class:`MapDynamics`)."""
+        return self._core
+
+    @property
+    def n_modes(self) -> int:
+        """Number of modes (shaper filters in cascade)."""
+        return self._core.n_modes
+
+    @property
+    def mode_maps(self) -> list[dict[str, float | int]]:
+        """The coefficients of every mode."""
+        return self._core.modes
+
+    @property
+    def uses_gravity(self) -> bool:
+        """True if any mode has a gravity-torque term (``k_g != 0``)."""
+        return self._core.uses_gravity
+
+    def modes_from_inertia(
+        self,
+        inertia_kg_m2: Sequence[float] | np.ndarray,
+        gravity_torque_nm: Sequence[float] | np.ndarray | None = None,
+    ) -> list[tuple[float, float]]:
+        """Modes ``[(wn_rad_s, zeta), ...]`` for joint inertias ``J_0, J_1, ...`` (kg m²).
+
+        ``gravity_torque_nm`` is needed only when :attr:`uses_gravity`. A mode the map cannot
+        give (non-positive stiffness or inertia) is ``(nan, nan)``.
+        """
+        j = [float(v) for v in np.asarray(inertia_kg_m2, dtype=float).ravel()]
+        tau = None
+        if gravity_torque_nm is not None:
+            tau = [float(v) for v in np.asarray(gravity_torque_nm, dtype=float).ravel()]
+        return self._core.modes_from_inertia(j, tau)
+
+    def modes(self, robot: Robot, q: Sequence[float] | np.ndarray) -> list[tuple[float, float]]:
+        """Modes at configuration ``q`` of ``robot`` (its payload included)."""
+        j = robot.joint_inertia(q)
+        tau = robot.gravity_torque(q) if self.uses_gravity else None
+        return self.modes_from_inertia(j, tau)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON document of this map."""
+        return {
+            "schema_version": SCHEMA_VERSION,
+            "kind": KIND,
+            "metadata": self.metadata,
+            "modes": self.mode_maps,
+        }
+
+    def save(self, path: str | Path) -> None:
+        """Write the map as JSON (see the module docstring for the format)."""
+        Path(path).write_text(json.dumps(self.to_dict(), indent=2) + "\n", encoding="utf-8")
+
+    @classmethod
+    def from_dict(cls, doc: Any) -> DynamicMap:
+        """Validate and build from a parsed map document."""
+        if not isinstance(doc, Mapping):
+            raise ValueError("map file: top level must be a JSON object")
+        version = doc.get("schema_version")
+        if version != SCHEMA_VERSION:
+            raise ValueError(f"schema_version: expected {SCHEMA_VERSION}, got {version!r}")
+        if doc.get("kind", KIND) != KIND:
+            raise ValueError(f"kind: expected {KIND!r}, got {doc.get('kind')!r}")
+        if "modes" not in doc:
+            raise ValueError("modes: missing")
+        modes = doc["modes"]
+        if not isinstance(modes, list) or not modes:
+            raise ValueError("modes: must be a non-empty list of mode objects")
+        return cls(modes, doc.get("metadata"))
+
+    @classmethod
+    def load(cls, path: str | Path) -> DynamicMap:
+        """Read and validate a map file; malformed files raise ValueError naming the field."""
+        text = Path(path).read_text(encoding="utf-8")
+        try:
+            doc = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise ValueError(f"{path}: not valid JSON ({exc})") from None
+        return cls.from_dict(doc)
+
+    def __repr__(self) -> str:
+        return f"DynamicMap(n_modes={self.n_modes}, robot={self.metadata.get('robot')!r})"
+
+
+class MapDynamics(_core.MapDynamics):
+    """Per-cycle dynamics provider for :class:`tvist.TvShaper`: robot inertia + dynamic map.
+
+    Every cycle the joint inertias of ``robot`` are evaluated at the previous shaped output
+    and mapped to modes. Construction rejects a map that gives an invalid mode (non-positive
+    stiffness, ``zeta >= 1``) anywhere among ``MapDynamics.validation_poses`` sampled
+    configurations, or reads joints the robot does not have.
+
+    Parameters
+    ----------
+    robot
+        The arm with its payload (:class:`tvist.robots.Robot`).
+    dynmap
+        The map (:class:`DynamicMap`).
+    """
+
+    def __new__(cls, robot: Robot, dynmap: DynamicMap) -> MapDynamics:
+        if not isinstance(robot, Robot):
+            raise TypeError(f"robot must be a tvist.robots.Robot, got {type(robot).__name__}")
+        if not isinstance(dynmap, DynamicMap):
+            raise TypeError(f"dynmap must be a tvist.DynamicMap, got {type(dynmap).__name__}")
+        return super().__new__(cls, robot.core, dynmap.core)
+
+    def __init__(self, robot: Robot, dynmap: DynamicMap) -> None:
+        self.robot = robot
+        self.dynmap = dynmap
+
+    def __repr__(self) -> str:
+        return f"MapDynamics({self.robot!r}, {self.dynmap!r})"

@@ -1,0 +1,339 @@
+"""RTDE logs: the :class:`Record` of one identification run and reading/writing UR CSV files.
+
+Two recorder formats share the RTDE column names (vector fields expanded to ``name_0 … name_n``):
+
+- ``"ur_rtde"``: ``RTDEReceiveInterface.startFileRecording`` of the ur_rtde library,
+  comma-separated, 6 decimals;
+- ``"ur_client"``: Universal Robots' own RTDE client (``record.py``), space-separated.
+
+Both are detected automatically from the header line. Columns other than the ones a
+:class:`Record` holds are ignored.
+
+Validation at load time (every message names the offending rows, counted from 0 over the data
+rows, i.e. not counting the header):
+
+- a missing required column is a ``ValueError`` naming the column;
+- a row with NaN/inf is a ``ValueError`` unless ``drop_nan=True`` (then dropped with a
+  :class:`LogWarning`);
+- a repeated timestamp (the recorder wrote the same sample twice) is dropped with a
+  :class:`LogWarning`;
+- a timestamp that goes backwards is a ``ValueError``;
+- skipped samples (a step longer than 1.5 sampling periods) are reported with a
+  :class:`LogWarning`; ``resample=True`` interpolates the record onto a uniform grid.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, fields
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+
+__all__ = [
+    "LogWarning",
+    "Record",
+    "find_gaps",
+    "read_rtde_csv",
+]
+
+LogFormat = Literal["ur_rtde", "ur_client"]
+
+#: Record field -> (RTDE field name, vector length). ``actual_TCP_pose`` is optional.
+_FIELDS: dict[str, tuple[str, int]] = {
+    "target_q": ("target_q", 6),
+    "target_qd": ("target_qd", 6),
+    "target_qdd": ("target_qdd", 6),
+    "actual_q": ("actual_q", 6),
+    "actual_TCP_pose": ("actual_TCP_pose", 6),
+    "tool_accel": ("actual_tool_accelerometer", 3),
+}
+_OPTIONAL = {"actual_TCP_pose"}
+
+#: A step longer than this many median sampling periods counts as skipped samples.
+GAP_FACTOR = 1.5
+
+
+class LogWarning(UserWarning):
+    """A log was repaired or has a defect that the caller should know about."""
+
+
+def _columns(rtde_name: str, n: int) -> list[str]:
+    return [f"{rtde_name}_{i}" for i in range(n)]
+
+
+def _rows_text(rows: np.ndarray, limit: int = 10) -> str:
+    shown = ", ".join(str(int(r)) for r in rows[:limit])
+    more = f" and {len(rows) - limit} more" if len(rows) > limit else ""
+    return f"{shown}{more}"
+
+
+@dataclass(frozen=True)
+class Record:
+    """One recorded run, time along rows.
+
+    Attributes
+    ----------
+    t_s
+        Timestamps, s, shape (n_samples,), strictly increasing.
+    target_q, target_qd, target_qdd
+        Reference joint position (rad), velocity (rad/s) and acceleration (rad/s²),
+        shape (n_samples, 6).
+    actual_q
+        Measured joint positions, rad, shape (n_samples, 6).
+    tool_accel
+        Raw tool-flange accelerometer reading, m/s², in the flange frame, shape (n_samples, 3).
+        At rest it reads the reaction to gravity (+9.8 m/s² pointing up).
+    actual_TCP_pose
+        Optional measured TCP pose ``[x, y, z, rx, ry, rz]`` (m, rotation vector in rad),
+        shape (n_samples, 6).
+    """
+
+    t_s: np.ndarray
+    target_q: np.ndarray
+    target_qd: np.ndarray
+    target_qdd: np.ndarray
+    actual_q: np.ndarray
+    tool_accel: np.ndarray
+    actual_TCP_pose: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.t_s, dtype=float)
+        if t.ndim != 1 or t.size == 0:
+            raise ValueError(f"t_s must be a non-empty 1-D array, got shape {t.shape}")
+        object.__setattr__(self, "t_s", t)
+        n = t.size
+        for name, (_, width) in _FIELDS.items():
+            value = getattr(self, name)
+            if value is None:
+                if name in _OPTIONAL:
+                    continue
+                raise ValueError(f"{name} is required")
+            arr = np.asarray(value, dtype=float)
+            if arr.shape != (n, width):
+                raise ValueError(f"{name} must have shape ({n}, {width}), got {arr.shape}")
+            object.__setattr__(self, name, arr)
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.t_s.size)
+
+    @property
+    def dt_s(self) -> float:
+        """Median sampling period, s (NaN for a single sample)."""
+        if self.t_s.size < 2:
+            return float("nan")
+        return float(np.median(np.diff(self.t_s)))
+
+    def select(self, index: np.ndarray | slice) -> Record:
+        """The record restricted to rows ``index`` (boolean mask, indices or slice)."""
+        kwargs = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            kwargs[f.name] = None if value is None else value[index]
+        return Record(**kwargs)
+
+    def to_csv(self, path: str | Path, fmt: LogFormat = "ur_rtde") -> Path:
+        """Write the record as a UR RTDE CSV file.
+
+        Parameters
+        ----------
+        path
+            Output file.
+        fmt
+            ``"ur_rtde"`` (comma-separated, 6 decimals, like ur_rtde's file recording) or
+            ``"ur_client"`` (space-separated, full float precision, like UR's ``record.py``).
+        """
+        if fmt == "ur_rtde":
+            sep, number = ",", "%.6f"
+        elif fmt == "ur_client":
+            sep, number = " ", "%.17g"
+        else:
+            raise ValueError(f"fmt must be 'ur_rtde' or 'ur_client', got {fmt!r}")
+        header = ["timestamp"]
+        blocks = [self.t_s[:, None]]
+        for name, (rtde_name, width) in _FIELDS.items():
+            value = getattr(self, name)
+            if value is None:
+                continue
+            header += _columns(rtde_name, width)
+            blocks.append(value)
+        path = Path(path)
+        np.savetxt(
+            path, np.hstack(blocks), fmt=number, delimiter=sep, header=sep.join(header), comments=""
+        )
+        return path
+
+
+def find_gaps(t_s: np.ndarray, factor: float = GAP_FACTOR) -> np.ndarray:
+    """Rows ``i`` where the step ``t_s[i] - t_s[i-1]`` exceeds ``factor`` median periods.
+
+    Returns the indices (into ``t_s``) of the first sample after each gap.
+    """
+    t = np.asarray(t_s, dtype=float)
+    if t.size < 3:
+        return np.zeros(0, dtype=int)
+    step = np.diff(t)
+    period = np.median(step)
+    return np.flatnonzero(step > factor * period) + 1
+
+
+def _detect_separator(header_line: str) -> str:
+    if "," in header_line:
+        return ","
+    if header_line.split() and header_line.split()[0] == "timestamp":
+        return " "
+    raise ValueError(
+        "not a UR RTDE CSV file: the header must start with 'timestamp' and be comma- or "
+        f"space-separated; got {header_line[:80]!r}"
+    )
+
+
+def _resample_uniform(record: Record) -> Record:
+    """Linear interpolation of every channel onto a uniform grid at the median period."""
+    t = record.t_s
+    dt = record.dt_s
+    n = int(np.floor((t[-1] - t[0]) / dt + 1e-9)) + 1
+    grid = t[0] + dt * np.arange(n)
+    kwargs: dict[str, np.ndarray | None] = {"t_s": grid}
+    for name in _FIELDS:
+        value = getattr(record, name)
+        if value is None:
+            kwargs[name] = None
+            continue
+        kwargs[name] = np.column_stack([np.interp(grid, t, col) for col in value.T])
+    return Record(**kwargs)
+
+
+def read_rtde_csv(path: str | Path, *, drop_nan: bool = False, resample: bool = False) -> Record:
+    """Read a UR RTDE log written by ur_rtde or by UR's ``record.py`` (format auto-detected).
+
+    Parameters
+    ----------
+    path
+        The CSV file.
+    drop_nan
+        Drop rows containing NaN/inf (with a :class:`LogWarning`) instead of raising.
+    resample
+        If samples were skipped, interpolate all channels linearly onto a uniform grid at the
+        median sampling period (with a :class:`LogWarning`). Without it, gaps are only
+        reported.
+
+    Returns
+    -------
+    Record
+        Timestamps strictly increasing; duplicated samples removed.
+
+    Raises
+    ------
+    ValueError
+        Unknown format, missing columns, NaN rows (unless ``drop_nan``), timestamps that go
+        backwards, or fewer than 2 samples.
+    """
+    path = Path(path)
+    with path.open() as fh:
+        header_line = fh.readline().strip()
+    sep = _detect_separator(header_line)
+    names = header_line.split(",") if sep == "," else header_line.split()
+    names = [n.strip() for n in names]
+    while names and not names[-1]:  # a trailing separator leaves an empty last name
+        names.pop()
+    index = {name: i for i, name in enumerate(names)}
+
+    required = ["timestamp"]
+    for name, (rtde_name, width) in _FIELDS.items():
+        if name not in _OPTIONAL:
+            required += _columns(rtde_name, width)
+    missing = [c for c in required if c not in index]
+    if missing:
+        raise ValueError(f"{path}: missing column(s) {', '.join(missing)}")
+
+    try:
+        data = np.loadtxt(
+            path,
+            delimiter="," if sep == "," else None,
+            skiprows=1,
+            ndmin=2,
+            usecols=range(len(names)),
+        )
+    except ValueError as exc:
+        raise ValueError(f"{path}: malformed data row: {exc}") from exc
+
+    def take(columns: list[str]) -> np.ndarray:
+        return data[:, [index[c] for c in columns]]
+
+    used = ["timestamp"]
+    has_pose = all(c in index for c in _columns("actual_TCP_pose", 6))
+    for name, (rtde_name, width) in _FIELDS.items():
+        if name in _OPTIONAL and not has_pose:
+            continue
+        used += _columns(rtde_name, width)
+    bad = np.flatnonzero(~np.all(np.isfinite(take(used)), axis=1))
+    if bad.size:
+        if not drop_nan:
+            raise ValueError(
+                f"{path}: non-finite values in data row(s) {_rows_text(bad)} "
+                "(pass drop_nan=True to drop them)"
+            )
+        warnings.warn(
+            f"{path}: dropped {bad.size} row(s) with non-finite values: {_rows_text(bad)}",
+            LogWarning,
+            stacklevel=2,
+        )
+    keep = np.ones(data.shape[0], dtype=bool)
+    keep[bad] = False
+    rows = np.flatnonzero(keep)  # original data-row numbers of the kept rows
+    data = data[keep]
+    if data.shape[0] < 2:
+        raise ValueError(f"{path}: need at least 2 valid samples, got {data.shape[0]}")
+
+    t = data[:, index["timestamp"]]
+    step = np.diff(t)
+    backwards = np.flatnonzero(step < 0) + 1
+    if backwards.size:
+        r = backwards[0]
+        raise ValueError(
+            f"{path}: timestamp goes backwards at data row {rows[r]} "
+            f"({t[r]:.6f} s after {t[r - 1]:.6f} s)"
+        )
+    duplicate = np.flatnonzero(step == 0) + 1
+    if duplicate.size:
+        warnings.warn(
+            f"{path}: dropped {duplicate.size} sample(s) with a repeated timestamp at data "
+            f"row(s) {_rows_text(rows[duplicate])}",
+            LogWarning,
+            stacklevel=2,
+        )
+        keep = np.ones(data.shape[0], dtype=bool)
+        keep[duplicate] = False
+        data, rows = data[keep], rows[keep]
+
+    record = Record(
+        t_s=data[:, index["timestamp"]],
+        target_q=_take(data, index, "target_q", 6),
+        target_qd=_take(data, index, "target_qd", 6),
+        target_qdd=_take(data, index, "target_qdd", 6),
+        actual_q=_take(data, index, "actual_q", 6),
+        tool_accel=_take(data, index, "actual_tool_accelerometer", 3),
+        actual_TCP_pose=_take(data, index, "actual_TCP_pose", 6) if has_pose else None,
+    )
+    gaps = find_gaps(record.t_s)
+    if gaps.size:
+        dt = record.dt_s
+        missing_n = int(np.sum(np.round(np.diff(record.t_s)[gaps - 1] / dt) - 1))
+        action = "resampled onto a uniform grid" if resample else "left as is"
+        warnings.warn(
+            f"{path}: about {missing_n} skipped sample(s) before data row(s) "
+            f"{_rows_text(rows[gaps])} (period {dt * 1e3:.3f} ms); {action}",
+            LogWarning,
+            stacklevel=2,
+        )
+        if resample:
+            record = _resample_uniform(record)
+    return record
+
+
+def _take(data: np.ndarray, index: dict[str, int], rtde_name: str, width: int) -> np.ndarray:
+    """Columns ``rtde_name_0 … rtde_name_{width-1}`` of ``data`` as an (n_samples, width) array."""
+    return data[:, [index[c] for c in _columns(rtde_name, width)]]

@@ -1,0 +1,420 @@
+"""Fit the dynamic map's coefficients to identified modes (paper section 5.3).
+
+Per mode, by nonlinear least squares on relative errors:
+
+1. **Frequency** (``k_J``, ``k_p`` and the gravity term ``k_g``; ``k_0`` fixed, default
+   10000 N m/rad, because ``ω_n`` only fixes ratios of the stiffness terms). For a mode with
+   several candidate frequency joints (the base mode: ``J_0`` or ``J_1``), each is fitted and
+   the one with the smaller residual is kept.
+2. **Damping** (``c_0``, ``c_1``, ``c_2``, ``c_τ``) with the stiffness terms fixed.
+
+A term whose estimate is smaller than ``drop_t`` standard errors (``k_g`` and ``c_1`` on the
+UR5e) is dropped (set to 0) and the step refitted, as the paper did.
+
+The map equations are evaluated only through :class:`tvist.DynamicMap` (the Rust core). The
+starting values use the fact that, for a fixed ``k_p``, ``ω_n²`` is affine in
+``(k_J, k_g)``, and for a fixed ``c_τ``, ``ζ`` is linear in ``(c_0, c_1, c_2)``: the columns of
+those linear problems are themselves map evaluations.
+
+Input poses are mappings (the campaign's JSON-lines records have this form)::
+
+    {"inertia_kg_m2": [J_0, ..., J_5],
+     "gravity_torque_nm": [τ_0, ..., τ_5],            # optional; needed for k_g
+     "modes": [{"joint": 0, "wn_rad_s": ..., "zeta": ..., "low_confidence": false}, ...]}
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import optimize
+
+from tvist.dynmap import DynamicMap
+
+__all__ = [
+    "DEFAULT_MODE_SPECS",
+    "ModeSpec",
+    "PoseTable",
+    "evaluate_mode",
+    "fit_map",
+    "pose_table",
+]
+
+#: The paper's fixed stiffness at zero inertia, N m/rad.
+K_0_FIXED = 10000.0
+_FREQ_TERMS = ("k_j", "k_p", "k_g")
+_DAMP_TERMS = ("c_0", "c_1", "c_2", "c_tau")
+#: Residual (relative error) returned where the map gives no valid mode for a trial parameter.
+_INVALID_RESIDUAL = 10.0
+
+
+@dataclass(frozen=True)
+class ModeSpec:
+    """Which mode to fit and which inertias may drive it.
+
+    Attributes
+    ----------
+    joint
+        The joint whose excitation identified the mode (0 = base, 1 = shoulder).
+    frequency_joints
+        Candidate joints for ``J_f``; each is fitted and the best kept.
+    damping_joint
+        Joint for ``J_d``.
+    """
+
+    joint: int
+    frequency_joints: tuple[int, ...]
+    damping_joint: int
+
+
+#: The paper's two UR5e modes: the base mode tries J_0 and J_1 for its frequency (section
+#: 5.3.1), damping from J_0; the shoulder mode uses J_1 throughout.
+DEFAULT_MODE_SPECS = (ModeSpec(0, (0, 1), 0), ModeSpec(1, (1,), 1))
+
+
+@dataclass(frozen=True)
+class PoseTable:
+    """Observations of one mode over many poses.
+
+    Attributes
+    ----------
+    inertia_kg_m2
+        Joint inertias per pose, shape (n_poses, n_dof).
+    gravity_torque_nm
+        Gravity torques per pose, shape (n_poses, n_dof) (zeros if unknown).
+    wn_rad_s, zeta
+        Identified mode per pose, shape (n_poses,).
+    has_gravity
+        Whether real gravity torques were given.
+    """
+
+    inertia_kg_m2: np.ndarray
+    gravity_torque_nm: np.ndarray
+    wn_rad_s: np.ndarray
+    zeta: np.ndarray
+    has_gravity: bool
+
+    @property
+    def n_poses(self) -> int:
+        return int(self.wn_rad_s.size)
+
+
+def pose_table(
+    poses: Sequence[Mapping[str, Any]], joint: int, *, include_low_confidence: bool = False
+) -> PoseTable:
+    """Collect the observations of the mode identified through ``joint``.
+
+    Poses without that mode, with a non-finite value, or flagged ``low_confidence`` (unless
+    ``include_low_confidence``) are skipped.
+    """
+    inertia, gravity, wn, zeta = [], [], [], []
+    has_gravity = True
+    for i, pose in enumerate(poses):
+        if "inertia_kg_m2" not in pose:
+            raise ValueError(f"poses[{i}]: missing 'inertia_kg_m2'")
+        for mode in pose.get("modes", []):
+            if mode.get("joint") != joint:
+                continue
+            if mode.get("low_confidence", False) and not include_low_confidence:
+                continue
+            w, z = float(mode.get("wn_rad_s", math.nan)), float(mode.get("zeta", math.nan))
+            if not (math.isfinite(w) and math.isfinite(z) and w > 0 and z > 0):
+                continue
+            inertia.append(np.asarray(pose["inertia_kg_m2"], dtype=float))
+            tau = pose.get("gravity_torque_nm")
+            if tau is None:
+                has_gravity = False
+                tau = np.zeros_like(inertia[-1])
+            gravity.append(np.asarray(tau, dtype=float))
+            wn.append(w)
+            zeta.append(z)
+    if not wn:
+        raise ValueError(f"no usable identified mode for joint {joint} in {len(poses)} poses")
+    return PoseTable(
+        inertia_kg_m2=np.array(inertia),
+        gravity_torque_nm=np.array(gravity),
+        wn_rad_s=np.array(wn),
+        zeta=np.array(zeta),
+        has_gravity=has_gravity,
+    )
+
+
+def _mode_dict(
+    coefficients: Mapping[str, float], frequency_joint: int, damping_joint: int
+) -> dict[str, float | int]:
+    """A complete mode record; the exponents follow the map's two published forms."""
+    same = frequency_joint == damping_joint
+    mode: dict[str, float | int] = {
+        "k_0": K_0_FIXED,
+        "k_j": 0.0,
+        "k_g": 0.0,
+        "k_p": 0.0,
+        "c_0": 0.0,
+        "c_1": 0.0,
+        "c_2": 0.0,
+        "c_tau": 0.0,
+    }
+    mode.update({k: float(v) for k, v in coefficients.items()})
+    mode.update(
+        frequency_joint=frequency_joint,
+        damping_joint=damping_joint,
+        # eqs. 43/51: √(1 + k_p/J); eq. 48 as printed: (1 + k_p/J_0) / √(1 + k_p/J_1)
+        damping_gain_exponent=0.5 if same else 1.0,
+        frequency_gain_exponent=0.0 if same else -0.5,
+    )
+    return mode
+
+
+def evaluate_mode(
+    mode: Mapping[str, float | int], inertia_kg_m2: np.ndarray, gravity_torque_nm: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(ω_n, ζ)`` of one mode at every pose, through :class:`tvist.DynamicMap`.
+
+    Returns two arrays of shape (n_poses,); NaN where the map gives no valid mode.
+    """
+    dynmap = DynamicMap([mode])
+    tau = gravity_torque_nm if dynmap.uses_gravity else [None] * len(inertia_kg_m2)
+    out = np.array(
+        [dynmap.modes_from_inertia(j, t)[0] for j, t in zip(inertia_kg_m2, tau, strict=True)]
+    )
+    return out[:, 0], out[:, 1]
+
+
+@dataclass
+class _StepResult:
+    values: dict[str, float]
+    se: dict[str, float]
+    rms_rel_error: float
+    dropped: dict[str, dict[str, float]]
+
+
+def _covariance_se(jac: np.ndarray, residual: np.ndarray, names: Sequence[str]) -> dict:
+    n, p = jac.shape
+    sigma2 = float(residual @ residual) / max(n - p, 1)
+    sv = np.linalg.svd(jac, compute_uv=False)
+    if sv[-1] <= 1e-10 * sv[0]:
+        raise ValueError(
+            f"singular map fit: parameters {', '.join(names)} are not identifiable from these "
+            "poses (too little variation in inertia?)"
+        )
+    cov = np.linalg.inv(jac.T @ jac) * sigma2
+    return {name: float(math.sqrt(max(cov[i, i], 0.0))) for i, name in enumerate(names)}
+
+
+def _fit_frequency(
+    table: PoseTable, f_joint: int, d_joint: int, terms: list[str], k_0: float
+) -> _StepResult:
+    j, tau, w_meas = table.inertia_kg_m2, table.gravity_torque_nm, table.wn_rad_s
+
+    def mode_for(values: Mapping[str, float]) -> dict[str, float | int]:
+        return _mode_dict({"k_0": k_0, **values}, f_joint, d_joint)
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        wn, _ = evaluate_mode(mode_for(dict(zip(terms, x, strict=True))), j, tau)
+        r = wn / w_meas - 1.0
+        return np.where(np.isfinite(r), r, _INVALID_RESIDUAL)
+
+    # Start: for fixed k_p, ω_n² is affine in (k_J, k_g); columns from map evaluations.
+    linear = [t for t in terms if t != "k_p"]
+    best: tuple[float, np.ndarray] | None = None
+    for k_p in (0.0, 0.3, 1.0, 2.0, 4.0, 8.0, 16.0):
+        base = {"k_p": k_p, **{t: 0.0 for t in linear}}
+        w0, _ = evaluate_mode(mode_for(base), j, tau)
+        cols = []
+        for t in linear:
+            w1, _ = evaluate_mode(mode_for({**base, t: 1.0}), j, tau)
+            cols.append((w1**2 - w0**2) / w_meas**2)
+        if not np.all(np.isfinite(w0)) or not all(np.all(np.isfinite(c)) for c in cols):
+            continue
+        a = np.column_stack(cols)
+        coef, *_ = np.linalg.lstsq(a, 1.0 - w0**2 / w_meas**2, rcond=None)
+        values = dict(zip(linear, coef, strict=True))
+        x = np.array([k_p if t == "k_p" else values[t] for t in terms])
+        cost = float(np.sum(residual(x) ** 2))
+        if best is None or cost < best[0]:
+            best = (cost, x)
+    if best is None:
+        raise ValueError("map fit: no valid starting point for the frequency coefficients")
+    lower = [0.0 if t == "k_p" else -np.inf for t in terms]
+    res = optimize.least_squares(residual, best[1], bounds=(lower, np.inf), x_scale="jac")
+    se = _covariance_se(res.jac, res.fun, terms)
+    return _StepResult(
+        values=dict(zip(terms, (float(v) for v in res.x), strict=True)),
+        se=se,
+        rms_rel_error=float(np.sqrt(np.mean(res.fun**2))),
+        dropped={},
+    )
+
+
+def _fit_damping(
+    table: PoseTable, stiffness: Mapping[str, float], f_joint: int, d_joint: int, terms: list[str]
+) -> _StepResult:
+    j, tau, z_meas = table.inertia_kg_m2, table.gravity_torque_nm, table.zeta
+
+    def mode_for(values: Mapping[str, float]) -> dict[str, float | int]:
+        return _mode_dict({**stiffness, **values}, f_joint, d_joint)
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        _, zeta = evaluate_mode(mode_for(dict(zip(terms, x, strict=True))), j, tau)
+        r = zeta / z_meas - 1.0
+        return np.where(np.isfinite(r), r, _INVALID_RESIDUAL)
+
+    # Start: for fixed c_τ, ζ is linear in (c_0, c_1, c_2); columns from map evaluations.
+    linear = [t for t in terms if t != "c_tau"]
+    best: tuple[float, np.ndarray] | None = None
+    for c_tau in (0.0, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0, 300.0):
+        cols = []
+        for t in linear:
+            _, z1 = evaluate_mode(mode_for({"c_tau": c_tau, t: 1.0}), j, tau)
+            cols.append(z1 / z_meas)
+        a = np.column_stack(cols)
+        if not np.all(np.isfinite(a)):
+            continue
+        coef, *_ = np.linalg.lstsq(a, np.ones(len(z_meas)), rcond=None)
+        values = dict(zip(linear, coef, strict=True))
+        x = np.array([c_tau if t == "c_tau" else values[t] for t in terms])
+        cost = float(np.sum(residual(x) ** 2))
+        if best is None or cost < best[0]:
+            best = (cost, x)
+    if best is None:
+        raise ValueError("map fit: no valid starting point for the damping coefficients")
+    lower = [0.0 if t == "c_tau" else -np.inf for t in terms]
+    res = optimize.least_squares(residual, best[1], bounds=(lower, np.inf), x_scale="jac")
+    se = _covariance_se(res.jac, res.fun, terms)
+    return _StepResult(
+        values=dict(zip(terms, (float(v) for v in res.x), strict=True)),
+        se=se,
+        rms_rel_error=float(np.sqrt(np.mean(res.fun**2))),
+        dropped={},
+    )
+
+
+def _fit_dropping(fit, terms: list[str], droppable: Sequence[str], drop_t: float) -> _StepResult:
+    """Fit, then drop droppable terms below ``drop_t`` standard errors one at a time."""
+    dropped: dict[str, dict[str, float]] = {}
+    result = fit(terms)
+    while True:
+        candidates = [
+            t for t in terms if t in droppable and abs(result.values[t]) < drop_t * result.se[t]
+        ]
+        if not candidates:
+            break
+        worst = min(candidates, key=lambda t: abs(result.values[t]) / max(result.se[t], 1e-300))
+        dropped[worst] = {"value": result.values[worst], "se": result.se[worst]}
+        terms = [t for t in terms if t != worst]
+        result = fit(terms)
+    result.dropped = dropped
+    return result
+
+
+def _stats(step: _StepResult) -> dict[str, Any]:
+    return {
+        "coefficients": {k: {"value": v, "se": step.se[k]} for k, v in step.values.items()},
+        "rms_relative_error": step.rms_rel_error,
+        "dropped": step.dropped,
+    }
+
+
+def fit_map(
+    poses: Sequence[Mapping[str, Any]],
+    *,
+    mode_specs: Sequence[ModeSpec] = DEFAULT_MODE_SPECS,
+    k_0: float = K_0_FIXED,
+    drop_negligible: bool = True,
+    drop_t: float = 2.0,
+    include_low_confidence: bool = False,
+    metadata: Mapping[str, Any] | None = None,
+) -> DynamicMap:
+    """Fit a :class:`tvist.DynamicMap` to modes identified at many poses.
+
+    Parameters
+    ----------
+    poses
+        Per-pose records (see the module docstring).
+    mode_specs
+        One entry per mode, in cascade order (default: base, shoulder).
+    k_0
+        Fixed stiffness at zero inertia, N m/rad.
+    drop_negligible
+        Drop ``k_g`` and ``c_1`` when smaller than ``drop_t`` standard errors; otherwise
+        ``k_g`` and ``c_1`` are fixed at 0 (the reduced map, eqs. 44-45).
+    drop_t
+        Significance threshold, in standard errors.
+    include_low_confidence
+        Also use identifications flagged low-confidence.
+    metadata
+        Extra map metadata (``robot``, ``payload``, ``source``); ``fit_statistics`` is filled
+        in here.
+
+    Returns
+    -------
+    DynamicMap
+        With ``metadata["fit_statistics"]``: per mode the coefficients with standard errors,
+        the RMS relative errors, the dropped terms and the frequency-joint comparison.
+
+    Raises
+    ------
+    ValueError
+        Too few usable poses for the parameters, or a singular (non-identifiable) problem.
+    """
+    if not (math.isfinite(k_0) and k_0 > 0):
+        raise ValueError(f"k_0 must be finite and > 0, got {k_0}")
+    modes = []
+    stats: dict[str, Any] = {"k_0_fixed": k_0, "drop_t": drop_t, "modes": []}
+    for spec in mode_specs:
+        table = pose_table(poses, spec.joint, include_low_confidence=include_low_confidence)
+        use_gravity = drop_negligible and table.has_gravity
+        freq_terms = ["k_j", "k_p"] + (["k_g"] if use_gravity else [])
+        damp_terms = ["c_0", "c_2", "c_tau"] + (["c_1"] if drop_negligible else [])
+        needed = max(len(freq_terms), len(damp_terms)) + 2
+        if table.n_poses < needed:
+            raise ValueError(
+                f"mode of joint {spec.joint}: {table.n_poses} usable poses, need at least "
+                f"{needed} for {len(damp_terms)} damping coefficients"
+            )
+        droppable = ("k_g", "c_1") if drop_negligible else ()
+        candidates: dict[int, _StepResult] = {}
+        failed: dict[str, str] = {}
+        for f_joint in spec.frequency_joints:
+
+            def fit_freq(terms, f=f_joint, table=table, d=spec.damping_joint):
+                return _fit_frequency(table, f, d, terms, k_0)
+
+            try:
+                candidates[f_joint] = _fit_dropping(fit_freq, list(freq_terms), droppable, drop_t)
+            except ValueError as exc:
+                failed[f"J_{f_joint}"] = str(exc)
+        if not candidates:
+            raise ValueError(f"mode of joint {spec.joint}: " + "; ".join(failed.values()))
+        f_joint = min(candidates, key=lambda f: candidates[f].rms_rel_error)
+        freq = candidates[f_joint]
+        stiffness = {"k_0": k_0, **freq.values}
+
+        def fit_damp(terms, table=table, stiffness=stiffness, f=f_joint, d=spec.damping_joint):
+            return _fit_damping(table, stiffness, f, d, terms)
+
+        damp = _fit_dropping(fit_damp, list(damp_terms), droppable, drop_t)
+        mode = _mode_dict({**stiffness, **damp.values}, f_joint, spec.damping_joint)
+        modes.append(mode)
+        stats["modes"].append(
+            {
+                "joint": spec.joint,
+                "n_poses": table.n_poses,
+                "frequency_joint": f_joint,
+                "damping_joint": spec.damping_joint,
+                "frequency": _stats(freq),
+                "damping": _stats(damp),
+                "frequency_joint_rms_relative_error": {
+                    f"J_{f}": r.rms_rel_error for f, r in candidates.items()
+                },
+                "frequency_joint_failures": failed,
+            }
+        )
+    meta = dict(metadata or {})
+    meta.setdefault("source", "tvist.ident.fit_map")
+    meta["fit_statistics"] = stats
+    return DynamicMap(modes, meta)

@@ -1,0 +1,31 @@
+"""Robot models: UR e-Series parameter data, payloads and the rigid-body inertia model.
+
+The numbers live in one file, ``ur_e_series.json`` next to this module; :func:`params` loads
+them. :class:`Robot` evaluates the joint-space inertia, kinematics and gravity torques in the
+Rust core.
+
+Examples
+--------
+>>> import tvist
+>>> robot = tvist.robots.ur5e(payload_kg=5.0, payload_com_m=(0.0, 0.0, 0.05))
+>>> j = robot.joint_inertia([0.0, -3.14159, 0.0, -1.5708, 0.0, 0.0])  # J_0 ... J_5, kg m^2
+"""
+
+from __future__ import annotations
+
+from tvist.robots._params import Payload, RobotParams, inertia_tensor, names, params
+from tvist.robots._robot import Robot, ur3e, ur5e, ur10e, ur16e, ur20
+
+__all__ = [
+    "Payload",
+    "Robot",
+    "RobotParams",
+    "inertia_tensor",
+    "names",
+    "params",
+    "ur3e",
+    "ur5e",
+    "ur10e",
+    "ur16e",
+    "ur20",
+]

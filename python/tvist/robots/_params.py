@@ -1,0 +1,214 @@
+"""Robot parameter records loaded from ``ur_e_series.json`` (the one source of robot data).
+
+Conventions (also stated in the JSON file):
+
+- Standard DH: frame ``i = Rz(q_i) Tz(d_i) Tx(a_i) Rx(alpha_i)``; ``q = 0`` is the arm stretched
+  out horizontally. The flange frame is DH frame ``n``.
+- ``com_m[i]`` is the centre of mass of link ``i`` in DH frame ``i`` (m).
+- ``inertia_kg_m2[i] = [ixx, iyy, izz, ixy, ixz, iyz]`` are inertia-tensor elements about the
+  centre of mass, axes of DH frame ``i`` (``ixy = -∫ x y dm``, the URDF convention).
+- Link side only, no rotor inertia.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from functools import cache, lru_cache
+from importlib import resources
+from typing import Any
+
+import numpy as np
+
+DATA_FILE = "ur_e_series.json"
+SCHEMA_VERSION = 1
+
+
+def _frozen_array(value: Any, shape: tuple[int, ...], what: str) -> np.ndarray:
+    """Convert ``value`` to a read-only float array of ``shape`` with finite entries."""
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{what}: not a numeric array ({exc})") from None
+    if arr.shape != shape:
+        raise ValueError(f"{what}: expected shape {shape}, got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{what}: contains NaN or infinite values")
+    arr.setflags(write=False)
+    return arr
+
+
+def inertia_tensor(six: np.ndarray) -> np.ndarray:
+    """3x3 tensor from ``[ixx, iyy, izz, ixy, ixz, iyz]`` (tensor elements, not products)."""
+    ixx, iyy, izz, ixy, ixz, iyz = (float(v) for v in six)
+    return np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+
+
+@dataclass(frozen=True)
+class RobotParams:
+    """Kinematic and rigid-body parameters of a serial revolute arm (standard DH).
+
+    Arrays are read-only. ``n_dof`` is the number of joints ``n``.
+
+    Attributes
+    ----------
+    name, description, source, inertia_source
+        Identification and provenance of the numbers.
+    d_m, a_m, alpha_rad
+        DH parameters, each shape ``(n,)``.
+    mass_kg
+        Link masses, ``(n,)``.
+    com_m
+        Centres of mass in DH frame ``i``, ``(n, 3)``.
+    inertia_kg_m2
+        ``[ixx, iyy, izz, ixy, ixz, iyz]`` about the centre of mass, axes of DH frame ``i``,
+        ``(n, 6)``.
+    joint_limits_rad
+        ``[lower, upper]`` per joint, ``(n, 2)``.
+    max_velocity_rad_s
+        Joint speed limits, ``(n,)``.
+    max_payload_kg
+        Rated payload.
+    """
+
+    name: str
+    description: str
+    source: str
+    d_m: np.ndarray
+    a_m: np.ndarray
+    alpha_rad: np.ndarray
+    mass_kg: np.ndarray
+    com_m: np.ndarray
+    inertia_kg_m2: np.ndarray
+    inertia_source: str
+    joint_limits_rad: np.ndarray
+    max_velocity_rad_s: np.ndarray
+    max_payload_kg: float
+    n_dof: int = field(init=False)
+
+    def __post_init__(self) -> None:
+        n = np.asarray(self.d_m).shape[0] if np.ndim(self.d_m) == 1 else -1
+        if n < 1:
+            raise ValueError(f"{self.name}: dh.d must be a non-empty 1-D array")
+        object.__setattr__(self, "n_dof", int(n))
+        spec = {
+            "d_m": (n,),
+            "a_m": (n,),
+            "alpha_rad": (n,),
+            "mass_kg": (n,),
+            "com_m": (n, 3),
+            "inertia_kg_m2": (n, 6),
+            "joint_limits_rad": (n, 2),
+            "max_velocity_rad_s": (n,),
+        }
+        for attr, shape in spec.items():
+            value = _frozen_array(getattr(self, attr), shape, f"{self.name}: {attr}")
+            object.__setattr__(self, attr, value)
+        if np.any(self.mass_kg < 0.0):
+            raise ValueError(f"{self.name}: mass_kg must be >= 0, got {self.mass_kg.tolist()}")
+        if np.any(self.joint_limits_rad[:, 0] >= self.joint_limits_rad[:, 1]):
+            raise ValueError(f"{self.name}: joint_limits_rad needs lower < upper for every joint")
+        if np.any(self.max_velocity_rad_s <= 0.0):
+            raise ValueError(f"{self.name}: max_velocity_rad_s must be > 0")
+        payload = float(self.max_payload_kg)
+        if not math.isfinite(payload) or payload < 0.0:
+            raise ValueError(f"{self.name}: max_payload_kg must be finite and >= 0")
+        object.__setattr__(self, "max_payload_kg", payload)
+
+    @property
+    def inertia_tensors_kg_m2(self) -> np.ndarray:
+        """Inertia tensors about each centre of mass, axes of DH frame ``i``, ``(n, 3, 3)``."""
+        return np.stack([inertia_tensor(row) for row in self.inertia_kg_m2])
+
+    @classmethod
+    def from_dict(cls, name: str, entry: dict[str, Any]) -> RobotParams:
+        """Build from one ``robots`` entry of the JSON schema; missing fields raise ValueError."""
+        try:
+            dh = entry["dh"]
+            return cls(
+                name=name,
+                description=str(entry["description"]),
+                source=str(entry["source"]),
+                d_m=dh["d"],
+                a_m=dh["a"],
+                alpha_rad=dh["alpha"],
+                mass_kg=entry["mass_kg"],
+                com_m=entry["com_m"],
+                inertia_kg_m2=entry["inertia_kg_m2"],
+                inertia_source=str(entry["inertia_source"]),
+                joint_limits_rad=entry["joint_limits_rad"],
+                max_velocity_rad_s=entry["max_velocity_rad_s"],
+                max_payload_kg=entry["max_payload_kg"],
+            )
+        except (KeyError, TypeError) as exc:
+            raise ValueError(f"{name}: missing or malformed field {exc}") from None
+
+
+@dataclass(frozen=True)
+class Payload:
+    """Rigid payload fixed to the flange (DH frame ``n``).
+
+    Parameters
+    ----------
+    mass_kg
+        Payload mass (>= 0).
+    com_m
+        Centre of mass in the flange frame (m); ``(0, 0, 0.05)`` is 5 cm beyond the flange
+        along its z axis.
+    inertia_kg_m2
+        ``[ixx, iyy, izz, ixy, ixz, iyz]`` about the payload's centre of mass, flange axes, or
+        ``None`` for a point mass. Physical consistency (positive semi-definite, triangle
+        inequality) is checked when a :class:`~tvist.robots.Robot` is built.
+    """
+
+    mass_kg: float = 0.0
+    com_m: tuple[float, float, float] | np.ndarray = (0.0, 0.0, 0.0)
+    inertia_kg_m2: tuple[float, ...] | np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        mass = float(self.mass_kg)
+        if not math.isfinite(mass) or mass < 0.0:
+            raise ValueError(f"payload mass_kg must be finite and >= 0, got {self.mass_kg!r}")
+        object.__setattr__(self, "mass_kg", mass)
+        com = _frozen_array(self.com_m, (3,), "payload com_m")
+        object.__setattr__(self, "com_m", com)
+        if self.inertia_kg_m2 is not None:
+            inertia = _frozen_array(self.inertia_kg_m2, (6,), "payload inertia_kg_m2")
+            object.__setattr__(self, "inertia_kg_m2", inertia)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-friendly form (used in map-file metadata)."""
+        return {
+            "mass_kg": self.mass_kg,
+            "com_m": [float(v) for v in self.com_m],
+            "inertia_kg_m2": None
+            if self.inertia_kg_m2 is None
+            else [float(v) for v in self.inertia_kg_m2],
+        }
+
+
+@lru_cache(maxsize=1)
+def _load_document() -> dict[str, Any]:
+    text = resources.files("tvist.robots").joinpath(DATA_FILE).read_text(encoding="utf-8")
+    doc = json.loads(text)
+    version = doc.get("schema_version")
+    if version != SCHEMA_VERSION:
+        raise ValueError(f"{DATA_FILE}: schema_version {version!r}, expected {SCHEMA_VERSION}")
+    if not isinstance(doc.get("robots"), dict) or not doc["robots"]:
+        raise ValueError(f"{DATA_FILE}: 'robots' must be a non-empty object")
+    return doc
+
+
+def names() -> tuple[str, ...]:
+    """Names of the robots in the parameter file, e.g. ``("ur3e", "ur5e", ...)``."""
+    return tuple(_load_document()["robots"])
+
+
+@cache
+def params(name: str) -> RobotParams:
+    """Parameters of robot ``name`` (one of :func:`names`)."""
+    robots = _load_document()["robots"]
+    if name not in robots:
+        raise ValueError(f"unknown robot {name!r}; known: {', '.join(robots)}")
+    return RobotParams.from_dict(name, robots[name])

@@ -1,0 +1,190 @@
+"""Rigid-body model of a serial revolute arm with a payload (thin wrapper over the Rust core)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from tvist import _core
+from tvist.robots._params import Payload, RobotParams, params
+
+
+def _as_q(q: Sequence[float] | np.ndarray, n_dof: int) -> np.ndarray:
+    arr = np.ascontiguousarray(q, dtype=float)
+    if arr.shape != (n_dof,):
+        raise ValueError(f"q must have shape ({n_dof},), got {arr.shape}")
+    return arr
+
+
+def _as_many(q: Sequence[Sequence[float]] | np.ndarray, n_dof: int) -> np.ndarray:
+    arr = np.ascontiguousarray(q, dtype=float)
+    if arr.ndim != 2 or arr.shape[1] != n_dof:
+        raise ValueError(f"Q must have shape (n_samples, {n_dof}), got {arr.shape}")
+    return arr
+
+
+class Robot:
+    """Serial revolute arm (standard DH) with link masses and an optional payload.
+
+    All quantities are link side, without rotor inertia, with gravity 9.81 m/s² along ``-z`` of
+    the base frame. Joint vectors have shape ``(n_dof,)``; batches ``(n_samples, n_dof)``.
+
+    Parameters
+    ----------
+    params
+        Kinematic and inertial parameters (see :func:`tvist.robots.params`).
+    payload
+        Payload on the flange; ``None`` means no payload.
+
+    Raises
+    ------
+    ValueError
+        For non-physical parameters (negative mass, inertia that is not positive
+        semi-definite or violates the triangle inequality, NaN, inconsistent lengths).
+    """
+
+    def __init__(self, params: RobotParams, payload: Payload | None = None) -> None:
+        payload = Payload() if payload is None else payload
+        self._params = params
+        self._payload = payload
+        self._core = _core.Robot(
+            np.asarray(params.d_m),
+            np.asarray(params.a_m),
+            np.asarray(params.alpha_rad),
+            np.asarray(params.mass_kg),
+            np.ascontiguousarray(params.com_m),
+            np.ascontiguousarray(params.inertia_kg_m2),
+            payload.mass_kg,
+            np.asarray(payload.com_m),
+            None if payload.inertia_kg_m2 is None else np.asarray(payload.inertia_kg_m2),
+        )
+
+    @classmethod
+    def from_params(cls, params: RobotParams, payload: Payload | None = None) -> Robot:
+        """Build a robot from any :class:`RobotParams` (for example a user-defined arm)."""
+        return cls(params, payload)
+
+    @property
+    def params(self) -> RobotParams:
+        """The robot's parameters."""
+        return self._params
+
+    @property
+    def payload(self) -> Payload:
+        """The payload on the flange."""
+        return self._payload
+
+    @property
+    def n_dof(self) -> int:
+        """Number of joints."""
+        return self._params.n_dof
+
+    @property
+    def core(self) -> _core.Robot:
+        """The Rust model (pass-through for :class:`tvist.MapDynamics`)."""
+        return self._core
+
+    def joint_inertia(self, q: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Diagonal of the joint-space inertia matrix, ``J_i = M[i, i]`` (kg m²), ``(n_dof,)``."""
+        return self._core.joint_inertia(_as_q(q, self.n_dof))
+
+    def joint_inertia_many(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
+        """:meth:`joint_inertia` for every row of ``q`` ``(n_samples, n_dof)``."""
+        return self._core.joint_inertia_many(_as_many(q, self.n_dof))
+
+    def mass_matrix(self, q: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Joint-space inertia matrix ``M(q)`` (composite rigid body algorithm), ``(n, n)``."""
+        return self._core.mass_matrix(_as_q(q, self.n_dof))
+
+    def mass_matrix_many(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
+        """:meth:`mass_matrix` for every row of ``q``, ``(n_samples, n_dof, n_dof)``."""
+        return self._core.mass_matrix_many(_as_many(q, self.n_dof))
+
+    def flange_pose(self, q: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Homogeneous transform of the flange (DH frame ``n``) in the base frame, ``(4, 4)``."""
+        return self._core.flange_pose(_as_q(q, self.n_dof))
+
+    def flange_pose_many(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
+        """:meth:`flange_pose` for every row of ``q``, ``(n_samples, 4, 4)``."""
+        return self._core.flange_pose_many(_as_many(q, self.n_dof))
+
+    def jacobian(self, q: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Geometric Jacobian of the flange origin, base frame, rows ``[linear; angular]``.
+
+        Returns shape ``(6, n_dof)``.
+        """
+        return self._core.jacobian(_as_q(q, self.n_dof))
+
+    def jacobian_many(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
+        """:meth:`jacobian` for every row of ``q``, ``(n_samples, 6, n_dof)``."""
+        return self._core.jacobian_many(_as_many(q, self.n_dof))
+
+    def gravity_torque(self, q: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Joint torques that hold the arm against gravity, ``τ_g(q)`` (N m), ``(n_dof,)``."""
+        return self._core.gravity_torque(_as_q(q, self.n_dof))
+
+    def gravity_torque_many(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
+        """:meth:`gravity_torque` for every row of ``q``, ``(n_samples, n_dof)``."""
+        return self._core.gravity_torque_many(_as_many(q, self.n_dof))
+
+    def __repr__(self) -> str:
+        return (
+            f"Robot({self._params.name!r}, n_dof={self.n_dof}, "
+            f"payload_kg={self._payload.mass_kg:g})"
+        )
+
+
+def _named(
+    name: str,
+    payload_kg: float,
+    payload_com_m: Sequence[float],
+    payload_inertia_kg_m2: Sequence[float] | None,
+) -> Robot:
+    payload = Payload(payload_kg, tuple(payload_com_m), payload_inertia_kg_m2)
+    return Robot(params(name), payload)
+
+
+def ur3e(
+    payload_kg: float = 0.0,
+    payload_com_m: Sequence[float] = (0.0, 0.0, 0.0),
+    payload_inertia_kg_m2: Sequence[float] | None = None,
+) -> Robot:
+    """UR3e with a payload (centre of mass and inertia in the flange frame)."""
+    return _named("ur3e", payload_kg, payload_com_m, payload_inertia_kg_m2)
+
+
+def ur5e(
+    payload_kg: float = 0.0,
+    payload_com_m: Sequence[float] = (0.0, 0.0, 0.0),
+    payload_inertia_kg_m2: Sequence[float] | None = None,
+) -> Robot:
+    """UR5e with a payload (centre of mass and inertia in the flange frame)."""
+    return _named("ur5e", payload_kg, payload_com_m, payload_inertia_kg_m2)
+
+
+def ur10e(
+    payload_kg: float = 0.0,
+    payload_com_m: Sequence[float] = (0.0, 0.0, 0.0),
+    payload_inertia_kg_m2: Sequence[float] | None = None,
+) -> Robot:
+    """UR10e with a payload (centre of mass and inertia in the flange frame)."""
+    return _named("ur10e", payload_kg, payload_com_m, payload_inertia_kg_m2)
+
+
+def ur16e(
+    payload_kg: float = 0.0,
+    payload_com_m: Sequence[float] = (0.0, 0.0, 0.0),
+    payload_inertia_kg_m2: Sequence[float] | None = None,
+) -> Robot:
+    """UR16e with a payload (centre of mass and inertia in the flange frame)."""
+    return _named("ur16e", payload_kg, payload_com_m, payload_inertia_kg_m2)
+
+
+def ur20(
+    payload_kg: float = 0.0,
+    payload_com_m: Sequence[float] = (0.0, 0.0, 0.0),
+    payload_inertia_kg_m2: Sequence[float] | None = None,
+) -> Robot:
+    """UR20 with a payload (centre of mass and inertia in the flange frame)."""
+    return _named("ur20", payload_kg, payload_com_m, payload_inertia_kg_m2)

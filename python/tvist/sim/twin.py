@@ -1,0 +1,494 @@
+"""Simulated flexible UR arm (MuJoCo) that produces RTDE-like logs.
+
+Model
+-----
+A flexible-joint arm (paper section 4.3, Fig. 7; Spong's model). The motor side of every
+joint follows the joint reference exactly: an ideal, infinitely stiff position servo, the
+paper's assumption ``q_m / N ≈ q_c``. The reference arrives at the control rate (500 Hz) and is
+linearly interpolated at the physics rate. The link side is the rigid arm of
+:mod:`tvist.sim.mjcf` (link masses, centres of mass and inertia tensors of the robot parameter
+file, plus the payload); each hinge carries the gear torque of :class:`~tvist.sim.FlexParams`,
+
+``tau_j = k1 delta_j + k3 delta_j³ + c_j(tau) (d/dt)delta_j``,  ``delta_j = q_motor,j - q_j``,
+
+which acts between link ``j-1`` and link ``j`` and therefore is the generalized force of hinge
+``j``. Rotor inertia does not enter: the motor's motion is prescribed.
+
+Integration: semi-implicit Euler of MuJoCo's ``implicitfast`` integrator. The spring torque is
+explicit (no numerical damping of the modes); the damping ``-c q_link'`` is MuJoCo dof damping
+and so implicit, and ``+c q_motor'`` is an applied force.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from tvist import robots
+from tvist.sim.flex import FlexParams, default_flex
+from tvist.sim.mjcf import GRAVITY_M_S2, build_mjcf
+from tvist.sim.modal import ModalAnalysis, modal_analysis
+from tvist.sim.record import SimRecord
+
+#: The twin refuses payloads heavier than this multiple of the rated payload: the gear model
+#: (eq. 22 fitted around the rated torque) is not meant far beyond it.
+PAYLOAD_LIMIT_FACTOR = 1.5
+
+#: Joint indices of the two modes the dynamic map describes.
+BASE_JOINT = 0
+SHOULDER_JOINT = 1
+
+
+class SimulationDiverged(RuntimeError):
+    """The simulation produced NaN or an impossible gear deflection.
+
+    Attributes
+    ----------
+    time_s
+        Simulated time (s) at which the divergence was detected.
+    """
+
+    def __init__(self, time_s: float, reason: str) -> None:
+        super().__init__(f"simulation diverged at t = {time_s:.4f} s: {reason}")
+        self.time_s = time_s
+
+
+def _finite_float(value: float, what: str) -> float:
+    try:
+        out = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} must be a number, got {value!r}") from None
+    if not math.isfinite(out):
+        raise ValueError(f"{what} must be finite, got {value!r}")
+    return out
+
+
+class Twin:
+    """MuJoCo twin of a UR e-Series arm with flexible joints and a tool-flange accelerometer.
+
+    Parameters
+    ----------
+    robot_name
+        A robot of the parameter file, e.g. ``"ur5e"`` (see :func:`tvist.robots.names`).
+    payload_kg
+        Payload mass (kg), ``0 <= payload_kg <= 1.5 * max_payload_kg``.
+    payload_com_m
+        Payload centre of mass in the flange frame (m).
+    flex
+        Gear springs and dampers; ``None`` takes :func:`~tvist.sim.default_flex` of the robot.
+    physics_dt_s
+        Physics time step (s); must divide the control period given to :meth:`run`.
+    accel_noise_std
+        Standard deviation of white noise added to each accelerometer axis (m/s²).
+    seed
+        Seed of the accelerometer noise.
+    payload_inertia_kg_m2
+        ``[ixx, iyy, izz, ixy, ixz, iyz]`` about the payload's centre of mass, flange axes;
+        ``None`` is a point mass.
+
+    Raises
+    ------
+    ValueError
+        Unknown robot, impossible payload, invalid flexibility or time step.
+    """
+
+    def __init__(
+        self,
+        robot_name: str = "ur5e",
+        payload_kg: float = 5.0,
+        payload_com_m: Sequence[float] = (0.0, 0.0, 0.05),
+        flex: FlexParams | None = None,
+        physics_dt_s: float = 0.0005,
+        accel_noise_std: float = 0.0,
+        seed: int = 0,
+        payload_inertia_kg_m2: Sequence[float] | None = None,
+    ) -> None:
+        import mujoco
+
+        self._params = robots.params(robot_name)
+        mass_kg = _finite_float(payload_kg, "payload_kg")
+        limit_kg = PAYLOAD_LIMIT_FACTOR * self._params.max_payload_kg
+        if not 0.0 <= mass_kg <= limit_kg:
+            raise ValueError(
+                f"payload_kg = {mass_kg:g} is outside [0, {limit_kg:g}] kg "
+                f"({PAYLOAD_LIMIT_FACTOR:g} x the {robot_name} rated payload)"
+            )
+        self._payload = robots.Payload(mass_kg, tuple(payload_com_m), payload_inertia_kg_m2)
+        self._flex = default_flex(robot_name) if flex is None else flex
+        self._flex.validate(self._params.n_dof)
+        dt = _finite_float(physics_dt_s, "physics_dt_s")
+        if not 0.0 < dt <= 0.0005:
+            raise ValueError(f"physics_dt_s must be in (0, 0.0005] s, got {dt:g}")
+        noise = _finite_float(accel_noise_std, "accel_noise_std")
+        if noise < 0.0:
+            raise ValueError(f"accel_noise_std must be >= 0, got {noise:g}")
+        self._noise_std = noise
+        self._rng = np.random.default_rng(seed)
+
+        self._mujoco = mujoco
+        self._model = mujoco.MjModel.from_xml_string(
+            build_mjcf(self._params, self._payload, physics_dt_s=dt)
+        )
+        self._data = mujoco.MjData(self._model)
+        self._flange = self._model.site("flange").id
+        accel = self._model.sensor("accelerometer")
+        self._accel_slice = slice(int(accel.adr[0]), int(accel.adr[0]) + 3)
+        self._k1 = np.asarray(self._flex.k1_nm_per_rad, dtype=float)
+        self._k3 = np.asarray(self._flex.k3_nm_per_rad3, dtype=float)
+        self._c0 = np.asarray(self._flex.c0_nms_per_rad, dtype=float)
+        self._c_load = np.asarray(self._flex.c_load_per_nm, dtype=float)
+
+    # ------------------------------------------------------------------ properties
+
+    @property
+    def params(self) -> robots.RobotParams:
+        """Robot parameters the model was generated from."""
+        return self._params
+
+    @property
+    def payload(self) -> robots.Payload:
+        """The payload on the flange."""
+        return self._payload
+
+    @property
+    def flex(self) -> FlexParams:
+        """Gear springs and dampers."""
+        return self._flex
+
+    @property
+    def n_dof(self) -> int:
+        """Number of joints."""
+        return self._params.n_dof
+
+    @property
+    def physics_dt_s(self) -> float:
+        """Physics time step (s)."""
+        return float(self._model.opt.timestep)
+
+    @property
+    def gravity_m_s2(self) -> float:
+        """Magnitude of gravity (m/s²), acting along ``-z`` of the base frame."""
+        return GRAVITY_M_S2
+
+    @property
+    def mjcf(self) -> str:
+        """MJCF text of the rigid link-side arm (for inspection or rendering)."""
+        return build_mjcf(self._params, self._payload, physics_dt_s=self.physics_dt_s)
+
+    def rigid_model(self) -> tuple[object, object]:
+        """A fresh ``(mujoco.MjModel, mujoco.MjData)`` pair of the rigid link-side arm."""
+        model = self._mujoco.MjModel.from_xml_string(self.mjcf)
+        return model, self._mujoco.MjData(model)
+
+    # ------------------------------------------------------------------ statics
+
+    def _check_pose(self, q: np.ndarray, what: str) -> np.ndarray:
+        arr = np.asarray(q, dtype=float)
+        if arr.shape != (self.n_dof,):
+            raise ValueError(f"{what} must have shape ({self.n_dof},), got {arr.shape}")
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"{what} contains NaN or infinite values")
+        lower, upper = self._params.joint_limits_rad.T
+        bad = np.flatnonzero((arr < lower) | (arr > upper))
+        if bad.size:
+            j = int(bad[0])
+            raise ValueError(
+                f"{what}: joint {j} = {arr[j]:.6g} rad is outside its limits "
+                f"[{lower[j]:.6g}, {upper[j]:.6g}]"
+            )
+        return arr
+
+    def _gravity_torque(self, q_link: np.ndarray) -> np.ndarray:
+        """Generalized gravity force ``G(q)`` of the link side at rest (N m)."""
+        d = self._data
+        d.qpos[:] = q_link
+        d.qvel[:] = 0.0
+        self._mujoco.mj_forward(self._model, d)
+        return d.qfrc_bias.copy()
+
+    def _gravity_stiffness(self, q_link: np.ndarray, step_rad: float = 1e-6) -> np.ndarray:
+        """``dG/dq`` by central differences (N m/rad), ``(n_dof, n_dof)``.
+
+        ``G`` is smooth (trigonometric) with second derivatives of order ``|G| ~ 1e2 N m``,
+        so the truncation error ``~ step² |G'''|`` is ~1e-10 N m/rad and rounding
+        ``~ eps |G| / step`` ~1e-8 N m/rad, far below gear stiffnesses of ~1e3 N m/rad.
+        """
+        n = self.n_dof
+        out = np.empty((n, n))
+        for j in range(n):
+            dq = np.zeros(n)
+            dq[j] = step_rad
+            out[:, j] = (self._gravity_torque(q_link + dq) - self._gravity_torque(q_link - dq)) / (
+                2.0 * step_rad
+            )
+        return out
+
+    def equilibrium(self, q_motor: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Link-side angles at rest under gravity with the motors held at ``q_motor`` (rad).
+
+        Solves ``k1 delta + k3 delta³ = G(q_motor - delta)`` by Newton's method.
+        """
+        theta = self._check_pose(np.asarray(q_motor, dtype=float), "q_motor")
+        delta = self._flex.deflection_rad(self._gravity_torque(theta))
+        for _ in range(50):
+            q_link = theta - delta
+            residual = self._flex.spring_torque_nm(delta) - self._gravity_torque(q_link)
+            if np.max(np.abs(residual)) < 1e-11:
+                break
+            # d(residual)/d(delta) = K_gear + dG/dq (since q_link = theta - delta).
+            jac = np.diag(self._flex.tangent_stiffness_nm_per_rad(delta)) + self._gravity_stiffness(
+                q_link
+            )
+            delta = delta - np.linalg.solve(jac, residual)
+        else:
+            raise SimulationDiverged(0.0, "no static equilibrium under gravity at this pose")
+        return theta - delta
+
+    # ------------------------------------------------------------------ modes
+
+    def modal_analysis(self, q: Sequence[float] | np.ndarray) -> ModalAnalysis:
+        """All vibration modes at rest with the motors held at ``q`` (linearized).
+
+        The arm is linearized about its static equilibrium under gravity:
+        ``M dq'' + C dq' + (K_gear + dG/dq) dq = 0`` with the mass matrix ``M`` of the link
+        side, the tangent gear stiffness ``K_gear = diag(k1 + 3 k3 delta_g²)`` at the gravity
+        deflection ``delta_g``, the gravity stiffness ``dG/dq`` and the gear damping at the
+        gravity load ``C = diag(c0 (1 + c_load |tau_g|))``.
+        """
+        theta = self._check_pose(np.asarray(q, dtype=float), "q")
+        q_link = self.equilibrium(theta)
+        delta = theta - q_link
+        tau = self._flex.spring_torque_nm(delta)
+        gear = self._flex.tangent_stiffness_nm_per_rad(delta)
+        stiffness = np.diag(gear) + self._gravity_stiffness(q_link)
+        damping = np.diag(self._flex.damping_nms_per_rad(tau))
+        return modal_analysis(self.mass_matrix(q_link), damping, stiffness, gear)
+
+    def modes(self, q: Sequence[float] | np.ndarray) -> list[tuple[float, float]]:
+        """Ground-truth ``[(wn_rad_s, zeta) base, (wn_rad_s, zeta) shoulder]`` at pose ``q``.
+
+        The base (shoulder) mode is the mode that stores the largest share of its gear strain
+        energy in the base (shoulder) joint; see :meth:`modal_analysis`.
+        """
+        analysis = self.modal_analysis(q)
+        base = analysis.dominant_mode(BASE_JOINT)
+        shoulder = analysis.dominant_mode(SHOULDER_JOINT, exclude=(base,))
+        return [
+            (float(analysis.wn_rad_s[base]), float(analysis.zeta[base])),
+            (float(analysis.wn_rad_s[shoulder]), float(analysis.zeta[shoulder])),
+        ]
+
+    def mass_matrix(self, q_link: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Link-side joint-space inertia matrix of the MuJoCo model (kg m²), ``(n, n)``."""
+        d = self._data
+        d.qpos[:] = np.asarray(q_link, dtype=float)
+        self._mujoco.mj_forward(self._model, d)
+        out = np.zeros((self.n_dof, self.n_dof))
+        self._mujoco.mj_fullM(self._model, d, out)
+        return out
+
+    # ------------------------------------------------------------------ run
+
+    def _check_trajectory(self, q_ref: np.ndarray | Sequence[Sequence[float]]) -> np.ndarray:
+        try:
+            arr = np.array(q_ref, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError("Q_ref must be a numeric array of shape (n_samples, n_dof)") from None
+        if arr.ndim != 2 or arr.shape[1] != self.n_dof or arr.shape[0] < 2:
+            raise ValueError(
+                f"Q_ref must have shape (n_samples >= 2, {self.n_dof}), got {arr.shape}"
+            )
+        bad_rows = np.flatnonzero(~np.all(np.isfinite(arr), axis=1))
+        if bad_rows.size:
+            raise ValueError(f"Q_ref has NaN or infinite values in row {int(bad_rows[0])}")
+        lower, upper = self._params.joint_limits_rad.T
+        outside = np.argwhere((arr < lower) | (arr > upper))
+        if outside.size:
+            row, j = (int(v) for v in outside[0])
+            raise ValueError(
+                f"Q_ref row {row}: joint {j} = {arr[row, j]:.6g} rad is outside its limits "
+                f"[{lower[j]:.6g}, {upper[j]:.6g}]"
+            )
+        return arr
+
+    def run(
+        self,
+        Q_ref: np.ndarray | Sequence[Sequence[float]],  # noqa: N803 (matches the paper's Q)
+        dt_s: float = 0.002,
+        progress: bool = False,
+        *,
+        initial_dq_rad: Sequence[float] | np.ndarray | None = None,
+        initial_qd_rad_s: Sequence[float] | np.ndarray | None = None,
+    ) -> SimRecord:
+        """Simulate the joint reference ``Q_ref`` and record it like RTDE at the control rate.
+
+        The arm starts at rest in static equilibrium under gravity at ``Q_ref[0]`` (the gear
+        deflection of the gravity load already settled).
+
+        Parameters
+        ----------
+        Q_ref
+            Joint references (rad), one row per control period, ``(n_samples, n_dof)``.
+        dt_s
+            Control period (s); a whole multiple of ``physics_dt_s``.
+        progress
+            Show a progress bar.
+        initial_dq_rad, initial_qd_rad_s
+            Optional link-side offsets from the rest state at ``t = 0`` (rad, rad/s), for
+            free-decay experiments; ``(n_dof,)``.
+
+        Returns
+        -------
+        SimRecord
+            ``n_samples`` samples at ``timestamp = k * dt_s``.
+
+        Raises
+        ------
+        ValueError
+            For a malformed trajectory (shape, NaN, joint limits) or control period.
+        SimulationDiverged
+            If the simulation blows up; nothing is returned then.
+        """
+        mujoco = self._mujoco
+        q_ref = self._check_trajectory(Q_ref)
+        dt = _finite_float(dt_s, "dt_s")
+        n_sub = round(dt / self.physics_dt_s)
+        if n_sub < 1 or abs(n_sub * self.physics_dt_s - dt) > 1e-9 * dt:
+            raise ValueError(
+                f"dt_s = {dt:g} s must be a whole multiple of physics_dt_s = {self.physics_dt_s:g} s"
+            )
+        n_samples, n = q_ref.shape
+        offsets = []
+        for value, what in ((initial_dq_rad, "initial_dq_rad"), (initial_qd_rad_s, "initial_qd")):
+            arr = np.zeros(n) if value is None else np.asarray(value, dtype=float)
+            if arr.shape != (n,) or not np.all(np.isfinite(arr)):
+                raise ValueError(f"{what} must be {n} finite values")
+            offsets.append(arr)
+
+        model, data = self._model, self._data
+        q_start = self.equilibrium(q_ref[0])
+        mujoco.mj_resetData(model, data)
+        data.qpos[:] = q_start + offsets[0]
+        data.qvel[:] = offsets[1]
+
+        # Motor reference: linear interpolation within each control period.
+        q_next = np.vstack([q_ref[1:], q_ref[-1:]])
+        slope = (q_next - q_ref) / dt  # rad/s, motor velocity within period k
+        fractions = np.arange(n_sub) / n_sub
+
+        actual_q = np.empty((n_samples, n))
+        actual_qd = np.empty((n_samples, n))
+        deflection = np.empty((n_samples, n))
+        accel = np.empty((n_samples, 3))
+        flange_pos = np.empty((n_samples, 3))
+        flange_rot = np.empty((n_samples, 9))
+
+        k1, k3, c0, c_load = self._k1, self._k3, self._c0, self._c_load
+        qpos, qvel, applied = data.qpos, data.qvel, data.qfrc_applied
+        dof_damping = model.dof_damping
+        site_xpos, site_xmat, sensordata = data.site_xpos, data.site_xmat, data.sensordata
+        step = mujoco.mj_step
+        flange, accel_slice = self._flange, self._accel_slice
+        limit = self._flex.max_deflection_rad
+        bad_qacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
+        theta = np.empty(n)
+        delta = np.empty(n)
+        tau = np.empty(n)
+        damp = np.empty(n)
+
+        bar = _progress_bar(n_samples, dt) if progress else None
+        try:
+            for k in range(n_samples):
+                base_ref = q_ref[k]
+                vel_ref = slope[k]
+                actual_q[k] = qpos
+                actual_qd[k] = qvel
+                deflection[k] = base_ref - qpos
+                for s in range(n_sub):
+                    np.multiply(vel_ref, fractions[s] * dt, out=theta)
+                    theta += base_ref
+                    np.subtract(theta, qpos, out=delta)
+                    # tau = k1 delta + k3 delta^3
+                    np.multiply(delta, delta, out=tau)
+                    tau *= k3
+                    tau += k1
+                    tau *= delta
+                    # c = c0 (1 + c_load |tau|); -c q_link' is implicit dof damping.
+                    np.abs(tau, out=damp)
+                    damp *= c_load
+                    damp += 1.0
+                    damp *= c0
+                    dof_damping[:] = damp
+                    damp *= vel_ref
+                    np.add(tau, damp, out=applied)
+                    step(model, data)
+                    if s == 0:
+                        # mj_step evaluated sensors and kinematics before integrating, so
+                        # these belong to the sample instant t_k.
+                        accel[k] = sensordata[accel_slice]
+                        flange_pos[k] = site_xpos[flange]
+                        flange_rot[k] = site_xmat[flange]
+                if (
+                    data.warning[bad_qacc].number
+                    or not np.all(np.isfinite(qpos))
+                    or not np.all(np.isfinite(qvel))
+                ):
+                    raise SimulationDiverged((k + 1) * dt, "non-finite state")
+                worst = float(np.max(np.abs(q_next[k] - qpos)))
+                if worst > limit:
+                    raise SimulationDiverged(
+                        (k + 1) * dt,
+                        f"gear deflection {worst:.3g} rad exceeds {limit:g} rad",
+                    )
+                if bar is not None and k % 250 == 0:
+                    bar.update(k)
+        finally:
+            if bar is not None:
+                bar.close()
+
+        if self._noise_std > 0.0:
+            accel = accel + self._rng.normal(0.0, self._noise_std, size=accel.shape)
+        from scipy.spatial.transform import Rotation
+
+        rotvec = Rotation.from_matrix(flange_rot.reshape(-1, 3, 3)).as_rotvec()
+        target_qd = np.gradient(q_ref, dt, axis=0)
+        return SimRecord(
+            timestamp=np.arange(n_samples) * dt,
+            target_q=q_ref,
+            target_qd=target_qd,
+            target_qdd=np.gradient(target_qd, dt, axis=0),
+            actual_q=actual_q,
+            actual_qd=actual_qd,
+            actual_TCP_pose=np.hstack([flange_pos, rotvec]),
+            actual_tool_accelerometer=accel,
+            deflection_rad=deflection,
+        )
+
+
+class _ProgressBar:
+    """Rich progress bar over simulated samples."""
+
+    def __init__(self, n_samples: int, dt_s: float) -> None:
+        from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+        self._progress = Progress(
+            TextColumn("simulating {task.fields[seconds]:.1f} s"),
+            BarColumn(),
+            TextColumn("{task.percentage:>3.0f}%"),
+            TimeRemainingColumn(),
+        )
+        self._task = self._progress.add_task("sim", total=n_samples, seconds=n_samples * dt_s)
+        self._progress.start()
+
+    def update(self, completed: int) -> None:
+        self._progress.update(self._task, completed=completed)
+
+    def close(self) -> None:
+        self._progress.update(self._task, completed=self._progress.tasks[0].total)
+        self._progress.stop()
+
+
+def _progress_bar(n_samples: int, dt_s: float) -> _ProgressBar:
+    return _ProgressBar(n_samples, dt_s)
