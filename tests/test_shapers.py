@@ -97,14 +97,14 @@ def simulated_residual_ratio(s: tvist.Impulses, wn: float, zeta: float) -> float
             continue
         last = i == len(s.amplitudes) - 1
         t_eval = np.linspace(t0, t1, 2000) if last else None
-        sol = solve_ivp(
-            rhs, (t0, t1), state, args=(level,), rtol=1e-12, atol=1e-14, t_eval=t_eval
-        )
+        sol = solve_ivp(rhs, (t0, t1), state, args=(level,), rtol=1e-12, atol=1e-14, t_eval=t_eval)
         if last:
             t_fit, y_fit = sol.t, sol.y[0] - 1.0
         state = sol.y[:, -1]
     tau = t_fit - s.times_s[-1]
-    basis = np.exp(-zeta * wn * tau)[:, None] * np.column_stack([np.cos(wd * tau), np.sin(wd * tau)])
+    basis = np.exp(-zeta * wn * tau)[:, None] * np.column_stack(
+        [np.cos(wd * tau), np.sin(wd * tau)]
+    )
     coef, *_ = np.linalg.lstsq(basis, y_fit, rcond=None)
     # The unshaped unit step leaves y - 1 = -e^{-zeta wn t}(cos wd t + zeta/sqrt(1-zeta^2) sin wd t)
     # whose amplitude at t = 0 is 1/sqrt(1 - zeta^2).
@@ -181,8 +181,9 @@ def test_exact_undamped_ei_gives_the_band_the_fit_reproduces() -> None:
     s = tvist.shaper("ei", 1.0, 0.0, tolerance=v)
     ratio = np.linspace(0.5, 1.6, 110001)
     lo, hi = band_around_one(ratio, tvist.prv(s, ratio, 0.0), v)
-    # The fit's band is slightly wider because its hump is 1.2e-3 below V (see above).
-    assert r_edge - 0.01 < lo < r_edge and 2 - r_edge < hi < 2 - r_edge + 0.01
+    # The fit's band edges lie within 1.2e-3 of the exact ones (measured: 0.8014 and 1.1986
+    # against 0.8003 and 1.1997); 5e-3 still fails a shaper of any other shape.
+    assert abs(lo - r_edge) < 5e-3 and abs(hi - (2 - r_edge)) < 5e-3
 
 
 def extrema(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -224,7 +225,7 @@ def test_convolution(names: tuple[str, ...]) -> None:
     modes = [(2 * np.pi * 8.0, 0.26), (2 * np.pi * 6.9, 0.1), (2 * np.pi * 19.2, 0.14)][
         : len(names)
     ]
-    sets = [tvist.shaper(n, *m) for n, m in zip(names, modes)]
+    sets = [tvist.shaper(n, *m) for n, m in zip(names, modes, strict=True)]
     c = tvist.convolve(*sets)
     assert c.amplitudes.sum() == pytest.approx(1.0, abs=1e-12)
     assert np.all(np.diff(c.times_s) > 0)
@@ -236,7 +237,7 @@ def test_convolution(names: tuple[str, ...]) -> None:
     for wn, zeta in probe:
         product = np.prod([tvist.prv(s, wn, zeta) for s in sets])
         assert tvist.prv(c, wn, zeta) == pytest.approx(product, abs=1e-12)
-    for (wn, zeta), name in zip(modes, names):
+    for (wn, zeta), name in zip(modes, names, strict=True):
         if name in ("zv", "zvd", "zvdd", "mzv"):
             assert tvist.prv(c, wn, zeta) <= 1e-9
 

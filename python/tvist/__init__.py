@@ -13,7 +13,7 @@ import numpy as np
 from tvist import _core, robots
 from tvist._core import ConstantModes, Impulses, TvShaper
 from tvist.dynmap import DynamicMap, MapDynamics
-from tvist.zero_delay import ZeroDelayResult, zero_delay
+from tvist.ztdis import ZeroDelayResult, zero_delay
 
 __all__ = [
     "SHAPERS",

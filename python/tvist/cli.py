@@ -22,13 +22,13 @@ def _add_demo(sub: argparse._SubParsersAction) -> None:
 
 
 def _cmd_zero_delay(args: argparse.Namespace) -> int:
-    from tvist.zero_delay_benchmark import run_from_args
+    from tvist.ztdis_benchmark import run_from_args
 
     return run_from_args(args)
 
 
 def _add_zero_delay(sub: argparse._SubParsersAction) -> None:
-    from tvist.zero_delay_benchmark import add_arguments
+    from tvist.ztdis_benchmark import add_arguments
 
     p = sub.add_parser(
         "zero-delay",

@@ -16,7 +16,14 @@ mod robot_support;
 /// A slow base-and-shoulder sweep so the inertia and the modes change every cycle.
 fn pose(k: u64, q: &mut [f64; 6]) {
     let s = (k % 5000) as f64 * 2e-4;
-    *q = [s, -3.0 + 1.2 * s, 0.5 * s, -1.5708, 0.3, 0.0];
+    *q = [
+        s,
+        -3.0 + 1.2 * s,
+        0.5 * s,
+        -std::f64::consts::FRAC_PI_2,
+        0.3,
+        0.0,
+    ];
 }
 
 fn bench_map_step(c: &mut Criterion) {

@@ -122,18 +122,17 @@ impl DelayLine {
         let max = self.max_delay_samples();
         let clamped = !(delay <= max); // also catches NaN
         let d = if clamped { max } else { delay.max(0.0) };
-        let k = d.floor();
-        let mu = d - k;
-        let k = k as usize;
+        // d ∈ [0, max]: truncation is the floor and the cast cannot overflow.
+        let k = d as usize;
         match self.interp {
             Interpolation::Linear => {
-                self.add_sample(k, weight * (1.0 - mu), out);
-                if mu != 0.0 {
-                    self.add_sample(k + 1, weight * mu, out);
-                }
+                let mu = d - k as f64;
+                // Ages k and k + 1 <= floor(max) + 1 = capacity − 1.
+                self.add_two(k, [weight * (1.0 - mu), weight * mu], out);
             }
             Interpolation::Cubic => {
-                // Nodes at ages base..base+3, evaluated at x = d − base ∈ [0, 2).
+                // Nodes at ages base..base+3 (<= floor(max) + 2 = capacity − 1), evaluated at
+                // x = d − base: centred (x ∈ [1, 2)) except for delays below one sample.
                 let base = k.saturating_sub(1);
                 let x = d - base as f64;
                 let l = [
@@ -142,31 +141,61 @@ impl DelayLine {
                     -x * (x - 1.0) * (x - 3.0) / 2.0,
                     x * (x - 1.0) * (x - 2.0) / 6.0,
                 ];
-                for (j, lj) in l.iter().enumerate() {
-                    if *lj != 0.0 {
-                        self.add_sample(base + j, weight * lj, out);
-                    }
-                }
+                self.add_four(base, l.map(|lj| weight * lj), out);
             }
         }
         clamped
     }
 
-    /// `out += w · sample(age)`. `age < capacity` is guaranteed by the clamping in
-    /// `accumulate`; an older age would still give an in-bounds slot (and `get` checks).
+    /// Slot of the sample of age `age` (`age < capacity`, guaranteed by the clamping in
+    /// `accumulate`; an older age still gives an in-bounds slot).
     #[inline]
-    fn add_sample(&self, age: usize, w: f64, out: &mut [f64]) {
+    fn slot(&self, age: usize) -> usize {
         debug_assert!(age < self.capacity);
-        let slot = if age <= self.head {
+        if age <= self.head {
             self.head - age
         } else {
             (self.head + self.capacity).saturating_sub(age)
-        };
-        let start = slot * self.n_channels;
-        if let Some(s) = self.buf.get(start..start + self.n_channels) {
-            for (o, &v) in out.iter_mut().zip(s) {
-                *o += w * v;
-            }
+        }
+    }
+
+    /// The stored sample (all channels) of age `age`; empty only if the invariants broke.
+    #[inline]
+    fn row(&self, age: usize) -> &[f64] {
+        let start = self.slot(age) * self.n_channels;
+        self.buf.get(start..start + self.n_channels).unwrap_or(&[])
+    }
+
+    /// `out += w0 · sample(age) + w1 · sample(age + 1)` over all channels, in one pass.
+    #[inline]
+    fn add_two(&self, age: usize, [w0, w1]: [f64; 2], out: &mut [f64]) {
+        let (r0, r1) = (self.row(age), self.row(age + 1));
+        // Equal-length views: the loop below has no bounds checks and vectorizes.
+        let n = out.len().min(r0.len()).min(r1.len());
+        let (out, r0, r1) = (&mut out[..n], &r0[..n], &r1[..n]);
+        for i in 0..n {
+            out[i] += w0 * r0[i] + w1 * r1[i];
+        }
+    }
+
+    /// `out += Σ_{j<4} w_j · sample(age + j)` over all channels, in one pass.
+    #[inline]
+    fn add_four(&self, age: usize, [w0, w1, w2, w3]: [f64; 4], out: &mut [f64]) {
+        let (r0, r1, r2, r3) = (
+            self.row(age),
+            self.row(age + 1),
+            self.row(age + 2),
+            self.row(age + 3),
+        );
+        let n = out
+            .len()
+            .min(r0.len())
+            .min(r1.len())
+            .min(r2.len())
+            .min(r3.len());
+        let (out, r0, r1, r2, r3) = (&mut out[..n], &r0[..n], &r1[..n], &r2[..n], &r3[..n]);
+        for i in 0..n {
+            out[i] += (w0 * r0[i] + w1 * r1[i]) + (w2 * r2[i] + w3 * r3[i]);
         }
     }
 }

@@ -149,11 +149,27 @@ impl ModeMap {
         }
         let wn_rad_s = (gain_f * stiffness / j_f).sqrt();
         let numerator = (c.c_0 + c.c_1 * j_d.sqrt() + c.c_2 * j_d) * (1.0 + c.c_tau * j_d);
-        let zeta = gain_d.powf(self.damping_gain_exponent)
-            * gain_f.powf(self.frequency_gain_exponent)
+        let zeta = power(gain_d, self.damping_gain_exponent)
+            * power(gain_f, self.frequency_gain_exponent)
             * numerator
             / (2.0 * (stiffness * j_f).sqrt());
         Mode::new(wn_rad_s, zeta)
+    }
+}
+
+/// `x^e` for `x > 0`, with exact fast paths for the exponents the published forms use.
+#[inline]
+fn power(x: f64, e: f64) -> f64 {
+    if e == 0.0 {
+        1.0
+    } else if e == 1.0 {
+        x
+    } else if e == 0.5 {
+        x.sqrt()
+    } else if e == -0.5 {
+        1.0 / x.sqrt()
+    } else {
+        x.powf(e)
     }
 }
 

@@ -260,8 +260,8 @@ impl Robot {
         let ws = &mut self.ws;
         ws.rot[0] = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
         ws.pos[0] = [0.0; 3];
-        for k in 0..n {
-            let (st, ct) = q[k].sin_cos();
+        for (k, qk) in q.iter().enumerate() {
+            let (st, ct) = qk.sin_cos();
             let (ca, sa) = (self.cos_alpha[k], self.sin_alpha[k]);
             let DhJoint { d_m, a_m, .. } = self.joints[k];
             let local = [ct, -st * ca, st * sa, st, ct * ca, -ct * sa, 0.0, sa, ca];

@@ -576,4 +576,49 @@ mod tests {
         assert!(err.to_string().contains("Nyquist"), "{err}");
         assert!(Discretization::from_name("zoh").is_err());
     }
+
+    mod properties {
+        use super::*;
+        use proptest::prelude::*;
+
+        proptest! {
+            /// For any valid setup below Nyquist: unit DC gain, poles inside (or, for ζ = 0, on)
+            /// the unit circle, and a constant input is reproduced exactly after a reset.
+            #[test]
+            fn sections_are_stable_with_unit_dc_gain(
+                wn in 0.5f64..300.0,
+                zeta in 0.0f64..0.6,
+                alpha in 0.05f64..1.0,
+                dt in 1e-4f64..4e-3,
+                x0 in -10.0f64..10.0,
+                tustin in any::<bool>(),
+            ) {
+                prop_assume!(wn / alpha * dt < 0.9 * PI);
+                let method = if tustin { Discretization::Tustin } else { Discretization::Matched };
+                let mode = Mode::new(wn, zeta);
+                let sec = Biquad::compensator(mode, alpha, dt, method);
+                // DC gain: sums of O(1) coefficients that cancel to O((ω dt)²), so rounding
+                // is amplified by up to 1/(ω dt)² ~ 2e7 at the slowest corner: 1e-8 relative.
+                prop_assert!((sec.dc_gain() - 1.0).abs() < 1e-8, "dc gain {}", sec.dc_gain());
+                // Poles of z² + a1 z + a2: complex pair with |p|² = a2, or two real roots.
+                let (a1, a2) = (sec.a[0], sec.a[1]);
+                let disc = a1 * a1 - 4.0 * a2;
+                let radius = if disc < 0.0 {
+                    a2.sqrt()
+                } else {
+                    (a1.abs() + disc.sqrt()) / 2.0
+                };
+                prop_assert!(radius <= 1.0 + 1e-12, "pole radius {radius}");
+                let mut c = Compensator::with_discretization(&[mode], alpha, dt, 1, method)
+                    .expect("valid");
+                // Same conditioning as the DC gain, times |x0| <= 10: 1e-6 absolute is ample.
+                c.reset(&[x0]);
+                let mut y = [0.0];
+                for _ in 0..50 {
+                    c.step(&[x0], &mut y);
+                }
+                prop_assert!((y[0] - x0).abs() < 1e-6 * (1.0 + x0.abs()), "{} != {x0}", y[0]);
+            }
+        }
+    }
 }

@@ -242,13 +242,11 @@ fn wrong_lengths_report_bad_length_and_leave_outputs_alone() {
 }
 
 fn expect_invalid(result: Result<Robot, Error>, needle: &str) {
-    match result {
-        Err(e) => assert!(
-            e.to_string().contains(needle),
-            "{e} does not mention {needle:?}"
-        ),
-        Ok(_) => panic!("accepted an invalid robot (expected {needle:?})"),
-    }
+    let err = result.expect_err("an invalid robot must be rejected");
+    assert!(
+        err.to_string().contains(needle),
+        "{err} does not mention {needle:?}"
+    );
 }
 
 #[test]
@@ -402,8 +400,8 @@ fn map_dynamics_rejects_maps_invalid_in_the_workspace() {
         DynamicMap::new(vec![ModeMap::general(damped, 1)]).expect("finite")
     )
     .is_err());
-    // Only overdamped at small inertia: stiffness falls as J falls below ~0.2 kg m² on joint 4
-    // (wrist), so a map on the wrist with the shoulder's coefficients is rejected too.
+    // The shoulder's coefficients on joint 5 (J_5 ~ 3e-4 kg m²): (1 + k_p/J) ~ 7000 drives
+    // zeta far above 1, so that map is rejected too.
     let shoulder = MapCoefficients::reduced(1e4, 763.0, 1.73, 0.27, 0.038, 47.2);
     assert!(MapDynamics::new(
         robot.clone(),

@@ -24,11 +24,7 @@ fn check_len(what: &str, got: usize, expected: usize) -> PyResult<()> {
     }
 }
 
-fn rows<'a>(
-    arr: &'a PyReadonlyArray2<'_, f64>,
-    cols: usize,
-    what: &str,
-) -> PyResult<(usize, Vec<f64>)> {
+fn rows(arr: &PyReadonlyArray2<'_, f64>, cols: usize, what: &str) -> PyResult<(usize, Vec<f64>)> {
     let shape = arr.shape();
     if shape[1] != cols {
         return Err(PyValueError::new_err(format!(

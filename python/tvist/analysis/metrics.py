@@ -90,21 +90,46 @@ def peak_jerk(q: ArrayLike, dt_s: float) -> float:
     return float(np.max(np.abs(d3q)) / positive("dt_s", dt_s) ** 3)
 
 
+def _count_humps(speed: np.ndarray, bar: float) -> int:
+    """Local maxima above ``bar`` separated from the previous counted one by a dip of at
+    least ``bar`` below the lower of the two.
+
+    :func:`scipy.signal.find_peaks` proposes the candidates (a flat top is one candidate).
+    Its own prominence cannot be used alone: maxima of exactly equal height, as rounding
+    leaves on a cruise plateau, each get the full prominence.
+    """
+    from scipy.signal import find_peaks
+
+    # Zero padding lets a hump that touches either end of the record count.
+    padded = np.concatenate([[0.0], speed, [0.0]])
+    kept: list[int] = []
+    for i in find_peaks(padded, height=bar)[0]:
+        if kept:
+            last = kept[-1]
+            dip = padded[last : i + 1].min()
+            if min(padded[last], padded[i]) - dip < bar:
+                if padded[i] > padded[last]:
+                    kept[-1] = i
+                continue
+        kept.append(int(i))
+    return len(kept)
+
+
 def count_velocity_peaks(qd: ArrayLike, rel_threshold: float = 0.05) -> int | np.ndarray:
     """Number of humps of ``|velocity|`` per joint: a measure of how smooth a move is.
 
     A rest-to-rest move with one acceleration and one deceleration phase has one hump; a
     reference shaped with impulses spaced wider than the move has one per impulse. A hump is
-    a local maximum of ``|qd|`` (a flat top counts once) whose height and prominence both
-    exceed ``rel_threshold`` times that joint's largest ``|qd|``, so rounding ripples on a
-    cruise plateau are not counted.
+    a local maximum of ``|qd|`` (a flat top counts once) that exceeds ``rel_threshold`` times
+    that joint's largest ``|qd|`` and is separated from the previous hump by a dip of at least
+    that much, so rounding ripples on a cruise plateau are not counted.
 
     Parameters
     ----------
     qd
         Joint velocity, ``(n_samples,)`` or ``(n_samples, n_dof)``.
     rel_threshold
-        Relative height and prominence threshold, in (0, 1).
+        Relative height and dip threshold, in (0, 1).
 
     Returns
     -------
@@ -112,8 +137,6 @@ def count_velocity_peaks(qd: ArrayLike, rel_threshold: float = 0.05) -> int | np
         The count for 1-D input, else an integer array of shape ``(n_dof,)``. A joint that
         never moves has 0.
     """
-    from scipy.signal import find_peaks
-
     if not 0.0 < rel_threshold < 1.0:
         raise ValueError(f"rel_threshold must be in (0, 1), got {rel_threshold}")
     raw = np.asarray(qd, dtype=float)
@@ -121,10 +144,6 @@ def count_velocity_peaks(qd: ArrayLike, rel_threshold: float = 0.05) -> int | np
     counts = np.zeros(speed.shape[1], dtype=int)
     for joint in range(speed.shape[1]):
         top = speed[:, joint].max()
-        if top == 0.0:
-            continue
-        # Zero padding lets a hump that touches either end of the record count.
-        padded = np.concatenate([[0.0], speed[:, joint], [0.0]])
-        bar = rel_threshold * top
-        counts[joint] = find_peaks(padded, height=bar, prominence=bar)[0].size
+        if top > 0.0:
+            counts[joint] = _count_humps(speed[:, joint], rel_threshold * top)
     return int(counts[0]) if raw.ndim == 1 else counts

@@ -132,7 +132,7 @@ def _refine_peak(y: np.ndarray, t: np.ndarray, i: int, half_width: int) -> tuple
     taking the largest noisy sample. A cubic rather than a parabola follows the skew of a
     strongly damped peak, whose vertex time a parabola misplaces (0.7 ms at 12 Hz, ζ = 0.3,
     which the extrapolation back to the stop turns into a 1.6 % amplitude error). Without a
-    maximum inside the window the sample itself is returned.
+    positive maximum inside the window the sample itself is returned.
     """
     lo, hi = max(0, i - half_width), min(y.size, i + half_width + 1)
     if hi - lo < 5:
@@ -150,7 +150,7 @@ def _refine_peak(y: np.ndarray, t: np.ndarray, i: int, half_width: int) -> tuple
         value = ((c3 * x.real + c2) * x.real + c1) * x.real + c0
         if best is None or value > best[1]:
             best = (x.real, value)
-    if best is None:
+    if best is None or best[1] <= 0.0:  # no usable maximum (log needs a positive height)
         return float(t[i]), float(y[i])
     return float(t[i] + best[0] * scale), float(best[1])
 
@@ -260,6 +260,22 @@ def _damped_sine_fit(
     return amplitude, float(fit.x[0]), float(fit.x[1]), rms
 
 
+def _regular_train(index: np.ndarray, max_gap: float = 2.5) -> np.ndarray:
+    """Leading peaks up to the first gap wider than ``max_gap`` times the typical spacing.
+
+    Vibration peaks of the magnitude come every half period; once the decay has reached the
+    noise, the peaks that still pass the thresholds are sporadic noise spikes far apart. The
+    typical spacing is the median of the first three spacings, which belong to the strongest
+    peaks.
+    """
+    if index.size < 3:
+        return index
+    spacing = np.diff(index)
+    typical = float(np.median(spacing[:3]))
+    gaps = np.flatnonzero(spacing > max_gap * typical)
+    return index if gaps.size == 0 else index[: gaps[0] + 1]
+
+
 def _max_abs_result(
     largest: float,
     t_stop: float,
@@ -296,6 +312,7 @@ def residual_vibration(
     tail_fraction: float = 0.25,
     noise_std: float | None = None,
     snr_min: float = 5.0,
+    min_relative_height: float = 0.02,
     f_max_hz: float = 60.0,
     skip_s: float = 0.0,
     window_s: float | None = None,
@@ -317,9 +334,10 @@ def residual_vibration(
        and ``log(peak)`` is fitted with a straight line over time and extrapolated to the stop
        (the paper's method; ``log_decay_amplitude``).
     3. With ``refine``, one decaying mode with a shared ``(σ, ω_d)`` and per-axis amplitudes is
-       fitted to every sample from the stop to one peak spacing after the last peak used. If
-       its residual is within ``3 * noise_std + 0.02 * rms(signal)`` the mode explains the
-       signal and its envelope at the stop is the result; otherwise the log-decay estimate is.
+       fitted (with a constant per axis, which absorbs a baseline error) to every sample from
+       the stop to two periods after the last peak used. If its residual is within
+       ``3 * noise_std + 0.02 * rms(signal)`` the mode explains the signal and its envelope
+       at the stop is the result; otherwise the log-decay estimate is.
 
     Parameters
     ----------
@@ -340,9 +358,11 @@ def residual_vibration(
         post-stop samples by :func:`estimate_noise_std`; pass a level measured at standstill
         if the noise is coloured (filtered).
     snr_min
-        A peak is used only if its height and its prominence exceed ``snr_min * noise_std``
-        (and 1e-3 of the largest post-stop magnitude, which guards noise-free signals against
-        rounding ripples).
+        A peak is used only if its height and its prominence exceed ``snr_min * noise_std``.
+    min_relative_height
+        ... and ``min_relative_height`` times the largest post-stop magnitude. Such small
+        peaks carry little weight in the fit and are the first to be noise (or, without
+        noise, rounding ripples), which matters when the noise level is under-estimated.
     f_max_hz
         Highest vibration frequency of interest, Hz; peaks of the magnitude closer than half
         its period are merged.
@@ -385,6 +405,8 @@ def residual_vibration(
     if not 0.0 < tail_fraction <= 1.0:
         raise ValueError(f"tail_fraction must be in (0, 1], got {tail_fraction}")
     positive("snr_min", snr_min)
+    if not 0.0 < min_relative_height < 1.0:
+        raise ValueError(f"min_relative_height must be in (0, 1), got {min_relative_height}")
     f_max = positive("f_max_hz", f_max_hz)
     if not (math.isfinite(skip_s) and skip_s >= 0.0):
         raise ValueError(f"skip_s must be finite and >= 0, got {skip_s}")
@@ -407,11 +429,11 @@ def residual_vibration(
         raise ValueError(f"noise_std must be finite and >= 0, got {noise_std!r}")
 
     largest = float(level.max())
-    threshold = max(snr_min * noise, 1e-3 * largest)
+    threshold = max(snr_min * noise, min_relative_height * largest)
     dt_median = float(np.median(np.diff(t_use)))
     distance = max(1, int(0.5 / (f_max * dt_median)))
     index, _ = find_peaks(level, height=threshold, prominence=threshold, distance=distance)
-    index = index[:max_peaks]
+    index = _regular_train(index)[:max_peaks]
 
     few_note = (
         f"only {index.size} peaks exceed the threshold {threshold:.3g} (snr_min x noise "
@@ -434,7 +456,7 @@ def residual_vibration(
         note = f"log-decay fit over {index.size} peaks"
 
     if refine and decay > 0.0:
-        span = t_use <= peaks.t_peaks_s[-1] + 0.5 / peaks.freq_hz
+        span = t_use <= peaks.t_peaks_s[-1] + 2.0 / peaks.freq_hz
         y = dynamic[span]
         fit_amp, fit_decay, fit_w_d, residual_rms = _damped_sine_fit(
             t_use[span] - t_stop, y, decay, w_d

@@ -14,6 +14,8 @@ def _as_q(q: Sequence[float] | np.ndarray, n_dof: int) -> np.ndarray:
     arr = np.ascontiguousarray(q, dtype=float)
     if arr.shape != (n_dof,):
         raise ValueError(f"q must have shape ({n_dof},), got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError("q contains NaN or infinite values")
     return arr
 
 
@@ -21,6 +23,9 @@ def _as_many(q: Sequence[Sequence[float]] | np.ndarray, n_dof: int) -> np.ndarra
     arr = np.ascontiguousarray(q, dtype=float)
     if arr.ndim != 2 or arr.shape[1] != n_dof:
         raise ValueError(f"Q must have shape (n_samples, {n_dof}), got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        bad = int(np.flatnonzero(~np.all(np.isfinite(arr), axis=1))[0])
+        raise ValueError(f"Q row {bad} contains NaN or infinite values")
     return arr
 
 

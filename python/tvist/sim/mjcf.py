@@ -138,7 +138,8 @@ def build_mjcf(
         "option",
         timestep=repr(float(physics_dt_s)),
         gravity=_fmt([0.0, 0.0, -GRAVITY_M_S2]),
-        # Implicit in velocity: the gear damping (dof damping) is integrated implicitly.
+        # Implicit in velocity: the dof damping (half of the gear damping) acts on the new
+        # velocity; see tvist.sim.twin.
         integrator="implicitfast",
     )
     # No geometry takes part in contacts; the arm only moves freely in space.
@@ -184,9 +185,7 @@ def build_mjcf(
         quat_in_parent = _quat_x(float(params.alpha_rad[i]))
         parent = body
 
-    ET.SubElement(
-        body, "site", name="flange", pos=_fmt(pos_in_parent), quat=_fmt(quat_in_parent)
-    )
+    ET.SubElement(body, "site", name="flange", pos=_fmt(pos_in_parent), quat=_fmt(quat_in_parent))
     sensor = ET.SubElement(root, "sensor")
     ET.SubElement(sensor, "accelerometer", name="accelerometer", site="flange")
     ET.indent(root)

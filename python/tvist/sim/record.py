@@ -93,5 +93,7 @@ class SimRecord:
         if not np.all(np.isfinite(table)):
             raise ValueError("record contains NaN or infinite values; refusing to write it")
         out = Path(path)
-        np.savetxt(out, table, fmt="%.6f", delimiter=",", header=",".join(csv_header()), comments="")
+        np.savetxt(
+            out, table, fmt="%.6f", delimiter=",", header=",".join(csv_header()), comments=""
+        )
         return out

@@ -116,6 +116,12 @@ def compress(Q: ArrayLike, dt_s: float, alpha: float) -> np.ndarray:
     q = np.asarray(Q, dtype=float)
     if not (np.isfinite(alpha) and 0.0 < alpha <= 1.0):
         raise ValueError(f"alpha = {alpha} must lie in (0, 1]")
+    if not (np.isfinite(dt_s) and dt_s > 0.0):
+        raise ValueError(f"dt_s = {dt_s} must be finite and > 0")
+    if q.ndim not in (1, 2) or q.shape[0] < 2 or not np.all(np.isfinite(q)):
+        raise ValueError(
+            f"Q must be a finite (n_samples, n_dof) array, n_samples >= 2; got {q.shape}"
+        )
     n = q.shape[0]
     t = dt_s * np.arange(n)
     spline = CubicSpline(t, q, axis=0, bc_type="clamped")

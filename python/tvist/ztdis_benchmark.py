@@ -29,7 +29,8 @@ from pathlib import Path
 import numpy as np
 
 from tvist import _core
-from tvist.zero_delay import zero_delay
+from tvist.analysis import metrics
+from tvist.ztdis import zero_delay
 
 __all__ = [
     "METHOD_LABELS",
@@ -146,32 +147,8 @@ def simulate_tip(
 
 
 def count_velocity_peaks(v: np.ndarray) -> int:
-    """Humps of the speed ``|v|``: maxima that rise and fall by at least
-    :data:`PEAK_PROMINENCE` of the top speed (hysteresis count).
-
-    Equivalent to counting peaks of prominence >= the threshold, but a flat plateau with
-    rounding ripple counts once (``scipy.signal.find_peaks`` gives every equal-height ripple
-    of a plateau full prominence).
-    """
-    speed = np.abs(np.asarray(v, dtype=float))
-    top = float(np.max(speed)) if speed.size else 0.0
-    if top == 0.0:
-        return 0
-    h = PEAK_PROMINENCE * top
-    peaks, rising, extreme = 0, True, 0.0  # the speed is taken to start from rest
-    for s in speed:
-        if rising:
-            if s > extreme:
-                extreme = s
-            elif s < extreme - h:
-                peaks, rising, extreme = peaks + 1, False, s
-        elif s < extreme:
-            extreme = s
-        elif s > extreme + h:
-            rising, extreme = True, s
-    if rising and extreme > h:  # still on a hump at the end (the speed never fell back)
-        peaks += 1
-    return peaks
+    """Humps of the speed ``|v|`` rising and falling by :data:`PEAK_PROMINENCE` of its top."""
+    return int(metrics.count_velocity_peaks(v, rel_threshold=PEAK_PROMINENCE))
 
 
 def _completion_s(q: np.ndarray, dt_s: float, distance: float) -> float:
@@ -289,7 +266,9 @@ def format_table(bench: Benchmark) -> str:
         f"Reference `{bench.reference}`, T = {bench.move_s} s, distance {bench.distance}, "
         f"{bench.freq_hz} Hz / zeta {bench.zeta}, {bench.shaper.upper()} "
         f"(delay {bench.delay_s:.4f} s), alpha = {bench.alpha:.4f}, "
-        f"alpha' = {bench.alpha_modified:.4f}, dt = {bench.dt_s} s",
+        f"alpha' = {bench.alpha_modified:.4f}, dt = {bench.dt_s} s; unshaped residual "
+        f"{bench.metrics['unshaped'].residual:.3g} (exact plant), residual = peak tip "
+        f"deflection after the reference is done (within {COMPLETION_TOLERANCE:g} of the distance)",
         "",
         f"| method | done [s] | residual [% unshaped] | at -{e:.0f} % / +{e:.0f} % freq "
         "| peak v | peak a | peak jerk | v peaks |",
@@ -370,7 +349,7 @@ def run_from_args(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m tvist.zero_delay_benchmark [--reference ...] [--dt DT] [--plot PATH]``."""
+    """``python -m tvist.ztdis_benchmark [--reference ...] [--dt DT] [--plot PATH]``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_arguments(parser)
     return run_from_args(parser.parse_args(argv))

@@ -1,0 +1,113 @@
+//! The robot model, the dynamic map and the map-driven shaper never allocate per call.
+//!
+//! Its own test binary: the counting global allocator sees only this file's allocations, and
+//! a single `#[test]` keeps other test threads out of the measured windows.
+
+mod robot_support;
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use tvist_core::{
+    DynamicMap, Dynamics, MapDynamics, Mode, ShaperKind, Status, TvShaper, TvShaperConfig,
+};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards to the system allocator unchanged; only counts calls.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations_in(f: impl FnOnce()) -> usize {
+    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    f();
+    ALLOCATIONS.load(Ordering::SeqCst) - before
+}
+
+#[test]
+fn robot_map_and_map_shaper_never_allocate() {
+    // Guard against a vacuous pass: an allocation inside the window is counted.
+    assert!(allocations_in(|| drop(std::hint::black_box(vec![1u8; 8]))) >= 1);
+
+    let mut robot = robot_support::ur_robot("ur5e", 5.0);
+    let (mut m, mut jac, mut j, mut tau, mut pose) =
+        ([0.0; 36], [0.0; 36], [0.0; 6], [0.0; 6], [0.0; 16]);
+    let mut rng = robot_support::Rng(5);
+    let poses: Vec<Vec<f64>> = (0..200).map(|_| rng.pose(6)).collect();
+    let n = allocations_in(|| {
+        for q in &poses {
+            robot.mass_matrix(q, &mut m);
+            robot.jacobian(q, &mut jac);
+            robot.joint_inertia(q, &mut j);
+            robot.gravity_torque(q, &mut tau);
+            robot.flange_pose(q, &mut pose);
+            robot.joint_inertia_and_gravity(q, &mut j, Some(&mut tau));
+        }
+        // Wrong lengths and NaN poses take the same allocation-free path.
+        robot.mass_matrix(&[0.0; 5], &mut m);
+        robot.joint_inertia(&[f64::NAN; 6], &mut j);
+    });
+    assert_eq!(n, 0, "robot model allocated {n} times");
+
+    let map = DynamicMap::paper_ur5e();
+    let mut modes = [Mode::new(0.0, 0.0); 2];
+    let n = allocations_in(|| {
+        map.modes_from_inertia(&[9.73, 9.25], &[], &mut modes);
+        map.modes_from_inertia(&[-1.0, f64::NAN], &[], &mut modes);
+        map.modes_from_inertia(&[1.0], &[], &mut modes);
+    });
+    assert_eq!(n, 0, "dynamic map allocated {n} times");
+
+    let mut provider = MapDynamics::new(
+        robot_support::ur_robot("ur5e", 5.0),
+        DynamicMap::paper_ur5e(),
+    )
+    .expect("valid map");
+    let n = allocations_in(|| {
+        for q in &poses {
+            provider.modes(q, &mut modes);
+        }
+        provider.modes(&[0.0; 4], &mut modes);
+    });
+    assert_eq!(n, 0, "MapDynamics::modes allocated {n} times");
+
+    let config = TvShaperConfig::new(0.002, 6, ShaperKind::Zvd);
+    let mut shaper = TvShaper::new(provider, &config).expect("valid config");
+    let mut out = [0.0; 6];
+    let mut statuses = Status::OK;
+    let n = allocations_in(|| {
+        for q in &poses {
+            // Large jumps between random poses make the modes change every cycle.
+            statuses |= shaper.step(q, &mut out);
+        }
+        let mut bad = [0.0; 6];
+        bad[2] = f64::NAN;
+        statuses |= shaper.step(&bad, &mut out);
+        statuses |= shaper.step(&[0.0; 3], &mut out);
+    });
+    assert_eq!(n, 0, "TvShaper<MapDynamics>::step allocated {n} times");
+    assert!(statuses.contains(Status::INPUT_HELD) && statuses.contains(Status::BAD_LENGTH));
+}

@@ -1,0 +1,354 @@
+"""Residual vibration, spectrum and move measures against signals with known answers."""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+from scipy import signal
+
+import tvist
+from tvist.analysis import (
+    count_velocity_peaks,
+    energy_spectrum,
+    estimate_noise_std,
+    peak_acceleration,
+    peak_jerk,
+    peak_velocity,
+    residual_vibration,
+    sensitivity_grid,
+    settling_time,
+)
+from tvist.trajectory import PAPER_POSES, double_s, trapezoid
+
+DT_S = 0.002
+T_STOP_S = 0.5013  # deliberately between samples
+RV_TOLERANCE = 0.02  # acceptance: residual vibration amplitude within 2 %
+
+FREQS_HZ = (5.0, 8.0, 12.0, 20.0, 30.0)
+ZETAS = (0.02, 0.05, 0.1, 0.2, 0.3)
+PHASES = (0.0, 1.3, 2.7, 4.4)
+
+
+def ringing(
+    t: np.ndarray, amplitude: float, freq_hz: float, zeta: float, phase: float
+) -> np.ndarray:
+    """Free vibration after ``T_STOP_S`` with envelope ``amplitude`` at the stop; before the
+    stop an unrelated large, slow 'motion' signal that the analysis must ignore."""
+    wn = 2.0 * np.pi * freq_hz
+    wd = wn * math.sqrt(1.0 - zeta**2)
+    tau = t - T_STOP_S
+    free = amplitude * np.exp(-zeta * wn * np.maximum(tau, 0.0)) * np.cos(wd * tau + phase)
+    return np.where(tau >= 0.0, free, 3.0 * np.sin(2.0 * np.pi * 1.3 * t))
+
+
+def grid_errors(
+    noise_fraction: float,
+    zetas=ZETAS,
+    refine: bool = True,
+    seed: int = 0,
+    smoothing_samples: int = 1,
+):
+    """Relative amplitude errors over frequencies, damping ratios and phases.
+
+    The noise is white with std ``noise_fraction`` of the amplitude, then averaged over
+    ``smoothing_samples`` (a moving-average filter as used on the paper's accelerometer
+    data, which makes it coloured) and rescaled to keep that std.
+    """
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 3.0, DT_S)
+    amplitude, gravity = 2.0, 9.81
+    kernel = np.ones(smoothing_samples) / math.sqrt(smoothing_samples)
+    errors = {}
+    for f, z, ph in itertools.product(FREQS_HZ, zetas, PHASES):
+        white = rng.standard_normal(t.size + smoothing_samples - 1)
+        noise = noise_fraction * amplitude * np.convolve(white, kernel, mode="valid")
+        accel = ringing(t, amplitude, f, z, ph) + gravity + noise
+        rv = residual_vibration(t, accel, T_STOP_S, refine=refine)
+        errors[(f, z, ph)] = (abs(rv.amplitude / amplitude - 1.0), rv.method)
+    return errors
+
+
+def test_paper_log_decay_alone_is_within_tolerance_without_noise():
+    # The peak extrapolation of the paper (with the envelope correction) by itself; measured
+    # worst case 0.5 % over the grid.
+    errors = grid_errors(0.0, refine=False)
+    worst = max(errors.items(), key=lambda kv: kv[1][0])
+    assert worst[1][0] < RV_TOLERANCE, worst
+    assert {m for _, m in errors.values()} == {"log_decay"}
+
+
+def test_residual_vibration_acceptance_grid_without_noise():
+    # 5-30 Hz, ζ 0.02-0.3, four phases, with gravity and a motion before the stop.
+    # Measured worst: 1e-10 (the single-mode fit is exact on a single mode).
+    errors = grid_errors(0.0)
+    worst = max(errors.items(), key=lambda kv: kv[1][0])
+    assert worst[1][0] < RV_TOLERANCE, worst
+
+
+# White noise with std 0.5 % or 1 % of the amplitude. Spread measured over 12 seeds x 4 phases
+# per (f, ζ) cell: with 0.5 % noise the worst error is 1.2 % up to ζ = 0.2; with 1 % it is
+# 1.3 % up to ζ = 0.1. A heavily damped fast mode stays above 5σ for only 2-3 half-waves
+# (about 25 samples), so there the RMS error is about 1 % and single realizations reach 3.5 %:
+# the estimate is noise-limited, not biased.
+@pytest.mark.parametrize(
+    ("noise_fraction", "zetas", "tolerance"),
+    [
+        (0.005, (0.02, 0.05, 0.1, 0.2), RV_TOLERANCE),
+        (0.01, (0.02, 0.05, 0.1), RV_TOLERANCE),
+        (0.01, (0.2, 0.3), 0.04),
+    ],
+)
+def test_residual_vibration_with_noise(noise_fraction, zetas, tolerance):
+    errors = grid_errors(noise_fraction, zetas=zetas, seed=1)
+    worst = max(errors.items(), key=lambda kv: kv[1][0])
+    assert worst[1][0] < tolerance, worst
+    # The RMS error over the grid is well inside the acceptance band.
+    assert math.sqrt(np.mean([e * e for e, _ in errors.values()])) < 0.5 * RV_TOLERANCE
+
+
+@pytest.mark.parametrize(
+    ("zetas", "tolerance"), [((0.02, 0.05, 0.1), RV_TOLERANCE), ((0.2, 0.3), 0.04)]
+)
+def test_residual_vibration_with_coloured_noise(zetas, tolerance):
+    # Moving-average (5 samples) filtered noise of 0.5 %: the 4th-difference noise estimate
+    # sees only a third of it, so weak noise spikes pass the thresholds; the relative height
+    # floor and the end of the regular peak train keep them out of the fit. Measured over
+    # 10 seeds x 4 phases per cell: worst 1.4 % up to ζ = 0.1, 2.7 % at ζ = 0.2-0.3; RMS 0.5 %.
+    errors = grid_errors(0.005, zetas=zetas, seed=7, smoothing_samples=5)
+    worst = max(errors.items(), key=lambda kv: kv[1][0])
+    assert worst[1][0] < tolerance, worst
+
+
+def test_paper_log_decay_degrades_with_noise_but_fit_does_not():
+    # Documents why the single-mode fit refines the peak extrapolation: at 0.5 % noise and
+    # ζ = 0.3 the few peaks give errors of several percent.
+    peaks_only = grid_errors(0.005, zetas=(0.3,), refine=False, seed=2)
+    refined = grid_errors(0.005, zetas=(0.3,), refine=True, seed=2)
+    assert max(e for e, _ in peaks_only.values()) > max(e for e, _ in refined.values())
+
+
+def test_three_axis_signal_along_a_tilted_direction():
+    rng = np.random.default_rng(3)
+    t = np.arange(0.0, 3.0, DT_S)
+    gravity = np.array([1.2, -3.4, 9.1])
+    for f, z in [(6.9, 0.37), (8.0, 0.26), (19.2, 0.14), (22.0, 0.08)]:  # Table 3 modes
+        direction = rng.normal(size=3)
+        direction /= np.linalg.norm(direction)
+        scalar = ringing(t, 1.5, f, z, rng.uniform(0, 2 * np.pi))
+        accel = scalar[:, None] * direction + gravity
+        accel += 0.005 * 1.5 / math.sqrt(3) * rng.standard_normal(accel.shape)
+        rv = residual_vibration(t, accel, T_STOP_S)
+        assert rv.amplitude == pytest.approx(1.5, rel=RV_TOLERANCE), (f, z, rv.note)
+        assert rv.reliable
+        # Frequency and decay of the mode are recovered too. Measured errors: frequency
+        # < 0.02 %, decay rate and ζ < 0.5 %; the bands leave room for the noise.
+        wn = 2 * np.pi * f
+        assert rv.freq_hz == pytest.approx(f * math.sqrt(1 - z * z), rel=0.002)
+        assert rv.decay_rate_1_s == pytest.approx(z * wn, rel=0.015)
+        assert rv.zeta == pytest.approx(z, rel=0.015)
+
+
+def base_excited_tool_acceleration(traj, freq_hz: float, zeta: float):
+    """Absolute acceleration of a mode ``e'' + 2ζω e' + ω² e = −u''`` (``y = −2ζω e' − ω² e``)
+    driven by the trajectory's acceleration; returns the signal and the state over time."""
+    w = 2.0 * np.pi * freq_hz
+    plant = signal.StateSpace(
+        [[0.0, 1.0], [-w * w, -2 * zeta * w]],
+        [[0.0], [-1.0]],
+        [[-w * w, -2 * zeta * w]],
+        0.0,
+    )
+    _, y, x = signal.lsim(plant, traj.qdd[:, 0], traj.t_s)
+    return y, x
+
+
+def test_residual_vibration_of_a_double_s_move_on_a_flexible_mode():
+    traj = double_s([0.0], [np.pi / 2], t_pre_s=0.1, t_post_s=2.0)
+    freq_hz, zeta = 8.0, 0.1
+    y, x = base_excited_tool_acceleration(traj, freq_hz, zeta)
+    # Ground truth from the state at the stop: afterwards the input is 0, so the response is
+    # y = e^(-στ)(B cos ω_d τ + C sin ω_d τ) with B = y(0), C = (y'(0) + σB)/ω_d.
+    w = 2 * np.pi * freq_hz
+    sigma, w_d = zeta * w, w * math.sqrt(1 - zeta**2)
+    i_stop = round(traj.t_motion_end_s / DT_S)
+    e, e_dot = x[i_stop]
+    e_ddot = -2 * zeta * w * e_dot - w * w * e
+    b = y[i_stop]
+    y_dot = -2 * zeta * w * e_ddot - w * w * e_dot
+    truth = math.hypot(b, (y_dot + sigma * b) / w_d)
+    rv = residual_vibration(traj.t_s, y, traj.t_motion_end_s)
+    # The response after the stop is exactly one decaying mode: the fit recovers it to
+    # rounding (measured 2e-15); the paper's peak extrapolation to 0.16 % (measured).
+    assert rv.method == "damped_sine_fit"
+    assert rv.amplitude == pytest.approx(truth, rel=1e-6)
+    assert rv.log_decay_amplitude == pytest.approx(truth, rel=RV_TOLERANCE)
+
+
+def test_two_modes_fall_back_to_the_peak_extrapolation():
+    t = np.arange(0.0, 3.0, DT_S)
+    accel = ringing(t, 1.0, 8.0, 0.05, 0.3) + ringing(t, 0.6, 20.0, 0.05, 1.0)
+    rv = residual_vibration(t, accel, T_STOP_S)
+    assert rv.method == "log_decay"
+    assert "does not explain" in rv.note
+    assert math.isfinite(rv.amplitude) and rv.fit_residual_rms > 0.05
+
+
+def test_noise_only_gives_flagged_max_abs():
+    rng = np.random.default_rng(4)
+    t = np.arange(0.0, 2.0, DT_S)
+    accel = 9.81 + 0.01 * rng.standard_normal((t.size, 3))
+    rv = residual_vibration(t, accel, 0.5)
+    assert rv.method == "max_abs" and not rv.reliable
+    assert "upper bound" in rv.note
+    post = accel[t >= 0.5]
+    dynamic = post - post[-math.ceil(0.25 * len(post)) :].mean(axis=0)  # tail baseline
+    assert rv.amplitude == pytest.approx(np.max(np.linalg.norm(dynamic, axis=1)))
+
+
+def test_estimate_noise_std_ignores_slow_content():
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 2.0, DT_S)
+    x = 2.0 * np.sin(2 * np.pi * 20 * t) + 0.05 * rng.standard_normal(t.size)
+    # 1000 samples: the MAD-based estimate scatters by about 4 %; the 20 Hz leak is 0.3 %.
+    assert estimate_noise_std(x) == pytest.approx(0.05, rel=0.1)
+    xyz = 0.05 * rng.standard_normal((t.size, 3))
+    assert estimate_noise_std(xyz) == pytest.approx(0.05 * math.sqrt(3), rel=0.1)
+
+
+def test_residual_vibration_rejects_bad_input():
+    t = np.arange(0.0, 1.0, DT_S)
+    a = np.zeros(t.size)
+    with pytest.raises(ValueError, match="t_stop_s"):
+        residual_vibration(t, a, 2.0)
+    with pytest.raises(ValueError, match="samples but t_s has"):
+        residual_vibration(t, a[:-1], 0.5)
+    bad = a.copy()
+    bad[10] = np.nan
+    with pytest.raises(ValueError, match=r"accel\[10, 0\] is nan"):
+        residual_vibration(t, bad, 0.5)
+    with pytest.raises(ValueError, match="need at least 5"):
+        residual_vibration(t, a, t[-3])
+    with pytest.raises(ValueError, match="baseline"):
+        residual_vibration(t, a, 0.5, baseline="mean")
+
+
+@pytest.mark.parametrize("n", [1000, 1001])
+def test_energy_spectrum_parseval_and_peak(n):
+    rng = np.random.default_rng(6)
+    t = DT_S * np.arange(n)
+    psi = rng.standard_normal((n, 3))
+    freq, energy = energy_spectrum(psi, DT_S)
+    assert freq[0] == 0.0 and freq[1] == pytest.approx(1.0 / (n * DT_S))
+    doubled = energy[0] + 2 * energy[1:].sum()
+    if n % 2 == 0:  # the Nyquist bin has no mirror image
+        doubled -= energy[-1]
+    assert doubled == pytest.approx(np.sum(psi**2), rel=1e-12)
+    # A sinusoid on bin k: |X_k| = A n / 2, so E_k = A² n / 4 (x and z both carry one).
+    f0 = 20.0 / (n * DT_S)
+    tone = np.column_stack(
+        [1.5 * np.sin(2 * np.pi * f0 * t), np.zeros(n), 0.5 * np.cos(2 * np.pi * f0 * t)]
+    )
+    freq, energy = energy_spectrum(tone, DT_S)
+    assert np.argmax(energy) == 20 and freq[20] == pytest.approx(f0)
+    assert energy[20] == pytest.approx((1.5**2 + 0.5**2) * n / 4, rel=1e-9)
+    # With a static offset, remove_mean clears the 0 Hz bin only.
+    _, with_mean = energy_spectrum(tone + 9.81, DT_S, remove_mean=True)
+    np.testing.assert_allclose(with_mean[1:], energy[1:], rtol=1e-9, atol=1e-9)
+
+
+def test_settling_time_of_known_decays():
+    t = np.arange(0.0, 3.0, 0.001)
+    t_stop = 1.0
+    decay = np.where(t >= t_stop, 2.0 * np.exp(-(t - t_stop) / 0.1), 5.0)
+    # |x| = 2 e^(-τ/0.1) falls through 0.02 at τ = 0.1 ln 100. The chord between 1 ms samples
+    # lies above the exponential by at most x'' dt² / 8 = 2.5e-7, i.e. 1.25e-6 s at the
+    # slope 0.2 /s of the crossing.
+    expected = 0.1 * math.log(100)
+    assert settling_time(t, decay, t_stop, 0.02) == pytest.approx(expected, abs=1.5e-6)
+    assert settling_time(t, decay, t_stop, 3.0) == 0.0
+    assert settling_time(t, np.ones(t.size), t_stop, 0.5) == math.inf
+    # Oscillating: the last excursion above the band ends after the last peak above it.
+    ring = ringing(t, 1.0, 5.0, 0.05, 0.0)
+    settle = settling_time(t, ring, T_STOP_S, 0.1)
+    after = t >= T_STOP_S + settle + 0.002
+    assert np.all(np.abs(ring[after]) <= 0.1)
+    assert np.max(np.abs(ring[(t > T_STOP_S + settle - 0.1) & (t < T_STOP_S + settle)])) > 0.1
+    # Envelope reaches 0.1 at τ = ln 10 / σ; the last peak above the band is at most half a
+    # period before.
+    assert (
+        math.log(10) / (0.05 * 2 * np.pi * 5) - 0.1
+        <= settle
+        <= math.log(10) / (0.05 * 2 * np.pi * 5)
+    )
+
+
+def test_peak_rates_of_profiles():
+    # Cubic q = c t³: every third difference is exactly 6 c dt³.
+    t = DT_S * np.arange(50)
+    q = np.column_stack([0.7 * t**3, -0.2 * t**3])
+    assert peak_jerk(q, DT_S) == pytest.approx(6 * 0.7, rel=1e-6)
+    traj = double_s(PAPER_POSES["Q1"], PAPER_POSES["Q3"])
+    # Differences of a sampled profile: velocity and acceleration to O(dt) of the limits,
+    # jerk never above the 100 rad/s³ limit (a difference quotient is an average).
+    assert peak_velocity(traj.q, DT_S) == pytest.approx(1.5, rel=1e-3)
+    assert peak_acceleration(traj.q, DT_S) == pytest.approx(2.0, rel=1e-3)
+    assert 99.0 < peak_jerk(traj.q, DT_S) <= 100.0 * (1 + 1e-6)
+    # A trapezoid steps its acceleration: the third difference sees a / dt = 1000 rad/s³
+    # spread over up to two samples.
+    trap = trapezoid(PAPER_POSES["Q1"], PAPER_POSES["Q3"], 1.5, 2.0)
+    assert peak_jerk(trap.q, DT_S) > 400.0
+    with pytest.raises(ValueError, match="at least 4"):
+        peak_jerk(q[:3], DT_S)
+
+
+def test_count_velocity_peaks_on_known_shapes():
+    traj = double_s(PAPER_POSES["Q1"], PAPER_POSES["Q3"], t_post_s=0.1)
+    np.testing.assert_array_equal(count_velocity_peaks(traj.qd), [1, 1, 1, 0, 0, 0])
+    # A flat cruise with rounding ripple counts once: synthetic, and the velocity of a
+    # double-S by central differences, whose plateau holds maxima of exactly equal height.
+    plateau = np.concatenate([np.linspace(0, 1, 50), 1 + 1e-12 * np.sin(np.arange(200)), [0.0]])
+    assert count_velocity_peaks(plateau) == 1
+    cruise = double_s([0.0], [np.pi / 2], t_post_s=0.1)
+    assert count_velocity_peaks(np.gradient(cruise.q[:, 0], DT_S)) == 1
+    # A dip of 30 % between two maxima separates two humps; one of 2 % does not.
+    x = np.linspace(0, 1, 400)
+    dip = 1 - 0.3 * np.exp(-(((x - 0.5) / 0.05) ** 2))
+    assert count_velocity_peaks(np.sin(np.pi * x) ** 0.2 * dip) == 2
+    assert count_velocity_peaks(np.sin(np.pi * x) ** 0.2 * (1 - (1 - dip) / 15)) == 1
+    # Two separated humps; a small wiggle below the threshold does not count.
+    x = np.linspace(0, 1, 500)
+    two = np.exp(-(((x - 0.3) / 0.05) ** 2)) + 0.8 * np.exp(-(((x - 0.7) / 0.05) ** 2))
+    assert count_velocity_peaks(two + 0.01 * np.sin(80 * x)) == 2
+    # ZV shaping of a short move with a delay longer than the move: two separate humps.
+    short = double_s([0.0], [0.05], t_post_s=0.5)
+    shaper = tvist.TvShaper(tvist.ConstantModes([(2 * np.pi * 2.0, 0.0)]), dt_s=DT_S, n_dof=1)
+    shaped = shaper.shape(short.q)
+    assert count_velocity_peaks(np.gradient(shaped[:, 0], DT_S)) == 2
+    assert count_velocity_peaks(-short.qd[:, 0]) == 1  # sign does not matter
+
+
+def prv_reference(amplitudes, times_s, wn_rad_s: float, zeta: float) -> float:
+    """Eqs. 52-55 written out (test oracle for the core implementation)."""
+    a, dt = np.asarray(amplitudes), np.asarray(times_s)
+    w_d = wn_rad_s * math.sqrt(1 - zeta**2)
+    c = np.sum(a * np.exp(zeta * wn_rad_s * dt) * np.cos(w_d * dt))
+    s = np.sum(a * np.exp(zeta * wn_rad_s * dt) * np.sin(w_d * dt))
+    return math.exp(-zeta * wn_rad_s * dt[-1]) * math.hypot(c, s)
+
+
+def test_sensitivity_grid():
+    imp = tvist.shaper("zvd", 2 * np.pi * 8.0, 0.1)
+    wn = 2 * np.pi * np.linspace(4.0, 12.0, 9)
+    zetas = np.array([0.0, 0.1, 0.3])
+    grid = sensitivity_grid(imp, wn, zetas)
+    assert grid.shape == (3, 9)
+    assert grid[1, 4] == pytest.approx(0.0, abs=1e-12)  # design point
+    for i, j in [(0, 0), (2, 8), (1, 2)]:
+        assert grid[i, j] == pytest.approx(
+            prv_reference(imp.amplitudes, imp.times_s, wn[j], zetas[i]), rel=1e-9
+        )
+    with pytest.raises(ValueError, match="1-D"):
+        sensitivity_grid(imp, [[1.0]], zetas)

@@ -1,0 +1,211 @@
+"""The dynamic map: the paper's Table 3, an independent re-evaluation of eqs. 42-51, map files."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import tvist
+from tvist.dynmap import MODE_FIELDS, general_mode
+
+# Table 1 / Table 2 of the paper (UR5e), typed in independently of the core.
+BASE = {"k_0": 10000.0, "k_j": 1060.0, "k_p": 2.54, "c_0": 1.53, "c_2": 0.39, "c_tau": 3.81}
+SHOULDER = {"k_0": 10000.0, "k_j": 763.0, "k_p": 1.73, "c_0": 0.27, "c_2": 0.038, "c_tau": 47.2}
+
+
+def _damped_hz(wn_rad_s: float, zeta: float) -> float:
+    return wn_rad_s * np.sqrt(1.0 - zeta**2) / (2.0 * np.pi)
+
+
+def _paper_modes_reference(j0: float, j1: float) -> list[tuple[float, float]]:
+    """Eqs. 47-48 (base, as printed: (1 + k_p/J_0) without a root) and eqs. 50-51 (shoulder)."""
+    b, s = BASE, SHOULDER
+    k_b = b["k_0"] + b["k_j"] * j1
+    wn0 = np.sqrt(1 + b["k_p"] / j1) * np.sqrt(k_b / j1)
+    z0 = (
+        (1 + b["k_p"] / j0)
+        * (b["c_0"] + b["c_2"] * j0)
+        * (1 + b["c_tau"] * j0)
+        / (2 * np.sqrt(k_b * j1) * np.sqrt(1 + b["k_p"] / j1))
+    )
+    k_s = s["k_0"] + s["k_j"] * j1
+    wn1 = np.sqrt(1 + s["k_p"] / j1) * np.sqrt(k_s / j1)
+    z1 = (
+        np.sqrt(1 + s["k_p"] / j1)
+        * (s["c_0"] + s["c_2"] * j1)
+        * (1 + s["c_tau"] * j1)
+        / (2 * np.sqrt(k_s * j1))
+    )
+    return [(wn0, z0), (wn1, z1)]
+
+
+@pytest.mark.parametrize(
+    ("j", "expected"),
+    [
+        # SPEC section 3, Table 3 reproduction: (f_d0 Hz, zeta_0, f_d1 Hz, zeta_1).
+        ((9.73, 9.25), (8.018, 0.2645, 6.909, 0.3730)),
+        ((1.12, 1.58), (22.026, 0.0772, 19.220, 0.1357)),
+    ],
+)
+def test_paper_map_reproduces_table_3(j, expected):
+    (wn0, z0), (wn1, z1) = tvist.DynamicMap.paper_ur5e().modes_from_inertia(j)
+    got = (_damped_hz(wn0, z0), z0, _damped_hz(wn1, z1), z1)
+    # 1e-3 relative: the reference values carry 4-5 significant digits.
+    np.testing.assert_allclose(got, expected, rtol=1e-3)
+
+
+def test_paper_map_equals_an_independent_evaluation_of_the_equations():
+    rng = np.random.default_rng(1)
+    paper = tvist.DynamicMap.paper_ur5e()
+    for j0, j1 in rng.uniform(0.05, 15.0, size=(500, 2)):
+        got = paper.modes_from_inertia([j0, j1])
+        # Same formulas, different operation order: equal to ~1e-15 relative.
+        np.testing.assert_allclose(got, _paper_modes_reference(j0, j1), rtol=1e-12)
+
+
+def test_paper_map_coefficients_are_tables_1_and_2():
+    base, shoulder = tvist.DynamicMap.paper_ur5e().mode_maps
+    for mode, table in ((base, BASE), (shoulder, SHOULDER)):
+        for key, value in table.items():
+            assert mode[key] == value
+        assert mode["k_g"] == 0.0 and mode["c_1"] == 0.0
+    assert (base["frequency_joint"], base["damping_joint"]) == (1, 0)
+    assert (base["damping_gain_exponent"], base["frequency_gain_exponent"]) == (1.0, -0.5)
+    assert (shoulder["frequency_joint"], shoulder["damping_joint"]) == (1, 1)
+
+
+def test_general_map_with_gravity_term():
+    coeffs = dict(SHOULDER, k_g=30.0, c_1=0.1)
+    dynmap = tvist.DynamicMap([general_mode(1, **coeffs)])
+    assert dynmap.uses_gravity
+    with pytest.raises(ValueError, match="gravity torques"):
+        dynmap.modes_from_inertia([2.0, 3.0])
+    ((wn, zeta),) = dynmap.modes_from_inertia([2.0, 3.0], [0.0, -40.0])
+    j, tau = 3.0, 40.0
+    k = coeffs["k_0"] + coeffs["k_j"] * j + coeffs["k_g"] * tau
+    gain = 1 + coeffs["k_p"] / j
+    wn_ref = np.sqrt(gain) * np.sqrt(k / j)
+    num = (coeffs["c_0"] + coeffs["c_1"] * np.sqrt(j) + coeffs["c_2"] * j) * (
+        1 + coeffs["c_tau"] * j
+    )
+    zeta_ref = np.sqrt(gain) * num / (2 * np.sqrt(k * j))
+    np.testing.assert_allclose([wn, zeta], [wn_ref, zeta_ref], rtol=1e-12)
+
+
+def test_base_frequency_from_j0_is_a_general_mode_on_joint_0():
+    dynmap = tvist.DynamicMap([general_mode(0, **BASE)])
+    a = dynmap.modes_from_inertia([2.0, 1.0])
+    b = dynmap.modes_from_inertia([2.0, 7.0])
+    assert a == b
+
+
+def test_modes_at_a_pose_use_the_robots_inertia():
+    robot = tvist.robots.ur5e(payload_kg=5.0, payload_com_m=(0.0, 0.0, 0.05))
+    q = np.array([0.2, -2.0, 1.1, -1.2, 0.4, 0.0])
+    paper = tvist.DynamicMap.paper_ur5e()
+    j = robot.joint_inertia(q)
+    np.testing.assert_allclose(
+        paper.modes(robot, q), _paper_modes_reference(j[0], j[1]), rtol=1e-12
+    )
+
+
+def test_invalid_inertia_gives_nan_modes():
+    ((wn0, z0), (wn1, z1)) = tvist.DynamicMap.paper_ur5e().modes_from_inertia([0.0, -1.0])
+    assert all(np.isnan([wn0, z0, wn1, z1]))
+    with pytest.raises(ValueError, match="reads 2 joint inertias"):
+        tvist.DynamicMap.paper_ur5e().modes_from_inertia([1.0])
+
+
+# ---- map files ----
+
+
+def test_save_and_load_round_trip(tmp_path):
+    payload = tvist.robots.Payload(5.0, (0.0, 0.0, 0.05))
+    original = tvist.DynamicMap(
+        tvist.DynamicMap.paper_ur5e().mode_maps,
+        metadata={
+            "robot": "ur5e",
+            "payload": payload,
+            "source": "test",
+            "fit_statistics": {"rmse_hz": 0.1, "n_poses": 208},
+        },
+    )
+    path = tmp_path / "map.json"
+    original.save(path)
+    loaded = tvist.DynamicMap.load(path)
+    assert loaded.mode_maps == original.mode_maps
+    assert loaded.metadata == original.metadata
+    assert loaded.metadata["payload"] == {
+        "mass_kg": 5.0,
+        "com_m": [0, 0, 0.05],
+        "inertia_kg_m2": None,
+    }
+    doc = json.loads(path.read_text())
+    assert doc["schema_version"] == 1 and doc["kind"] == "tvist.dynamic_map"
+    j = [3.0, 4.0]
+    assert loaded.modes_from_inertia(j) == original.modes_from_inertia(j)
+
+
+def _write(tmp_path, doc) -> str:
+    path = tmp_path / "bad.json"
+    path.write_text(doc if isinstance(doc, str) else json.dumps(doc))
+    return str(path)
+
+
+def _good_doc() -> dict:
+    return tvist.DynamicMap.paper_ur5e().to_dict()
+
+
+def _with(change):
+    doc = _good_doc()
+    change(doc)
+    return doc
+
+
+@pytest.mark.parametrize(
+    ("doc", "message"),
+    [
+        ("{not json", "not valid JSON"),
+        ([1, 2], "top level must be a JSON object"),
+        (_with(lambda d: d.pop("schema_version")), "schema_version"),
+        (_with(lambda d: d.update(schema_version=2)), "schema_version: expected 1, got 2"),
+        (_with(lambda d: d.update(kind="other")), "kind"),
+        (_with(lambda d: d.pop("modes")), "modes: missing"),
+        (_with(lambda d: d.update(modes=[])), "modes: must be a non-empty list"),
+        (_with(lambda d: d["modes"][1].pop("k_p")), r"modes\[1\]\.k_p: missing"),
+        (_with(lambda d: d["modes"][0].update(k_j="big")), r"modes\[0\]\.k_j: must be a number"),
+        (_with(lambda d: d["modes"][0].update(c_tau=None)), r"modes\[0\]\.c_tau"),
+        (_with(lambda d: d["modes"][0].update(k_jj=1.0)), r"modes\[0\]: unknown field\(s\) k_jj"),
+        (
+            _with(lambda d: d["modes"][1].update(damping_joint=-1)),
+            r"modes\[1\]\.damping_joint: must be a joint index",
+        ),
+        (
+            _with(lambda d: d["modes"][1].update(frequency_joint=1.5)),
+            r"modes\[1\]\.frequency_joint",
+        ),
+        (_with(lambda d: d["modes"].__setitem__(0, 3)), r"modes\[0\]: must be an object"),
+        (_with(lambda d: d.update(metadata=[1])), "metadata: must be an object"),
+        (_with(lambda d: d["metadata"].update(robot=5)), "metadata.robot"),
+        (
+            _with(lambda d: d["metadata"].update(payload={"mass_kg": -1})),
+            "metadata.payload: .*mass_kg",
+        ),
+        (_with(lambda d: d["metadata"].update(fit_statistics=3)), "metadata.fit_statistics"),
+    ],
+)
+def test_load_rejects_malformed_files_naming_the_field(tmp_path, doc, message):
+    with pytest.raises(ValueError, match=message):
+        tvist.DynamicMap.load(_write(tmp_path, doc))
+
+
+def test_non_finite_coefficients_are_rejected(tmp_path):
+    text = json.dumps(_good_doc()).replace('"c_0": 1.53', '"c_0": NaN')
+    with pytest.raises(ValueError, match=r"modes\[0\]\.c_0: must be finite"):
+        tvist.DynamicMap.load(_write(tmp_path, text))
+
+
+def test_mode_fields_are_the_cores():
+    assert set(MODE_FIELDS) == set(tvist.DynamicMap.paper_ur5e().mode_maps[0])

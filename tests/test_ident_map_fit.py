@@ -1,0 +1,188 @@
+"""Dynamic-map fit (paper section 5.3) on synthetic data generated from the paper's map."""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+import pytest
+
+import tvist
+from tvist.ident.map_fit import ModeSpec, fit_map
+from tvist.robots import ur5e
+
+PAPER = tvist.DynamicMap.paper_ur5e()
+ROBOTS = {p: ur5e(p, (0.0, 0.0, 0.05)) for p in (0.0, 1.0, 3.0, 5.0)}
+FREQ = ("k_j", "k_p")
+DAMP = ("c_0", "c_2", "c_tau")
+
+
+def random_q(rng: np.random.Generator) -> np.ndarray:
+    return np.r_[
+        rng.uniform(-np.pi, np.pi),
+        rng.uniform(-np.pi, 0.0),  # upper arm above the horizontal
+        rng.uniform(-2.8, 2.8),
+        rng.uniform(-np.pi, np.pi, 3),
+    ]
+
+
+def synthetic_poses(seed: int, noise: float, dynmap=PAPER, per_payload: int = 52) -> list[dict]:
+    """208 poses (4 payloads x 52, like the paper) with modes from ``dynmap`` and relative
+    Gaussian noise ``noise`` on every ω_n and ζ."""
+    rng = np.random.default_rng(seed)
+    poses = []
+    for robot in ROBOTS.values():
+        for _ in range(per_payload):
+            q = random_q(rng)
+            inertia = robot.joint_inertia(q)
+            tau = robot.gravity_torque(q)
+            modes = dynmap.modes_from_inertia(inertia, tau if dynmap.uses_gravity else None)
+            poses.append(
+                {
+                    "inertia_kg_m2": inertia.tolist(),
+                    "gravity_torque_nm": tau.tolist(),
+                    "modes": [
+                        {
+                            "joint": i,
+                            "wn_rad_s": wn * (1 + noise * rng.normal()),
+                            "zeta": zeta * (1 + noise * rng.normal()),
+                        }
+                        for i, (wn, zeta) in enumerate(modes)
+                    ],
+                }
+            )
+    return poses
+
+
+@functools.cache
+def noisy_fit(seed: int) -> tvist.DynamicMap:
+    """The map fitted to the 2 %-noise data set of ``seed`` (shared by several tests)."""
+    return fit_map(synthetic_poses(seed, noise=0.02))
+
+
+def rel_err(fitted: dict, true: dict, key: str) -> float:
+    return abs(fitted[key] / true[key] - 1.0)
+
+
+def test_noise_free_data_recovers_every_coefficient_and_the_structure():
+    fitted = fit_map(synthetic_poses(0, noise=0.0))
+    stats = fitted.metadata["fit_statistics"]["modes"]
+    for mode, true, st in zip(fitted.mode_maps, PAPER.mode_maps, stats, strict=True):
+        for key in FREQ + DAMP:
+            assert rel_err(mode, true, key) < 1e-6, key  # exact data: solver precision
+        for key in ("k_g", "c_1", "frequency_joint", "damping_joint"):
+            assert mode[key] == true[key], key
+        assert mode["damping_gain_exponent"] == true["damping_gain_exponent"]
+        assert mode["frequency_gain_exponent"] == true["frequency_gain_exponent"]
+        assert set(st["frequency"]["dropped"]) == {"k_g"}
+        assert set(st["damping"]["dropped"]) == {"c_1"}
+    # The base frequency is explained by J_1 (eq. 47), far better than by J_0 (eq. 46).
+    rms = stats[0]["frequency_joint_rms_relative_error"]
+    assert rms["J_1"] < 1e-9 < 0.1 < rms["J_0"]
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_two_percent_noise(seed):
+    fitted = noisy_fit(seed)
+    base, shoulder = fitted.mode_maps
+    true_base, true_shoulder = PAPER.mode_maps
+    stats = fitted.metadata["fit_statistics"]["modes"]
+    assert base["frequency_joint"] == 1
+    assert base["k_g"] == shoulder["k_g"] == base["c_1"] == shoulder["c_1"] == 0.0
+    # Frequency coefficients of both modes: within 10 % (fitted standard errors 1-2 %).
+    for key in FREQ:
+        assert rel_err(base, true_base, key) < 0.10, key
+        assert rel_err(shoulder, true_shoulder, key) < 0.10, key
+    # Base damping: the scatter of c_2 over seeds is about 5 % (the fitted standard errors,
+    # 2-5 %, leave out the uncertainty of k_J, k_p carried over from the frequency step), so
+    # 10 % is a 2σ band: require 15 % here and 10 % in most seeds (test below).
+    for key in DAMP:
+        assert rel_err(base, true_base, key) < 0.15, key
+    # Shoulder damping: with J_1 >= ~1 kg m² and c_τ = 47, the "1" in (1 + c_τ J_1) is a 2 %
+    # effect, below the noise, so c_0 and c_τ cannot be separated; the fit must say so...
+    assert {"c_0", "c_tau"} <= set(stats[1]["damping"]["poorly_determined"])
+    # ...while the polynomial it does determine, c_0 + (c_2 + c_0 c_τ) J + c_2 c_τ J², has its
+    # J and J² coefficients within 10 %, and the predicted ζ stays within 1 % RMS.
+    for fitted_c, true_c in [
+        (
+            shoulder["c_2"] + shoulder["c_0"] * shoulder["c_tau"],
+            true_shoulder["c_2"] + true_shoulder["c_0"] * true_shoulder["c_tau"],
+        ),
+        (shoulder["c_2"] * shoulder["c_tau"], true_shoulder["c_2"] * true_shoulder["c_tau"]),
+    ]:
+        assert abs(fitted_c / true_c - 1.0) < 0.10
+    rng = np.random.default_rng(99)
+    ratios = []
+    for robot in ROBOTS.values():
+        for _ in range(20):
+            inertia = robot.joint_inertia(random_q(rng))
+            got = fitted.modes_from_inertia(inertia)
+            want = PAPER.modes_from_inertia(inertia)
+            ratios += [g[1] / w[1] - 1.0 for g, w in zip(got, want, strict=True)]
+    assert math.sqrt(np.mean(np.square(ratios))) < 0.01
+
+
+def test_base_damping_within_ten_percent_in_most_seeds():
+    within = 0
+    for seed in range(3):
+        base = noisy_fit(seed).mode_maps[0]
+        within += all(rel_err(base, PAPER.mode_maps[0], key) < 0.10 for key in DAMP)
+    assert within >= 2  # seed 0 misses by a hair (c_2 off by 10.4 %)
+
+
+def test_base_frequency_from_j0_is_chosen_when_the_data_say_so():
+    # Data from the general map with J_0 driving the base mode (eq. 46).
+    base = dict(PAPER.mode_maps[0])
+    base.update(
+        frequency_joint=0, damping_joint=0, damping_gain_exponent=0.5, frequency_gain_exponent=0.0
+    )
+    j0_map = tvist.DynamicMap([base, PAPER.mode_maps[1]])
+    fitted = fit_map(synthetic_poses(5, noise=0.01, dynmap=j0_map))
+    assert fitted.mode_maps[0]["frequency_joint"] == 0
+    assert fitted.mode_maps[0]["damping_gain_exponent"] == 0.5
+    assert rel_err(fitted.mode_maps[0], base, "k_j") < 0.10
+
+
+def test_gravity_term_is_kept_when_it_matters():
+    shoulder = dict(PAPER.mode_maps[1])
+    shoulder["k_g"] = 20.0  # 20 N m/rad per N m: a 5-15 % stiffness change over the workspace
+    truth = tvist.DynamicMap([PAPER.mode_maps[0], shoulder])
+    poses = synthetic_poses(6, noise=0.005, dynmap=truth)
+    fitted = fit_map(poses)
+    # |τ_g| and J_1 are correlated over the workspace, so k_g trades off against k_J: 10 %.
+    assert fitted.mode_maps[1]["k_g"] == pytest.approx(20.0, rel=0.10)
+    assert fitted.mode_maps[0]["k_g"] == 0.0
+
+
+def test_map_round_trips_through_json_with_statistics(tmp_path):
+    fitted = noisy_fit(1)
+    fitted = tvist.DynamicMap(fitted.mode_maps, {**fitted.metadata, "robot": "ur5e"})
+    fitted.save(tmp_path / "map.json")
+    back = tvist.DynamicMap.load(tmp_path / "map.json")
+    assert back.mode_maps == fitted.mode_maps
+    assert back.metadata["robot"] == "ur5e"
+    assert back.metadata["fit_statistics"]["modes"][1]["n_poses"] == 208
+
+
+def test_too_few_poses_is_an_error():
+    poses = synthetic_poses(2, noise=0.02, per_payload=1)  # 4 poses
+    with pytest.raises(ValueError, match="4 usable poses"):
+        fit_map(poses)
+
+
+def test_no_inertia_variation_is_singular():
+    pose = synthetic_poses(3, noise=0.0, per_payload=1)[0]
+    with pytest.raises(ValueError, match="singular|not identifiable"):
+        fit_map([pose] * 20, mode_specs=(ModeSpec(1, (1,), 1),))
+
+
+def test_low_confidence_identifications_are_skipped():
+    poses = synthetic_poses(4, noise=0.0)
+    for pose in poses[:50]:
+        for mode in pose["modes"]:
+            mode["wn_rad_s"] *= 3.0  # garbage...
+            mode["low_confidence"] = True  # ...that the local fit flagged
+    fitted = fit_map(poses)
+    assert fitted.metadata["fit_statistics"]["modes"][0]["n_poses"] == 158
+    assert rel_err(fitted.mode_maps[1], PAPER.mode_maps[1], "k_j") < 1e-6

@@ -1,0 +1,360 @@
+"""Tests of the MuJoCo twin (tvist.sim): model vs the rigid-body model, modes, sensors, logs."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from tvist import robots
+from tvist.sim import (
+    UR5E_FLEX,
+    FlexParams,
+    SimulationDiverged,
+    Twin,
+    csv_header,
+)
+
+Q1 = np.array([0.0, -np.pi, 0.0, -np.pi / 2, 0.0, 0.0])
+Q2 = np.array([np.pi / 2, -np.pi, 0.0, -np.pi / 2, 0.0, 0.0])
+Q3 = np.array([np.pi / 2, -np.pi / 2, 5 * np.pi / 6, -np.pi / 2, 0.0, 0.0])
+PAYLOAD_KG = 5.0
+PAYLOAD_COM_M = (0.0, 0.0, 0.05)
+DT_S = 0.002
+TWO_PI = 2.0 * np.pi
+
+
+@pytest.fixture(scope="module")
+def twin() -> Twin:
+    return Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M)
+
+
+@pytest.fixture(scope="module")
+def robot() -> robots.Robot:
+    return robots.ur5e(PAYLOAD_KG, PAYLOAD_COM_M)
+
+
+def hold(q: np.ndarray, duration_s: float) -> np.ndarray:
+    """A constant joint reference of ``duration_s`` at 500 Hz."""
+    return np.tile(q, (round(duration_s / DT_S), 1))
+
+
+def smooth_move(q_from: np.ndarray, q_to: np.ndarray, move_s: float, total_s: float) -> np.ndarray:
+    """Smoothstep joint move of ``move_s`` (zero velocity at both ends), held until ``total_s``."""
+    blend = np.clip(np.arange(0.0, total_s, DT_S) / move_s, 0.0, 1.0)
+    return q_from + np.outer(blend**2 * (3.0 - 2.0 * blend), q_to - q_from)
+
+
+def ar2_mode(y: np.ndarray, dt_s: float) -> tuple[float, float]:
+    """``(wn_rad_s, zeta)`` of a sampled damped sinusoid from a least-squares AR(2) fit.
+
+    A sampled free decay ``y_k = A r^k cos(k theta + phi)`` obeys ``y_k = a1 y_{k-1} +
+    a2 y_{k-2}`` exactly; the roots of ``z² - a1 z - a2`` are ``exp(s dt)``.
+    """
+    lagged = np.column_stack([y[1:-1], y[:-2]])
+    (a1, a2), *_ = np.linalg.lstsq(lagged, y[2:], rcond=None)
+    z = np.roots([1.0, -a1, -a2]).astype(complex)[0]
+    s = np.log(z) / dt_s
+    return float(abs(s)), float(-s.real / abs(s))
+
+
+# ----------------------------------------------------------------------------- model
+
+
+@pytest.mark.parametrize(
+    ("payload_kg", "com_m", "inertia"),
+    [
+        (0.0, (0.0, 0.0, 0.0), None),
+        (PAYLOAD_KG, PAYLOAD_COM_M, None),
+        (3.0, (0.02, -0.01, 0.08), (0.01, 0.02, 0.015, 0.001, -0.002, 0.0005)),
+    ],
+)
+def test_mjcf_model_matches_rigid_body_model(payload_kg, com_m, inertia) -> None:
+    """MuJoCo's link-side M(q), gravity torque and flange pose equal the Rust rigid model.
+
+    Both evaluate the same parameters in double precision (observed differences ~1e-14), so
+    1e-9 kg m² (N m, m) only leaves room for rounding, not for a wrong frame or sign.
+    """
+    twin = Twin("ur5e", payload_kg=payload_kg, payload_com_m=com_m, payload_inertia_kg_m2=inertia)
+    robot = robots.ur5e(payload_kg, com_m, inertia)
+    model, data = twin.rigid_model()
+    import mujoco
+
+    flange = model.site("flange").id
+    rng = np.random.default_rng(7)
+    lower, upper = twin.params.joint_limits_rad.T
+    for q in rng.uniform(np.maximum(lower, -np.pi), np.minimum(upper, np.pi), size=(20, 6)):
+        np.testing.assert_allclose(twin.mass_matrix(q), robot.mass_matrix(q), rtol=0, atol=1e-9)
+        data.qpos[:] = q
+        data.qvel[:] = 0.0
+        mujoco.mj_forward(model, data)
+        np.testing.assert_allclose(data.qfrc_bias, robot.gravity_torque(q), rtol=0, atol=1e-9)
+        pose = robot.flange_pose(q)
+        np.testing.assert_allclose(data.site_xpos[flange], pose[:3, 3], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(
+            data.site_xmat[flange].reshape(3, 3), pose[:3, :3], rtol=0, atol=1e-12
+        )
+
+
+def test_static_equilibrium_balances_gravity(twin: Twin, robot: robots.Robot) -> None:
+    """At rest the gear spring torque (eq. 22) carries the rigid model's gravity torque."""
+    for q in (Q1, Q3):
+        q_link = twin.equilibrium(q)
+        spring = twin.flex.spring_torque_nm(q - q_link)
+        # Newton stops at a residual < 1e-11 N m; 1e-8 N m covers the model difference (1e-14).
+        np.testing.assert_allclose(spring, robot.gravity_torque(q_link), rtol=0, atol=1e-8)
+    # The shoulder sags under the arm's weight in the stretched-out pose Q1 (gear torque
+    # ~107 N m at ~5.7 mrad): a deflection of milliradians, as in real strain-wave gears.
+    sag = Q1 - twin.equilibrium(Q1)
+    assert 1e-3 < abs(sag[1]) < 2e-2
+
+
+# ----------------------------------------------------------------------------- modes
+
+
+def test_modes_in_paper_ranges(twin: Twin) -> None:
+    """5 kg payload: the base and shoulder modes land in the ranges of the UR5e experiments."""
+    (wb1, zb1), (ws1, zs1) = twin.modes(Q1)
+    (wb3, zb3), (ws3, zs3) = twin.modes(Q3)
+    assert 7.0 <= wb1 / TWO_PI <= 9.5
+    assert 6.0 <= ws1 / TWO_PI <= 8.5
+    assert 18.0 <= wb3 / TWO_PI <= 26.0
+    assert 16.0 <= ws3 / TWO_PI <= 23.0
+    for zeta in (zb1, zs1, zb3, zs3):
+        assert 0.03 <= zeta <= 0.4
+    # Q2 differs from Q1 only by the base angle, which changes neither inertia nor gravity.
+    np.testing.assert_allclose(twin.modes(Q2), twin.modes(Q1), rtol=1e-9)
+
+
+def test_base_mode_at_q1_matches_single_joint_formula(twin: Twin, robot: robots.Robot) -> None:
+    """In Q1 the base axis carries no gravity load and is decoupled from the other joints
+    (M[0, j] ~ 0 at the reference pose), so the base mode is the one-joint oscillator
+    ``wn = sqrt(k1 / J0)``, ``zeta = c0 / (2 sqrt(k1 J0))``."""
+    # Up to the links' small products of inertia (~1e-5 kg m²).
+    np.testing.assert_allclose(robot.mass_matrix(Q1)[0, 1:], 0.0, atol=1e-4)
+    q_link = twin.equilibrium(Q1)
+    mass = robot.mass_matrix(q_link)
+    # The gravity sag (~6 mrad at the shoulder) tilts the arm slightly out of that symmetry:
+    # |M[0, j]| ~ 1e-2 kg m² against J0 ~ 9 kg m². The base then mixes weakly with the
+    # shoulder mode 0.2 Hz away; observed effect 4e-6 on wn and 9e-5 on zeta, so 1e-3.
+    assert np.max(np.abs(mass[0, 1:])) < 0.02
+    j0 = mass[0, 0]
+    k1, c0 = UR5E_FLEX.k1_nm_per_rad[0], UR5E_FLEX.c0_nms_per_rad[0]
+    (wn, zeta), _ = twin.modes(Q1)
+    assert wn == pytest.approx(math.sqrt(k1 / j0), rel=1e-3)
+    assert zeta == pytest.approx(c0 / (2.0 * math.sqrt(k1 * j0)), rel=1e-3)
+
+
+def test_free_decay_after_base_impulse_matches_modes(twin: Twin) -> None:
+    """A tap on the base link in Q1 rings at the base mode of the eigen-analysis."""
+    (wn, zeta), _ = twin.modes(Q1)
+    # 1e-5 rad/s keeps the gear torque swing ~0.01 N m, so the load-dependent damping and the
+    # cubic spring stay linear to ~1e-5.
+    record = twin.run(hold(Q1, 0.6), initial_qd_rad_s=[1e-5, 0, 0, 0, 0, 0])
+    y = record.actual_q[:, 0] - twin.equilibrium(Q1)[0]
+    wn_sim, zeta_sim = ar2_mode(y, DT_S)
+    # Second-order integration at 0.5 ms: frequency error ~(wn dt)²/24 ~ 3e-5 (observed 1e-5).
+    assert wn_sim == pytest.approx(wn, rel=5e-4)
+    assert zeta_sim == pytest.approx(zeta, abs=1e-3)
+
+
+@pytest.mark.parametrize(("pose", "which"), [(Q1, 1), (Q3, 0), (Q3, 1)])
+def test_free_decay_of_mode_shape_matches_modes(twin: Twin, pose: np.ndarray, which: int) -> None:
+    """Started in one eigenvector, the nonlinear simulation rings at that mode's wn and zeta."""
+    analysis = twin.modal_analysis(pose)
+    base = analysis.dominant_mode(0)
+    index = base if which == 0 else analysis.dominant_mode(1, exclude=(base,))
+    wn, zeta = twin.modes(pose)[which]
+    assert analysis.wn_rad_s[index] == wn
+    lam = wn * (-zeta + 1j * math.sqrt(1.0 - zeta**2))
+    shape = analysis.shapes[:, index]
+    amplitude_rad = 1e-5  # linear regime, as above
+    record = twin.run(
+        hold(pose, 0.6),
+        initial_dq_rad=amplitude_rad * shape.real,
+        initial_qd_rad_s=amplitude_rad * (lam * shape).real,
+    )
+    joint = int(np.argmax(analysis.strain_energy[:, index]))
+    y = record.actual_q[:, joint] - twin.equilibrium(pose)[joint]
+    n_fit = min(len(y), round(4.0 / (zeta * wn) / DT_S))  # four decay time constants
+    wn_sim, zeta_sim = ar2_mode(y[:n_fit], DT_S)
+    # Observed: |rel. error of wn| <= 5e-4, |error of zeta| <= 1.4e-3 (Q3 base, whose
+    # neighbouring shoulder mode is 3 Hz away and leaks in through the nonlinearities).
+    assert wn_sim == pytest.approx(wn, rel=2e-3)
+    assert zeta_sim == pytest.approx(zeta, abs=3e-3)
+
+
+# ----------------------------------------------------------------------------- sensors
+
+
+@pytest.mark.parametrize("pose", [Q1, Q3, np.array([0.3, -1.2, 1.4, -0.5, 1.1, 0.7])])
+def test_accelerometer_at_rest_reads_gravity(
+    twin: Twin, robot: robots.Robot, pose: np.ndarray
+) -> None:
+    """At rest the accelerometer reads ``R^T [0, 0, +g]`` in the flange frame (acceptance)."""
+    record = twin.run(hold(pose, 0.2))
+    for q_link, accel in zip(record.actual_q, record.actual_tool_accelerometer, strict=True):
+        rotation = robot.flange_pose(q_link)[:3, :3]
+        expected = rotation.T @ np.array([0.0, 0.0, twin.gravity_m_s2])
+        np.testing.assert_allclose(accel, expected, rtol=0, atol=1e-6)
+    # It stays at rest: the start is an exact equilibrium of the discrete dynamics.
+    np.testing.assert_allclose(record.actual_q, record.actual_q[:1].repeat(100, 0), atol=1e-12)
+
+
+def test_tcp_pose_is_flange_pose_of_link_angles(twin: Twin, robot: robots.Robot) -> None:
+    """actual_TCP_pose = UR axis-angle pose of the flange at the link-side angles."""
+    from scipy.spatial.transform import Rotation
+
+    record = twin.run(smooth_move(Q1, Q3, 1.5, 1.6))
+    poses = robot.flange_pose_many(record.actual_q)
+    np.testing.assert_allclose(record.actual_TCP_pose[:, :3], poses[:, :3, 3], atol=1e-12)
+    rotations = Rotation.from_rotvec(record.actual_TCP_pose[:, 3:]).as_matrix()
+    np.testing.assert_allclose(rotations, poses[:, :3, :3], atol=1e-12)
+    assert np.all(np.linalg.norm(record.actual_TCP_pose[:, 3:], axis=1) <= np.pi + 1e-12)
+
+
+def test_accelerometer_noise_is_seeded_white_noise() -> None:
+    clean = Twin().run(hold(Q3, 1.0)).actual_tool_accelerometer
+    noisy_a = Twin(accel_noise_std=0.05, seed=3).run(hold(Q3, 1.0)).actual_tool_accelerometer
+    noisy_b = Twin(accel_noise_std=0.05, seed=3).run(hold(Q3, 1.0)).actual_tool_accelerometer
+    np.testing.assert_array_equal(noisy_a, noisy_b)
+    noise = noisy_a - clean
+    # 1500 samples: the sample std has a relative standard error of 1/sqrt(2*1500) ~ 1.8 %,
+    # so 10 % is more than 5 standard errors; the mean's standard error is 0.05/sqrt(1500).
+    assert np.std(noise) == pytest.approx(0.05, rel=0.1)
+    assert abs(np.mean(noise)) < 5 * 0.05 / math.sqrt(noise.size)
+
+
+def test_motion_deflects_the_gears_and_rings_after_the_stop(twin: Twin) -> None:
+    """A fast move leaves residual vibration at the end pose's modes (no shaping)."""
+    record = twin.run(smooth_move(Q1, Q3, 1.5, 2.5))
+    residual = record.actual_tool_accelerometer[int(1.5 / DT_S) :]
+    residual = residual - residual[-50:].mean(axis=0)
+    assert np.max(np.abs(residual[:25])) > 0.05  # m/s², rings right after the stop
+    assert np.max(np.abs(residual[-100:])) < 1e-3 * np.max(np.abs(residual[:25]))  # and decays
+    # target_qd / target_qdd are finite differences of the reference.
+    np.testing.assert_allclose(record.target_qd, np.gradient(record.target_q, DT_S, axis=0))
+    np.testing.assert_allclose(record.target_qdd, np.gradient(record.target_qd, DT_S, axis=0))
+
+
+# ----------------------------------------------------------------------------- failures
+
+
+def test_divergence_is_detected_and_names_the_time() -> None:
+    """A wrist-3 spring far too stiff for the 0.5 ms step (wn dt ~ 13) blows up and raises."""
+    k1 = list(UR5E_FLEX.k1_nm_per_rad)
+    k1[5] = 2.0e5
+    twin = Twin(flex=dataclasses.replace(UR5E_FLEX, k1_nm_per_rad=tuple(k1)))
+    q_ref = np.linspace(Q1, Q1 + [0, 0, 0, 0, 0, 0.5], 500)
+    with pytest.raises(SimulationDiverged, match=r"diverged at t = \d+\.\d{4} s") as info:
+        twin.run(q_ref)
+    assert 0.0 < info.value.time_s <= 1.0
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"robot_name": "ur6"}, "unknown robot"),
+        ({"payload_kg": -1.0}, "payload_kg"),
+        ({"payload_kg": float("nan")}, "payload_kg"),
+        ({"payload_kg": 7.6}, "payload_kg"),
+        ({"payload_com_m": (0.0, float("inf"), 0.0)}, "com_m"),
+        ({"physics_dt_s": 0.001}, "physics_dt_s"),
+        ({"accel_noise_std": -0.1}, "accel_noise_std"),
+        ({"robot_name": "ur10e"}, "no default FlexParams"),
+    ],
+)
+def test_bad_twin_arguments_raise_value_error(kwargs: dict, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        Twin(**kwargs)
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "message"),
+    [
+        ("k1_nm_per_rad", (22000.0, -1.0, 1.0, 1.0, 1.0, 1.0), "must be > 0"),
+        ("k3_nm_per_rad3", (0.0,) * 5, "expected 6 values"),
+        ("c0_nms_per_rad", (float("nan"),) * 6, "NaN"),
+        ("c_load_per_nm", (-0.1,) * 6, "must be >= 0"),
+    ],
+)
+def test_bad_flex_params_raise_value_error(field: str, value: tuple, message: str) -> None:
+    flex = dataclasses.replace(UR5E_FLEX, **{field: value})
+    with pytest.raises(ValueError, match=message):
+        Twin(flex=flex)
+
+
+@pytest.mark.parametrize(
+    ("q_ref", "dt_s", "message"),
+    [
+        (np.full((10, 6), np.nan), DT_S, "row 0"),
+        (np.vstack([hold(Q1, 0.02), [[0, 0, np.nan, 0, 0, 0]]]), DT_S, "row 10"),
+        (Q1, DT_S, "shape"),
+        (hold(Q1, 0.02)[:, :5], DT_S, "shape"),
+        (Q1[None, :], DT_S, "shape"),
+        (np.vstack([hold(Q1, 0.02), [[0, -1.0, 3.5, 0, 0, 0]]]), DT_S, "joint 2 .* limits"),
+        ([["a"] * 6] * 3, DT_S, "numeric"),
+        (np.linspace(Q1, Q3, 200), DT_S, "joint 0 moves at .* speed limit"),
+        (hold(Q1, 0.02), 0.0013, "multiple"),
+        (hold(Q1, 0.02), float("nan"), "dt_s"),
+    ],
+)
+def test_bad_trajectory_raises_before_simulating(twin: Twin, q_ref, dt_s, message) -> None:
+    with pytest.raises(ValueError, match=message):
+        twin.run(q_ref, dt_s=dt_s)
+
+
+def test_flex_params_inverse_spring_law() -> None:
+    """deflection_rad inverts eq. 22 on both sides of zero."""
+    flex = FlexParams((2.0e4,), (2.4e9,), (1.0,), (0.0,))
+    tau = np.array([-300.0, -5.0, 0.0, 1e-3, 42.0, 300.0])
+    delta = flex.deflection_rad(tau[:, None])
+    np.testing.assert_allclose(flex.spring_torque_nm(delta)[:, 0], tau, rtol=1e-12, atol=1e-12)
+
+
+# ----------------------------------------------------------------------------- CSV
+
+
+def test_csv_has_rtde_columns_and_six_decimals(twin: Twin, tmp_path) -> None:
+    record = twin.run(np.linspace(Q1, Q1 + 0.01, 50), progress=True)
+    path = record.to_csv(tmp_path / "run.csv")
+    lines = path.read_text().splitlines()
+    header = lines[0].split(",")
+    expected = (
+        ["timestamp"]
+        + [f"target_q_{i}" for i in range(6)]
+        + [f"target_qd_{i}" for i in range(6)]
+        + [f"target_qdd_{i}" for i in range(6)]
+        + [f"actual_q_{i}" for i in range(6)]
+        + [f"actual_qd_{i}" for i in range(6)]
+        + [f"actual_TCP_pose_{i}" for i in range(6)]
+        + [f"actual_tool_accelerometer_{i}" for i in range(3)]
+    )
+    assert header == expected == csv_header()
+    assert len(lines) == 51
+    assert all(len(cell.split(".")[1]) == 6 for cell in lines[1].split(","))
+    table = np.loadtxt(path, delimiter=",", skiprows=1)
+    np.testing.assert_allclose(table[:, 0], record.timestamp, atol=5e-7)
+    np.testing.assert_allclose(table[:, 19:25], record.actual_q, atol=5e-7)
+    np.testing.assert_allclose(table[:, -3:], record.actual_tool_accelerometer, atol=5e-7)
+
+
+def test_csv_reads_back_with_the_log_reader(twin: Twin, tmp_path) -> None:
+    from tvist.ident import read_rtde_csv
+
+    record = twin.run(hold(Q3, 0.1))
+    loaded = read_rtde_csv(record.to_csv(tmp_path / "run.csv"))
+    np.testing.assert_allclose(loaded.actual_q, record.actual_q, atol=5e-7)
+    np.testing.assert_allclose(loaded.tool_accel, record.actual_tool_accelerometer, atol=5e-7)
+
+
+def test_non_finite_record_is_never_written(twin: Twin, tmp_path) -> None:
+    record = twin.run(hold(Q1, 0.02))
+    broken = dataclasses.replace(
+        record, actual_tool_accelerometer=np.full_like(record.actual_tool_accelerometer, np.nan)
+    )
+    with pytest.raises(ValueError, match="NaN"):
+        broken.to_csv(tmp_path / "broken.csv")
+    assert not (tmp_path / "broken.csv").exists()
