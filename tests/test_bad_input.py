@@ -123,12 +123,14 @@ def test_callable_raising_during_steps_propagates() -> None:
         shaper.step(np.array([0.0]))
     with pytest.raises(Boom, match="map evaluation failed"):
         shaper.step(np.array([0.0]))
-    # In a block, the first failure ends the block (the callable is not called again).
-    calls["n"] = 0
-    shaper = tvist.TvShaper(fails_later, 0.002, 1, max_delay_s=0.5)
-    with pytest.raises(Boom):
-        shaper.shape(np.zeros((1000, 1)))
-    assert calls["n"] == 6
+    # In a block, the first failure ends the block (the callable is not called again),
+    # also past the first of the chunks the block is processed in.
+    for fail_after in (5, 1500):
+        calls["n"] = 5 - fail_after
+        shaper = tvist.TvShaper(fails_later, 0.002, 1, max_delay_s=0.5)
+        with pytest.raises(Boom):
+            shaper.shape(np.zeros((3000, 1)))
+        assert calls["n"] == 6
 
 
 def test_callable_returning_the_wrong_count_raises() -> None:

@@ -76,6 +76,22 @@ def test_paper_map_coefficients_are_tables_1_and_2():
     assert (shoulder["frequency_joint"], shoulder["damping_joint"]) == (1, 1)
 
 
+def test_many_equals_one_by_one():
+    paper = tvist.DynamicMap.paper_ur5e()
+    j = np.random.default_rng(4).uniform(-0.5, 12.0, size=(300, 2))
+    many = paper.modes_from_inertia_many(j)
+    assert many.shape == (300, 2, 2)
+    for row, modes in zip(j, many, strict=True):
+        np.testing.assert_array_equal(modes, np.array(paper.modes_from_inertia(row)))
+    gravity_map = tvist.DynamicMap([general_mode(1, **dict(SHOULDER, k_g=30.0))])
+    with pytest.raises(ValueError, match="gravity torques"):
+        gravity_map.modes_from_inertia_many(j)
+    with pytest.raises(ValueError, match="shape of inertia_kg_m2"):
+        gravity_map.modes_from_inertia_many(j, np.zeros((300, 3)))
+    with pytest.raises(ValueError, match="reads 2 joint inertias"):
+        paper.modes_from_inertia_many(np.ones((4, 1)))
+
+
 def test_general_map_with_gravity_term():
     coeffs = dict(SHOULDER, k_g=30.0, c_1=0.1)
     dynmap = tvist.DynamicMap([general_mode(1, **coeffs)])

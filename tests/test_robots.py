@@ -224,6 +224,18 @@ def test_single_pose_methods_equal_the_batch_ones():
         np.testing.assert_array_equal(robot.joint_inertia(q), np.diag(m))
 
 
+def test_core_batch_entry_points_read_any_memory_layout():
+    robot = tvist.robots.ur5e(payload_kg=1.0)
+    qs = _random_poses(6, seed=5)[:10]
+    expected = robot.joint_inertia_many(qs)
+    np.testing.assert_array_equal(robot.core.joint_inertia_many(np.asfortranarray(qs)), expected)
+    j = np.asfortranarray(expected[:, :2])
+    paper = tvist.DynamicMap.paper_ur5e()
+    np.testing.assert_array_equal(
+        paper.core.modes_from_inertia_many(j), paper.modes_from_inertia_many(expected[:, :2])
+    )
+
+
 def test_ur5e_q1_q3_inertias_and_stretched_pose():
     robot = tvist.robots.ur5e(payload_kg=5.0, payload_com_m=(0.0, 0.0, 0.05))
     assert robot.n_dof == 6 and robot.params.name == "ur5e" and robot.payload.mass_kg == 5.0

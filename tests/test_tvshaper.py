@@ -133,7 +133,8 @@ def test_cubic_interpolation_equals_a_lagrange_reference(name: str, n_modes: int
 
 
 def test_streaming_equals_batch_and_reset_restarts() -> None:
-    x = make_signal(400, 2)
+    # 2500 samples: longer than the chunks `shape` copies its input in.
+    x = make_signal(2500, 2)
     modes = tvist.ConstantModes(MODES[:2])
     batch = tvist.TvShaper(modes, DT_S, 2, shaper="zvd").shape(x)
     streaming = tvist.TvShaper(modes, DT_S, 2, shaper="zvd")
@@ -141,16 +142,18 @@ def test_streaming_equals_batch_and_reset_restarts() -> None:
     np.testing.assert_array_equal(steps, batch)
     # Blocks continue the streaming state.
     split = tvist.TvShaper(modes, DT_S, 2, shaper="zvd")
-    np.testing.assert_array_equal(np.vstack([split.shape(x[:123]), split.shape(x[123:])]), batch)
+    np.testing.assert_array_equal(np.vstack([split.shape(x[:1234]), split.shape(x[1234:])]), batch)
     # reset(None) forgets history; reset(q0) puts the filter at rest at q0.
     split.reset()
     np.testing.assert_array_equal(split.shape(x), batch)
     split.reset(np.array([1.0, -1.0]))
     np.testing.assert_allclose(split.step(np.array([1.0, -1.0])), [1.0, -1.0], atol=1e-15)
-    # Non-contiguous input is accepted.
+    # Fortran-ordered and strided input is read in row order.
     np.testing.assert_array_equal(
         tvist.TvShaper(modes, DT_S, 2, shaper="zvd").shape(np.asfortranarray(x)), batch
     )
+    wide = np.repeat(x, 2, axis=1)[:, ::2]
+    np.testing.assert_array_equal(tvist.TvShaper(modes, DT_S, 2, shaper="zvd").shape(wide), batch)
 
 
 # --- time-varying smoothness -------------------------------------------------------------

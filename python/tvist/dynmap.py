@@ -192,6 +192,28 @@ class DynamicMap:
             tau = [float(v) for v in np.asarray(gravity_torque_nm, dtype=float).ravel()]
         return self._core.modes_from_inertia(j, tau)
 
+    def modes_from_inertia_many(
+        self, inertia_kg_m2: np.ndarray, gravity_torque_nm: np.ndarray | None = None
+    ) -> np.ndarray:
+        """:meth:`modes_from_inertia` for every row of ``inertia_kg_m2`` ``(n_poses, n_j)``.
+
+        ``gravity_torque_nm`` has the same shape (needed only when :attr:`uses_gravity`).
+        Returns ``(n_poses, n_modes, 2)``: ``[..., 0]`` is ``wn_rad_s``, ``[..., 1]`` is
+        ``zeta``; NaN where the map gives no mode.
+        """
+        j = np.ascontiguousarray(inertia_kg_m2, dtype=float)
+        if j.ndim != 2:
+            raise ValueError(f"inertia_kg_m2 must have shape (n_poses, n_j), got {j.shape}")
+        tau = None
+        if gravity_torque_nm is not None:
+            tau = np.ascontiguousarray(gravity_torque_nm, dtype=float)
+            if tau.shape != j.shape:
+                raise ValueError(
+                    f"gravity_torque_nm must have the shape of inertia_kg_m2 {j.shape}, "
+                    f"got {tau.shape}"
+                )
+        return self._core.modes_from_inertia_many(j, tau)
+
     def modes(self, robot: Robot, q: Sequence[float] | np.ndarray) -> list[tuple[float, float]]:
         """Modes at configuration ``q`` of ``robot`` (its payload included)."""
         j = robot.joint_inertia(q)

@@ -120,7 +120,7 @@ impl DelayLine {
     #[inline]
     pub fn accumulate(&self, delay: f64, weight: f64, out: &mut [f64]) -> bool {
         let max = self.max_delay_samples();
-        let clamped = !(delay <= max); // also catches NaN
+        let clamped = delay.is_nan() || delay > max;
         let d = if clamped { max } else { delay.max(0.0) };
         // d ∈ [0, max]: truncation is the floor and the cast cannot overflow.
         let k = d as usize;

@@ -36,7 +36,9 @@ impl ConstantModes {
     /// Validates every mode (finite, `ω_n > 0`, `0 <= ζ < 1`); at least one is required.
     pub fn new(modes: Vec<Mode>) -> Result<ConstantModes, Error> {
         if modes.is_empty() {
-            return Err(Error::InvalidParameter("at least one mode is required".into()));
+            return Err(Error::InvalidParameter(
+                "at least one mode is required".into(),
+            ));
         }
         for (i, m) in modes.iter().enumerate() {
             m.validate(i)?;

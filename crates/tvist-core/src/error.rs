@@ -15,11 +15,19 @@ pub enum Error {
     /// A parameter outside its domain; the string names the parameter and the rule.
     InvalidParameter(String),
     /// A mode `(wn_rad_s, zeta)` that is not finite, has `wn <= 0`, or `zeta` outside `[0, 1)`.
-    InvalidMode { index: usize, wn_rad_s: f64, zeta: f64 },
+    InvalidMode {
+        index: usize,
+        wn_rad_s: f64,
+        zeta: f64,
+    },
     /// An impulse set that is empty, non-finite, unsorted or sums to zero.
     InvalidImpulses(String),
     /// Channel-count mismatch between the parts of a filter.
-    DimensionMismatch { what: &'static str, expected: usize, got: usize },
+    DimensionMismatch {
+        what: &'static str,
+        expected: usize,
+        got: usize,
+    },
     /// The filter cannot size its delay line: the provider gives no delay bound and none was set.
     UnknownDelayBound,
 }
@@ -33,16 +41,27 @@ impl fmt::Display for Error {
                 crate::shaper::SHAPER_NAMES
             ),
             Error::UnknownInterpolation(name) => {
-                write!(f, "unknown interpolation {name:?}; expected \"linear\" or \"cubic\"")
+                write!(
+                    f,
+                    "unknown interpolation {name:?}; expected \"linear\" or \"cubic\""
+                )
             }
             Error::InvalidParameter(msg) => write!(f, "invalid parameter: {msg}"),
-            Error::InvalidMode { index, wn_rad_s, zeta } => write!(
+            Error::InvalidMode {
+                index,
+                wn_rad_s,
+                zeta,
+            } => write!(
                 f,
                 "invalid mode {index}: wn_rad_s={wn_rad_s}, zeta={zeta} \
                  (need finite wn_rad_s > 0 and 0 <= zeta < 1)"
             ),
             Error::InvalidImpulses(msg) => write!(f, "invalid impulse set: {msg}"),
-            Error::DimensionMismatch { what, expected, got } => {
+            Error::DimensionMismatch {
+                what,
+                expected,
+                got,
+            } => {
                 write!(f, "{what}: expected {expected}, got {got}")
             }
             Error::UnknownDelayBound => write!(

@@ -61,9 +61,18 @@ pub struct TvShaper<D: Dynamics> {
 impl<D: Dynamics> TvShaper<D> {
     /// Validates the configuration and allocates all state.
     pub fn new(dynamics: D, config: &TvShaperConfig) -> Result<TvShaper<D>, Error> {
-        let TvShaperConfig { dt_s, n_dof, shaper, interp, max_delay_s, safety_factor } = *config;
+        let TvShaperConfig {
+            dt_s,
+            n_dof,
+            shaper,
+            interp,
+            max_delay_s,
+            safety_factor,
+        } = *config;
         if !(dt_s.is_finite() && dt_s > 0.0) {
-            return Err(Error::InvalidParameter(format!("dt_s = {dt_s} must be finite and > 0")));
+            return Err(Error::InvalidParameter(format!(
+                "dt_s = {dt_s} must be finite and > 0"
+            )));
         }
         if n_dof == 0 {
             return Err(Error::InvalidParameter("n_dof must be at least 1".into()));
@@ -199,7 +208,10 @@ impl<D: Dynamics> TvShaper<D> {
             return Status::BAD_LENGTH;
         }
         let mut status = Status::OK;
-        for (x, y) in input.chunks_exact(self.n_dof).zip(output.chunks_exact_mut(self.n_dof)) {
+        for (x, y) in input
+            .chunks_exact(self.n_dof)
+            .zip(output.chunks_exact_mut(self.n_dof))
+        {
             status |= self.step(x, y);
         }
         status

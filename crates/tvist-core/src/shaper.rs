@@ -33,7 +33,9 @@ pub enum ShaperKind {
     Zvdd,
     Mzv,
     /// Extra-insensitive shaper with vibration tolerance `v_tol` (fraction, e.g. 0.05).
-    Ei { v_tol: f64 },
+    Ei {
+        v_tol: f64,
+    },
     Ei2Hump,
     Ei3Hump,
 }
@@ -68,7 +70,11 @@ impl Mode {
         if self.is_valid() {
             Ok(())
         } else {
-            Err(Error::InvalidMode { index, wn_rad_s: self.wn_rad_s, zeta: self.zeta })
+            Err(Error::InvalidMode {
+                index,
+                wn_rad_s: self.wn_rad_s,
+                zeta: self.zeta,
+            })
         }
     }
 }
@@ -94,7 +100,11 @@ impl ImpulseArray {
     /// Builds a sequence from raw (unnormalized) amplitudes and times; normalizes `Σ A = 1`.
     /// `raw_a` and `raw_t` have equal length `<= MAX_IMPULSES` by construction at every call site.
     fn normalized(raw_a: &[f64], raw_t: &[f64]) -> ImpulseArray {
-        let mut out = ImpulseArray { len: 0, amplitudes: [0.0; MAX_IMPULSES], times_s: [0.0; MAX_IMPULSES] };
+        let mut out = ImpulseArray {
+            len: 0,
+            amplitudes: [0.0; MAX_IMPULSES],
+            times_s: [0.0; MAX_IMPULSES],
+        };
         let sum: f64 = raw_a.iter().sum();
         for ((a, t), (oa, ot)) in raw_a
             .iter()
@@ -271,8 +281,7 @@ impl ShaperKind {
                 let a2 = 1.0 - a1 - a3;
                 let t2 = 0.4999
                     + (((0.46159 + 8.57843 * v) * v)
-                        + (((4.26169 - 108.644 * v) * v) + ((1.75601 + 336.989 * v) * v) * z)
-                            * z)
+                        + (((4.26169 - 108.644 * v) * v) + ((1.75601 + 336.989 * v) * v) * z) * z)
                         * z;
                 ImpulseArray::normalized(&[a1, a2, a3], &[0.0, t2 * td, td])
             }
@@ -318,16 +327,25 @@ impl Impulses {
                 times_s.len()
             )));
         }
-        if let Some(i) = amplitudes.iter().chain(&times_s).position(|v| !v.is_finite()) {
+        if let Some(i) = amplitudes
+            .iter()
+            .chain(&times_s)
+            .position(|v| !v.is_finite())
+        {
             let (what, idx) = if i < amplitudes.len() {
                 ("amplitude", i)
             } else {
                 ("time", i - amplitudes.len())
             };
-            return Err(Error::InvalidImpulses(format!("{what} {idx} is not finite")));
+            return Err(Error::InvalidImpulses(format!(
+                "{what} {idx} is not finite"
+            )));
         }
         if times_s[0] < 0.0 {
-            return Err(Error::InvalidImpulses(format!("time 0 is negative ({})", times_s[0])));
+            return Err(Error::InvalidImpulses(format!(
+                "time 0 is negative ({})",
+                times_s[0]
+            )));
         }
         if let Some(i) = times_s.windows(2).position(|w| w[1] < w[0]) {
             return Err(Error::InvalidImpulses(format!(
@@ -343,7 +361,10 @@ impl Impulses {
             return Err(Error::InvalidImpulses("amplitudes sum to zero".into()));
         }
         let amplitudes = amplitudes.into_iter().map(|a| a / sum).collect();
-        Ok(Impulses { amplitudes, times_s })
+        Ok(Impulses {
+            amplitudes,
+            times_s,
+        })
     }
 
     /// The registry shaper `kind` designed for `mode` (validated, including the damping range
@@ -388,8 +409,12 @@ impl Impulses {
         let Some((first, rest)) = sets.split_first() else {
             return Err(Error::InvalidImpulses("nothing to convolve".into()));
         };
-        let mut pairs: Vec<(f64, f64)> =
-            first.times_s.iter().copied().zip(first.amplitudes.iter().copied()).collect();
+        let mut pairs: Vec<(f64, f64)> = first
+            .times_s
+            .iter()
+            .copied()
+            .zip(first.amplitudes.iter().copied())
+            .collect();
         for set in rest {
             let mut next = Vec::with_capacity(pairs.len() * set.len());
             for &(t0, a0) in &pairs {
@@ -414,6 +439,9 @@ impl Impulses {
 
 impl From<&ImpulseArray> for Impulses {
     fn from(a: &ImpulseArray) -> Self {
-        Impulses { amplitudes: a.amplitudes().to_vec(), times_s: a.times_s().to_vec() }
+        Impulses {
+            amplitudes: a.amplitudes().to_vec(),
+            times_s: a.times_s().to_vec(),
+        }
     }
 }

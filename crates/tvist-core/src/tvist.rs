@@ -36,7 +36,9 @@ impl ModeFilter {
         interp: Interpolation,
     ) -> Result<ModeFilter, Error> {
         if !(dt_s.is_finite() && dt_s > 0.0) {
-            return Err(Error::InvalidParameter(format!("dt_s = {dt_s} must be finite and > 0")));
+            return Err(Error::InvalidParameter(format!(
+                "dt_s = {dt_s} must be finite and > 0"
+            )));
         }
         if !(max_delay_s.is_finite() && max_delay_s >= 0.0) {
             return Err(Error::InvalidParameter(format!(
@@ -104,7 +106,12 @@ impl ModeFilter {
         self.line.push(input);
         self.output.fill(0.0);
         let n = self.impulses.len();
-        for (&a, &d) in self.impulses.amplitudes().iter().zip(&self.delays_samples[..n]) {
+        for (&a, &d) in self
+            .impulses
+            .amplitudes()
+            .iter()
+            .zip(&self.delays_samples[..n])
+        {
             if self.line.accumulate(d, a, &mut self.output) {
                 status |= Status::DELAY_CLAMPED;
             }

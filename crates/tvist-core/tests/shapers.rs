@@ -196,7 +196,10 @@ fn ei_meets_its_tolerance_at_the_design_point_and_over_its_band() {
 }
 
 /// Local maxima and minima of a sampled curve.
-fn extrema(curve: &[(f64, f64)]) -> (Vec<(f64, f64)>, Vec<(f64, f64)>) {
+/// Sampled `(frequency ratio, PRV)` points.
+type Points = Vec<(f64, f64)>;
+
+fn extrema(curve: &[(f64, f64)]) -> (Points, Points) {
     let mut max = Vec::new();
     let mut min = Vec::new();
     for w in curve.windows(3) {
@@ -265,7 +268,8 @@ fn zeta_beyond_a_fit_range_is_rejected_at_design() {
         ShaperKind::Ei2Hump,
         ShaperKind::Ei3Hump,
     ] {
-        let err = Impulses::design(kind, Mode::new(10.0, kind.max_zeta() + 0.01)).unwrap_err();
+        let err = Impulses::design(kind, Mode::new(10.0, kind.max_zeta() + 0.01))
+            .expect_err("beyond the fit");
         assert!(err.to_string().contains(kind.name()), "{err}");
         assert!(Impulses::design(kind, Mode::new(10.0, kind.max_zeta())).is_ok());
     }
@@ -332,7 +336,7 @@ fn custom_sets_are_validated_and_normalized() {
         (vec![1.0], vec![-0.1], "negative"),
     ];
     for (a, t, what) in cases {
-        let err = Impulses::new(a, t).unwrap_err().to_string();
+        let err = Impulses::new(a, t).expect_err(what).to_string();
         assert!(err.contains(what), "expected {what:?} in {err:?}");
     }
     let set = Impulses::new(vec![2.0, 2.0], vec![0.0, 0.05]).expect("valid");

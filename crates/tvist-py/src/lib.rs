@@ -239,6 +239,9 @@ impl StatusCounts {
     }
 }
 
+/// Rows per chunk of `TvShaper.shape` (48 kB of 6-DOF samples: cache-resident).
+const SHAPE_CHUNK_ROWS: usize = 1024;
+
 /// Multi-mode FD-TVIST shaper (streaming and batch).
 #[pyclass(name = "TvShaper", module = "tvist._core")]
 struct PyTvShaper {
@@ -351,32 +354,47 @@ impl PyTvShaper {
                 self.inner.n_dof()
             )));
         }
-        // Row-major order whatever the memory layout (`as_slice` alone would also accept a
-        // Fortran-ordered array and hand it over in column order).
-        let input: Vec<f64> = match q.as_slice() {
-            Ok(s) if q.is_c_contiguous() => s.to_vec(),
-            _ => q.as_array().iter().copied().collect(),
-        };
-        // Not `vec![0.0; n]`: its calloc hands out fresh pages that fault on first write
-        // (measured ~30 ns per 6-DOF sample); recycled heap memory does not.
-        let mut output = Vec::with_capacity(input.len());
-        output.resize(input.len(), 0.0);
-        let inner = &mut self.inner;
+        // The block is copied in chunks of SHAPE_CHUNK_ROWS rows (with the interpreter lock
+        // held, so no Python thread can change the array under us) and shaped with the lock
+        // released. The chunk buffer stays in cache and, unlike one full-size copy, does not
+        // make the allocator hand out fresh pages each call.
+        let view = q.as_array();
+        let contiguous = q.as_slice().ok().filter(|_| q.is_c_contiguous());
+        let mut output: Vec<f64> = Vec::with_capacity(n * d);
+        let mut chunk: Vec<f64> = Vec::with_capacity(SHAPE_CHUNK_ROWS.min(n) * d);
         let mut counts = self.counts;
-        let last = py.detach(|| {
-            let mut last = Status::OK;
-            for (x, y) in input.chunks_exact(d).zip(output.chunks_exact_mut(d)) {
-                last = inner.step(x, y);
-                counts.add(last);
-                // A raising callable ends the block: its exception is re-raised below.
-                if let Provider::Callable(p) = inner.dynamics() {
-                    if p.error.is_some() {
-                        break;
+        let mut last = Status::OK;
+        let mut row = 0;
+        while row < n {
+            let rows = SHAPE_CHUNK_ROWS.min(n - row);
+            chunk.clear();
+            match contiguous {
+                // Row-major order whatever the memory layout (`as_slice` alone would also
+                // accept a Fortran-ordered array and hand it over in column order).
+                Some(all) => chunk.extend_from_slice(&all[row * d..(row + rows) * d]),
+                None => (row..row + rows).for_each(|r| chunk.extend(view.row(r).iter())),
+            }
+            let filled = output.len();
+            output.resize(filled + rows * d, 0.0);
+            let (inner, out) = (&mut self.inner, &mut output[filled..]);
+            let failed = py.detach(|| {
+                for (x, y) in chunk.chunks_exact(d).zip(out.chunks_exact_mut(d)) {
+                    last = inner.step(x, y);
+                    counts.add(last);
+                    // A raising callable ends the block: its exception is re-raised below.
+                    if let Provider::Callable(p) = inner.dynamics() {
+                        if p.error.is_some() {
+                            return true;
+                        }
                     }
                 }
+                false
+            });
+            if failed {
+                break;
             }
-            last
-        });
+            row += rows;
+        }
         self.counts = counts;
         self.last_status = last;
         self.take_callable_error()?;

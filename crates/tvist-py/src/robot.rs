@@ -32,9 +32,10 @@ fn rows(arr: &PyReadonlyArray2<'_, f64>, cols: usize, what: &str) -> PyResult<(u
             shape[0], shape[1]
         )));
     }
+    // Row-major whatever the memory layout (`as_slice` also accepts Fortran order).
     let data: Vec<f64> = match arr.as_slice() {
-        Ok(s) => s.to_vec(),
-        Err(_) => arr.as_array().iter().copied().collect(),
+        Ok(s) if arr.is_c_contiguous() => s.to_vec(),
+        _ => arr.as_array().iter().copied().collect(),
     };
     Ok((shape[0], data))
 }
@@ -388,6 +389,57 @@ impl PyDynamicMap {
         self.inner
             .modes_from_inertia(&inertia_kg_m2, &tau, &mut out);
         Ok(out.iter().map(|m| (m.wn_rad_s, m.zeta)).collect())
+    }
+
+    /// modes_from_inertia for every row: inertia (n_poses, n_j), gravity torques likewise (or
+    /// None when the map has no gravity term) -> (n_poses, n_modes, 2) of (wn_rad_s, zeta).
+    #[pyo3(signature = (inertia_kg_m2, gravity_torque_nm=None))]
+    fn modes_from_inertia_many<'py>(
+        &self,
+        py: Python<'py>,
+        inertia_kg_m2: PyReadonlyArray2<'py, f64>,
+        gravity_torque_nm: Option<PyReadonlyArray2<'py, f64>>,
+    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        let cols = inertia_kg_m2.shape()[1];
+        let need = self.inner.required_joints();
+        if cols < need {
+            return Err(PyValueError::new_err(format!(
+                "the map reads {need} joint inertias per row, got {cols}"
+            )));
+        }
+        let (n, j) = rows(&inertia_kg_m2, cols, "inertia_kg_m2")?;
+        let tau = match gravity_torque_nm {
+            Some(t) => {
+                let (tn, tau) = rows(&t, cols, "gravity_torque_nm")?;
+                check_len("gravity_torque_nm rows", tn, n)?;
+                tau
+            }
+            None if self.inner.uses_gravity() => {
+                return Err(PyValueError::new_err(format!(
+                    "the map uses gravity torques (k_g != 0): pass {need} per row"
+                )));
+            }
+            None => Vec::new(),
+        };
+        let m = self.inner.n_modes();
+        let mut modes = vec![Mode::new(0.0, 0.0); m];
+        let mut out = vec![0.0; n * m * 2];
+        for (r, chunk) in out.chunks_exact_mut(2 * m).enumerate() {
+            let tau_row = if tau.is_empty() {
+                &[][..]
+            } else {
+                &tau[r * cols..(r + 1) * cols]
+            };
+            self.inner
+                .modes_from_inertia(&j[r * cols..(r + 1) * cols], tau_row, &mut modes);
+            for (pair, mode) in chunk.chunks_exact_mut(2).zip(&modes) {
+                pair[0] = mode.wn_rad_s;
+                pair[1] = mode.zeta;
+            }
+        }
+        Ok(Array3::from_shape_vec((n, m, 2), out)
+            .map_err(|e| PyValueError::new_err(e.to_string()))?
+            .into_pyarray(py))
     }
 
     /// The coefficients of every mode as dicts (see the constructor).

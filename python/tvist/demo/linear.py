@@ -3,7 +3,7 @@
 A joint-space double-S move drives a plant whose tool acceleration is the sum of two
 base-excited second-order modes. The reference is shaped by ``TvShaper`` with the plant's own
 (constant) modes, and the residual vibration of both runs is compared. This needs no robot
-model and no simulator; the MuJoCo twin demo is the full experiment.
+model and no simulator; :mod:`tvist.demo.experiment` on the MuJoCo twin is the full experiment.
 """
 
 from __future__ import annotations
@@ -49,7 +49,9 @@ class LinearDemoRow:
     peak_jerk_rad_s3: float
 
 
-def run_linear_demo(out_dir: str | Path = "out/demo", quick: bool = False) -> list[LinearDemoRow]:
+def run_linear_demo(
+    out_dir: str | Path = "out/demo-linear", quick: bool = False
+) -> list[LinearDemoRow]:
     """Run the example, print a table, write ``results.json`` and a figure to ``out_dir``."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
