@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 import tvist
-from tvist.robots import Payload, Robot, RobotParams, names, params
+from tvist.robots import Payload, Robot, RobotParams, _cylinders, names, params
+from tvist.trajectory import PAPER_POSES
 
 pin = pytest.importorskip("pinocchio")
 
@@ -25,8 +26,7 @@ PAYLOADS = [
     Payload(5.0, (0.0, 0.0, 0.05)),
     Payload(2.3, (0.03, -0.02, 0.08), (0.010, 0.012, 0.008, 0.001, -0.0005, 0.0007)),
 ]
-Q1 = np.array([0.0, -np.pi, 0.0, -np.pi / 2, 0.0, 0.0])
-Q3 = np.array([np.pi / 2, -np.pi / 2, 5 * np.pi / 6, -np.pi / 2, 0.0, 0.0])
+Q1, Q2, Q3 = PAPER_POSES["Q1"], PAPER_POSES["Q2"], PAPER_POSES["Q3"]
 
 
 def _fixed_dh(d: float, a: float, alpha: float):
@@ -173,6 +173,94 @@ def test_robot_methods_reject_wrong_shapes():
         robot.jacobian_many(bad)
 
 
+# ---- cylinder-approximated link inertias (UR3e, UR5e) ----
+
+
+def _data_text() -> str:
+    return resources.files("tvist.robots").joinpath("ur_e_series.json").read_text()
+
+
+def test_cylinder_robots_are_ur3e_and_ur5e_and_their_source_says_so():
+    robots = json.loads(_data_text())["robots"]
+    assert {n for n, e in robots.items() if "inertia_cylinders" in e} == {"ur3e", "ur5e"}
+    for name in ("ur3e", "ur5e"):
+        entry, source = robots[name], robots[name]["inertia_source"]
+        assert "publishes no inertia tensors" in source
+        assert "I_axis = m r^2/2, I_perpendicular = m (3 r^2 + l^2)/12" in source
+        assert "centre of mass" in source and "DH frame i" in source
+        # Every radius/length pair of the block is written out in the text, in link order.
+        block = entry["inertia_cylinders"]
+        at = 0
+        for r, length in zip(block["radius_m"], block["length_m"], strict=True):
+            at = source.index(f" {r:g}/{length:g}", at) + 1  # ValueError if missing/out of order
+
+
+def test_stored_cylinder_tensors_are_the_ones_the_generator_writes():
+    # Regenerating the derived rows must leave the data file unchanged, byte for byte.
+    text = _data_text()
+    assert _cylinders.regenerate(text) == text, "run: python -m tvist.robots._cylinders --write"
+    assert _cylinders.main([]) == 0
+
+
+def test_cylinder_formula_matches_pinocchio_for_every_axis():
+    # pinocchio's own solid cylinder (axis z, about the centre), rotated onto x and y.
+    mass, radius, length = 2.7, 0.06, 0.31
+    reference = pin.Inertia.FromCylinder(mass, radius, length).inertia
+    onto = {"x": pin.utils.rotate("y", np.pi / 2), "y": pin.utils.rotate("x", np.pi / 2)}
+    for axis in ("x", "y", "z"):
+        rot = onto.get(axis, np.eye(3))
+        six = _cylinders.cylinder_inertia(mass, radius, length, axis)
+        # Exact formulas on both sides: agreement to double round-off.
+        np.testing.assert_allclose(
+            tvist.robots.inertia_tensor(np.array(six)), rot @ reference @ rot.T, atol=1e-15
+        )
+
+
+def test_ur5e_rows_follow_the_block_and_the_link_masses():
+    # Values typed in from the ROS 1 block, not read from code. 5e-10 relative: the file keeps
+    # ten significant digits (at most half a unit of the tenth digit off).
+    p = params("ur5e")
+    # Upper arm: 8.058 kg, r = 0.06 m, l = 0.425 m, along DH x.
+    across = 8.058 * (3 * 0.06**2 + 0.425**2) / 12
+    expected = [8.058 * 0.06**2 / 2, across, across, 0, 0, 0]
+    np.testing.assert_allclose(p.inertia_kg_m2[1], expected, rtol=5e-10)
+    # Wrist 3: 0.365 kg, r = 0.0375 m, l = 0.0458 m, along DH z.
+    across = 0.365 * (3 * 0.0375**2 + 0.0458**2) / 12
+    expected = [across, across, 0.365 * 0.0375**2 / 2, 0, 0, 0]
+    np.testing.assert_allclose(p.inertia_kg_m2[5], expected, rtol=5e-10)
+
+
+def test_ur5e_inertias_at_q1_and_q3_are_those_of_the_spec():
+    # SPEC section 6 (typed in independently): with 5 kg 5 cm beyond the flange and the
+    # cylinder approximation, J_0, J_1 = 8.94, 8.36 at Q1 and 1.12, 1.18 at Q3. 1 %: the spec
+    # prints three figures (rounding <= 0.45 %); other plausible tensors miss by more (the
+    # ROS 2 'tensor' blocks: +2.7 % and +20 %; ur_e_description's 0.075 m radii: +1.07 % at Q3).
+    robot = tvist.robots.ur5e(payload_kg=5.0, payload_com_m=(0.0, 0.0, 0.05))
+    np.testing.assert_allclose(robot.joint_inertia(Q1)[:2], [8.94, 8.36], rtol=0.01)
+    np.testing.assert_allclose(robot.joint_inertia(Q3)[:2], [1.12, 1.18], rtol=0.01)
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        ((1.0, 0.05, 0.2, "w"), "axis must be one of"),
+        ((1.0, 0.0, 0.2, "x"), "radius, length > 0"),
+        ((-1.0, 0.05, 0.2, "x"), "mass >= 0"),
+        ((1.0, 0.05, float("nan"), "z"), "radius, length > 0"),
+    ],
+)
+def test_cylinder_inertia_rejects_bad_values(args, message):
+    with pytest.raises(ValueError, match=message):
+        _cylinders.cylinder_inertia(*args)
+
+
+def test_cylinder_block_needs_one_entry_per_link():
+    entry = json.loads(_data_text())["robots"]["ur5e"]
+    entry["inertia_cylinders"]["axis"] = ["x"] * 5
+    with pytest.raises(ValueError, match="one entry per link"):
+        _cylinders.link_inertias(entry)
+
+
 # ---- the model against pinocchio ----
 
 
@@ -240,9 +328,8 @@ def test_ur5e_q1_q3_inertias_and_stretched_pose():
     robot = tvist.robots.ur5e(payload_kg=5.0, payload_com_m=(0.0, 0.0, 0.05))
     assert robot.n_dof == 6 and robot.params.name == "ur5e" and robot.payload.mass_kg == 5.0
     # Q1 and Q2 differ only in the base angle, on which no J_i depends.
-    q2 = Q1.copy()
-    q2[0] = np.pi / 2
-    np.testing.assert_allclose(robot.joint_inertia(Q1), robot.joint_inertia(q2), rtol=1e-14)
+    np.testing.assert_array_equal(Q1[1:], Q2[1:])
+    np.testing.assert_allclose(robot.joint_inertia(Q1), robot.joint_inertia(Q2), rtol=1e-14)
     # q = 0: arm stretched out horizontally along -x of the base at shoulder height (d1),
     # reach a2 + a3 = 0.8172 m; the flange is offset by d4 (y) and lowered by d5.
     t = robot.flange_pose(np.zeros(6))

@@ -74,7 +74,8 @@ def prv(impulses: Impulses, wn_rad_s, zeta=0.0):
     for scalar inputs, otherwise an array of the broadcast shape. Invalid modes give NaN.
     """
     wn, z = np.broadcast_arrays(np.asarray(wn_rad_s, dtype=float), np.asarray(zeta, dtype=float))
-    out = _core.prv_flat(impulses, np.ascontiguousarray(wn).ravel(), np.ascontiguousarray(z).ravel())
+    flat_wn, flat_zeta = np.ascontiguousarray(wn).ravel(), np.ascontiguousarray(z).ravel()
+    out = _core.prv_flat(impulses, flat_wn, flat_zeta)
     if wn.ndim == 0:
         return float(out[0])
     return out.reshape(wn.shape)

@@ -8,16 +8,40 @@ import sys
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
-    from tvist.demo_linear import run_linear_demo
+    if args.linear:
+        from tvist.demo.linear import run_linear_demo
 
-    run_linear_demo(out_dir=args.out, quick=args.quick)
+        run_linear_demo(out_dir=args.out or "out/demo-linear", quick=args.quick)
+        return 0
+    from tvist import DynamicMap
+    from tvist.demo import default_methods, fd_tvist_map, run_demo
+
+    methods = default_methods()
+    for i, path in enumerate(args.map or []):
+        methods.append(
+            fd_tvist_map(f"fd-tvist-map-{i + 1}", f"FD-TVIST ZV, map {path}", DynamicMap.load(path))
+        )
+    run_demo(out_dir=args.out or "out/demo", quick=args.quick, methods=methods)
     return 0
 
 
 def _add_demo(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("demo", help="run the main demo and write a report")
-    p.add_argument("--out", default="out/demo", help="output folder (default out/demo)")
+    p = sub.add_parser(
+        "demo", help="the paper's UR5e experiment on the simulated arm: table, figures, report"
+    )
+    p.add_argument("--out", default=None, help="output folder (default out/demo)")
     p.add_argument("--quick", action="store_true", help="shortened run (used by the tests)")
+    p.add_argument(
+        "--map",
+        action="append",
+        metavar="FILE",
+        help="add an FD-TVIST row driven by this dynamic map file (repeatable)",
+    )
+    p.add_argument(
+        "--linear",
+        action="store_true",
+        help="run the small two-mode linear-plant example instead (default out/demo-linear)",
+    )
     p.set_defaults(func=_cmd_demo)
 
 

@@ -15,6 +15,7 @@ pub fn prv(amplitudes: &[f64], times_s: &[f64], wn_rad_s: f64, zeta: f64) -> f64
         return f64::NAN;
     }
     let wd = wn_rad_s * (1.0 - zeta * zeta).sqrt();
+    let times_s = &times_s[..times_s.len().min(amplitudes.len())];
     let t_last = times_s.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let (mut c, mut s) = (0.0, 0.0);
     for (&a, &t) in amplitudes.iter().zip(times_s) {

@@ -365,6 +365,8 @@ fn prv_matches_a_direct_evaluation_and_is_one_for_a_single_impulse() {
         .sum();
     let direct = (-z * wn * t[2]).exp() * (c * c + s * s).sqrt();
     assert!((prv(&a, &t, wn, z) - direct).abs() < 1e-14);
+    // Extra entries of the longer slice are ignored (also for the final time).
+    assert!((prv(&[1.0], &[0.0, 5.0], 10.0, 0.1) - 1.0).abs() < 1e-15);
     assert!(prv(&a, &t, -1.0, z).is_nan());
     assert!(prv(&a, &t, wn, 1.0).is_nan());
 }

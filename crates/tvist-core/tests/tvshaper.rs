@@ -385,6 +385,11 @@ fn setup_errors() {
         TvShaper::new(Unbounded, &TvShaperConfig::new(DT_S, 6, ShaperKind::Zv)),
         Err(tvist_core::Error::UnknownDelayBound)
     ));
+    let mut none = scripted(usize::MAX, 0);
+    none.modes.clear();
+    let err =
+        TvShaper::new(none, &TvShaperConfig::new(DT_S, 1, ShaperKind::Zv)).expect_err("no modes");
+    assert!(err.to_string().contains("no modes"), "{err}");
     assert!(matches!(
         TvShaper::new(Unbounded, &TvShaperConfig::new(DT_S, 3, ShaperKind::Zv)),
         Err(tvist_core::Error::DimensionMismatch {

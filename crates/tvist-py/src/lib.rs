@@ -1,7 +1,9 @@
 //! Thin PyO3 bindings of `tvist-core`: numpy in/out, errors mapped to `ValueError`.
 //! No algorithm lives here.
 
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use tvist_core as core;
@@ -30,7 +32,9 @@ struct PyImpulses {
 impl PyImpulses {
     #[new]
     fn new(amplitudes: Vec<f64>, times_s: Vec<f64>) -> PyResult<Self> {
-        Ok(PyImpulses { inner: core::Impulses::new(amplitudes, times_s).map_err(value_error)? })
+        Ok(PyImpulses {
+            inner: core::Impulses::new(amplitudes, times_s).map_err(value_error)?,
+        })
     }
 
     /// Amplitudes (sum to 1).
@@ -67,7 +71,12 @@ impl PyImpulses {
 /// Designs registry shaper `name` for mode (wn_rad_s, zeta).
 #[pyfunction]
 #[pyo3(signature = (name, wn_rad_s, zeta=0.0, tolerance=None))]
-fn design_shaper(name: &str, wn_rad_s: f64, zeta: f64, tolerance: Option<f64>) -> PyResult<PyImpulses> {
+fn design_shaper(
+    name: &str,
+    wn_rad_s: f64,
+    zeta: f64,
+    tolerance: Option<f64>,
+) -> PyResult<PyImpulses> {
     let kind = core::ShaperKind::from_name(name, tolerance).map_err(value_error)?;
     let inner = core::Impulses::design(kind, Mode::new(wn_rad_s, zeta)).map_err(value_error)?;
     Ok(PyImpulses { inner })
@@ -78,7 +87,9 @@ fn design_shaper(name: &str, wn_rad_s: f64, zeta: f64, tolerance: Option<f64>) -
 #[pyo3(signature = (*sets))]
 fn convolve(sets: Vec<PyRef<'_, PyImpulses>>) -> PyResult<PyImpulses> {
     let refs: Vec<&core::Impulses> = sets.iter().map(|s| &s.inner).collect();
-    Ok(PyImpulses { inner: core::Impulses::convolve(&refs).map_err(value_error)? })
+    Ok(PyImpulses {
+        inner: core::Impulses::convolve(&refs).map_err(value_error)?,
+    })
 }
 
 /// Residual-vibration fraction of `impulses` for flat arrays of modes (same length).
@@ -91,10 +102,16 @@ fn prv_flat<'py>(
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let (wn, z) = (wn_rad_s.as_slice()?, zeta.as_slice()?);
     if wn.len() != z.len() {
-        return Err(PyValueError::new_err("wn_rad_s and zeta must have the same length"));
+        return Err(PyValueError::new_err(
+            "wn_rad_s and zeta must have the same length",
+        ));
     }
     let (a, t) = (impulses.inner.amplitudes(), impulses.inner.times_s());
-    let out: Vec<f64> = wn.iter().zip(z).map(|(&w, &zz)| core::prv(a, t, w, zz)).collect();
+    let out: Vec<f64> = wn
+        .iter()
+        .zip(z)
+        .map(|(&w, &zz)| core::prv(a, t, w, zz))
+        .collect();
     Ok(out.into_pyarray(py))
 }
 
@@ -117,7 +134,11 @@ impl PyConstantModes {
     /// The modes as [(wn_rad_s, zeta), ...].
     #[getter]
     fn modes(&self) -> Vec<(f64, f64)> {
-        self.inner.modes_list().iter().map(|m| (m.wn_rad_s, m.zeta)).collect()
+        self.inner
+            .modes_list()
+            .iter()
+            .map(|m| (m.wn_rad_s, m.zeta))
+            .collect()
     }
 
     fn __repr__(&self) -> String {
@@ -290,10 +311,14 @@ impl PyTvShaper {
             }
             let probe = vec![0.0; n_dof].into_pyarray(py);
             let pairs: Vec<(f64, f64)> = dynamics.call1((probe,))?.extract().map_err(|_| {
-                PyTypeError::new_err("the dynamics callable must return a sequence of (wn_rad_s, zeta)")
+                PyTypeError::new_err(
+                    "the dynamics callable must return a sequence of (wn_rad_s, zeta)",
+                )
             })?;
             if pairs.is_empty() {
-                return Err(PyValueError::new_err("the dynamics callable returned no modes"));
+                return Err(PyValueError::new_err(
+                    "the dynamics callable returned no modes",
+                ));
             }
             Provider::Callable(CallableModes {
                 func: dynamics.clone().unbind(),
@@ -315,7 +340,11 @@ impl PyTvShaper {
             safety_factor,
         };
         let inner = core::TvShaper::new(provider, &config).map_err(value_error)?;
-        Ok(PyTvShaper { inner, last_status: Status::OK, counts: StatusCounts::default() })
+        Ok(PyTvShaper {
+            inner,
+            last_status: Status::OK,
+            counts: StatusCounts::default(),
+        })
     }
 
     /// One control cycle: q (n_dof,) -> shaped q (n_dof,).
@@ -435,7 +464,11 @@ impl PyTvShaper {
     /// Modes used in the latest cycle [(wn_rad_s, zeta), ...] (as returned by the provider).
     #[getter]
     fn current_modes(&self) -> Vec<(f64, f64)> {
-        self.inner.current_modes().iter().map(|m| (m.wn_rad_s, m.zeta)).collect()
+        self.inner
+            .current_modes()
+            .iter()
+            .map(|m| (m.wn_rad_s, m.zeta))
+            .collect()
     }
 
     /// Status bits of the latest step (see tvist.Status).
@@ -462,7 +495,11 @@ impl PyTvShaper {
     /// Longest delay each mode filter can hold, s.
     #[getter]
     fn max_delay_s(&self) -> Vec<f64> {
-        self.inner.filters().iter().map(|f| f.max_delay_s()).collect()
+        self.inner
+            .filters()
+            .iter()
+            .map(|f| f.max_delay_s())
+            .collect()
     }
 
     #[getter]

@@ -14,12 +14,14 @@ import numpy as np
 from tvist.analysis import EnergySpectrum, ResidualVibration, energy_spectrum, residual_vibration
 from tvist.sim import GRAVITY_M_S2, SimRecord
 
-#: A reference has stopped once it stays within this distance of its end pose (rad). A
-#: jerk-limited approach (jerk 100 rad/s³) is still ``j dt³ / 6 ≈ 1.3e-7`` rad away one sample
-#: before its end, and a ZV-shaped one at least half of that, so the stop is found to the
-#: sample; the round-off of the shapers (~1e-15 rad) and the truncation residue of the
-#: zero-delay references (``tail_error``, measured at ≤ 5e-9 rad) stay below it.
-STOP_TOL_RAD = 1e-8
+#: A reference has stopped once it stays within this distance of its end pose (rad). The
+#: twin interpolates the reference linearly between samples, so a reference stops moving at
+#: the first sample from which all samples equal the end pose; "equal" allows for round-off
+#: (the impulse amplitudes sum to 1 within ~1e-15). A ZV-shaped jerk-limited approach
+#: (jerk 100 rad/s³) is still ~1e-8 rad away one sample before its end, so the stop is found
+#: to the sample. The zero-delay references keep a truncation residue of a few 1e-9 rad at
+#: their last sample (``tail_error``), so by this measure they stop one sample after ``T``.
+STOP_TOL_RAD = 1e-9
 
 
 def stop_time_s(t_s: np.ndarray, q: np.ndarray, q_end: np.ndarray, tol_rad: float = STOP_TOL_RAD):

@@ -208,10 +208,10 @@ def default_methods() -> list[Method]:
         Method("fd-tvist-truth", "FD-TVIST ZV, true modes", _fd_tvist_truth),
         fd_tvist_map("fd-tvist-paper-map", "FD-TVIST ZV, paper map", DynamicMap.paper_ur5e()),
         zero_delay_row(
-            "zero-delay-modified", "Modified ZTDIS ZV, end-pose modes", "modified",
+            "zero-delay-modified",
+            "Modified ZTDIS ZV, end-pose modes",
+            "modified",
             ZERO_DELAY_MOTIONS,
         ),
-        zero_delay_row(
-            "zero-delay-ztdis", "ZTDIS ZV, end-pose modes", "ztdis", ZERO_DELAY_MOTIONS
-        ),
+        zero_delay_row("zero-delay-ztdis", "ZTDIS ZV, end-pose modes", "ztdis", ZERO_DELAY_MOTIONS),
     ]

@@ -34,7 +34,7 @@ import numpy as np
 from scipy import optimize
 
 from tvist.ident.excitation import Excitation, random_excitation, to_urscript
-from tvist.ident.local_fit import FitOptions, identify_local
+from tvist.ident.local_fit import FitOptions, LocalFit, identify_local
 from tvist.ident.logs import Record, read_rtde_csv
 from tvist.robots import Payload as _Payload
 from tvist.robots import Robot, params
@@ -378,6 +378,7 @@ class _Settings:
     noise_seed: int
     duration_s: float
     options: FitOptions = field(default_factory=FitOptions)
+    separate_modes: bool = True
 
 
 def identify_pose(robot: CampaignRobot, pose: CampaignPose, settings: _Settings) -> dict:
@@ -401,14 +402,23 @@ def identify_pose(robot: CampaignRobot, pose: CampaignPose, settings: _Settings)
     record["gravity_torque_nm"] = model.gravity_torque(pose.q).tolist()
     robot.set_payload(pose.payload_kg, pose.payload_com_m)
     rng = np.random.default_rng(pose.seed)
+    fits: dict[int, LocalFit] = {}
     for joint in IDENTIFIED_JOINTS:
         excitation = random_excitation(pose.q, joint, seed=rng, duration_s=settings.duration_s)
         try:
             log = robot.record_excitation(excitation)
-            fit = identify_local(log, joint, model, options=settings.options)
-            record["modes"].append(fit.to_dict())
+            fits[joint] = identify_local(
+                log,
+                joint,
+                model,
+                options=settings.options,
+                two_modes=settings.separate_modes and joint == 0,
+            )
+            record["modes"].append(fits[joint].to_dict())
         except (ValueError, RuntimeError) as exc:
             record["modes"].append({"joint": joint, "error": str(exc)})
+    if settings.separate_modes and 0 in fits and 1 in fits:
+        record["modes"][0] = _separated_base_mode(fits[0], fits[1], settings.options)
     truth = robot.true_modes(pose.q)
     if truth is not None:
         record["true_modes"] = [
@@ -416,6 +426,42 @@ def identify_pose(robot: CampaignRobot, pose: CampaignPose, settings: _Settings)
             for j, (wn, zeta) in zip(IDENTIFIED_JOINTS, truth, strict=True)
         ]
     return record
+
+
+def _separated_base_mode(base: LocalFit, shoulder: LocalFit, options: FitOptions) -> dict:
+    """The base record, with the base mode separated from the shoulder mode if needed.
+
+    If the base excitation rings two modes (a significant two-mode fit), the base mode is the
+    one farther from the shoulder mode identified from the shoulder excitation; the
+    single-mode result is kept under ``apparent``.
+    """
+    entry = base.to_dict()
+    entry["method"] = "single-mode"
+    split = base.two_mode
+    if split is None or not split.significant or shoulder.low_confidence:
+        return entry
+    chosen = split.away_from(shoulder.wn_rad_s)
+    reasons = [r for r in base.reasons if not r.startswith(("uncertain", "poor fit", "overdamped"))]
+    if chosen.wn_se_rad_s > options.max_wn_rel_se * chosen.wn_rad_s:
+        reasons.append(
+            f"uncertain frequency: standard error {100 * chosen.wn_se_rad_s / chosen.wn_rad_s:.2f}"
+            " % of ω_n (two-mode fit)"
+        )
+    entry.update(
+        wn_rad_s=chosen.wn_rad_s,
+        zeta=chosen.zeta,
+        wn_se_rad_s=chosen.wn_se_rad_s,
+        zeta_se=chosen.zeta_se,
+        k_a=None,
+        k_b=None,
+        k_c=2.0 * chosen.zeta * chosen.wn_rad_s,
+        k_d=chosen.wn_rad_s**2,
+        method="two-mode",
+        apparent={"wn_rad_s": base.wn_rad_s, "zeta": base.zeta},
+        reasons=reasons,
+        low_confidence=bool(reasons),
+    )
+    return entry
 
 
 #: One twin per worker process and payload (building a MuJoCo model takes a while).
@@ -477,6 +523,7 @@ def run_campaign(
     noise_seed: int = 0,
     duration_s: float = 8.0,
     options: FitOptions | None = None,
+    separate_modes: bool = True,
     progress: bool = True,
 ) -> list[dict]:
     """Run (or resume) a campaign and return every pose record in ``results_path``.
@@ -501,6 +548,10 @@ def run_campaign(
         Excitation length per joint (Algorithm 2: about 8 s).
     options
         Local-fit settings.
+    separate_modes
+        Separate the base mode from the shoulder mode with a two-mode fit where the base
+        excitation rings both (see :func:`tvist.ident.two_mode.fit_two_modes`); ``False``
+        records the paper's single-mode fit only.
     progress
         Show a rich progress bar.
     """
@@ -515,6 +566,7 @@ def run_campaign(
         noise_seed=noise_seed,
         duration_s=duration_s,
         options=options or FitOptions(),
+        separate_modes=separate_modes,
     )
     bar = _Progress(len(todo), len(done)) if progress and todo else None
     try:

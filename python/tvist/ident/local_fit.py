@@ -25,7 +25,8 @@ returned with ``low_confidence=True`` and the reasons.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import linalg, optimize, signal
@@ -37,6 +38,9 @@ from tvist.ident.preprocess import (
     TangentialAcceleration,
     tangential_acceleration,
 )
+
+if TYPE_CHECKING:
+    from tvist.ident.two_mode import TwoModeFit
 
 __all__ = [
     "FitOptions",
@@ -114,6 +118,8 @@ class LocalFit:
         True if any check failed; ``reasons`` says which.
     joint
         Excited joint, if known.
+    two_mode
+        The two-mode fit of the same data, if requested (:mod:`tvist.ident.two_mode`).
     """
 
     wn_rad_s: float
@@ -132,6 +138,7 @@ class LocalFit:
     low_confidence: bool
     reasons: tuple[str, ...] = field(default_factory=tuple)
     joint: int | None = None
+    two_mode: TwoModeFit | None = None
 
     @property
     def fn_hz(self) -> float:
@@ -306,8 +313,8 @@ def _refine(problem: _Problem, wn0: float, zeta0: float, wn_lo: float, wn_hi: fl
         bounds=([math.log(wn_lo), 1e-4], [math.log(wn_hi), 2.0]),
         x_scale=[0.05, 0.02],
         diff_step=1e-6,
-        xtol=1e-10,
-        ftol=1e-12,
+        xtol=1e-9,
+        ftol=1e-10,
     )
     return float(2.0 * res.cost), math.exp(res.x[0]), float(res.x[1])
 
@@ -389,9 +396,11 @@ def fit_local(
     results = [_refine(problem0, wn, z, wn_lo, wn_hi) + (0,) for wn, z in starts]
     max_delay = int(round(opts.max_delay_s / dt_s))
     _, wn_b, z_b, _ = min(results)
-    for d in range(1, max_delay + 1):
-        problem = _Problem(_delayed(u, d), y, mask, dt_s)
-        results.append(_refine(problem, wn_b, z_b, wn_lo, wn_hi) + (d,))
+    # Rank the delays by the cost at the best mode so far; refine the three most promising.
+    problems = {d: _Problem(_delayed(u, d), y, mask, dt_s) for d in range(1, max_delay + 1)}
+    ranked = sorted(problems, key=lambda d: float(np.sum(problems[d].projected(wn_b, z_b)[0] ** 2)))
+    for d in ranked[:3]:
+        results.append(_refine(problems[d], wn_b, z_b, wn_lo, wn_hi) + (d,))
     _, wn_b, z_b, delay = min(results)
 
     # Final pass over all parameters for the Jacobian (and any last improvement).
@@ -469,6 +478,7 @@ def identify_local(
     accel_frame: str = "flange",
     accel_limit_m_s2: float | None = None,
     min_standstill_samples: int = MIN_STANDSTILL_SAMPLES,
+    two_modes: bool = False,
 ) -> LocalFit:
     """Identify ``(ω_n, ζ)`` of the mode excited through ``joint`` from one log.
 
@@ -491,6 +501,9 @@ def identify_local(
         Known accelerometer range, for the saturation check (optional).
     min_standstill_samples
         Fewest initial standstill samples accepted for the gravity estimate.
+    two_modes
+        Also fit two modes (:func:`tvist.ident.two_mode.fit_two_modes`) and attach the result
+        as ``two_mode``.
 
     Raises
     ------
@@ -524,7 +537,7 @@ def identify_local(
                 f"({100 * fraction:.1f} %); lower the excitation's acceleration"
             )
         reasons = (f"accelerometer saturated on {n_sat} samples (excluded from the fit)",)
-    return fit_local(
+    fit = fit_local(
         tangential.target_qdd,
         tangential.psi,
         dt,
@@ -533,3 +546,17 @@ def identify_local(
         joint=joint,
         extra_reasons=reasons,
     )
+    if two_modes:
+        from tvist.ident.two_mode import fit_two_modes
+
+        split = fit_two_modes(
+            tangential.target_qdd,
+            tangential.psi,
+            dt,
+            fit,
+            mask=~saturated,
+            f_min_hz=opts.f_min_hz,
+            f_max_hz=opts.f_max_hz,
+        )
+        fit = replace(fit, two_mode=split)
+    return fit

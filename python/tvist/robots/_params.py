@@ -6,7 +6,9 @@ Conventions (also stated in the JSON file):
   out horizontally. The flange frame is DH frame ``n``.
 - ``com_m[i]`` is the centre of mass of link ``i`` in DH frame ``i`` (m).
 - ``inertia_kg_m2[i] = [ixx, iyy, izz, ixy, ixz, iyz]`` are inertia-tensor elements about the
-  centre of mass, axes of DH frame ``i`` (``ixy = -∫ x y dm``, the URDF convention).
+  centre of mass, axes of DH frame ``i`` (``ixy = -∫ x y dm``, the URDF convention). For a
+  robot with an ``inertia_cylinders`` block they are derived from it by
+  :mod:`tvist.robots._cylinders`; the loader reads only ``inertia_kg_m2``.
 - Link side only, no rotor inertia.
 """
 

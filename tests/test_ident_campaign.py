@@ -1,0 +1,149 @@
+"""Mapping campaign (Algorithm 1): poses, resumable runner, and identification on the twin."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from scipy import signal
+
+from tvist.ident.campaign import (
+    PAPER_ANGLES_RAD,
+    PAPER_RADII_M,
+    TwinRobot,
+    campaign_poses,
+    load_results,
+    plane_coordinates,
+    run_campaign,
+)
+from tvist.ident.logs import Record
+from tvist.ident.map_fit import pose_table
+from tvist.robots import params, ur5e
+
+G_UP = np.array([0.0, 0.0, 9.81])
+
+
+def test_poses_follow_algorithm_1():
+    poses = campaign_poses(payloads_kg=(0.0, 5.0), seed=3)
+    assert len(poses) == 2 * 4 * 13
+    assert len({p.key for p in poses}) == len(poses)
+    np.testing.assert_allclose(PAPER_RADII_M, 0.4 + np.arange(13) / 24)
+    assert PAPER_RADII_M[-1] == pytest.approx(0.9)
+    robot = ur5e()
+    limits = params("ur5e").joint_limits_rad
+    for pose in poses:
+        assert pose.q is not None, f"{pose.key} unreachable"
+        angle, radius = plane_coordinates(robot, pose.q)
+        assert angle == pytest.approx(pose.angle_rad, abs=1e-5)  # IK tolerance 1 µm / 0.4 m
+        assert radius == pytest.approx(pose.radius_m, abs=1e-6)
+        assert pose.angle_rad in PAPER_ANGLES_RAD
+        assert pose.wrist_joint in (3, 4, 5)
+        assert np.all((pose.q >= limits[:, 0]) & (pose.q <= limits[:, 1]))
+        assert 0.0 < pose.q[2] < math.pi  # elbow up
+    # reproducible, and the pose of one payload does not depend on the others
+    again = campaign_poses(payloads_kg=(5.0,), seed=3)
+    assert [p.wrist_joint for p in again] != [] and all(
+        a.key == b.key for a, b in zip(again, poses[52:], strict=True)
+    )
+
+
+class ModeRobot:
+    """A cheap stand-in robot: rigid kinematics plus one known mode per excited joint."""
+
+    robot_name = "ur5e"
+
+    def __init__(self, modes=((2 * math.pi * 15.0, 0.08), (2 * math.pi * 9.0, 0.12))):
+        self.modes = modes
+        self.calls = 0
+        self._robot = ur5e()
+
+    def set_payload(self, payload_kg, payload_com_m):
+        self._robot = ur5e(payload_kg, payload_com_m)
+
+    def record_excitation(self, excitation):
+        self.calls += 1
+        j = excitation.joint
+        wn, zeta = self.modes[j]
+        tangent = self._robot.jacobian(excitation.q0)[:3, j]
+        r = np.linalg.norm(tangent)
+        mode = signal.lti([r * 2 * zeta * wn, r * wn**2], [1, 2 * zeta * wn, wn**2])
+        _, psi, _ = signal.lsim(mode, excitation.qdd[:, j], excitation.t_s, interp=False)
+        rot = self._robot.flange_pose_many(excitation.q)[:, :3, :3]
+        a_base = psi[:, None] * tangent / r + G_UP
+        rng = np.random.default_rng(self.calls)
+        accel = np.einsum("nji,nj->ni", rot, a_base) + rng.normal(0, 0.05, (len(psi), 3))
+        return Record(
+            t_s=excitation.t_s,
+            target_q=excitation.q,
+            target_qd=excitation.qd,
+            target_qdd=excitation.qdd,
+            actual_q=excitation.q,
+            tool_accel=accel,
+        )
+
+    def true_modes(self, q):
+        return list(self.modes)
+
+
+def test_runner_appends_per_pose_and_resumes(tmp_path):
+    poses = campaign_poses(payloads_kg=(1.0,), radii_m=PAPER_RADII_M[::6])  # 4 x 3 poses
+    results = tmp_path / "campaign.jsonl"
+    robot = ModeRobot()
+    first = run_campaign(poses[:5], results, robot=robot, progress=False, duration_s=3.0)
+    assert len(first) == 5 and robot.calls == 10  # base and shoulder per pose
+    # An interrupted write leaves a torn last line; that pose is simply run again.
+    with results.open("a") as fh:
+        fh.write('{"key": "' + poses[5].key + '", "modes": [')
+    all_results = run_campaign(poses, results, robot=robot, progress=False, duration_s=3.0)
+    assert robot.calls == 10 + 2 * (len(poses) - 5)  # finished poses were skipped
+    assert sorted(r["key"] for r in all_results) == sorted(p.key for p in poses)
+    for line in results.read_text().splitlines():
+        json.loads(line)  # every line is a complete record
+    for record in all_results:
+        assert record["error"] is None
+        for fit, (wn, zeta) in zip(record["modes"], robot.modes, strict=True):
+            assert fit["wn_rad_s"] == pytest.approx(wn, rel=0.01)
+            assert fit["zeta"] == pytest.approx(zeta, rel=0.05)
+    table = pose_table(all_results, joint=1)  # the records feed the map fit directly
+    assert table.n_poses == len(poses)
+    assert table.inertia_kg_m2.shape == (len(poses), 6)
+
+
+def test_twin_campaign_subset(tmp_path):
+    """Identified modes against the twin's linearized modes on a spread of poses."""
+    poses = {p.key: p for p in campaign_poses(payloads_kg=(0.0, 5.0))}
+    # One pose per angle V and payload, radii spread over the range (fixed before looking at
+    # the results).
+    keys = ["m0kg-V0-R3", "m0kg-V1-R8", "m0kg-V2-R5", "m0kg-V3-R11"]
+    keys += ["m5kg-V0-R10", "m5kg-V1-R2", "m5kg-V2-R12", "m5kg-V3-R6"]
+    subset = [poses[k] for k in keys]
+    results = run_campaign(subset, tmp_path / "twin.jsonl", workers=2, progress=False)
+    assert len(results) == len(subset)
+    shoulder_ok = 0
+    base_errors = []
+    for record in results:
+        fits = {m["joint"]: m for m in record["modes"]}
+        truth = {m["joint"]: m for m in record["true_modes"]}
+        shoulder_ok += abs(fits[1]["wn_rad_s"] / truth[1]["wn_rad_s"] - 1) < 0.03
+        base_errors.append(fits[0]["wn_rad_s"] / truth[0]["wn_rad_s"] - 1)
+    assert shoulder_ok == len(subset)
+    # The base mode: see the campaign report; on this subset it is found within 3 % at the
+    # poses where it is not hidden behind the shoulder mode (V = 0 and 3π/4).
+    by_angle = {r["key"]: e for r, e in zip(results, base_errors, strict=True)}
+    for key, error in by_angle.items():
+        if "-V0-" in key or "-V3-" in key:
+            assert abs(error) < 0.03, (key, error)
+
+
+def test_twin_robot_needs_a_payload_first():
+    with pytest.raises(RuntimeError, match="set_payload"):
+        TwinRobot().true_modes(np.zeros(6))
+
+
+def test_load_results_rejects_corruption_inside_the_file(tmp_path):
+    path = tmp_path / "bad.jsonl"
+    path.write_text('{"key": "a"}\nnot json\n{"key": "b"}\n')
+    with pytest.raises(ValueError, match="line 2"):
+        load_results(path)
