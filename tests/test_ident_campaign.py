@@ -121,20 +121,21 @@ def test_twin_campaign_subset(tmp_path):
     subset = [poses[k] for k in keys]
     results = run_campaign(subset, tmp_path / "twin.jsonl", workers=2, progress=False)
     assert len(results) == len(subset)
-    shoulder_ok = 0
-    base_errors = []
+    shoulder_ok = base_ok = 0
     for record in results:
         fits = {m["joint"]: m for m in record["modes"]}
         truth = {m["joint"]: m for m in record["true_modes"]}
         shoulder_ok += abs(fits[1]["wn_rad_s"] / truth[1]["wn_rad_s"] - 1) < 0.03
-        base_errors.append(fits[0]["wn_rad_s"] / truth[0]["wn_rad_s"] - 1)
-    assert shoulder_ok == len(subset)
-    # The base mode: see the campaign report; on this subset it is found within 3 % at the
-    # poses where it is not hidden behind the shoulder mode (V = 0 and 3π/4).
-    by_angle = {r["key"]: e for r, e in zip(results, base_errors, strict=True)}
-    for key, error in by_angle.items():
-        if "-V0-" in key or "-V3-" in key:
-            assert abs(error) < 0.03, (key, error)
+        base_error = abs(fits[0]["wn_rad_s"] / truth[0]["wn_rad_s"] - 1)
+        base_ok += base_error < 0.03
+        # Never a silently wrong base mode: off by more than 6 % only with a flag. (The
+        # twin's base mode is heavily damped, ζ 0.2-0.5, and sits next to the shoulder
+        # mode; at V = π/2 it can only be separated with large uncertainty.)
+        assert base_error < 0.06 or fits[0]["low_confidence"], (record["key"], base_error)
+    assert shoulder_ok == len(subset)  # acceptance: within 3 % in >= 90 % of poses
+    # Base within 3 %: measured 4 of these 8 poses (the V = 0 and 3π/4 ones); the rest are
+    # 3-6 % low at V = π/4 or flagged at V = π/2.
+    assert base_ok >= 4
 
 
 def test_twin_robot_needs_a_payload_first():

@@ -6,12 +6,10 @@ import numpy as np
 import pytest
 
 import tvist
-from tvist.trajectory import double_s
+from tvist.trajectory import PAPER_POSES, double_s
 
 DT_S = 0.002
-Q1 = np.array([0.0, -np.pi, 0.0, -np.pi / 2, 0.0, 0.0])
-Q2 = np.array([np.pi / 2, -np.pi, 0.0, -np.pi / 2, 0.0, 0.0])
-Q3 = np.array([np.pi / 2, -np.pi / 2, 5 * np.pi / 6, -np.pi / 2, 0.0, 0.0])
+Q1, Q2, Q3 = PAPER_POSES["Q1"], PAPER_POSES["Q2"], PAPER_POSES["Q3"]
 
 
 def _ur5e_5kg() -> tvist.robots.Robot:

@@ -6,6 +6,13 @@ from __future__ import annotations
 import argparse
 import sys
 
+from tvist.ident.cli import (
+    add_campaign_command,
+    add_fit_map_command,
+    add_identify_command,
+    add_sensitivity_command,
+)
+
 
 def _cmd_demo(args: argparse.Namespace) -> int:
     if args.linear:
@@ -21,7 +28,12 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         methods.append(
             fd_tvist_map(f"fd-tvist-map-{i + 1}", f"FD-TVIST ZV, map {path}", DynamicMap.load(path))
         )
-    run_demo(out_dir=args.out or "out/demo", quick=args.quick, methods=methods)
+    run_demo(
+        out_dir=args.out or "out/demo",
+        quick=args.quick,
+        methods=methods,
+        identify=args.identify,
+    )
     return 0
 
 
@@ -36,6 +48,11 @@ def _add_demo(sub: argparse._SubParsersAction) -> None:
         action="append",
         metavar="FILE",
         help="add an FD-TVIST row driven by this dynamic map file (repeatable)",
+    )
+    p.add_argument(
+        "--identify",
+        action="store_true",
+        help="also identify a map on the twin (reduced mapping campaign, 15-40 s) and add its row",
     )
     p.add_argument(
         "--linear",
@@ -64,6 +81,12 @@ def _add_zero_delay(sub: argparse._SubParsersAction) -> None:
 
 #: (name, adder) pairs; an adder registers one subparser and sets ``func``.
 COMMANDS = [("demo", _add_demo), ("zero-delay", _add_zero_delay)]
+COMMANDS += [
+    ("campaign", add_campaign_command),
+    ("identify", add_identify_command),
+    ("fit-map", add_fit_map_command),
+    ("sensitivity", add_sensitivity_command),
+]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -132,7 +132,7 @@ def plot_energy_spectra(
     """
     plt = _pyplot()
     fig, axes = plt.subplots(
-        len(panels), 1, figsize=(10, 3.2 * len(panels) + 0.6), constrained_layout=True
+        len(panels), 1, figsize=(13, 3.2 * len(panels) + 0.6), constrained_layout=True
     )
     axes = np.atleast_1d(axes)
     for ax, (panel_title, spectra, marks) in zip(axes, panels, strict=True):
@@ -154,7 +154,7 @@ def plot_energy_spectra(
         ax.set_xlabel("frequency [Hz]")
         ax.set_ylabel("energy E [(m/s²)²]")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(loc="upper right", fontsize=8)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     fig.suptitle(title)
     fig.savefig(path, dpi=120)
     plt.close(fig)
@@ -188,7 +188,7 @@ def plot_mode_tracks(
         Vertical markers ``label -> time`` (start and end of the move), s.
     """
     plt = _pyplot()
-    fig, axes = plt.subplots(3, 1, figsize=(9, 9), sharex=True, constrained_layout=True)
+    fig, axes = plt.subplots(3, 1, figsize=(12, 9), sharex=True, constrained_layout=True)
     axes[0].plot(t_s, inertia_kg_m2[:, 0], color="tab:blue", label="J_0 (base axis)")
     axes[0].plot(t_s, inertia_kg_m2[:, 1], color="tab:red", ls="--", label="J_1 (shoulder axis)")
     axes[0].set_ylabel("inertia [kg m²]")
@@ -204,19 +204,11 @@ def plot_mode_tracks(
     axes[2].set_ylabel("damping ratio ζ [-]")
     axes[2].set_xlabel("time [s]")
     for ax in axes:
-        for mark, t in (t_marks_s or {}).items():
-            ax.axvline(t, color="gray", ls=":", lw=1.0)
-            if ax is axes[0]:
-                ax.annotate(
-                    mark,
-                    (t, 1.0),
-                    xycoords=("data", "axes fraction"),
-                    fontsize=8,
-                    ha="center",
-                    va="bottom",
-                )
+        marks = (t_marks_s or {}).items()
+        for (mark, t), style in zip(marks, (":", "-.", "--"), strict=False):
+            ax.axvline(t, color="gray", ls=style, lw=1.1, label=mark if ax is axes[0] else None)
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8, loc="best")
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return Path(path)

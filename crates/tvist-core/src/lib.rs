@@ -1,6 +1,7 @@
 //! tvist-core: real-time, allocation-free time-varying input shaping for robot arms.
 //!
 //! - [`shaper`]: the shaper library (ZV … 3-hump EI, custom sets, convolution).
+//! - [`ei`]: the extra-insensitive shaper designed exactly for a damped mode.
 //! - [`prv`]: percent residual vibration of any impulse set.
 //! - [`delay_line`]: circular buffer with fractional-delay (Lagrange) reads.
 //! - [`tvist`]: the single-mode time-varying filter (eq. 7).
@@ -14,11 +15,14 @@
 pub mod delay_line;
 pub mod dynamics;
 pub mod dynmap;
+pub mod ei;
 pub mod error;
 pub mod map_dynamics;
 pub mod multimode;
 pub mod prv;
 pub mod robot;
+#[cfg(feature = "json")]
+pub mod robot_data;
 pub mod shaper;
 pub mod tvist;
 pub mod ztdis;

@@ -6,13 +6,17 @@
 //!   `K = exp(−ζπ/√(1−ζ²))`.
 //! - MZV: three impulses at `[0, 3/8, 3/4]·T_d` with the damped amplitudes of the standard
 //!   modified-ZV form.
-//! - EI, 2-hump EI, 3-hump EI: the standard polynomial-in-ζ approximations (the same ones
-//!   3D-printer firmware uses); EI's vibration tolerance is a parameter (default 5 %), the
-//!   2- and 3-hump forms are tabulated for 5 %.
+//! - EI: designed exactly for the damped mode ([`crate::ei`]: residual vibration `V` at the
+//!   design point, its local maximum, and zero vibration at one frequency either side), starting
+//!   from the published polynomial-in-ζ fit; the vibration tolerance `V` is a parameter
+//!   (default 5 %).
+//! - 2-hump and 3-hump EI: the standard polynomial-in-ζ approximations (the same ones
+//!   3D-printer firmware uses), tabulated for 5 %.
 //!
 //! [`ShaperKind::design`] is allocation-free and used every control cycle; [`Impulses`] is the
 //! heap-backed set used offline (custom sets, convolution, analysis).
 
+use crate::ei;
 use crate::error::Error;
 use core::f64::consts::PI;
 
@@ -182,7 +186,8 @@ const EI3_A: [[f64; 4]; 5] = [
 
 impl ShaperKind {
     /// Looks a shaper up by registry name. `ei_tolerance` applies to `"ei"` only
-    /// (`None` = 5 %); it must lie in `(0, 0.2]`, the range of the polynomial fit.
+    /// (`None` = 5 %); it must lie in `[0.005, 0.2]` ([`ei::MIN_TOLERANCE`],
+    /// [`ei::MAX_TOLERANCE`]), where the exact EI design is supported.
     pub fn from_name(name: &str, ei_tolerance: Option<f64>) -> Result<ShaperKind, Error> {
         let kind = match name {
             "zv" => ShaperKind::Zv,
@@ -191,9 +196,11 @@ impl ShaperKind {
             "mzv" => ShaperKind::Mzv,
             "ei" => {
                 let v_tol = ei_tolerance.unwrap_or(DEFAULT_EI_TOLERANCE);
-                if !(v_tol > 0.0 && v_tol <= 0.2) {
+                if !(ei::MIN_TOLERANCE..=ei::MAX_TOLERANCE).contains(&v_tol) {
                     return Err(Error::InvalidParameter(format!(
-                        "EI vibration tolerance {v_tol} outside (0, 0.2]"
+                        "EI vibration tolerance {v_tol} outside [{}, {}] (use \"zvd\" for less)",
+                        ei::MIN_TOLERANCE,
+                        ei::MAX_TOLERANCE
                     )));
                 }
                 ShaperKind::Ei { v_tol }
@@ -223,14 +230,15 @@ impl ShaperKind {
         }
     }
 
-    /// Largest damping ratio the family's published approximation covers. The closed forms
-    /// (ZV, ZVD, ZVDD, MZV) are exact for every underdamped mode and return 1 (exclusive).
-    /// Beyond the limit the EI polynomials give negative amplitudes and, further out, times
-    /// that are no longer sorted, so [`Impulses::design`] rejects such modes and the
-    /// time-varying filter designs at the limit instead.
+    /// Largest damping ratio the family's design covers. The closed forms (ZV, ZVD, ZVDD, MZV)
+    /// are exact for every underdamped mode and return 1 (exclusive). EI: 0.4 up to `V = 10 %`,
+    /// less for larger tolerances ([`ei::max_zeta`]). Beyond the limit the 2- and 3-hump EI
+    /// polynomials give negative amplitudes and, further out, times that are no longer sorted,
+    /// so [`Impulses::design`] rejects such modes and the time-varying filter designs at the
+    /// limit instead.
     pub fn max_zeta(&self) -> f64 {
         match self {
-            ShaperKind::Ei { .. } => 0.4,
+            ShaperKind::Ei { v_tol } => ei::max_zeta(*v_tol),
             ShaperKind::Ei2Hump => 0.3,
             ShaperKind::Ei3Hump => 0.2,
             _ => 1.0,
@@ -272,18 +280,11 @@ impl ShaperKind {
                 let a3 = a1 * km * km;
                 ImpulseArray::normalized(&[a1, a2, a3], &[0.0, 0.375 * td, 0.75 * td])
             }
-            ShaperKind::Ei { v_tol: v } => {
-                let z = zeta;
-                let a1 = (0.24968 + 0.24961 * v)
-                    + ((0.80008 + 1.23328 * v) + (0.49599 + 3.17316 * v) * z) * z;
-                let a3 = (0.25149 + 0.21474 * v)
-                    + ((-0.83249 + 1.41498 * v) + (0.85181 - 4.90094 * v) * z) * z;
-                let a2 = 1.0 - a1 - a3;
-                let t2 = 0.4999
-                    + (((0.46159 + 8.57843 * v) * v)
-                        + (((4.26169 - 108.644 * v) * v) + ((1.75601 + 336.989 * v) * v) * z) * z)
-                        * z;
-                ImpulseArray::normalized(&[a1, a2, a3], &[0.0, t2 * td, td])
+            ShaperKind::Ei { v_tol } => {
+                let ei = ei::design(v_tol, zeta);
+                let [_, tau2, tau3] = ei.phases_rad;
+                let wn = mode.wn_rad_s;
+                ImpulseArray::normalized(&ei.amplitudes, &[0.0, tau2 / wn, tau3 / wn])
             }
             ShaperKind::Ei2Hump => expansion(&EI2_A, &EI2_T, mode),
             ShaperKind::Ei3Hump => expansion(&EI3_A, &EI3_T, mode),

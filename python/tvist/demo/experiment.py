@@ -23,7 +23,13 @@ from typing import Any
 import numpy as np
 
 from tvist import robots
-from tvist.analysis import EnergySpectrum, ResidualVibration, peak_jerk
+from tvist.analysis import (
+    EnergySpectrum,
+    ResidualVibration,
+    peak_acceleration,
+    peak_jerk,
+    peak_velocity,
+)
 from tvist.demo.measure import (
     damped_frequency_hz,
     measure_residual,
@@ -45,6 +51,7 @@ from tvist.demo.motions import (
     Motion,
 )
 from tvist.sim import Twin
+from tvist.trajectory import Trajectory
 
 #: Rest after the planned move (s): room for the longest shaper delay (~0.13 s) plus the
 #: spectrum window, and for the unshaped vibration to decay to ~1e-4 of its start (ζω ≈ 5/s
@@ -55,8 +62,10 @@ SPECTRUM_WINDOW_S = 1.5
 #: Shorter settings of the quick run (the first motion only).
 QUICK_TAIL_S = 1.4
 QUICK_SPECTRUM_WINDOW_S = 1.0
-#: Modes along a motion are evaluated every this many samples (10 ms) for the figures.
+#: Modes along a motion are evaluated every this many samples (10 ms) for the figures ...
 TRACK_STRIDE = 5
+#: ... up to this long after the planned move (s); the pose does not change after it.
+TRACK_AFTER_S = 0.3
 
 
 @dataclass(frozen=True)
@@ -127,6 +136,8 @@ class MethodRun:
             "residual_vibration_m_s2": rv.amplitude,
             "reduction_percent": self.reduction_percent,
             "peak_jerk_rad_s3": self.peak_jerk_rad_s3,
+            "peak_velocity_rad_s": peak_velocity(self.q, DT_S),
+            "peak_acceleration_rad_s2": peak_acceleration(self.q, DT_S),
             "t_stop_s": self.t_stop_s,
             "residual_fit": {
                 "method": rv.method,
@@ -213,19 +224,25 @@ class DemoResult:
         Settings of the run (JSON-ready).
     wall_time_s
         Wall-clock time of the simulations and measurements, s.
+    identification
+        Summary of the campaign behind an identified-map row, if one was run.
     """
 
     motions: list[MotionRun]
     config: dict[str, Any]
     wall_time_s: float
+    identification: dict[str, Any] | None = None
 
     def to_json(self) -> dict[str, Any]:
         """The ``results.json`` document."""
-        return {
+        doc = {
             "config": self.config,
             "wall_time_s": self.wall_time_s,
             "motions": {m.motion.name: m.to_json() for m in self.motions},
         }
+        if self.identification is not None:
+            doc["identified_map"] = self.identification
+        return doc
 
 
 def _mode_track(modes: Sequence[tuple[float, float]]) -> list[tuple[float, float]]:
@@ -233,12 +250,14 @@ def _mode_track(modes: Sequence[tuple[float, float]]) -> list[tuple[float, float
 
 
 def mode_tracks(
-    traj_q: np.ndarray, t_s: np.ndarray, twin: Twin, robot: robots.Robot, methods: Sequence[Method]
+    traj: Trajectory, twin: Twin, robot: robots.Robot, methods: Sequence[Method]
 ) -> ModeTracks:
-    """Inertias, true modes and every map's modes along a reference, every
-    :data:`TRACK_STRIDE` samples (the last sample included)."""
-    index = np.unique(np.append(np.arange(0, len(t_s), TRACK_STRIDE), len(t_s) - 1))
-    q = np.ascontiguousarray(traj_q[index])
+    """Inertias, true modes and every map's modes along the planned reference, from its start
+    to :data:`TRACK_AFTER_S` after the move, every :data:`TRACK_STRIDE` samples."""
+    t_s = np.asarray(traj.t_s)
+    last = int(np.searchsorted(t_s, traj.t_motion_end_s + TRACK_AFTER_S))
+    index = np.unique(np.append(np.arange(0, last, TRACK_STRIDE), last))
+    q = np.ascontiguousarray(traj.q[index])
     inertia = robot.joint_inertia_many(q)[:, :2]
     modes = {"true modes": np.array([_mode_track(twin.modes(qk)) for qk in q])}
     for method in methods:
@@ -246,7 +265,7 @@ def mode_tracks(
             modes[method.label] = np.array(
                 [_mode_track(method.dynmap.modes(robot, qk)) for qk in q]
             )
-    return ModeTracks(t_s=np.array(t_s[index]), inertia_kg_m2=inertia, modes=modes)
+    return ModeTracks(t_s=t_s[index], inertia_kg_m2=inertia, modes=modes)
 
 
 def run_motion(
@@ -281,7 +300,7 @@ def run_motion(
     traj = motion.reference(tail_s)
     t = np.asarray(traj.t_s)
     t_b = stop_time_s(t, traj.q, motion.q_end)
-    tracks = mode_tracks(traj.q, t, twin, robot, methods)
+    tracks = mode_tracks(traj, twin, robot, methods)
     true_modes = tracks.modes["true modes"]
     # One-mode ZV delay 1/(2 f_d) along the move: sizes the callable provider's delay lines.
     max_mode_delay = float(np.max(0.5 / true_modes[:, :, 0]))

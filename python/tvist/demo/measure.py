@@ -24,7 +24,9 @@ from tvist.sim import GRAVITY_M_S2, SimRecord
 STOP_TOL_RAD = 1e-9
 
 
-def stop_time_s(t_s: np.ndarray, q: np.ndarray, q_end: np.ndarray, tol_rad: float = STOP_TOL_RAD):
+def stop_time_s(
+    t_s: np.ndarray, q: np.ndarray, q_end: np.ndarray, tol_rad: float = STOP_TOL_RAD
+) -> float:
     """Time of the first sample from which every later sample is within ``tol_rad`` of ``q_end``.
 
     Parameters
@@ -43,7 +45,10 @@ def stop_time_s(t_s: np.ndarray, q: np.ndarray, q_end: np.ndarray, tol_rad: floa
     ValueError
         If the reference has not come to rest before its last sample.
     """
-    away = np.flatnonzero(np.max(np.abs(np.asarray(q) - np.asarray(q_end)), axis=1) > tol_rad)
+    q = np.asarray(q, dtype=float)
+    if q.ndim != 2 or q.shape[0] != len(t_s):
+        raise ValueError(f"q must have shape ({len(t_s)} samples, n_dof), got {q.shape}")
+    away = np.flatnonzero(np.max(np.abs(q - np.asarray(q_end)), axis=1) > tol_rad)
     if away.size == 0:
         return float(t_s[0])
     last = int(away[-1])

@@ -9,8 +9,10 @@ from typing import Any
 
 import numpy as np
 
+from tvist.analysis import peak_acceleration, peak_velocity
 from tvist.demo.experiment import DemoResult, MotionRun
 from tvist.demo.measure import damped_frequency_hz, zv_delay_s
+from tvist.demo.motions import DT_S
 
 #: Paper Table 4 (real UR5e, average of 10 repetitions): unshaped RV, shaped RV (m/s²),
 #: measured delay (ms) and reduction (%), for comparison in the report.
@@ -84,6 +86,7 @@ def print_table(result: DemoResult, console: Any = None) -> None:
     """Print a Table-4-style table per motion, with the analytic ZV delay and end-pose modes."""
     from rich.console import Console
     from rich.table import Table
+    from rich.text import Text
 
     if console is None:
         console = Console()
@@ -100,9 +103,9 @@ def print_table(result: DemoResult, console: Any = None) -> None:
             caption=f"true modes at {motion.motion.end}: {modes}",
         )
         for i, name in enumerate(_CONSOLE_HEADER):
-            table.add_column(name, justify="left" if i in (0, 6) else "right", no_wrap=i == 0)
+            table.add_column(Text(name), justify="left" if i in (0, 6) else "right", no_wrap=i == 0)
         for row in _rows(motion):
-            table.add_row(*row)
+            table.add_row(*(Text(cell) for cell in row))
         console.print(table)
     console.print(f"simulation and analysis wall time: {result.wall_time_s:.1f} s")
 
@@ -135,12 +138,12 @@ def make_figures(result: DemoResult, out: Path) -> dict[str, list[Path]]:
         )
         spectra = {r.method.label: (r.spectrum.freq_hz, r.spectrum.energy) for r in motion.runs}
         marks = {
-            f"true f_d at {motion.motion.end}": [
+            f"twin (true): f_d at {motion.motion.end}": [
                 damped_frequency_hz(w, z) for w, z in motion.true_end_modes
             ]
         }
         for label, modes in motion.map_end_modes.items():
-            marks[f"{label} f_d at {motion.motion.end}"] = [
+            marks[f"{label}: f_d at {motion.motion.end}"] = [
                 damped_frequency_hz(w, z) for w, z in modes
             ]
         panels.append((f"{name}: residual vibration after the stop", spectra, marks))
@@ -191,7 +194,7 @@ def _discussion(result: DemoResult) -> list[str]:
         analytic = motion.analytic_zv_delay_s
         for r in motion.runs[1:]:
             parts.append(f"{r.method.label} {r.reduction_percent:.1f} %")
-        out.append(f"- **{name}**: reduction " + ", ".join(parts) + ".")
+        out.append(f"- **{name.replace('->', ' → ')}**: reduction " + ", ".join(parts) + ".")
         try:
             truth = motion.run("fd-tvist-truth")
             diff_ms = 1e3 * (truth.delay_s - analytic)
@@ -202,6 +205,25 @@ def _discussion(result: DemoResult) -> list[str]:
             )
         except KeyError:
             pass
+        true_fd = [damped_frequency_hz(w, z) for w, z in motion.true_end_modes]
+        for r in motion.runs[1:]:
+            f = r.residual.freq_hz
+            if math.isfinite(f) and f > 1.5 * max(true_fd):
+                out.append(
+                    f"  {r.method.label}: what is left rings at {f:.0f} Hz, above both shaped "
+                    f"modes ({', '.join(f'{x:.1f}' for x in true_fd)} Hz): a higher mode of the "
+                    "arm that the two-mode shaper does not address."
+                )
+        paper = PAPER_TABLE_4.get(name)
+        try:
+            paper_map = motion.run("fd-tvist-paper-map")
+        except KeyError:
+            paper_map = None
+        if paper and paper_map is not None:
+            out.append(
+                f"  Paper map on the twin: {paper_map.reduction_percent:.1f} % here, "
+                f"{paper['reduction']} % on the real UR5e in the paper."
+            )
         for label, modes in motion.map_end_modes.items():
             errs = [
                 100.0 * (damped_frequency_hz(*m) / damped_frequency_hz(*t) - 1.0)
@@ -234,7 +256,7 @@ def write_markdown(result: DemoResult, path: Path, figures: dict[str, list[Path]
         "end pose (to 1e-9 rad). Reduction: 1 − RV/RV_unshaped of the same motion. Peak jerk: "
         "largest third difference of the reference over all joints.",
         "",
-        f"Wall time of simulations and analysis: {result.wall_time_s:.1f} s"
+        f"Wall time (identification, simulations, analysis): {result.wall_time_s:.1f} s"
         + (" (quick run: first motion only, shorter tail)." if result.config["quick"] else "."),
         "",
     ]
@@ -276,15 +298,24 @@ def write_markdown(result: DemoResult, path: Path, figures: dict[str, list[Path]
                 + "; ".join(
                     f"{r.method.label}: α = {r.details['alpha']:.4f}, removed shaper delay "
                     f"{1e3 * r.details['shaper_delay_removed_s']:.1f} ms, truncation residue "
-                    f"{r.details['tail_error_rad']:.1e} rad"
+                    f"{r.details['tail_error_rad']:.1e} rad, peak speed "
+                    f"{peak_velocity(r.q, DT_S):.2f} rad/s and acceleration "
+                    f"{peak_acceleration(r.q, DT_S):.2f} rad/s² (planned move: "
+                    f"{peak_velocity(motion.runs[0].q, DT_S):.2f} and "
+                    f"{peak_acceleration(motion.runs[0].q, DT_S):.2f})"
                     for r in zd
                 )
-                + "."
+                + ". A residue above the 1e-9 rad rest tolerance makes the reference stop one "
+                "sample (2 ms) after the planned move."
             )
             lines.append("")
+    lines += _identification_section(result)
     lines += ["## Discussion", ""]
     lines += _discussion(result)
-    lines += ["", *_NOTES, ""]
+    lines += ["", *_NOTES]
+    if _jerk_spike(result):
+        lines.append(_JERK_NOTE)
+    lines.append("")
     lines += ["## Figures", ""]
     captions = {
         "acceleration": "Tool acceleration around the stop (like Fig. 35)",
@@ -303,7 +334,8 @@ _NOTES = [
     "Notes on the method:",
     "",
     "- *True modes* use the twin's eigen-analysis (linearized about the static equilibrium of "
-    "the pose the shaper reports, every 2 ms) as the provider: the best any map can do. "
+    "the pose the shaper reports, every 2 ms) as the provider: the modes a perfect map "
+    "would give. "
     "The *paper map* row runs the real-time path: the Rust robot model evaluates J_0, J_1 at "
     "the previous shaped output and the published coefficients (Tables 1-2) give the modes.",
     "- The zero-delay rows (second paper) compress the planned move and shape it with the "
@@ -316,15 +348,83 @@ _NOTES = [
     "modes the ZVD's robustness buys nothing, while its delay (the time that must be "
     "recovered by compression) doubles; with ZV the zero-delay rows remove exactly the delay "
     "of the FD-TVIST rows and differ from them only in how.",
-    "- Peak jerk is the largest third difference of the sent reference. The true-modes rows "
-    "on Q1→Q3 and Q3→Q1 show a spike where the shoulder's gravity torque changes sign: the "
-    "twin's gear damping grows with |τ|, so the true ζ has a kink there and the ZV amplitudes "
-    "follow it (a velocity kink of a few µrad/s, which the third difference turns into a "
-    "large number).",
+    "- The paper map was identified on a real UR5e; the twin is a model with its own gear "
+    "stiffness and damping. The map's errors here measure how far the twin is from that "
+    "robot, not the quality of the published map.",
     "- The twin's accelerometer has no noise, so small residual vibrations are measured "
     "exactly; on the real robot the paper reports that the shaped vibration reached the "
     "noise level.",
 ]
+
+
+def _identification_section(result: DemoResult) -> list[str]:
+    info = result.identification
+    if info is None:
+        return []
+    lines = ["## Identified map (reduced campaign on the twin)", ""]
+    if "error" in info:
+        return [*lines, f"Identification failed, so the row is missing: `{info['error']}`.", ""]
+    usable = ", ".join(f"{k}: {v}" for k, v in info["usable_identifications"].items())
+    lines.append(
+        f"{info['poses']} poses (payload {info['payload_kg']:g} kg, 4 angles x radii "
+        f"{', '.join(f'{r:g}' for r in info['radii_m'])} m), base and shoulder excited in turn "
+        f"(Algorithm 2), local fits (eq. 17) on the accelerometer with "
+        f"{info['accel_noise_std_m_s2']:g} m/s² noise, then the map fit (section 5.3). "
+        f"Identifications used (not low-confidence): {usable}. Campaign time "
+        f"{info['wall_time_s']:.1f} s. Files: [{info['map_file']}]({info['map_file']}), "
+        f"[{info['campaign_file']}]({info['campaign_file']})."
+    )
+    lines.append("")
+    rows = []
+    for i, mode in enumerate(info["modes"]):
+        stats = (info.get("fit_statistics") or {}).get("modes", [])
+        stat = stats[i] if i < len(stats) else {}
+        freq_err = stat.get("frequency", {}).get("rms_relative_error")
+        damp_err = stat.get("damping", {}).get("rms_relative_error")
+        coeffs = ", ".join(
+            f"{k} {mode[k]:.4g}" for k in ("k_j", "k_p", "k_g", "c_0", "c_1", "c_2", "c_tau")
+        )
+        rows.append(
+            [
+                ("base", "shoulder")[i] if i < 2 else str(i),
+                f"J_{mode['frequency_joint']}",
+                f"J_{mode['damping_joint']}",
+                coeffs,
+                "-" if freq_err is None else f"{100 * freq_err:.1f}",
+                "-" if damp_err is None else f"{100 * damp_err:.1f}",
+            ]
+        )
+    header = [
+        "mode",
+        "freq. from",
+        "damping from",
+        "coefficients",
+        "f rms err [%]",
+        "ζ rms err [%]",
+    ]
+    lines += [_md_table(header, rows), ""]
+    return lines
+
+
+_JERK_NOTE = (
+    "- Peak jerk is the largest third difference of the sent reference. A true-modes row "
+    "above the unshaped value comes from a kink in the true damping: the twin's gear damping "
+    "grows with the gear torque |τ|, so ζ has a kink where a gravity torque changes sign "
+    "(visible in the ζ panel of the mode figures). The ZV amplitudes follow it, which puts a "
+    "small kink into the reference velocity; the third difference turns it into a spike."
+)
+
+
+def _jerk_spike(result: DemoResult) -> bool:
+    """Whether some true-modes row is jerkier than its unshaped reference."""
+    for motion in result.motions:
+        try:
+            truth, plain = motion.run("fd-tvist-truth"), motion.run("unshaped")
+        except KeyError:
+            continue
+        if truth.peak_jerk_rad_s3 > plain.peak_jerk_rad_s3:
+            return True
+    return False
 
 
 def write_outputs(result: DemoResult, out_dir: str | Path) -> dict[str, Any]:

@@ -36,6 +36,7 @@ from scipy import optimize
 from tvist.ident.excitation import Excitation, random_excitation, to_urscript
 from tvist.ident.local_fit import FitOptions, LocalFit, identify_local
 from tvist.ident.logs import Record, read_rtde_csv
+from tvist.ident.two_mode import ModeEstimate
 from tvist.robots import Payload as _Payload
 from tvist.robots import Robot, params
 
@@ -429,19 +430,61 @@ def identify_pose(robot: CampaignRobot, pose: CampaignPose, settings: _Settings)
 
 
 def _separated_base_mode(base: LocalFit, shoulder: LocalFit, options: FitOptions) -> dict:
-    """The base record, with the base mode separated from the shoulder mode if needed.
+    """The base record, with the base mode separated from the shoulder mode where needed.
 
-    If the base excitation rings two modes (a significant two-mode fit), the base mode is the
-    one farther from the shoulder mode identified from the shoulder excitation; the
-    single-mode result is kept under ``apparent``.
+    The base excitation may ring the shoulder mode too (strongly where the base mode is
+    heavily damped, the paper's Fig. 22 situation). From the two-mode fit of the base log:
+
+    - if its dominant component (largest share of the response) is not at the shoulder
+      frequency identified from the shoulder excitation (within :data:`SAME_MODE_RATIO`),
+      it is the base mode (the single-mode fit if the other component is no real mode);
+    - if the dominant component is at the shoulder frequency, the base mode is the other
+      component when that one is significant and well determined; with less than
+      :data:`CLEAR_SHARE` of the response it is flagged low-confidence;
+    - otherwise the base and shoulder modes cannot be told apart (hidden or coincident
+      modes): the single-mode fit is kept, flagged.
+
+    The single-mode result is kept under ``apparent`` whenever it is replaced.
     """
     entry = base.to_dict()
     entry["method"] = "single-mode"
     split = base.two_mode
-    if split is None or not split.significant or shoulder.low_confidence:
+    if split is None or shoulder.low_confidence:
         return entry
-    chosen = split.away_from(shoulder.wn_rad_s)
-    reasons = [r for r in base.reasons if not r.startswith(("uncertain", "poor fit", "overdamped"))]
+    limit = math.log(SAME_MODE_RATIO)
+
+    def shoulder_like(m: ModeEstimate) -> bool:
+        return abs(math.log(m.wn_rad_s / shoulder.wn_rad_s)) < limit
+
+    dominant, other = sorted(split.modes, key=lambda m: -m.energy_share)
+    reasons = [r for r in base.reasons if not r.startswith(("uncertain", "overdamped"))]
+    if not shoulder_like(dominant):
+        # Even a weak second mode biases the single-mode fit, so the two-mode value is used
+        # unless the second component is no mode at all (overdamped or unresolved).
+        if other.zeta >= 0.9 or not other.wn_se_rad_s < 0.5 * other.wn_rad_s:
+            return entry
+        chosen = dominant
+    elif (
+        split.significant
+        and other.energy_share >= MIN_SHARE
+        and other.wn_se_rad_s <= options.max_wn_rel_se * 5 * other.wn_rad_s
+    ):
+        chosen = other
+        if other.energy_share < CLEAR_SHARE:
+            reasons.append(
+                f"base mode weak next to the shoulder mode ({100 * other.energy_share:.0f} % "
+                "of the response)"
+            )
+    else:
+        entry.update(
+            low_confidence=True,
+            reasons=[
+                *base.reasons,
+                "base excitation rings at the shoulder frequency: the base mode is hidden "
+                "behind (or coincides with) the shoulder mode",
+            ],
+        )
+        return entry
     if chosen.wn_se_rad_s > options.max_wn_rel_se * chosen.wn_rad_s:
         reasons.append(
             f"uncertain frequency: standard error {100 * chosen.wn_se_rad_s / chosen.wn_rad_s:.2f}"
@@ -462,6 +505,15 @@ def _separated_base_mode(base: LocalFit, shoulder: LocalFit, options: FitOptions
         low_confidence=bool(reasons),
     )
     return entry
+
+
+#: Modes closer than this frequency ratio are taken for the same mode (twice the 1 % accuracy
+#: of a local fit, plus margin).
+SAME_MODE_RATIO = 1.03
+#: A second component with less than this share of the base response is not used.
+MIN_SHARE = 0.05
+#: A base component with less than this share of the response is flagged low-confidence.
+CLEAR_SHARE = 0.3
 
 
 #: One twin per worker process and payload (building a MuJoCo model takes a while).

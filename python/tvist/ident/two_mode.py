@@ -38,12 +38,14 @@ MAX_WN_REL_SE = 0.05
 
 @dataclass(frozen=True)
 class ModeEstimate:
-    """One mode of a multi-mode fit, with standard errors (white-residual assumption)."""
+    """One mode of a multi-mode fit, with standard errors (white-residual assumption) and the
+    fraction of the fitted response energy it carries."""
 
     wn_rad_s: float
     zeta: float
     wn_se_rad_s: float
     zeta_se: float
+    energy_share: float = float("nan")
 
     @property
     def fn_hz(self) -> float:
@@ -71,6 +73,22 @@ class TwoModeFit:
     def away_from(self, wn_rad_s: float) -> ModeEstimate:
         """The mode farther (in log-frequency) from ``wn_rad_s``, e.g. the shoulder mode."""
         return max(self.modes, key=lambda m: abs(math.log(m.wn_rad_s / wn_rad_s)))
+
+
+def _energy_shares(
+    x: np.ndarray, u: np.ndarray, y_used: np.ndarray, mask: np.ndarray, dt_s: float
+) -> tuple[float, float]:
+    """Fraction of the fitted response energy carried by each of the two modes."""
+    blocks = [
+        _zoh_responses(math.exp(x[0]), x[1], u, dt_s)[mask],
+        _zoh_responses(math.exp(x[2]), x[3], u, dt_s)[mask],
+    ]
+    phi = np.column_stack([*blocks, np.ones(int(mask.sum()))])
+    beta, *_ = np.linalg.lstsq(phi, y_used, rcond=None)
+    parts = [blocks[0] @ beta[0:2], blocks[1] @ beta[2:4]]
+    energy = [float(p @ p) for p in parts]
+    total = sum(energy) or 1.0
+    return energy[0] / total, energy[1] / total
 
 
 def fit_two_modes(
@@ -138,6 +156,7 @@ def fit_two_modes(
         diff_step=1e-6,
     )
     rss2 = float(np.sum(res.fun**2))
+    shares = _energy_shares(res.x, u, y_used, mask, dt_s)
     # fit % = 100 (1 - |r| / |y - ȳ|), so the single-mode residual energy is:
     rss1 = (1.0 - single.fit_percent / 100.0) ** 2 * float(np.sum((y_used - y_used.mean()) ** 2))
     dof = max(y_used.size - 9, 1)  # 4 nonlinear + 5 linear parameters
@@ -147,7 +166,7 @@ def fit_two_modes(
     except np.linalg.LinAlgError:
         se = np.full(4, np.inf)
     modes = []
-    for i in (0, 2):
+    for k, i in enumerate((0, 2)):
         wn = math.exp(res.x[i])
         modes.append(
             ModeEstimate(
@@ -155,6 +174,7 @@ def fit_two_modes(
                 zeta=float(res.x[i + 1]),
                 wn_se_rad_s=float(wn * se[i]),  # d(exp x) = exp(x) dx
                 zeta_se=float(se[i + 1]),
+                energy_share=shares[k],
             )
         )
     modes.sort(key=lambda m: m.wn_rad_s)

@@ -1,0 +1,212 @@
+//! Robot parameters read from the project's robot-data file (feature `json`).
+//!
+//! The UR e-Series parameters live in exactly one place, `python/tvist/robots/ur_e_series.json`
+//! (schema in its `conventions` field); this module embeds that file and turns one of its
+//! `robots` entries into the joints and links of a [`Robot`]. Setup-time only: parsing
+//! allocates.
+
+use crate::error::Error;
+use crate::robot::{DhJoint, RigidBody, Robot};
+use serde_json::Value;
+
+/// The UR e-Series parameter file, embedded at build time.
+pub const UR_E_SERIES_JSON: &str = include_str!("../../../python/tvist/robots/ur_e_series.json");
+
+/// The `schema_version` this reader understands.
+pub const SCHEMA_VERSION: u64 = 1;
+
+fn invalid(msg: String) -> Error {
+    Error::InvalidParameter(format!("robot data: {msg}"))
+}
+
+/// Parses a robot-data document and checks its schema version.
+fn document(json: &str) -> Result<Value, Error> {
+    let doc: Value = serde_json::from_str(json).map_err(|e| invalid(format!("{e}")))?;
+    match doc.get("schema_version").and_then(Value::as_u64) {
+        Some(SCHEMA_VERSION) => Ok(doc),
+        other => Err(invalid(format!(
+            "schema_version {other:?}, expected {SCHEMA_VERSION}"
+        ))),
+    }
+}
+
+/// Names of the robots in a robot-data document (sorted).
+pub fn robot_names(json: &str) -> Result<Vec<String>, Error> {
+    let doc = document(json)?;
+    let robots = doc
+        .get("robots")
+        .and_then(Value::as_object)
+        .ok_or_else(|| invalid("'robots' must be an object".into()))?;
+    Ok(robots.keys().cloned().collect())
+}
+
+/// A list of `len` numbers at `value`, named `what` in errors.
+fn numbers(value: Option<&Value>, len: usize, what: &str) -> Result<Vec<f64>, Error> {
+    let list = value
+        .and_then(Value::as_array)
+        .ok_or_else(|| invalid(format!("{what} must be a list of numbers")))?;
+    if list.len() != len {
+        return Err(invalid(format!(
+            "{what} has {} entries, expected {len}",
+            list.len()
+        )));
+    }
+    list.iter()
+        .map(|v| {
+            v.as_f64()
+                .ok_or_else(|| invalid(format!("{what} must hold numbers only, found {v}")))
+        })
+        .collect()
+}
+
+/// `n` rows of `N` numbers at `value`.
+fn rows<const N: usize>(
+    value: Option<&Value>,
+    n: usize,
+    what: &str,
+) -> Result<Vec<[f64; N]>, Error> {
+    let list = value
+        .and_then(Value::as_array)
+        .ok_or_else(|| invalid(format!("{what} must be a list of rows")))?;
+    if list.len() != n {
+        return Err(invalid(format!(
+            "{what} has {} rows, expected {n}",
+            list.len()
+        )));
+    }
+    list.iter()
+        .enumerate()
+        .map(|(i, row)| {
+            let v = numbers(Some(row), N, &format!("{what}[{i}]"))?;
+            let mut out = [0.0; N];
+            out.copy_from_slice(&v);
+            Ok(out)
+        })
+        .collect()
+}
+
+/// Joints and links of robot `name` in robot-data document `json`.
+///
+/// The joint count is that of `dh.d`; every other per-joint field must match it. Values are
+/// taken as written (the [`Robot`] constructor checks that they are physical).
+pub fn robot_chain(json: &str, name: &str) -> Result<(Vec<DhJoint>, Vec<RigidBody>), Error> {
+    let doc = document(json)?;
+    let entry = doc.get("robots").and_then(|r| r.get(name)).ok_or_else(|| {
+        invalid(format!(
+            "unknown robot {name:?}; known: {:?}",
+            robot_names(json).unwrap_or_default()
+        ))
+    })?;
+    let dh = entry.get("dh");
+    let n = dh
+        .and_then(|d| d.get("d"))
+        .and_then(Value::as_array)
+        .map(Vec::len)
+        .ok_or_else(|| invalid(format!("{name}: dh.d must be a list of numbers")))?;
+    let d = numbers(dh.and_then(|d| d.get("d")), n, &format!("{name}: dh.d"))?;
+    let a = numbers(dh.and_then(|d| d.get("a")), n, &format!("{name}: dh.a"))?;
+    let alpha = numbers(
+        dh.and_then(|d| d.get("alpha")),
+        n,
+        &format!("{name}: dh.alpha"),
+    )?;
+    let mass = numbers(entry.get("mass_kg"), n, &format!("{name}: mass_kg"))?;
+    let com = rows::<3>(entry.get("com_m"), n, &format!("{name}: com_m"))?;
+    let inertia = rows::<6>(
+        entry.get("inertia_kg_m2"),
+        n,
+        &format!("{name}: inertia_kg_m2"),
+    )?;
+    let joints = (0..n).map(|i| DhJoint::new(d[i], a[i], alpha[i])).collect();
+    let links = (0..n)
+        .map(|i| RigidBody {
+            mass_kg: mass[i],
+            com_m: com[i],
+            inertia_kg_m2: inertia[i],
+        })
+        .collect();
+    Ok((joints, links))
+}
+
+/// UR e-Series robot `name` (`"ur3e"`, `"ur5e"`, …) from the embedded parameter file, with
+/// `payload` on the flange.
+pub fn ur_e_series(name: &str, payload: RigidBody) -> Result<Robot, Error> {
+    let (joints, links) = robot_chain(UR_E_SERIES_JSON, name)?;
+    Robot::new(joints, links, payload)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn message(result: Result<(Vec<DhJoint>, Vec<RigidBody>), Error>) -> String {
+        match result {
+            Ok(_) => String::from("accepted"),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    const ONE_JOINT: &str = r#"{"schema_version": 1, "robots": {"arm": {
+        "dh": {"d": [0.1], "a": [0.2], "alpha": [0.5]},
+        "mass_kg": [2.0], "com_m": [[0.1, 0.0, 0.0]],
+        "inertia_kg_m2": [[0.01, 0.02, 0.02, 0.0, 0.0, 0.0]]}}}"#;
+
+    #[test]
+    fn reads_every_field_of_an_entry() -> Result<(), Error> {
+        let (joints, links) = robot_chain(ONE_JOINT, "arm")?;
+        assert_eq!(joints, vec![DhJoint::new(0.1, 0.2, 0.5)]);
+        assert_eq!(
+            links,
+            vec![RigidBody {
+                mass_kg: 2.0,
+                com_m: [0.1, 0.0, 0.0],
+                inertia_kg_m2: [0.01, 0.02, 0.02, 0.0, 0.0, 0.0],
+            }]
+        );
+        Ok(())
+    }
+
+    #[test]
+    fn the_embedded_file_holds_six_joint_ur_robots() -> Result<(), Error> {
+        let names = robot_names(UR_E_SERIES_JSON)?;
+        assert!(names.iter().any(|n| n == "ur5e"), "{names:?}");
+        for name in &names {
+            let robot = ur_e_series(name, RigidBody::NONE)?;
+            assert_eq!(robot.n_dof(), 6, "{name}");
+        }
+        Ok(())
+    }
+
+    #[test]
+    fn malformed_documents_name_the_problem() {
+        let cases = [
+            ("{", "robot data:"),
+            (r#"{"schema_version": 2, "robots": {}}"#, "schema_version"),
+            (
+                &ONE_JOINT.replace(r#""a": [0.2]"#, r#""a": [0.2, 0.3]"#),
+                "dh.a has 2 entries",
+            ),
+            (
+                &ONE_JOINT.replace(r#""mass_kg": [2.0]"#, r#""mass_kg": ["x"]"#),
+                "mass_kg must hold numbers",
+            ),
+            (
+                &ONE_JOINT.replace("[[0.1, 0.0, 0.0]]", "[[0.1, 0.0]]"),
+                "com_m[0] has 2 entries",
+            ),
+            (
+                &ONE_JOINT.replace(r#""inertia_kg_m2""#, r#""inertia""#),
+                "inertia_kg_m2 must be a list of rows",
+            ),
+        ];
+        for (json, expected) in cases {
+            let msg = message(robot_chain(json, "arm"));
+            assert!(msg.contains(expected), "{msg:?} lacks {expected:?}");
+        }
+        let msg = message(robot_chain(ONE_JOINT, "ur99"));
+        assert!(
+            msg.contains("unknown robot \"ur99\"") && msg.contains("arm"),
+            "{msg}"
+        );
+    }
+}

@@ -1,0 +1,118 @@
+//! `tvist_shaper_step`, `_reset` and `_delay_s` never allocate, for both providers.
+//!
+//! Its own test binary: the counting global allocator sees only this file's allocations, and
+//! a single `#[test]` keeps other test threads out of the measured windows.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::ffi::CString;
+use std::ptr;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use tvist::{
+    tvist_shaper_delay_s, tvist_shaper_free, tvist_shaper_new_constant, tvist_shaper_new_ur_map,
+    tvist_shaper_reset, tvist_shaper_step, TvistShaper, TVIST_OK,
+};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards to the system allocator unchanged; only counts calls.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations_in(f: impl FnOnce()) -> usize {
+    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    f();
+    ALLOCATIONS.load(Ordering::SeqCst) - before
+}
+
+/// Runs 500 cycles of a moving 6-joint input, a reset and delay queries on `shaper`.
+fn cycle(shaper: *mut TvistShaper) -> usize {
+    let q0 = [0.0, -std::f64::consts::PI, 0.0, -1.5, 0.0, 0.0];
+    let (mut x, mut y) = (q0, [0.0; 6]);
+    let mut delay_sum = 0.0;
+    let n = allocations_in(|| {
+        // SAFETY: a live handle of 6 channels; every array holds 6 doubles.
+        unsafe {
+            assert_eq!(tvist_shaper_reset(shaper, q0.as_ptr(), 6), TVIST_OK);
+            for k in 0..500 {
+                x[0] = q0[0] + 0.5 * (k as f64 * 0.01).sin();
+                x[1] = q0[1] + 0.3 * (k as f64 * 0.007).sin();
+                if k == 100 {
+                    x[2] = f64::NAN;
+                } else {
+                    x[2] = 0.0;
+                }
+                assert!(tvist_shaper_step(shaper, x.as_ptr(), y.as_mut_ptr(), 6) >= 0);
+                delay_sum += tvist_shaper_delay_s(shaper);
+            }
+        }
+    });
+    assert!(delay_sum > 0.0 && y.iter().all(|v| v.is_finite()));
+    n
+}
+
+#[test]
+fn per_cycle_calls_never_allocate() {
+    // Guard against a vacuous pass: an allocation inside the window is counted.
+    assert!(allocations_in(|| drop(std::hint::black_box(vec![1u8; 8]))) >= 1);
+
+    let (zv, ur5e) = (
+        CString::new("zv").expect("name"),
+        CString::new("ur5e").expect("name"),
+    );
+    let (mut constant, mut map) = (ptr::null_mut(), ptr::null_mut());
+    // SAFETY: arrays of the stated lengths, NUL-terminated names, writable outputs.
+    unsafe {
+        let (wn, zeta) = ([40.0, 110.0], [0.05, 0.1]);
+        let code = tvist_shaper_new_constant(
+            wn.as_ptr(),
+            zeta.as_ptr(),
+            2,
+            0.002,
+            6,
+            zv.as_ptr(),
+            &mut constant,
+        );
+        assert_eq!(code, TVIST_OK);
+        let com = [0.0, 0.0, 0.05];
+        let code = tvist_shaper_new_ur_map(
+            ur5e.as_ptr(),
+            5.0,
+            com.as_ptr(),
+            0.002,
+            zv.as_ptr(),
+            &mut map,
+        );
+        assert_eq!(code, TVIST_OK);
+    }
+    assert_eq!(cycle(constant), 0, "constant-mode shaper allocated");
+    assert_eq!(cycle(map), 0, "map-driven shaper allocated");
+    // SAFETY: handles from the constructors, freed once.
+    unsafe {
+        tvist_shaper_free(constant);
+        tvist_shaper_free(map);
+    }
+}

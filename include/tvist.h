@@ -1,0 +1,124 @@
+/*
+ * tvist.h - C API of tvist: real-time time-varying multi-mode input shaping (FD-TVIST).
+ *
+ * Build the library with `cargo build -p tvist-ffi --release`, then link
+ *   target/release/libtvist.a  (static: add -lpthread -ldl -lm)  or
+ *   target/release/libtvist.so (shared).
+ *
+ * Conventions: SI units (dt_s in s, wn_rad_s in rad/s, payload_kg in kg, payload_com_m in m);
+ * joint arrays hold n_dof doubles. Setup calls return TVIST_OK (0) or a negative TvistError;
+ * tvist_shaper_step returns the status bits (>= 0) of the cycle or a negative TvistError.
+ * No call unwinds or aborts on bad input: null or misaligned pointers and wrong lengths give
+ * an error code. An array shorter than its stated length, a freed handle or a string without
+ * its NUL remain undefined behaviour, as in any C API.
+ *
+ * Threads: a handle may move between threads but must not be used by two at once.
+ * Real time: tvist_shaper_step never allocates, locks or blocks; create handles at setup.
+ */
+#ifndef TVIST_H
+#define TVIST_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Error codes (negative) returned by setup calls and by tvist_shaper_step / _reset. */
+typedef enum TvistError {
+    TVIST_OK = 0,
+    /* A required pointer is null or not aligned for its type. */
+    TVIST_ERR_NULL = -1,
+    /* The shaper name is not one of "zv", "zvd", "zvdd", "mzv", "ei", "2hump_ei", "3hump_ei". */
+    TVIST_ERR_UNKNOWN_SHAPER = -2,
+    /* A parameter outside its domain (dt_s <= 0, n_dof == 0 or > TVIST_MAX_DOF, no modes,
+     * a payload that is not physical, a damping ratio beyond the shaper's range, ...). */
+    TVIST_ERR_INVALID_PARAMETER = -3,
+    /* A mode (wn_rad_s, zeta) that is not finite, has wn_rad_s <= 0 or zeta outside [0, 1). */
+    TVIST_ERR_INVALID_MODE = -4,
+    /* An array length that does not match the shaper (n_dof of tvist_shaper_reset). */
+    TVIST_ERR_DIMENSION_MISMATCH = -5,
+    /* A robot without a dynamic map: the paper's map is identified for "ur5e" only. */
+    TVIST_ERR_UNKNOWN_ROBOT = -6,
+    /* An internal error was caught at the boundary (a bug). Only free the handle after it. */
+    TVIST_ERR_INTERNAL = -7
+} TvistError;
+
+/* Status bits of one cycle (tvist_shaper_step >= 0); 0 is a clean cycle. */
+/* A non-finite input sample was replaced by the last valid one. */
+#define TVIST_STATUS_INPUT_HELD 1
+/* The dynamics provider returned an invalid mode; the last valid mode was used. */
+#define TVIST_STATUS_MODES_HELD 2
+/* A delay exceeded the delay-line capacity and was clamped to it. */
+#define TVIST_STATUS_DELAY_CLAMPED 4
+/* No valid mode seen yet for some filter: it passed its input through unshaped. */
+#define TVIST_STATUS_UNSHAPED 8
+/* n_dof differs from the shaper's: nothing was read or written. */
+#define TVIST_STATUS_BAD_LENGTH 16
+/* A damping ratio beyond the shaper's published range; designed at that limit. */
+#define TVIST_STATUS_ZETA_CLAMPED 32
+
+/* Largest number of joint channels of a handle. */
+#define TVIST_MAX_DOF 4096
+/* Largest number of modes of tvist_shaper_new_constant. */
+#define TVIST_MAX_MODES 64
+
+/* Opaque shaper handle. */
+typedef struct TvistShaper TvistShaper;
+
+/*
+ * Shaper for n_modes fixed modes (wn_rad_s[m], zeta[m]): one cascaded filter per mode over
+ * n_dof channels sampled every dt_s seconds, shaper family shaper_name. Linear interpolation;
+ * delay lines sized 1.5 x the longest shaper. On success *out holds a new handle; on failure
+ * *out is NULL (when out is usable) and tvist_last_error_message says why.
+ */
+int32_t tvist_shaper_new_constant(const double *wn_rad_s, const double *zeta, size_t n_modes,
+                                  double dt_s, size_t n_dof, const char *shaper_name,
+                                  TvistShaper **out);
+
+/*
+ * Shaper driven by the paper's UR5e dynamic map (base and shoulder modes, re-evaluated every
+ * cycle at the previous shaped output) with the UR5e rigid-body model and a point payload of
+ * payload_kg at payload_com_m (flange frame, m). robot_name must be "ur5e"; n_dof is 6.
+ * Setup samples the workspace to validate the map (a few milliseconds).
+ */
+int32_t tvist_shaper_new_ur_map(const char *robot_name, double payload_kg,
+                                const double payload_com_m[3], double dt_s,
+                                const char *shaper_name, TvistShaper **out);
+
+/*
+ * One control cycle: shapes q_in into q_out (n_dof doubles each; they may be the same array).
+ * Returns the TVIST_STATUS_* bits of the cycle (TVIST_STATUS_BAD_LENGTH if n_dof is wrong)
+ * or TVIST_ERR_NULL. Allocation-free.
+ */
+int32_t tvist_shaper_step(TvistShaper *shaper, const double *q_in, double *q_out, size_t n_dof);
+
+/*
+ * Puts the shaper at rest at q0 (n_dof doubles; non-finite entries taken as 0): a following
+ * constant input q0 passes unchanged. Returns TVIST_OK, TVIST_ERR_NULL or
+ * TVIST_ERR_DIMENSION_MISMATCH.
+ */
+int32_t tvist_shaper_reset(TvistShaper *shaper, const double *q0, size_t n_dof);
+
+/* Total delay of the latest cycle, s (0 before the first step; NaN for NULL). */
+double tvist_shaper_delay_s(const TvistShaper *shaper);
+
+/* Number of joint channels (0 for NULL). */
+size_t tvist_shaper_n_dof(const TvistShaper *shaper);
+
+/* Frees a handle; NULL is ignored. */
+void tvist_shaper_free(TvistShaper *shaper);
+
+/*
+ * Copies this thread's last setup-error text into buf (len bytes, NUL-terminated when
+ * len > 0, truncated if needed) and returns the text's full length without the NUL, like
+ * snprintf. buf may be NULL when len is 0.
+ */
+size_t tvist_last_error_message(char *buf, size_t len);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* TVIST_H */

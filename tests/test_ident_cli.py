@@ -1,0 +1,111 @@
+"""The identification subcommands: campaign, identify, fit-map, sensitivity."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import tvist
+from tvist.cli import main
+from tvist.ident.campaign import load_results
+from tvist.ident.excitation import random_excitation
+from tvist.ident.logs import Record
+from tvist.sim import Twin
+
+Q0 = np.array([0.3, -1.7, 1.4, -1.2, 1.57, 0.0])
+
+
+@pytest.fixture(scope="module")
+def twin_log(tmp_path_factory):
+    """A shoulder excitation of the twin (3 kg) written as ur_rtde and as UR client CSV."""
+    twin = Twin("ur5e", payload_kg=3.0, payload_com_m=(0.0, 0.0, 0.05), accel_noise_std=0.05)
+    ex = random_excitation(Q0, 1, seed=2)
+    sim = twin.run(ex.q)
+    record = Record(
+        t_s=sim.timestamp,
+        target_q=sim.target_q,
+        target_qd=sim.target_qd,
+        target_qdd=sim.target_qdd,
+        actual_q=sim.actual_q,
+        tool_accel=sim.actual_tool_accelerometer,
+        actual_TCP_pose=sim.actual_TCP_pose,
+    )
+    folder = tmp_path_factory.mktemp("logs")
+    paths = {
+        fmt: record.to_csv(folder / f"shoulder_{fmt}.csv", fmt=fmt)
+        for fmt in ("ur_rtde", "ur_client")
+    }
+    return paths, twin.modes(Q0)[1]
+
+
+@pytest.mark.parametrize("fmt", ["ur_rtde", "ur_client"])
+def test_identify_reads_both_formats(twin_log, fmt, capsys):
+    paths, (wn_true, _) = twin_log
+    args = ["identify", str(paths[fmt]), "--joint", "1", "--payload-kg", "3", "--json"]
+    assert main(args) == 0
+    fit = json.loads(capsys.readouterr().out)
+    assert fit["joint"] == 1
+    assert fit["wn_rad_s"] == pytest.approx(wn_true, rel=0.03)  # campaign acceptance: 3 %
+    assert main(["identify", str(paths[fmt]), "--joint", "1", "--payload-kg", "3"]) == 0
+    text = capsys.readouterr().out
+    assert f"f_n = {fit['wn_rad_s'] / (2 * math.pi):.3f} Hz" in text
+
+
+def test_campaign_on_the_twin(tmp_path, capsys):
+    out = tmp_path / "c.jsonl"
+    args = ["campaign", "--sim", "--out", str(out), "--payloads", "0", "--every", "26"]
+    assert main([*args, "--duration", "4"]) == 0
+    records = load_results(out)
+    assert [r["key"] for r in records] == ["m0kg-V0-R0", "m0kg-V2-R0"]
+    assert "2/2 poses" in capsys.readouterr().out
+    assert main([*args, "--duration", "4"]) == 0  # resumes: nothing left to do
+    assert len(load_results(out)) == 2
+
+
+def write_synthetic_results(path, n=40):
+    """Campaign-style records whose modes follow the paper's map exactly."""
+    paper = tvist.DynamicMap.paper_ur5e()
+    rng = np.random.default_rng(1)
+    with path.open("w") as fh:
+        for i in range(n):
+            inertia = [rng.uniform(0.3, 9.0), rng.uniform(0.9, 9.0), 0.5, 0.1, 0.1, 0.01]
+            modes = paper.modes_from_inertia(inertia)
+            record = {
+                "key": f"p{i}",
+                "inertia_kg_m2": inertia,
+                "modes": [
+                    {"joint": j, "wn_rad_s": w, "zeta": z, "low_confidence": False}
+                    for j, (w, z) in enumerate(modes)
+                ],
+            }
+            fh.write(json.dumps(record) + "\n")
+    return path
+
+
+def test_fit_map_and_sensitivity(tmp_path, capsys):
+    results = write_synthetic_results(tmp_path / "r.jsonl")
+    map_path = tmp_path / "map.json"
+    assert main(["fit-map", str(results), "--out", str(map_path)]) == 0
+    text = capsys.readouterr().out
+    assert "frequency from J_1" in text and "dropped as negligible" in text
+    fitted = tvist.DynamicMap.load(map_path)
+    paper = tvist.DynamicMap.paper_ur5e()
+    for got, want in zip(fitted.mode_maps, paper.mode_maps, strict=True):
+        assert got["k_j"] == pytest.approx(want["k_j"], rel=1e-4)  # exact data
+    figs = tmp_path / "figs"
+    args = ["sensitivity", "--map", str(map_path), "--results", str(results), "--out", str(figs)]
+    assert main(args) == 0
+    assert "40/40 identified poses have PRV <= 10 %" in capsys.readouterr().out
+    for name in ("prv_sensitivity", "base_frequency", "shoulder_frequency", "shoulder_damping"):
+        assert (figs / f"{name}.png").stat().st_size > 10_000
+    assert json.loads((figs / "robustness.json").read_text())["n_poses"] == 40
+
+
+def test_fit_map_on_an_empty_file_fails_cleanly(tmp_path, capsys):
+    empty = tmp_path / "empty.jsonl"
+    empty.write_text("")
+    assert main(["fit-map", str(empty), "--out", str(tmp_path / "m.json")]) == 1
+    assert "no pose records" in capsys.readouterr().err
