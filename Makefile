@@ -6,12 +6,12 @@ export VIRTUAL_ENV := $(CURDIR)/$(VENV)
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml pyproject.toml
 
-.PHONY: demo test build lint fmt bench rust-test pytest clean
+.PHONY: demo test build lint fmt bench rust-test ffi-test pytest clean
 
 demo: build
 	$(PY) -m tvist.cli demo
 
-test: build rust-test lint pytest
+test: build rust-test ffi-test lint pytest
 
 $(PY):
 	python3 -m venv $(VENV)
@@ -28,6 +28,15 @@ rust-test:
 	cargo test --workspace --exclude tvist-py -q
 	cargo fmt --all --check
 	cargo clippy --workspace --all-targets -q -- -D warnings
+
+# C API: release library, the C example compiled against include/tvist.h and libtvist.a, run.
+FFI_LIBS := -lgcc_s -lutil -lrt -lpthread -lm -ldl
+ffi-test:
+	cargo build -p tvist-ffi --release -q
+	@mkdir -p target/c
+	cc -std=c11 -Wall -Wextra -Werror -Iinclude examples/c/shape_move.c \
+		target/release/libtvist.a $(FFI_LIBS) -o target/c/shape_move
+	./target/c/shape_move
 
 lint: $(PY)
 	$(VENV)/bin/ruff check python tests benches examples

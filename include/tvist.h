@@ -2,7 +2,7 @@
  * tvist.h - C API of tvist: real-time time-varying multi-mode input shaping (FD-TVIST).
  *
  * Build the library with `cargo build -p tvist-ffi --release`, then link
- *   target/release/libtvist.a  (static: add -lpthread -ldl -lm)  or
+ *   target/release/libtvist.a  (static: add -lgcc_s -lutil -lrt -lpthread -lm -ldl)  or
  *   target/release/libtvist.so (shared).
  *
  * Conventions: SI units (dt_s in s, wn_rad_s in rad/s, payload_kg in kg, payload_com_m in m);

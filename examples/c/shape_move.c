@@ -4,7 +4,8 @@
  * Build and run (what `make ffi-test` does):
  *   cargo build -p tvist-ffi --release
  *   cc -std=c11 -Wall -Wextra -Werror -Iinclude examples/c/shape_move.c \
- *      target/release/libtvist.a -lpthread -ldl -lm -o shape_move && ./shape_move
+ *      target/release/libtvist.a -lgcc_s -lutil -lrt -lpthread -lm -ldl -o shape_move
+ *   ./shape_move
  *
  * Exit code 0 if the shaped move ends exactly where the commanded one does, 1 otherwise.
  */
@@ -35,9 +36,9 @@ static int report_error(const char *what, int32_t code) {
 }
 
 int main(void) {
-    /* Start in the paper's pose Q1 (arm stretched out), move base and shoulder. */
+    /* Start in the paper's pose Q1 (arm stretched out); move base, shoulder and elbow. */
     const double q_start[N_DOF] = {0.0, -PI, 0.0, -PI / 2.0, 0.0, 0.0};
-    const double dq[N_DOF] = {0.6, 0.4, 0.0, 0.0, 0.0, 0.0};
+    const double dq[N_DOF] = {0.6, 0.5, 0.8, 0.0, 0.0, 0.0};
     const double payload_com_m[3] = {0.0, 0.0, 0.05};
     TvistShaper *shaper = NULL;
 

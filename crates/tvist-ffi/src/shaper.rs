@@ -30,7 +30,7 @@ pub const PAPER_MAP_ROBOT: &str = "ur5e";
 #[derive(Debug)]
 enum Provider {
     Constant(TvShaper<ConstantModes>),
-    Map(TvShaper<MapDynamics>),
+    Map(Box<TvShaper<MapDynamics>>),
 }
 
 /// An opaque shaper handle for C: one multi-mode FD-TVIST filter and its staging buffer.
@@ -163,6 +163,7 @@ unsafe fn publish(out: *mut *mut TvistShaper, built: Result<TvistShaper, i32>) -
     }
 }
 
+/// A handle around a new [`TvShaper`] for `dynamics` (setup errors recorded).
 fn build<D: tvist_core::Dynamics>(
     dynamics: D,
     config: &TvShaperConfig,
@@ -288,11 +289,9 @@ pub unsafe extern "C" fn tvist_shaper_new_ur_map(
             let n_dof = robot.n_dof();
             let dynamics =
                 MapDynamics::new(robot, DynamicMap::paper_ur5e()).map_err(|e| fail_with(&e))?;
-            build(
-                dynamics,
-                &TvShaperConfig::new(dt_s, n_dof, kind),
-                Provider::Map,
-            )
+            build(dynamics, &TvShaperConfig::new(dt_s, n_dof, kind), |s| {
+                Provider::Map(Box::new(s))
+            })
         })();
         // SAFETY: `out` checked above.
         unsafe { publish(out, built) }

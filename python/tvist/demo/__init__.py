@@ -15,9 +15,12 @@ More rows (for example a map identified on the twin) are added to the list of me
     from tvist import DynamicMap
     from tvist.demo import default_methods, fd_tvist_map, run_demo
 
-    rows = [*default_methods(), fd_tvist_map("fd-tvist-identified", "FD-TVIST ZV, identified
-            map", DynamicMap.load("map.json"))]
+    identified = DynamicMap.load("map.json")
+    rows = [*default_methods(), fd_tvist_map("my-map", "FD-TVIST ZV, my map", identified)]
     run_demo("out/demo", methods=rows)
+
+``run_demo(identify=True)`` identifies a map on the twin itself (a reduced mapping campaign)
+and adds its row.
 """
 
 from __future__ import annotations

@@ -4,9 +4,12 @@ A :class:`Method` builds the reference of one motion from a :class:`MotionContex
 default rows are :func:`default_methods`; more rows are added by appending to that list, for
 example a map identified on the twin with :func:`fd_tvist_map` (the CLI's ``--map`` option)::
 
-    methods = [*default_methods(), fd_tvist_map("fd-tvist-identified", "FD-TVIST, identified
-               map", DynamicMap.load("map.json"))]
+    identified = DynamicMap.load("map.json")
+    methods = [*default_methods(), fd_tvist_map("my-map", "FD-TVIST ZV, my map", identified)]
     run_demo(methods=methods)
+
+``run_demo(identify=True)`` (``tvist demo --identify``) adds such a row itself from a reduced
+mapping campaign on the twin (:mod:`tvist.demo.identified`).
 """
 
 from __future__ import annotations
