@@ -3,7 +3,8 @@
 //! Cases (6 DOF, the two UR5e modes of pose Q1, 500 Hz):
 //! - constant modes, ZV, linear reads: the sequence is designed once and reused;
 //! - modes that change every cycle (a frequency sweep), ZV, linear: redesign each cycle;
-//! - the same sweep with cubic reads.
+//! - the same sweep with cubic reads;
+//! - the same sweep with the (exact, Newton-refined) 5 % EI shaper, linear reads.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::f64::consts::PI;
@@ -74,6 +75,16 @@ fn bench_step(c: &mut Criterion) {
         c,
         "step 6dof 2 modes zv cubic (modes change every cycle)",
         TvShaper::new(Sweeping { k: 0 }, &cubic).expect("valid"),
+    );
+    let ei = TvShaperConfig::new(
+        0.002,
+        6,
+        ShaperKind::from_name("ei", None).expect("registry name"),
+    );
+    run(
+        c,
+        "step 6dof 2 modes ei linear (modes change every cycle)",
+        TvShaper::new(Sweeping { k: 0 }, &ei).expect("valid"),
     );
 }
 

@@ -1,11 +1,13 @@
 //! The robot model, the dynamic map and the map-driven shaper never allocate per call.
 //!
-//! Its own test binary: the counting global allocator sees only this file's allocations, and
-//! a single `#[test]` keeps other test threads out of the measured windows.
+//! Its own test binary with a counting global allocator. Only allocations made by the
+//! measuring thread inside a measured window are counted (a const thread-local flag), so the
+//! test harness's own threads cannot disturb the count.
 
 mod robot_support;
 
 use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use tvist_core::{
     DynamicMap, Dynamics, MapDynamics, Mode, ShaperKind, Status, TvShaper, TvShaperConfig,
@@ -15,20 +17,33 @@ struct Counting;
 
 static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
 
+thread_local! {
+    /// Set only on the measuring thread, only inside a measured window. Const-initialized and
+    /// without a destructor, so reading it from the allocator never allocates.
+    static MEASURING: Cell<bool> = const { Cell::new(false) };
+}
+
+/// Counts an allocation if the calling thread is inside a measured window.
+fn count() {
+    if MEASURING.with(Cell::get) {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+    }
+}
+
 // SAFETY: forwards to the system allocator unchanged; only counts calls.
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        count();
         // SAFETY: same contract as the caller's.
         unsafe { System.alloc(layout) }
     }
     unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        count();
         // SAFETY: same contract as the caller's.
         unsafe { System.alloc_zeroed(layout) }
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        count();
         // SAFETY: same contract as the caller's.
         unsafe { System.realloc(ptr, layout, new_size) }
     }
@@ -41,16 +56,27 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
+/// Runs `f` on this thread and returns how many allocations this thread made meanwhile
+/// (other threads, such as the test harness's, are not counted).
 fn allocations_in(f: impl FnOnce()) -> usize {
     let before = ALLOCATIONS.load(Ordering::SeqCst);
+    MEASURING.with(|m| m.set(true));
     f();
+    MEASURING.with(|m| m.set(false));
     ALLOCATIONS.load(Ordering::SeqCst) - before
 }
 
 #[test]
 fn robot_map_and_map_shaper_never_allocate() {
-    // Guard against a vacuous pass: an allocation inside the window is counted.
+    // Guard against a vacuous pass: an allocation inside the window is counted, one outside
+    // it (or on another thread) is not.
     assert!(allocations_in(|| drop(std::hint::black_box(vec![1u8; 8]))) >= 1);
+    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    drop(std::hint::black_box(vec![1u8; 8]));
+    std::thread::spawn(|| drop(std::hint::black_box(vec![1u8; 8])))
+        .join()
+        .expect("probe thread");
+    assert_eq!(ALLOCATIONS.load(Ordering::SeqCst), before);
 
     let mut robot = robot_support::ur_robot("ur5e", 5.0);
     let (mut m, mut jac, mut j, mut tau, mut pose) =
