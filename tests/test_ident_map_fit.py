@@ -100,8 +100,13 @@ def test_two_percent_noise(seed):
     for key in DAMP:
         assert rel_err(base, true_base, key) < 0.15, key
     # Shoulder damping: with J_1 >= ~1 kg m² and c_τ = 47, the "1" in (1 + c_τ J_1) is a 2 %
-    # effect, below the noise, so c_0 and c_τ cannot be separated; the fit must say so...
-    assert {"c_0", "c_tau"} <= set(stats[1]["damping"]["poorly_determined"])
+    # effect, below the noise, so c_0 and c_τ are barely separable; the fit must say so
+    # (relative standard errors of 25 % and more; measured 38-230 % over seeds 0-2), and the
+    # truth must lie within 3 of them...
+    shoulder_se = stats[1]["damping"]["coefficients"]
+    for key in ("c_0", "c_tau"):
+        assert shoulder_se[key]["se"] > 0.25 * abs(shoulder[key]), key
+        assert abs(shoulder[key] - true_shoulder[key]) < 3 * shoulder_se[key]["se"], key
     # ...while the polynomial it does determine, c_0 + (c_2 + c_0 c_τ) J + c_2 c_τ J², has its
     # J and J² coefficients within 10 %, and the predicted ζ stays within 1 % RMS.
     for fitted_c, true_c in [

@@ -1,13 +1,59 @@
-"""Identification of the arm's vibration modes: RTDE logs, excitation, preprocessing (eqs.
-12-13), local transfer-function fit (eq. 17), dynamic-map fit and mapping campaigns."""
+"""Identification of the arm's vibration modes (paper sections 4.4 and 5.2-5.4).
+
+Offline flow: RTDE log (real robot or twin) → :func:`tangential_acceleration` (eqs. 12-13)
+→ :func:`identify_local` (eq. 17) → per-pose modes from a campaign (:func:`run_campaign`,
+Algorithm 1, with :func:`random_excitation`, Algorithm 2) → :func:`fit_map` → map file →
+shaper; :func:`evaluate_map` judges the map against the shaper's 10 % PRV band.
+
+Modules: ``logs``, ``excitation``, ``preprocess``, ``local_fit``, ``two_mode``, ``map_fit``,
+``campaign``, ``robustness``, ``plots`` (matplotlib, imported lazily) and ``cli``.
+"""
 
 from __future__ import annotations
 
+from tvist.ident.campaign import (
+    CampaignPose,
+    TwinRobot,
+    URRobot,
+    campaign_poses,
+    load_results,
+    run_campaign,
+)
+from tvist.ident.excitation import BangCoastBangMove, Excitation, random_excitation, to_urscript
+from tvist.ident.local_fit import FitOptions, LocalFit, fit_local, identify_local
 from tvist.ident.logs import LogWarning, Record, find_gaps, read_rtde_csv
+from tvist.ident.map_fit import ModeSpec, fit_map
+from tvist.ident.preprocess import TangentialAcceleration, tangential_acceleration
+from tvist.ident.robustness import evaluate_map, prv_band, summarize, two_mode_shaper
+from tvist.ident.two_mode import TwoModeFit, fit_two_modes
 
 __all__ = [
+    "BangCoastBangMove",
+    "CampaignPose",
+    "Excitation",
+    "FitOptions",
+    "LocalFit",
     "LogWarning",
+    "ModeSpec",
     "Record",
+    "TangentialAcceleration",
+    "TwinRobot",
+    "TwoModeFit",
+    "URRobot",
+    "campaign_poses",
+    "evaluate_map",
     "find_gaps",
+    "fit_local",
+    "fit_map",
+    "fit_two_modes",
+    "identify_local",
+    "load_results",
+    "prv_band",
+    "random_excitation",
     "read_rtde_csv",
+    "run_campaign",
+    "summarize",
+    "tangential_acceleration",
+    "to_urscript",
+    "two_mode_shaper",
 ]

@@ -26,7 +26,7 @@ import tempfile
 import time
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -67,6 +67,16 @@ WRIST_JOINTS = (3, 4, 5)
 NOMINAL_WRIST_RAD = (-math.pi / 2, 0.0, 0.0)
 #: The flange must land within this distance of the target, m.
 IK_TOLERANCE_M = 1e-6
+#: RTDE fields recorded on a real robot (what :func:`read_rtde_csv` needs, plus the pose).
+RECORDED_FIELDS = (
+    "timestamp",
+    "target_q",
+    "target_qd",
+    "target_qdd",
+    "actual_q",
+    "actual_TCP_pose",
+    "actual_tool_accelerometer",
+)
 #: Joints the campaign identifies (base, shoulder).
 IDENTIFIED_JOINTS = (0, 1)
 
@@ -349,7 +359,7 @@ class URRobot:
         c.moveJ(list(excitation.q0), 0.5, 0.5)
         path = self._log_dir / f"excitation_{self._count:04d}_joint{excitation.joint}.csv"
         self._count += 1
-        self._receive.startFileRecording(str(path))
+        self._receive.startFileRecording(str(path), list(RECORDED_FIELDS))
         try:
             time.sleep(excitation.standstill_s)
             q = np.array(excitation.q0, dtype=float)
@@ -668,10 +678,3 @@ class _Progress:
 
     def close(self) -> None:
         self._progress.stop()
-
-
-def pose_to_dict(pose: CampaignPose) -> dict:
-    """Plain form of a pose (for listings)."""
-    out = asdict(pose)
-    out["q"] = None if pose.q is None else pose.q.tolist()
-    return out
