@@ -6,8 +6,11 @@ a load-dependent damper. With the deflection ``delta = q_motor - q_link`` (rad):
 
 - gear spring, eq. 22: ``tau_spring = k1 * delta + k3 * delta**3`` (N m), tangent stiffness
   ``k1 + 3 k3 delta**2`` (eq. 23);
-- gear damping, eq. 35 with constant ``c``: ``tau_damping = c0 * (1 + c_load * |tau_spring|) *
-  d(delta)/dt`` (N m), i.e. friction that grows with the load the gear carries.
+- gear damping, eq. 35 with constant ``c``: ``tau_damping = c0 * (1 + c_load * |tau_spring|_s) *
+  d(delta)/dt`` (N m), i.e. friction that grows with the load the gear carries. ``|x|_s =
+  sqrt(x² + s²) − s`` is a smooth absolute value (``s = load_smoothing_nm``): a gear's friction
+  has no kink where its load changes sign, and a kink would put one into the true damping
+  ratio along a move (and so into references shaped with it).
 
 The stiffness is an *effective* joint stiffness: it lumps the gear with the compliance of the
 bearings and the links, which the paper also folds into the joint modes (section 4.1).
@@ -37,7 +40,9 @@ class FlexParams:
         Viscous gear damping at zero load (N m s/rad).
     c_load_per_nm
         Load dependence of the damping (1/(N m)), >= 0: the damping coefficient is
-        ``c0 * (1 + c_load * |tau_spring|)``.
+        ``c0 * (1 + c_load * |tau_spring|_s)``.
+    load_smoothing_nm
+        Width ``s`` of the smooth absolute value ``|x|_s = sqrt(x² + s²) − s`` (N m), > 0.
     max_deflection_rad
         A gear deflection larger than this (rad) means the simulation has diverged; real
         strain-wave gears deflect a few milliradians.
@@ -47,6 +52,7 @@ class FlexParams:
     k3_nm_per_rad3: tuple[float, ...]
     c0_nms_per_rad: tuple[float, ...]
     c_load_per_nm: tuple[float, ...]
+    load_smoothing_nm: float = 5.0
     max_deflection_rad: float = 0.1
 
     def validate(self, n_dof: int) -> None:
@@ -67,9 +73,10 @@ class FlexParams:
                 raise ValueError(f"FlexParams.{name}: must be > 0, got {arr.tolist()}")
             if np.any(arr < 0.0):
                 raise ValueError(f"FlexParams.{name}: must be >= 0, got {arr.tolist()}")
-        limit = float(self.max_deflection_rad)
-        if not (math.isfinite(limit) and limit > 0.0):
-            raise ValueError(f"FlexParams.max_deflection_rad must be > 0, got {limit!r}")
+        for name in ("load_smoothing_nm", "max_deflection_rad"):
+            value = float(getattr(self, name))
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"FlexParams.{name} must be > 0, got {value!r}")
 
     def spring_torque_nm(self, delta_rad: np.ndarray) -> np.ndarray:
         """Gear spring torque ``k1 delta + k3 delta³`` (N m) for deflections ``(..., n_dof)``."""
@@ -82,9 +89,11 @@ class FlexParams:
         return np.asarray(self.k1_nm_per_rad) + 3.0 * np.asarray(self.k3_nm_per_rad3) * delta**2
 
     def damping_nms_per_rad(self, spring_torque_nm: np.ndarray) -> np.ndarray:
-        """Load-dependent gear damping ``c0 (1 + c_load |tau|)`` (N m s/rad)."""
-        tau = np.abs(np.asarray(spring_torque_nm, dtype=float))
-        return np.asarray(self.c0_nms_per_rad) * (1.0 + np.asarray(self.c_load_per_nm) * tau)
+        """Load-dependent gear damping ``c0 (1 + c_load |tau|_s)`` (N m s/rad)."""
+        tau = np.asarray(spring_torque_nm, dtype=float)
+        s = self.load_smoothing_nm
+        load = np.sqrt(tau * tau + s * s) - s
+        return np.asarray(self.c0_nms_per_rad) * (1.0 + np.asarray(self.c_load_per_nm) * load)
 
     def deflection_rad(self, torque_nm: np.ndarray) -> np.ndarray:
         """Deflection that carries ``torque_nm`` (inverse of eq. 22, the real root; Newton)."""

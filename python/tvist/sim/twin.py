@@ -263,7 +263,7 @@ class Twin:
         ``M dq'' + C dq' + (K_gear + dG/dq) dq = 0`` with the mass matrix ``M`` of the link
         side, the tangent gear stiffness ``K_gear = diag(k1 + 3 k3 delta_g²)`` at the gravity
         deflection ``delta_g``, the gravity stiffness ``dG/dq`` and the gear damping at the
-        gravity load ``C = diag(c0 (1 + c_load |tau_g|))``.
+        gravity load ``C = diag(c0 (1 + c_load |tau_g|_s))``.
         """
         theta = self._check_pose(np.asarray(q, dtype=float), "q")
         q_link = self.equilibrium(theta)
@@ -415,6 +415,8 @@ class Twin:
         step = mujoco.mj_step
         flange, accel_slice = self._flange, self._accel_slice
         limit = self._flex.max_deflection_rad
+        smoothing = self._flex.load_smoothing_nm
+        smoothing_sq = smoothing * smoothing
         bad_qacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
         theta = np.empty(n)
         delta = np.empty(n)
@@ -439,12 +441,16 @@ class Twin:
                     tau *= k3
                     tau += k1
                     tau *= delta
-                    # Gear damping c (q_motor' - q_link') with c = c0 (1 + c_load |tau|) and
+                    # Gear damping c (q_motor' - q_link') with c = c0 (1 + c_load |tau|_s) and
                     # the trapezoidal link velocity (v_n + v_{n+1}) / 2: c (q_motor' - v_n / 2)
                     # is applied, c / 2 is MuJoCo dof damping, which acts on v_{n+1}. This
                     # is second-order accurate; fully implicit damping would lower every
                     # mode frequency by about zeta wn dt / 2.
-                    np.abs(tau, out=damp)
+                    # |tau|_s = sqrt(tau² + s²) - s, as FlexParams.damping_nms_per_rad
+                    np.multiply(tau, tau, out=damp)
+                    damp += smoothing_sq
+                    np.sqrt(damp, out=damp)
+                    damp -= smoothing
                     damp *= c_load
                     damp += 1.0
                     damp *= c0
