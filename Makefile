@@ -51,8 +51,9 @@ fmt: $(PY)
 	$(VENV)/bin/ruff check --fix python tests benches examples
 
 bench: build
-	cargo bench -p tvist-core --bench step
+	cargo bench -p tvist-core --bench step --bench map_step
 	$(PY) benches/bench_shape.py
+	$(PY) benches/bench_sim.py
 
 clean:
 	rm -rf $(VENV) target out
