@@ -4,77 +4,19 @@
 //! by the measuring thread inside a measured window are counted (a const thread-local flag,
 //! which itself never allocates), so the harness' other threads cannot disturb the count.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-use std::sync::atomic::{AtomicUsize, Ordering};
+mod alloc_support;
+
+use alloc_support::{allocations_in, the_counter_sees_this_thread_only};
 use tvist_core::{
     ConstantModes, DelayLine, Dynamics, Interpolation, Mode, ModeFilter, ShaperKind, Status,
     TvShaper, TvShaperConfig, SHAPER_NAMES,
 };
 
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-thread_local! {
-    static MEASURING: Cell<bool> = const { Cell::new(false) };
-}
-
-fn count() {
-    if MEASURING.with(Cell::get) {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-    }
-}
-
-// SAFETY: forwards to the system allocator unchanged; only counts calls.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count();
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        count();
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count();
-        // SAFETY: same contract as the caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-/// Runs `f` and returns how many allocations it made.
-fn allocations_in(f: impl FnOnce()) -> usize {
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
-    MEASURING.with(|m| m.set(true));
-    f();
-    MEASURING.with(|m| m.set(false));
-    ALLOCATIONS.load(Ordering::SeqCst) - before
-}
-
 #[test]
 fn the_real_time_path_never_allocates() {
-    the_counter_sees_allocations();
+    the_counter_sees_this_thread_only();
     tv_shaper_step_never_allocates();
     mode_filter_delay_line_and_design_never_allocate();
-}
-
-fn the_counter_sees_allocations() {
-    // Guards against a vacuous pass: an allocation in the window is counted.
-    let n = allocations_in(|| {
-        let v: Vec<f64> = std::hint::black_box(vec![1.0; 16]);
-        drop(v);
-    });
-    assert!(n >= 1);
 }
 
 /// A provider whose modes change every cycle (frequency sweep, damping wobble, the odd

@@ -6,94 +6,12 @@
 
 mod robot_support;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::Arc;
+mod alloc_support;
+
+use alloc_support::{allocations_in, the_counter_sees_this_thread_only};
 use tvist_core::{
     DynamicMap, Dynamics, MapDynamics, Mode, ShaperKind, Status, TvShaper, TvShaperConfig,
 };
-
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-thread_local! {
-    /// Set only on the measuring thread, only inside a measured window. Const-initialized and
-    /// without a destructor, so reading it from the allocator never allocates.
-    static MEASURING: Cell<bool> = const { Cell::new(false) };
-}
-
-/// Counts an allocation if the calling thread is inside a measured window.
-fn count() {
-    if MEASURING.with(Cell::get) {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-    }
-}
-
-// SAFETY: forwards to the system allocator unchanged; only counts calls.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count();
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        count();
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count();
-        // SAFETY: same contract as the caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-/// Runs `f` on this thread and returns how many allocations this thread made meanwhile
-/// (other threads, such as the test harness's, are not counted).
-fn allocations_in(f: impl FnOnce()) -> usize {
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
-    MEASURING.with(|m| m.set(true));
-    f();
-    MEASURING.with(|m| m.set(false));
-    ALLOCATIONS.load(Ordering::SeqCst) - before
-}
-
-/// Guards against a vacuous pass (an allocation inside the window is counted) and against the
-/// harness's threads disturbing the count (another thread allocating throughout the window
-/// is not).
-fn the_counter_sees_this_thread_only() {
-    assert!(allocations_in(|| drop(std::hint::black_box(vec![1u8; 8]))) >= 1);
-    let stop = Arc::new(AtomicBool::new(false));
-    let progress = Arc::new(AtomicUsize::new(0));
-    let worker = {
-        let (stop, progress) = (Arc::clone(&stop), Arc::clone(&progress));
-        std::thread::spawn(move || {
-            while !stop.load(Ordering::SeqCst) {
-                drop(std::hint::black_box(vec![1u8; 32]));
-                progress.fetch_add(1, Ordering::SeqCst);
-            }
-        })
-    };
-    let n = allocations_in(|| {
-        // Atomic loads only: this thread does not allocate while the worker does, 1000 times.
-        let start = progress.load(Ordering::SeqCst);
-        while progress.load(Ordering::SeqCst) < start + 1000 {
-            std::hint::spin_loop();
-        }
-    });
-    stop.store(true, Ordering::SeqCst);
-    worker.join().expect("worker thread");
-    assert_eq!(n, 0, "another thread's allocations were counted");
-}
 
 #[test]
 fn robot_map_and_map_shaper_never_allocate() {

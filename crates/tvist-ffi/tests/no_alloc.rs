@@ -3,50 +3,16 @@
 //! Its own test binary: the counting global allocator sees only this file's allocations, and
 //! a single `#[test]` keeps other test threads out of the measured windows.
 
-use std::alloc::{GlobalAlloc, Layout, System};
+#[path = "../../tvist-core/tests/alloc_support/mod.rs"]
+mod alloc_support;
+
+use alloc_support::{allocations_in, the_counter_sees_this_thread_only};
 use std::ffi::CString;
 use std::ptr;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use tvist::{
     tvist_shaper_delay_s, tvist_shaper_free, tvist_shaper_new_constant, tvist_shaper_new_ur_map,
     tvist_shaper_reset, tvist_shaper_step, TvistShaper, TVIST_OK,
 };
-
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: forwards to the system allocator unchanged; only counts calls.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-fn allocations_in(f: impl FnOnce()) -> usize {
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
-    f();
-    ALLOCATIONS.load(Ordering::SeqCst) - before
-}
 
 /// Runs 500 cycles of a moving 6-joint input, a reset and delay queries on `shaper`.
 fn cycle(shaper: *mut TvistShaper) -> usize {
@@ -76,8 +42,7 @@ fn cycle(shaper: *mut TvistShaper) -> usize {
 
 #[test]
 fn per_cycle_calls_never_allocate() {
-    // Guard against a vacuous pass: an allocation inside the window is counted.
-    assert!(allocations_in(|| drop(std::hint::black_box(vec![1u8; 8]))) >= 1);
+    the_counter_sees_this_thread_only();
 
     let (zv, ur5e) = (
         CString::new("zv").expect("name"),
