@@ -421,3 +421,13 @@ def test_compensator_binding_streams_like_the_block_form():
     assert c1.step(np.array([1.0]))[0] == pytest.approx(1.0, abs=1e-10)
     assert c1.step(np.array([np.nan]))[0] == pytest.approx(1.0, abs=1e-10)
     assert c1.last_status & tvist.Status.INPUT_HELD
+
+
+def test_compensator_block_filter_reads_any_memory_layout():
+    # A Fortran-ordered (n, 3) block must be read row by row, like the C-ordered one; a
+    # transposed read would mix samples of different joints.
+    rng = np.random.default_rng(3)
+    q = np.cumsum(rng.normal(size=(200, 3)), axis=0)
+    c_order = _core.Compensator([(WN, ZETA)], 0.65, DT, 3).filter(np.ascontiguousarray(q))
+    f_order = _core.Compensator([(WN, ZETA)], 0.65, DT, 3).filter(np.asfortranarray(q))
+    np.testing.assert_array_equal(f_order, c_order)

@@ -9,6 +9,7 @@ use pyo3::prelude::*;
 use tvist_core as core;
 use tvist_core::{Dynamics, Mode, Status};
 
+mod convert;
 mod robot;
 
 mod ztdis;
@@ -427,9 +428,7 @@ impl PyTvShaper {
         self.counts = counts;
         self.last_status = last;
         self.take_callable_error()?;
-        let arr = numpy::ndarray::Array2::from_shape_vec((n, d), output)
-            .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        Ok(arr.into_pyarray(py))
+        convert::array2(py, n, d, output)
     }
 
     /// Puts the filter at rest at q0, or (None) forgets history so the next sample starts it.
@@ -438,16 +437,7 @@ impl PyTvShaper {
         match q0 {
             Some(q0) => {
                 let q0 = q0.as_slice()?;
-                if q0.len() != self.inner.n_dof() {
-                    return Err(PyValueError::new_err(format!(
-                        "q0 has {} values, expected n_dof = {}",
-                        q0.len(),
-                        self.inner.n_dof()
-                    )));
-                }
-                if q0.iter().any(|v| !v.is_finite()) {
-                    return Err(PyValueError::new_err("q0 must be finite"));
-                }
+                convert::check_start_pose(q0, self.inner.n_dof())?;
                 self.inner.reset(q0);
             }
             None => self.inner.clear(),

@@ -1,12 +1,13 @@
 //! Bindings of `tvist_core::ztdis`: the zero-time-delay time scales and the modified-ZTDIS
 //! compensator. Thin wrappers only; the equations live in the core.
 
-use numpy::{ndarray::Array2, PyUntypedArrayMethods};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use tvist_core::ztdis::{self, Compensator, Discretization};
 use tvist_core::{Error, Mode, Status};
+
+use crate::convert;
 
 fn to_value_error(e: Error) -> PyErr {
     PyValueError::new_err(e.to_string())
@@ -85,24 +86,11 @@ impl PyCompensator {
         py: Python<'py>,
         q: PyReadonlyArray2<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let shape = q.shape();
-        let (n, d) = (shape[0], shape[1]);
-        if d != self.inner.n_channels() {
-            return Err(PyValueError::new_err(format!(
-                "Q has shape ({n}, {d}); expected (n_samples, {})",
-                self.inner.n_channels()
-            )));
-        }
-        let input: Vec<f64> = match q.as_slice() {
-            Ok(s) => s.to_vec(),
-            Err(_) => q.as_array().iter().copied().collect(),
-        };
+        let (n, input) = convert::rows(&q, self.inner.n_channels(), "Q")?;
         let mut output = vec![0.0; input.len()];
         let inner = &mut self.inner;
         self.last_status = py.detach(|| inner.filter_into(&input, &mut output));
-        let arr = Array2::from_shape_vec((n, d), output)
-            .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        Ok(arr.into_pyarray(py))
+        convert::array2(py, n, self.inner.n_channels(), output)
     }
 
     /// Puts the compensator at rest at q0, or (None) lets the next sample start it at rest.
@@ -111,16 +99,7 @@ impl PyCompensator {
         match q0 {
             Some(q0) => {
                 let q0 = q0.as_slice()?;
-                if q0.len() != self.inner.n_channels() {
-                    return Err(PyValueError::new_err(format!(
-                        "q0 has {} values, expected n_dof = {}",
-                        q0.len(),
-                        self.inner.n_channels()
-                    )));
-                }
-                if q0.iter().any(|v| !v.is_finite()) {
-                    return Err(PyValueError::new_err("q0 must be finite"));
-                }
+                convert::check_start_pose(q0, self.inner.n_channels())?;
                 self.inner.reset(q0);
             }
             None => self.inner.clear(),

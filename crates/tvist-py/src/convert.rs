@@ -1,0 +1,53 @@
+//! numpy <-> Rust conversions shared by the bindings, with the error messages users see.
+
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+/// The rows of a `(n, cols)` array, row-major whatever its memory layout (`as_slice` also
+/// accepts Fortran order, which would transpose the data). Returns `(n, data)`.
+pub fn rows(
+    arr: &PyReadonlyArray2<'_, f64>,
+    cols: usize,
+    what: &str,
+) -> PyResult<(usize, Vec<f64>)> {
+    let shape = arr.shape();
+    if shape[1] != cols {
+        return Err(PyValueError::new_err(format!(
+            "{what} has shape ({}, {}), expected (n_samples, {cols})",
+            shape[0], shape[1]
+        )));
+    }
+    let data: Vec<f64> = match arr.as_slice() {
+        Ok(s) if arr.is_c_contiguous() => s.to_vec(),
+        _ => arr.as_array().iter().copied().collect(),
+    };
+    Ok((shape[0], data))
+}
+
+/// Checks that a start pose has `n` finite values.
+pub fn check_start_pose(q0: &[f64], n: usize) -> PyResult<()> {
+    if q0.len() != n {
+        return Err(PyValueError::new_err(format!(
+            "q0 has {} values, expected n_dof = {n}",
+            q0.len()
+        )));
+    }
+    if q0.iter().any(|v| !v.is_finite()) {
+        return Err(PyValueError::new_err("q0 must be finite"));
+    }
+    Ok(())
+}
+
+/// A row-major `(n, cols)` buffer as a numpy array.
+pub fn array2<'py>(
+    py: Python<'py>,
+    n: usize,
+    cols: usize,
+    data: Vec<f64>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let arr = Array2::from_shape_vec((n, cols), data)
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok(arr.into_pyarray(py))
+}
