@@ -17,6 +17,7 @@ pub mod dynamics;
 pub mod dynmap;
 pub mod ei;
 pub mod error;
+mod held_input;
 pub mod map_dynamics;
 pub mod multimode;
 pub mod prv;
@@ -29,7 +30,7 @@ pub mod ztdis;
 
 pub use delay_line::{DelayLine, Interpolation};
 pub use dynamics::{ConstantModes, Dynamics};
-pub use dynmap::{DynamicMap, MapCoefficients, ModeMap};
+pub use dynmap::{DynamicMap, InertiaRange, MapCoefficients, ModeMap};
 pub use error::{Error, Status};
 pub use map_dynamics::MapDynamics;
 pub use multimode::{TvShaper, TvShaperConfig};

@@ -7,6 +7,7 @@
 use crate::delay_line::Interpolation;
 use crate::dynamics::Dynamics;
 use crate::error::{Error, Status};
+use crate::held_input::HeldInput;
 use crate::shaper::{Mode, ShaperKind};
 use crate::tvist::ModeFilter;
 
@@ -50,10 +51,9 @@ pub struct TvShaper<D: Dynamics> {
     /// Scratch for the provider's modes, one per filter.
     modes: Vec<Mode>,
     /// Last valid input sample (held when a non-finite sample arrives).
-    input: Vec<f64>,
+    input: HeldInput,
     /// `q**_{n−1}`: the previous final output.
     previous_output: Vec<f64>,
-    started: bool,
     n_dof: usize,
     dt_s: f64,
 }
@@ -124,9 +124,8 @@ impl<D: Dynamics> TvShaper<D> {
             dynamics,
             filters,
             modes: vec![Mode::new(f64::NAN, f64::NAN); n_modes],
-            input: vec![0.0; n_dof],
+            input: HeldInput::new(n_dof),
             previous_output: vec![0.0; n_dof],
-            started: false,
             n_dof,
             dt_s,
         })
@@ -135,20 +134,16 @@ impl<D: Dynamics> TvShaper<D> {
     /// Puts the shaper at rest at `q0` (history and previous output equal `q0`).
     /// Non-finite entries of `q0` are taken as 0. Modes are re-read on the next step.
     pub fn reset(&mut self, q0: &[f64]) {
-        for (dst, &src) in self.input.iter_mut().zip(q0) {
-            *dst = if src.is_finite() { src } else { 0.0 };
-        }
-        self.previous_output.copy_from_slice(&self.input);
+        self.input.set(q0);
+        self.start_at_input();
         for f in &mut self.filters {
-            f.reset(&self.input);
             f.forget_mode();
         }
-        self.started = true;
     }
 
     /// Forgets all history: the next `step` starts at rest on its input.
     pub fn clear(&mut self) {
-        self.started = false;
+        self.input.clear();
         for f in &mut self.filters {
             f.forget_mode();
         }
@@ -163,14 +158,8 @@ impl<D: Dynamics> TvShaper<D> {
         if input.len() != self.n_dof || output.len() != self.n_dof {
             return Status::BAD_LENGTH;
         }
-        let mut status = Status::OK;
-        if input.iter().all(|v| v.is_finite()) {
-            self.input.copy_from_slice(input);
-        } else {
-            status |= Status::INPUT_HELD;
-        }
-        if !self.started {
-            // At rest on the first sample (zeros if that sample was non-finite).
+        let (mut status, first) = self.input.accept(input);
+        if first {
             self.start_at_input();
         }
         status |= self.dynamics.modes(&self.previous_output, &mut self.modes);
@@ -178,7 +167,7 @@ impl<D: Dynamics> TvShaper<D> {
             let (done, rest) = self.filters.split_at_mut(i);
             let src: &[f64] = match done.last() {
                 Some(prev) => prev.output(),
-                None => &self.input,
+                None => self.input.value(),
             };
             if let (Some(filter), Some(&mode)) = (rest.first_mut(), self.modes.get(i)) {
                 status |= filter.step(src, mode);
@@ -186,19 +175,19 @@ impl<D: Dynamics> TvShaper<D> {
         }
         let last: &[f64] = match self.filters.last() {
             Some(f) => f.output(),
-            None => &self.input,
+            None => self.input.value(),
         };
         output.copy_from_slice(last);
         self.previous_output.copy_from_slice(last);
         status
     }
 
+    /// At rest on the held input: history and previous output equal it.
     fn start_at_input(&mut self) {
-        self.previous_output.copy_from_slice(&self.input);
+        self.previous_output.copy_from_slice(self.input.value());
         for f in &mut self.filters {
-            f.reset(&self.input);
+            f.reset(self.input.value());
         }
-        self.started = true;
     }
 
     /// Shapes a block of samples in `(n_samples, n_dof)` row-major layout, continuing the

@@ -433,40 +433,41 @@ impl Robot {
     /// bounds the distance of body `k`'s centre of mass from the origin of joint `i` by the
     /// triangle inequality along the chain (`Σ √(a² + d²)` plus `|com|`).
     pub fn joint_inertia_upper_bound(&self) -> Vec<f64> {
-        let n = self.joints.len();
-        (0..n)
+        (0..self.joints.len())
             .map(|i| {
-                let mut reach = 0.0;
-                let mut total = 0.0;
-                for k in i..n {
-                    let j = &self.joints[k];
-                    reach += j.a_m.hypot(j.d_m);
-                    let b = &self.bodies[k];
-                    let rho = reach + dot3(&b.com_m, &b.com_m).sqrt();
-                    let lambda_max = sym_eigenvalues(&sym_from_six(&b.inertia_kg_m2))[2];
-                    total += lambda_max.max(0.0) + b.mass_kg * rho * rho;
-                }
-                total
+                self.bodies_beyond(i)
+                    .map(|(b, rho)| {
+                        let lambda_max = sym_eigenvalues(&sym_from_six(&b.inertia_kg_m2))[2];
+                        lambda_max.max(0.0) + b.mass_kg * rho * rho
+                    })
+                    .sum()
             })
             .collect()
     }
 
     /// An upper bound of `|τ_g,i|` over all configurations, N m (`g Σ_{k≥i} m_k ρ_k`).
     pub fn gravity_torque_upper_bound(&self) -> Vec<f64> {
-        let n = self.joints.len();
-        (0..n)
+        (0..self.joints.len())
             .map(|i| {
-                let mut reach = 0.0;
-                let mut total = 0.0;
-                for k in i..n {
-                    let j = &self.joints[k];
-                    reach += j.a_m.hypot(j.d_m);
-                    let b = &self.bodies[k];
-                    total += b.mass_kg * (reach + dot3(&b.com_m, &b.com_m).sqrt());
-                }
-                GRAVITY_M_S2 * total
+                let moment: f64 = self.bodies_beyond(i).map(|(b, rho)| b.mass_kg * rho).sum();
+                GRAVITY_M_S2 * moment
             })
             .collect()
+    }
+
+    /// Bodies `k >= i` with `ρ_k`, a bound on the distance of their centre of mass from the
+    /// origin of joint `i` over all configurations (triangle inequality along the chain:
+    /// `Σ √(a² + d²)` of the joints up to `k`, plus `|com_k|`).
+    fn bodies_beyond(&self, i: usize) -> impl Iterator<Item = (&RigidBody, f64)> {
+        let mut reach = 0.0;
+        self.joints
+            .iter()
+            .zip(&self.bodies)
+            .skip(i)
+            .map(move |(j, b)| {
+                reach += j.a_m.hypot(j.d_m);
+                (b, reach + dot3(&b.com_m, &b.com_m).sqrt())
+            })
     }
 }
 

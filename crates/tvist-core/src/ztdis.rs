@@ -16,6 +16,7 @@
 //! compensator runs per control cycle: [`Compensator::step`] never allocates, locks or panics.
 
 use crate::error::{Error, Status};
+use crate::held_input::HeldInput;
 use crate::shaper::Mode;
 use core::f64::consts::PI;
 
@@ -194,12 +195,11 @@ pub struct Compensator {
     /// Section states, channel-major: `state[ch * n_sections + sec]`.
     state: Vec<[f64; 2]>,
     /// Last valid input (held when a non-finite sample arrives).
-    input: Vec<f64>,
+    input: HeldInput,
     n_channels: usize,
     alpha: f64,
     dt_s: f64,
     method: Discretization,
-    started: bool,
 }
 
 impl Compensator {
@@ -262,34 +262,31 @@ impl Compensator {
         Ok(Compensator {
             sections,
             state: vec![[0.0; 2]; n_sections * n_channels],
-            input: vec![0.0; n_channels],
+            input: HeldInput::new(n_channels),
             n_channels,
             alpha,
             dt_s,
             method,
-            started: false,
         })
     }
 
     /// Puts the compensator at rest at `x0` (it has seen `x0` forever; the output is `x0`).
     /// Non-finite entries are taken as 0; missing ones leave the channel as it was.
     pub fn reset(&mut self, x0: &[f64]) {
-        for (dst, &src) in self.input.iter_mut().zip(x0) {
-            *dst = if src.is_finite() { src } else { 0.0 };
-        }
+        self.input.set(x0);
         self.settle_on_input();
-        self.started = true;
     }
 
     /// Forgets all history: the next `step` starts at rest on its input.
     pub fn clear(&mut self) {
-        self.started = false;
+        self.input.clear();
     }
 
     fn settle_on_input(&mut self) {
         let n_sections = self.sections.len();
         for (&x0, states) in self
             .input
+            .value()
             .iter()
             .zip(self.state.chunks_exact_mut(n_sections))
         {
@@ -310,19 +307,14 @@ impl Compensator {
         if input.len() != self.n_channels || output.len() != self.n_channels {
             return Status::BAD_LENGTH;
         }
-        let mut status = Status::OK;
-        if input.iter().all(|v| v.is_finite()) {
-            self.input.copy_from_slice(input);
-        } else {
-            status |= Status::INPUT_HELD;
-        }
-        if !self.started {
+        let (status, first) = self.input.accept(input);
+        if first {
             self.settle_on_input();
-            self.started = true;
         }
         let n_sections = self.sections.len();
         for ((&x0, y), states) in self
             .input
+            .value()
             .iter()
             .zip(output.iter_mut())
             .zip(self.state.chunks_exact_mut(n_sections))
