@@ -431,3 +431,13 @@ def test_compensator_block_filter_reads_any_memory_layout():
     c_order = _core.Compensator([(WN, ZETA)], 0.65, DT, 3).filter(np.ascontiguousarray(q))
     f_order = _core.Compensator([(WN, ZETA)], 0.65, DT, 3).filter(np.asfortranarray(q))
     np.testing.assert_array_equal(f_order, c_order)
+
+
+def test_joints_that_do_not_move_are_at_rest_despite_round_off():
+    # Joint 1 stands still at a value whose one-sided difference is round-off (~1e-13 rad/s):
+    # it must not count as "moving at the start".
+    t = np.linspace(0.0, 1.0, 501)
+    s = 10 * t**3 - 15 * t**4 + 6 * t**5
+    q = np.column_stack([0.3 * s, np.full_like(t, -1.570796326795)])
+    result = zero_delay(q, 0.002, [(2 * np.pi * 2.55, 0.04)], method="modified")
+    assert result.Q.shape == q.shape

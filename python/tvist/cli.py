@@ -12,6 +12,7 @@ from tvist.ident.cli import (
     add_identify_command,
     add_sensitivity_command,
 )
+from tvist.shape_command import add_shape_command
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
@@ -86,6 +87,7 @@ COMMANDS += [
     ("identify", add_identify_command),
     ("fit-map", add_fit_map_command),
     ("sensitivity", add_sensitivity_command),
+    ("shape", add_shape_command),
 ]
 
 

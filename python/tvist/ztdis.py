@@ -151,11 +151,14 @@ def _check_move(q: np.ndarray, dt_s: float) -> None:
         k, j = bad[0]
         raise ValueError(f"Q contains NaN or inf (first at sample {k}, joint {j})")
     v_peak = np.max(np.abs(np.diff(q, axis=0)), axis=0) / dt_s
+    # A joint that does not move has v_peak = 0; its end-velocity estimate is round-off, so the
+    # scale has a floor of 1e-6 of the fastest joint's peak.
+    v_scale = np.maximum(v_peak, 1e-6 * np.max(v_peak))
     # Second-order one-sided differences: exact for a quadratic start or end.
     v_start = (-3.0 * q[0] + 4.0 * q[1] - q[2]) / (2.0 * dt_s)
     v_end = (3.0 * q[-1] - 4.0 * q[-2] + q[-3]) / (2.0 * dt_s)
     for name, v in (("start", v_start), ("end", v_end)):
-        moving = np.abs(v) > REST_TOLERANCE * v_peak
+        moving = np.abs(v) > REST_TOLERANCE * v_scale
         if moving.any():
             j = int(np.argmax(moving))
             raise ValueError(
