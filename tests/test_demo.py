@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 import tvist
-from tvist.cli import main
+from tvist.cli import build_parser, main
 from tvist.demo import default_methods, fd_tvist_map, run_demo, run_experiment
+from tvist.demo.identified import QUICK_PLAN, _prepare_cache, identify_map
 from tvist.demo.measure import stop_time_s, tool_acceleration
 from tvist.demo.motions import DT_S, MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
 from tvist.sim import GRAVITY_M_S2, Twin
@@ -22,6 +23,8 @@ ROW_KEYS = ("delay_s", "residual_vibration_m_s2", "reduction_percent", "peak_jer
 
 @pytest.fixture(scope="module")
 def quick_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict]:
+    # The default pipeline: a (quick, 12-pose) campaign on the twin, the map fit, then the
+    # experiment with the identified map's row.
     out = tmp_path_factory.mktemp("demo")
     run_demo(out, quick=True, verbose=False)
     return out, json.loads((out / "results.json").read_text())
@@ -42,6 +45,7 @@ def test_quick_demo_writes_results_report_and_figures(quick_run):
         "unshaped",
         "fd-tvist-truth",
         "fd-tvist-paper-map",
+        "fd-tvist-identified-map",
         "zero-delay-modified",
         "zero-delay-ztdis",
     }
@@ -132,7 +136,8 @@ def test_an_identified_map_becomes_a_row_and_a_failed_one_is_reported(tmp_path, 
     # whatever map the fit returns drives an extra FD-TVIST row next to the paper map's.
     monkeypatch.setattr(campaign, "run_campaign", lambda poses, path, **kw: [{"key": "x"}])
     monkeypatch.setattr(map_fit, "fit_map", lambda records, **kw: tvist.DynamicMap.paper_ur5e())
-    result = run_demo(tmp_path / "ok", quick=True, identify=True, verbose=False)
+    rows = default_methods()[:3]  # up to the paper map: enough to check where the row goes
+    result = run_demo(tmp_path / "ok", quick=True, methods=rows, identify=True, verbose=False)
     keys = [r.method.key for r in result.motions[0].runs]
     assert keys.index("fd-tvist-identified-map") == keys.index("fd-tvist-paper-map") + 1
     doc = json.loads((tmp_path / "ok" / "results.json").read_text())
@@ -143,7 +148,54 @@ def test_an_identified_map_becomes_a_row_and_a_failed_one_is_reported(tmp_path, 
         raise ValueError("too few usable poses")
 
     monkeypatch.setattr(map_fit, "fit_map", broken)
-    result = run_demo(tmp_path / "bad", quick=True, identify=True, verbose=False)
+    result = run_demo(tmp_path / "bad", quick=True, methods=rows[:1], identify=True, verbose=False)
     assert "fd-tvist-identified-map" not in [r.method.key for r in result.motions[0].runs]
     assert "too few usable poses" in result.identification["error"]
     assert "too few usable poses" in (tmp_path / "bad" / "report.md").read_text()
+
+
+def test_the_default_demo_identifies_a_map_and_uses_it(quick_run):
+    out, results = quick_run
+    info = results["identified_map"]
+    assert "error" not in info, info.get("error")
+    assert info["poses"] == QUICK_PLAN.n_poses and info["poses_run"] == info["poses"]
+    for name in ("campaign.jsonl", "campaign_fingerprint.json", "identified_map.json"):
+        assert (out / name).stat().st_size > 0, name
+    for name in info["figures"]:
+        assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
+    report = (out / "report.md").read_text()
+    assert "## Identified map" in report and "(identified_map_fit.png)" in report
+    # The fitted map is limited to the inertias of the campaign, read back from its file.
+    dynmap = tvist.DynamicMap.load(out / "identified_map.json")
+    records = [json.loads(line) for line in (out / "campaign.jsonl").read_text().splitlines()]
+    j0 = [r["inertia_kg_m2"][0] for r in records if "inertia_kg_m2" in r]
+    (lo, hi), *_ = dynmap.inertia_ranges[0].values()
+    assert min(j0) <= lo < hi <= max(j0)
+    # The real-time path accepts it (the run would have raised otherwise) and it works: the
+    # acceptance floor of the experiment, 90 % (this small campaign gives ~98 % on Q1 -> Q2).
+    row = results["motions"]["Q1->Q2"]["methods"]["fd-tvist-identified-map"]
+    assert row["reduction_percent"] >= 90.0
+    assert row["details"]["map_use"]["inertia_clamped_percent"][0] >= 0.0
+    # Identified against true modes at the campaign poses: the local fits find the base
+    # frequency to a few percent (SPEC: ~1 % per fit; 5 % allows for the noisy accelerometer).
+    assert info["versus_true_modes"]["base"]["identified"]["f_n_rms_percent"] < 5.0
+
+
+def test_a_second_run_reuses_the_campaign_and_a_changed_one_does_not(quick_run, tmp_path):
+    out, results = quick_run
+    again = identify_map(out, plan=QUICK_PLAN)
+    assert again.summary["poses_reused"] == QUICK_PLAN.n_poses
+    assert again.summary["poses_run"] == 0
+    assert again.dynmap.mode_maps == tvist.DynamicMap.load(out / "identified_map.json").mode_maps
+    # Records made with other settings are discarded, not mixed in.
+    (tmp_path / "campaign.jsonl").write_text(json.dumps({"key": "m5kg-V0-R0"}) + "\n")
+    (tmp_path / "campaign_fingerprint.json").write_text(json.dumps({"plan": "other"}))
+    assert _prepare_cache(tmp_path, {"plan": "this"}) == 0
+    assert not (tmp_path / "campaign.jsonl").exists()
+    assert json.loads((tmp_path / "campaign_fingerprint.json").read_text()) == {"plan": "this"}
+
+
+def test_cli_identifies_by_default_and_can_skip_it():
+    parser = build_parser()
+    assert parser.parse_args(["demo"]).identify is True
+    assert parser.parse_args(["demo", "--no-identify"]).identify is False

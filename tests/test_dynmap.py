@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import tvist
-from tvist.dynmap import MODE_FIELDS, general_mode
+from tvist.dynmap import MODE_FIELDS, RANGE_FIELDS, general_mode
 
 # Table 1 / Table 2 of the paper (UR5e), typed in independently of the core.
 BASE = {"k_0": 10000.0, "k_j": 1060.0, "k_p": 2.54, "c_0": 1.53, "c_2": 0.39, "c_tau": 3.81}
@@ -224,4 +224,189 @@ def test_non_finite_coefficients_are_rejected(tmp_path):
 
 
 def test_mode_fields_are_the_cores():
-    assert set(MODE_FIELDS) == set(tvist.DynamicMap.paper_ur5e().mode_maps[0])
+    fields = set(tvist.DynamicMap.paper_ur5e().mode_maps[0])
+    assert set(MODE_FIELDS) | set(RANGE_FIELDS) == fields
+    assert not set(MODE_FIELDS) & set(RANGE_FIELDS)
+
+
+# ---- inertia ranges: the map never extrapolates beyond the inertias it was identified on ----
+
+#: The paper's base mode limited to J_0 in [1, 9] (damping) and J_1 in [2, 8] (frequency).
+BASE_RANGES = {
+    "damping_inertia_range_kg_m2": [1.0, 9.0],
+    "frequency_inertia_range_kg_m2": [2.0, 8.0],
+}
+
+
+def _ranged_paper() -> tvist.DynamicMap:
+    base, shoulder = tvist.DynamicMap.paper_ur5e().mode_maps
+    return tvist.DynamicMap([{**base, **BASE_RANGES}, shoulder])
+
+
+def test_the_paper_map_has_no_range():
+    paper = tvist.DynamicMap.paper_ur5e()
+    assert paper.inertia_ranges == [{}, {}]
+    assert all(m[key] is None for m in paper.mode_maps for key in RANGE_FIELDS)
+
+
+def test_ranges_clamp_each_inertia_exactly_to_its_bound():
+    ranged = _ranged_paper()
+    assert ranged.inertia_ranges == [{0: (1.0, 9.0), 1: (2.0, 8.0)}, {}]
+    rng = np.random.default_rng(7)
+    for j0, j1 in rng.uniform(0.05, 15.0, size=(400, 2)):
+        got = ranged.modes_from_inertia([j0, j1])
+        # Base mode: the independent equations at the clamped inertias; shoulder (no range):
+        # at the raw J_1. Same formulas, different operation order: 1e-12 relative.
+        base_ref = _paper_modes_reference(np.clip(j0, 1.0, 9.0), np.clip(j1, 2.0, 8.0))[0]
+        shoulder_ref = _paper_modes_reference(j0, j1)[1]
+        np.testing.assert_allclose(got, [base_ref, shoulder_ref], rtol=1e-12)
+    paper = tvist.DynamicMap.paper_ur5e()
+    # Exact (bit-identical) at and beyond the bounds, and inside them.
+    for j, at in [
+        ([0.3, 0.5], [1.0, 2.0]),
+        ([1.0, 2.0], [1.0, 2.0]),
+        ([40.0, 30.0], [9.0, 8.0]),
+        ([9.0, 8.0], [9.0, 8.0]),
+        ([4.0, 5.0], [4.0, 5.0]),
+    ]:
+        assert ranged.modes_from_inertia(j)[0] == paper.modes_from_inertia(at)[0]
+    many = ranged.modes_from_inertia_many(np.array([[0.3, 0.5], [40.0, 30.0]]))
+    np.testing.assert_array_equal(
+        many[:, 0], [paper.modes_from_inertia(a)[0] for a in ([1.0, 2.0], [9.0, 8.0])]
+    )
+
+
+def test_a_range_does_not_turn_broken_inertias_into_modes():
+    ranged = _ranged_paper()
+    for j in ([0.0, 3.0], [-2.0, 3.0], [float("nan"), 3.0], [float("inf"), 3.0]):
+        wn, zeta = ranged.modes_from_inertia(j)[0]
+        assert np.isnan(wn) and np.isnan(zeta), j
+
+
+def test_general_mode_with_a_range():
+    mode = general_mode(1, inertia_range_kg_m2=(0.5, 4.0), **SHOULDER)
+    assert mode[RANGE_FIELDS[0]] == mode[RANGE_FIELDS[1]] == [0.5, 4.0]
+    dynmap = tvist.DynamicMap([mode])
+    assert dynmap.modes_from_inertia([9.0, 10.0]) == dynmap.modes_from_inertia([9.0, 4.0])
+
+
+def test_ranges_round_trip_and_old_files_still_load(tmp_path):
+    ranged = _ranged_paper()
+    ranged.save(tmp_path / "ranged.json")
+    doc = json.loads((tmp_path / "ranged.json").read_text())
+    assert doc["schema_version"] == 1
+    assert doc["modes"][0]["damping_inertia_range_kg_m2"] == [1.0, 9.0]
+    back = tvist.DynamicMap.load(tmp_path / "ranged.json")
+    assert back.mode_maps == ranged.mode_maps
+    assert back.modes_from_inertia([0.2, 50.0]) == ranged.modes_from_inertia([0.2, 50.0])
+    # A file without the range fields (written before they existed) loads, unbounded.
+    old = tvist.DynamicMap.paper_ur5e().to_dict()
+    for mode in old["modes"]:
+        for key in RANGE_FIELDS:
+            del mode[key]
+    (tmp_path / "old.json").write_text(json.dumps(old))
+    loaded = tvist.DynamicMap.load(tmp_path / "old.json")
+    assert loaded.inertia_ranges == [{}, {}]
+    assert loaded.mode_maps == tvist.DynamicMap.paper_ur5e().mode_maps
+
+
+def _with_range(mode: int, key: str, value):
+    def change(doc):
+        doc["modes"][mode][key] = value
+
+    return _with(change)
+
+
+@pytest.mark.parametrize(
+    ("doc", "message"),
+    [
+        (
+            _with_range(0, "damping_inertia_range_kg_m2", [0.0, 2.0]),
+            r"modes\[0\]\.damping_inertia_range_kg_m2: min must be > 0",
+        ),
+        (
+            _with_range(0, "damping_inertia_range_kg_m2", [-1.0, 2.0]),
+            r"modes\[0\]\.damping_inertia_range_kg_m2: min must be > 0",
+        ),
+        (
+            _with_range(0, "frequency_inertia_range_kg_m2", [3.0, 3.0]),
+            r"modes\[0\]\.frequency_inertia_range_kg_m2: min must be < max",
+        ),
+        (
+            _with_range(0, "frequency_inertia_range_kg_m2", [3.0, 1.0]),
+            "min must be < max",
+        ),
+        (
+            _with_range(0, "frequency_inertia_range_kg_m2", [1.0]),
+            r"frequency_inertia_range_kg_m2: must be \[min, max\]",
+        ),
+        (
+            _with_range(0, "frequency_inertia_range_kg_m2", "1-2"),
+            r"frequency_inertia_range_kg_m2: must be \[min, max\]",
+        ),
+        (
+            _with_range(0, "frequency_inertia_range_kg_m2", [1.0, "big"]),
+            r"frequency_inertia_range_kg_m2\[1\] \(max\): must be a number",
+        ),
+        (
+            _with_range(1, "frequency_inertia_range_kg_m2", [1.0, 2.0]),
+            r"modes\[1\]: frequency and damping both read joint 1",
+        ),
+    ],
+)
+def test_load_rejects_bad_ranges(tmp_path, doc, message):
+    with pytest.raises(ValueError, match=message):
+        tvist.DynamicMap.load(_write(tmp_path, doc))
+
+
+def test_non_finite_range_is_rejected(tmp_path):
+    doc = _with_range(0, "damping_inertia_range_kg_m2", [1.0, 2.0])
+    text = json.dumps(doc).replace("[1.0, 2.0]", "[1.0, Infinity]")
+    with pytest.raises(
+        ValueError, match=r"damping_inertia_range_kg_m2\[1\] \(max\): must be finite"
+    ):
+        tvist.DynamicMap.load(_write(tmp_path, text))
+    # The core checks too (for maps built without this module).
+    mode = dict(tvist.DynamicMap.paper_ur5e().mode_maps[0], damping_inertia_range_kg_m2=[0.0, 1.0])
+    with pytest.raises(ValueError, match="min must be > 0"):
+        tvist._core.DynamicMap([mode])
+
+
+# ---- MapDynamics validates the map as it is evaluated: clamped into its ranges ----
+
+ROBOT_5KG = tvist.robots.ur5e(payload_kg=5.0, payload_com_m=(0.0, 0.0, 0.05))
+
+
+def _overdamped_at_small_j0(inertia_range_kg_m2=None) -> tvist.DynamicMap:
+    """A base mode (J = J_0) overdamped below J_0 ~ 0.35 kg m²: the (1 + k_p/J) factor grows
+    at small J (ζ = 2.1 at 0.2, 0.75 at 0.6). The UR5e with 5 kg reaches J_0 ~ 0.18 kg m²
+    with the arm pointing up."""
+    coeffs = {"k_0": 1e4, "k_j": 763.0, "k_p": 1.73, "c_0": 60.0, "c_2": 0.038, "c_tau": 0.0}
+    return tvist.DynamicMap([general_mode(0, inertia_range_kg_m2=inertia_range_kg_m2, **coeffs)])
+
+
+def test_map_dynamics_accepts_a_map_overdamped_only_outside_its_range():
+    unbounded = _overdamped_at_small_j0()
+    assert unbounded.modes_from_inertia([0.2])[0][1] >= 1.0
+    with pytest.raises(ValueError, match="no underdamped mode 0"):
+        tvist.MapDynamics(ROBOT_5KG, unbounded)
+
+    ranged = _overdamped_at_small_j0((0.6, 10.0))
+    provider = tvist.MapDynamics(ROBOT_5KG, ranged)
+    rng = np.random.default_rng(11)
+    q = rng.uniform(-np.pi, np.pi, size=(3000, 6))
+    j0 = ROBOT_5KG.joint_inertia_many(q)[:, 0]
+    assert np.sum(j0 < 0.6) > 50  # the clamp is exercised (~8 % of random poses)
+    for qk, jk in zip(q, j0, strict=True):
+        ((wn, zeta),) = provider.modes(qk)
+        assert np.isfinite(wn) and wn > 0 and 0.0 <= zeta < 1.0, (qk, jk, wn, zeta)
+        # Below the range, the mode is the map's value at the bound, exactly.
+        if jk < 0.6:
+            assert (wn, zeta) == unbounded.modes_from_inertia([0.6])[0]
+
+
+def test_map_dynamics_rejects_a_map_invalid_inside_its_own_range():
+    with pytest.raises(
+        ValueError, match=r"no underdamped mode 0 .*inertia ranges J_f \[0\.2, 10\] kg m²"
+    ):
+        tvist.MapDynamics(ROBOT_5KG, _overdamped_at_small_j0((0.2, 10.0)))

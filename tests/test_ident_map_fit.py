@@ -191,3 +191,54 @@ def test_low_confidence_identifications_are_skipped():
     fitted = fit_map(poses)
     assert fitted.metadata["fit_statistics"]["modes"][0]["n_poses"] == 158
     assert rel_err(fitted.mode_maps[1], PAPER.mode_maps[1], "k_j") < 1e-6
+
+
+def _used_range(poses: list[dict], joint: int, inertia_joint: int) -> list[float]:
+    """[min, max] of J_inertia_joint over the poses whose mode of ``joint`` the fit uses."""
+    j = [
+        p["inertia_kg_m2"][inertia_joint]
+        for p in poses
+        for m in p["modes"]
+        if m["joint"] == joint and not m.get("low_confidence", False)
+    ]
+    return [min(j), max(j)]
+
+
+def test_the_fitted_map_is_limited_to_the_inertias_of_its_data(tmp_path):
+    poses = synthetic_poses(4, noise=0.0)
+    for pose in poses[:50]:  # the lightest payload's first 50 poses are not used for the fit
+        for mode in pose["modes"]:
+            mode["low_confidence"] = True
+    fitted = fit_map(poses)
+    base, shoulder = fitted.mode_maps
+    # Base: frequency from J_1 (eq. 47), damping from J_0 (eq. 48); shoulder: J_1 for both.
+    assert base["frequency_inertia_range_kg_m2"] == _used_range(poses, 0, 1)
+    assert base["damping_inertia_range_kg_m2"] == _used_range(poses, 0, 0)
+    assert shoulder["frequency_inertia_range_kg_m2"] == _used_range(poses, 1, 1)
+    assert shoulder["damping_inertia_range_kg_m2"] == _used_range(poses, 1, 1)
+    assert _used_range(poses, 0, 0) != [
+        min(p["inertia_kg_m2"][0] for p in poses),
+        max(p["inertia_kg_m2"][0] for p in poses),
+    ]  # the skipped poses would have widened the range: the test can tell the difference
+    # Inside the ranges the fit is the paper's map (exact data); outside, the map holds the
+    # value at the bound instead of extrapolating.
+    (lo0, hi0), (lo1, hi1) = (
+        base["damping_inertia_range_kg_m2"],
+        base["frequency_inertia_range_kg_m2"],
+    )
+    inside = [0.5 * (lo0 + hi0), 0.5 * (lo1 + hi1)]
+    np.testing.assert_allclose(
+        fitted.modes_from_inertia(inside), PAPER.modes_from_inertia(inside), rtol=1e-6
+    )
+    outside = [0.5 * lo0, 2.0 * hi1]
+    assert fitted.modes_from_inertia(outside) == fitted.modes_from_inertia([lo0, hi1])
+    # Saved and loaded with its ranges.
+    fitted.save(tmp_path / "map.json")
+    back = tvist.DynamicMap.load(tmp_path / "map.json")
+    assert back.inertia_ranges == fitted.inertia_ranges
+    assert back.modes_from_inertia(outside) == fitted.modes_from_inertia(outside)
+
+
+def test_an_unbounded_fit_on_request():
+    fitted = fit_map(synthetic_poses(4, noise=0.0), limit_to_data=False)
+    assert fitted.inertia_ranges == [{}, {}]

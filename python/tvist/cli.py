@@ -52,8 +52,10 @@ def _add_demo(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--identify",
-        action="store_true",
-        help="also identify a map on the twin (reduced mapping campaign, 15-40 s) and add its row",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="identify a map on the twin first (reduced mapping campaign, 20-60 s, cached in "
+        "the output folder) and add its row (default); --no-identify skips it",
     )
     p.add_argument(
         "--linear",

@@ -11,6 +11,14 @@ the frequency joint and ``K = k_0 + k_J J_f + k_g |τ_f|``::
 The general map (eqs. 42-43) has ``J_f = J_d`` and ``(e_d, e_f) = (1/2, 0)``; the paper's UR5e
 base mode (eqs. 47-48) has ``J_f = J_1``, ``J_d = J_0`` and ``(e_d, e_f) = (1, -1/2)``.
 
+**Validity ranges.** A mode may carry the inertias it was identified on:
+``frequency_inertia_range_kg_m2 = [J_min, J_max]`` for ``J_f`` and
+``damping_inertia_range_kg_m2`` for ``J_d`` (equal when both read the same joint). Every
+evaluation clamps ``J_f`` and ``J_d`` into them first, so a map never extrapolates beyond the
+inertias it was identified on; a clamped evaluation is normal operation, not an error.
+Missing or ``null`` is unbounded (the paper's map, whose Table 3 values hold at any inertia).
+:func:`tvist.ident.fit_map` sets the ranges from its data.
+
 Map files are JSON::
 
     {"schema_version": 1, "kind": "tvist.dynamic_map",
@@ -18,7 +26,11 @@ Map files are JSON::
                   "fit_statistics": {...} | null},
      "modes": [{"k_0": ..., "k_j": ..., "k_g": ..., "k_p": ..., "c_0": ..., "c_1": ...,
                 "c_2": ..., "c_tau": ..., "frequency_joint": 1, "damping_joint": 0,
-                "damping_gain_exponent": 1.0, "frequency_gain_exponent": -0.5}, ...]}
+                "damping_gain_exponent": 1.0, "frequency_gain_exponent": -0.5,
+                "frequency_inertia_range_kg_m2": [0.7, 9.1] | null,     # optional
+                "damping_inertia_range_kg_m2": [0.2, 9.3] | null}, ...]} # optional
+
+The range fields are optional, so files written before they existed load unchanged.
 """
 
 from __future__ import annotations
@@ -38,6 +50,8 @@ SCHEMA_VERSION = 1
 KIND = "tvist.dynamic_map"
 #: Fields of one mode, all required in a map file.
 MODE_FIELDS: tuple[str, ...] = tuple(_core.MODE_MAP_FIELDS)
+#: Optional fields of one mode: ``[J_min, J_max]`` (kg m²) of ``J_f`` and of ``J_d``.
+RANGE_FIELDS: tuple[str, ...] = tuple(_core.MODE_MAP_RANGE_FIELDS)
 _INTEGER_FIELDS = ("frequency_joint", "damping_joint")
 _METADATA_FIELDS = ("robot", "payload", "source", "fit_statistics")
 
@@ -50,13 +64,27 @@ def _number(value: Any, where: str) -> float:
     return float(value)
 
 
-def _validate_mode(mode: Any, where: str) -> dict[str, float | int]:
+def _range(value: Any, where: str) -> list[float] | None:
+    """A validated ``[J_min, J_max]`` (kg m²), or ``None`` (unbounded)."""
+    if value is None:
+        return None
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 2:
+        raise ValueError(f"{where}: must be [min, max] in kg m² or null, got {value!r}")
+    lo, hi = _number(value[0], f"{where}[0] (min)"), _number(value[1], f"{where}[1] (max)")
+    if lo <= 0.0:
+        raise ValueError(f"{where}: min must be > 0 kg m², got [{lo}, {hi}]")
+    if lo >= hi:
+        raise ValueError(f"{where}: min must be < max, got [{lo}, {hi}]")
+    return [lo, hi]
+
+
+def _validate_mode(mode: Any, where: str) -> dict[str, Any]:
     if not isinstance(mode, Mapping):
         raise ValueError(f"{where}: must be an object with fields {', '.join(MODE_FIELDS)}")
-    unknown = sorted(set(mode) - set(MODE_FIELDS))
+    unknown = sorted(set(mode) - set(MODE_FIELDS) - set(RANGE_FIELDS))
     if unknown:
         raise ValueError(f"{where}: unknown field(s) {', '.join(unknown)}")
-    out: dict[str, float | int] = {}
+    out: dict[str, Any] = {}
     for key in MODE_FIELDS:
         if key not in mode:
             raise ValueError(f"{where}.{key}: missing")
@@ -67,6 +95,15 @@ def _validate_mode(mode: Any, where: str) -> dict[str, float | int]:
             out[key] = value
         else:
             out[key] = _number(value, f"{where}.{key}")
+    for key in RANGE_FIELDS:
+        out[key] = _range(mode.get(key), f"{where}.{key}")
+    f_range, d_range = (out[key] for key in RANGE_FIELDS)
+    if out["frequency_joint"] == out["damping_joint"] and f_range != d_range:
+        raise ValueError(
+            f"{where}: frequency and damping both read joint {out['frequency_joint']}, so "
+            f"{RANGE_FIELDS[0]} and {RANGE_FIELDS[1]} must be equal (got {f_range} and "
+            f"{d_range})"
+        )
     return out
 
 
@@ -98,18 +135,28 @@ def _validate_metadata(metadata: Any) -> dict[str, Any]:
     return out
 
 
-def general_mode(joint: int, **coefficients: float) -> dict[str, float | int]:
+def general_mode(
+    joint: int,
+    *,
+    inertia_range_kg_m2: Sequence[float] | None = None,
+    **coefficients: float,
+) -> dict[str, Any]:
     """One mode of the general map (eqs. 42-43) driven by ``J = J_joint``.
 
     ``coefficients`` are ``k_0, k_j, k_g, k_p, c_0, c_1, c_2, c_tau``; ``k_g`` and ``c_1``
     default to 0 (the reduced map, eqs. 44-45), the others are required.
+    ``inertia_range_kg_m2`` ``(J_min, J_max)`` limits the map to those inertias (``None``:
+    unbounded).
     """
-    mode = {"k_g": 0.0, "c_1": 0.0, **coefficients}
+    mode: dict[str, Any] = {"k_g": 0.0, "c_1": 0.0, **coefficients}
+    j_range = None if inertia_range_kg_m2 is None else list(inertia_range_kg_m2)
     mode.update(
         frequency_joint=joint,
         damping_joint=joint,
         damping_gain_exponent=0.5,
         frequency_gain_exponent=0.0,
+        frequency_inertia_range_kg_m2=j_range,
+        damping_inertia_range_kg_m2=j_range,
     )
     return _validate_mode(mode, f"mode for joint {joint}")
 
@@ -120,7 +167,8 @@ class DynamicMap:
     Parameters
     ----------
     modes
-        One mapping per mode (cascade order) with the fields :data:`MODE_FIELDS`.
+        One mapping per mode (cascade order) with the fields :data:`MODE_FIELDS` and,
+        optionally, the inertia ranges :data:`RANGE_FIELDS` (see the module docstring).
     metadata
         ``robot`` (name), ``payload`` (:class:`~tvist.robots.Payload` or its dict),
         ``source`` (text) and ``fit_statistics`` (mapping); other keys are kept as given.
@@ -128,7 +176,8 @@ class DynamicMap:
     Raises
     ------
     ValueError
-        Naming the offending field, for missing, unknown or non-finite values.
+        Naming the offending field, for missing, unknown or non-finite values and for bad
+        ranges (non-finite, ``min <= 0``, ``min >= max``, different for one joint).
     """
 
     def __init__(
@@ -167,9 +216,23 @@ class DynamicMap:
         return self._core.n_modes
 
     @property
-    def mode_maps(self) -> list[dict[str, float | int]]:
-        """The coefficients of every mode."""
+    def mode_maps(self) -> list[dict[str, Any]]:
+        """The coefficients of every mode, with its inertia ranges (``None``: unbounded)."""
         return self._core.modes
+
+    @property
+    def inertia_ranges(self) -> list[dict[int, tuple[float, float]]]:
+        """Per mode: ``{joint: (J_min, J_max)}`` of the joints whose inertia is clamped."""
+        out = []
+        for mode in self.mode_maps:
+            ranges = {}
+            for joint_key, range_key in zip(
+                ("frequency_joint", "damping_joint"), RANGE_FIELDS, strict=True
+            ):
+                if mode[range_key] is not None:
+                    ranges[int(mode[joint_key])] = (mode[range_key][0], mode[range_key][1])
+            out.append(ranges)
+        return out
 
     @property
     def uses_gravity(self) -> bool:
@@ -183,8 +246,9 @@ class DynamicMap:
     ) -> list[tuple[float, float]]:
         """Modes ``[(wn_rad_s, zeta), ...]`` for joint inertias ``J_0, J_1, ...`` (kg m²).
 
-        ``gravity_torque_nm`` is needed only when :attr:`uses_gravity`. A mode the map cannot
-        give (non-positive stiffness or inertia) is ``(nan, nan)``.
+        ``gravity_torque_nm`` is needed only when :attr:`uses_gravity`. Inertias outside a
+        mode's range are clamped into it. A mode the map cannot give (non-positive stiffness
+        or inertia) is ``(nan, nan)``.
         """
         j = [float(v) for v in np.asarray(inertia_kg_m2, dtype=float).ravel()]
         tau = None
@@ -268,9 +332,10 @@ class MapDynamics(_core.MapDynamics):
     """Per-cycle dynamics provider for :class:`tvist.TvShaper`: robot inertia + dynamic map.
 
     Every cycle the joint inertias of ``robot`` are evaluated at the previous shaped output
-    and mapped to modes. Construction rejects a map that gives an invalid mode (non-positive
-    stiffness, ``zeta >= 1``) anywhere among ``MapDynamics.validation_poses`` sampled
-    configurations, or reads joints the robot does not have.
+    and mapped to modes (clamped into the map's inertia ranges, if it has any). Construction
+    rejects a map that gives an invalid mode (non-positive stiffness, ``zeta >= 1``) anywhere
+    among ``MapDynamics.validation_poses`` sampled configurations, evaluated with the same
+    clamping, or reads joints the robot does not have.
 
     Parameters
     ----------

@@ -18,6 +18,17 @@
 //! Evaluation is allocation-free. An input that gives no underdamped mode (`J <= 0`, `K <= 0`,
 //! `1 + k_p/J <= 0`, non-finite values, or `ζ >= 1`) yields a mode that fails
 //! [`Mode::is_valid`], which a [`crate::ModeFilter`] holds over.
+//!
+//! # Validity ranges
+//!
+//! A map fitted to measurements is only known where it was measured. Each [`ModeMap`] may
+//! therefore carry the [`InertiaRange`] of `J_f` and of `J_d` it was identified on; evaluation
+//! clamps each inertia into its range before the equations see it. Invariant: **a map never
+//! extrapolates beyond the inertias it was identified on.** Outside its range a mode keeps the
+//! value at the nearest bound: a clamped evaluation is normal operation, not an error, and is
+//! not reported. Only inertias that are no inertia at all (`J <= 0`, non-finite) still give an
+//! invalid mode. Without a range (`None`, the paper's map) the equations are evaluated as they
+//! stand at every positive inertia.
 
 use crate::error::{Error, Status};
 use crate::shaper::Mode;
@@ -70,6 +81,78 @@ impl MapCoefficients {
     }
 }
 
+/// A closed range `[min, max]` of joint inertias, kg m², with `0 < min < max` (both finite).
+///
+/// The fields are private, so every value was checked by [`InertiaRange::new`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InertiaRange {
+    min_kg_m2: f64,
+    max_kg_m2: f64,
+}
+
+impl InertiaRange {
+    /// Rejects non-finite bounds, `min <= 0` and `min >= max`.
+    pub fn new(min_kg_m2: f64, max_kg_m2: f64) -> Result<InertiaRange, Error> {
+        if !(min_kg_m2.is_finite() && max_kg_m2.is_finite()) {
+            return Err(Error::InvalidParameter(format!(
+                "inertia range [{min_kg_m2}, {max_kg_m2}] kg m²: bounds must be finite"
+            )));
+        }
+        if min_kg_m2 <= 0.0 {
+            return Err(Error::InvalidParameter(format!(
+                "inertia range [{min_kg_m2}, {max_kg_m2}] kg m²: min must be > 0"
+            )));
+        }
+        if min_kg_m2 >= max_kg_m2 {
+            return Err(Error::InvalidParameter(format!(
+                "inertia range [{min_kg_m2}, {max_kg_m2}] kg m²: min must be < max"
+            )));
+        }
+        Ok(InertiaRange {
+            min_kg_m2,
+            max_kg_m2,
+        })
+    }
+
+    /// Lower bound, kg m².
+    pub fn min_kg_m2(&self) -> f64 {
+        self.min_kg_m2
+    }
+
+    /// Upper bound, kg m².
+    pub fn max_kg_m2(&self) -> f64 {
+        self.max_kg_m2
+    }
+
+    /// `j_kg_m2` moved into the range: exactly `min` below it, exactly `max` above it, and
+    /// unchanged inside it (NaN stays NaN). Never panics.
+    #[inline]
+    pub fn clamp(&self, j_kg_m2: f64) -> f64 {
+        if j_kg_m2 < self.min_kg_m2 {
+            self.min_kg_m2
+        } else if j_kg_m2 > self.max_kg_m2 {
+            self.max_kg_m2
+        } else {
+            j_kg_m2
+        }
+    }
+}
+
+impl core::fmt::Display for InertiaRange {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "[{}, {}] kg m²", self.min_kg_m2, self.max_kg_m2)
+    }
+}
+
+/// `j` clamped into `range`, or unchanged without one.
+#[inline]
+fn clamp_to(range: Option<InertiaRange>, j: f64) -> f64 {
+    match range {
+        Some(r) => r.clamp(j),
+        None => j,
+    }
+}
+
 /// The map of one mode: coefficients plus which joint inertias drive frequency and damping.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ModeMap {
@@ -82,6 +165,13 @@ pub struct ModeMap {
     pub damping_gain_exponent: f64,
     /// Exponent `e_f` of `(1 + k_p/J_f)` in `ζ`.
     pub frequency_gain_exponent: f64,
+    /// Inertias of the frequency joint the map was identified on; `J_f` is clamped into it.
+    /// `None`: unbounded.
+    pub frequency_range: Option<InertiaRange>,
+    /// Inertias of the damping joint the map was identified on; `J_d` is clamped into it.
+    /// `None`: unbounded. When both roles read the same joint the two ranges are equal
+    /// (checked by [`DynamicMap::new`]).
+    pub damping_range: Option<InertiaRange>,
 }
 
 impl ModeMap {
@@ -93,6 +183,8 @@ impl ModeMap {
             damping_joint: joint,
             damping_gain_exponent: 0.5,
             frequency_gain_exponent: 0.0,
+            frequency_range: None,
+            damping_range: None,
         }
     }
 
@@ -109,7 +201,20 @@ impl ModeMap {
             damping_joint: base,
             damping_gain_exponent: 1.0,
             frequency_gain_exponent: -0.5,
+            frequency_range: None,
+            damping_range: None,
         }
+    }
+
+    /// The same map limited to the inertias it was identified on (see the module docs).
+    pub const fn with_ranges(
+        mut self,
+        frequency_range: Option<InertiaRange>,
+        damping_range: Option<InertiaRange>,
+    ) -> Self {
+        self.frequency_range = frequency_range;
+        self.damping_range = damping_range;
+        self
     }
 
     /// Largest joint index used, plus one.
@@ -122,15 +227,25 @@ impl ModeMap {
         self.coefficients.k_g != 0.0
     }
 
-    /// Mode for inertias `j` and gravity torques `tau_g` (ignored when `k_g == 0`). Returns an
-    /// invalid mode (NaN) when the inputs give no positive stiffness or inertia.
+    /// Mode for inertias `j` and gravity torques `tau_g` (ignored when `k_g == 0`).
+    ///
+    /// `J_f` and `J_d` are clamped into their ranges first (if any). Returns an invalid mode
+    /// (NaN) when an inertia read is not finite and positive, or the (clamped) inertias give
+    /// no positive stiffness or gain term. Allocation-free.
     #[inline]
     pub fn evaluate(&self, j: &[f64], tau_g: &[f64]) -> Mode {
         let invalid = Mode::new(f64::NAN, f64::NAN);
-        let (Some(&j_f), Some(&j_d)) = (j.get(self.frequency_joint), j.get(self.damping_joint))
+        let (Some(&j_f_raw), Some(&j_d_raw)) =
+            (j.get(self.frequency_joint), j.get(self.damping_joint))
         else {
             return invalid;
         };
+        // A broken input stays an error: clamping must not turn it into a plausible mode.
+        if !(j_f_raw.is_finite() && j_f_raw > 0.0 && j_d_raw.is_finite() && j_d_raw > 0.0) {
+            return invalid;
+        }
+        let j_f = clamp_to(self.frequency_range, j_f_raw);
+        let j_d = clamp_to(self.damping_range, j_d_raw);
         let c = &self.coefficients;
         let gravity = if c.k_g != 0.0 {
             match tau_g.get(self.frequency_joint) {
@@ -180,7 +295,8 @@ pub struct DynamicMap {
 }
 
 impl DynamicMap {
-    /// Validates (at least one mode, finite coefficients and exponents).
+    /// Validates (at least one mode, finite coefficients and exponents, and equal ranges for
+    /// a joint that drives both frequency and damping).
     pub fn new(modes: Vec<ModeMap>) -> Result<DynamicMap, Error> {
         if modes.is_empty() {
             return Err(Error::InvalidParameter(
@@ -201,12 +317,22 @@ impl DynamicMap {
                     "dynamic map mode {m}: gain exponents must be finite"
                 )));
             }
+            if mode.frequency_joint == mode.damping_joint
+                && mode.frequency_range != mode.damping_range
+            {
+                return Err(Error::InvalidParameter(format!(
+                    "dynamic map mode {m}: frequency and damping both read joint {}, so their \
+                     inertia ranges must be equal (got {:?} and {:?})",
+                    mode.frequency_joint, mode.frequency_range, mode.damping_range
+                )));
+            }
         }
         Ok(DynamicMap { modes })
     }
 
     /// The UR5e map of the paper: Table 1 for the base mode (eqs. 47–48, joint 0) and
-    /// Table 2 for the shoulder mode (eqs. 50–51, joint 1).
+    /// Table 2 for the shoulder mode (eqs. 50–51, joint 1). It carries no inertia ranges (the
+    /// paper publishes none), so Table 3 is reproduced exactly at any inertia.
     pub fn paper_ur5e() -> DynamicMap {
         let base = MapCoefficients::reduced(10_000.0, 1060.0, 2.54, 1.53, 0.39, 3.81);
         let shoulder = MapCoefficients::reduced(10_000.0, 763.0, 1.73, 0.27, 0.038, 47.2);
@@ -242,7 +368,8 @@ impl DynamicMap {
 
     /// Modes from joint inertias `j` (kg m²) and gravity torques `tau_g` (N m; may be empty
     /// when [`Self::uses_gravity`] is false). `out` must hold [`Self::n_modes`] modes.
-    /// Allocation-free; [`Status::BAD_LENGTH`] if `j` or `out` is too short.
+    /// Inertias are clamped into each mode's ranges ([`ModeMap::evaluate`]); a clamp is not a
+    /// status. Allocation-free; [`Status::BAD_LENGTH`] if `j` or `out` is too short.
     pub fn modes_from_inertia(&self, j: &[f64], tau_g: &[f64], out: &mut [Mode]) -> Status {
         if out.len() != self.modes.len() || j.len() < self.required_joints() {
             return Status::BAD_LENGTH;
@@ -290,5 +417,104 @@ mod tests {
         assert!(!out[0].is_valid() && !out[1].is_valid());
         map.modes_from_inertia(&[f64::NAN, 1.0], &[], &mut out);
         assert!(!out[0].is_valid() && out[1].is_valid());
+    }
+
+    fn range(min: f64, max: f64) -> InertiaRange {
+        InertiaRange::new(min, max).expect("valid range")
+    }
+
+    /// The paper's base mode limited to J_1 in [2, 8] and J_0 in [1, 9] kg m².
+    fn ranged_base() -> (ModeMap, ModeMap) {
+        let unbounded = DynamicMap::paper_ur5e().mode_maps()[0];
+        let ranged = unbounded.with_ranges(Some(range(2.0, 8.0)), Some(range(1.0, 9.0)));
+        (unbounded, ranged)
+    }
+
+    #[test]
+    fn inertia_range_rejects_bad_bounds() {
+        for (min, max, why) in [
+            (f64::NAN, 1.0, "finite"),
+            (0.5, f64::INFINITY, "finite"),
+            (0.0, 1.0, "min must be > 0"),
+            (-1.0, 1.0, "min must be > 0"),
+            (2.0, 2.0, "min must be < max"),
+            (3.0, 2.0, "min must be < max"),
+        ] {
+            let err = InertiaRange::new(min, max).expect_err("bad range");
+            assert!(err.to_string().contains(why), "{err}");
+        }
+        let r = range(0.5, 2.0);
+        assert_eq!((r.min_kg_m2(), r.max_kg_m2()), (0.5, 2.0));
+    }
+
+    #[test]
+    fn clamping_is_exact_at_the_bounds_and_absent_inside() {
+        let (unbounded, ranged) = ranged_base();
+        let tau = [0.0; 2];
+        // Inside both ranges: bit-identical to the unbounded map.
+        for j in [[1.0, 2.0], [4.5, 3.3], [9.0, 8.0], [5.0, 7.999]] {
+            assert_eq!(ranged.evaluate(&j, &tau), unbounded.evaluate(&j, &tau));
+        }
+        // Outside: bit-identical to the unbounded map at the nearest bound, per joint.
+        for (j, at) in [
+            ([0.2, 0.3], [1.0, 2.0]),
+            ([0.2, 5.0], [1.0, 5.0]),
+            ([50.0, 1e6], [9.0, 8.0]),
+            ([4.0, 1e-9], [4.0, 2.0]),
+        ] {
+            assert_eq!(ranged.evaluate(&j, &tau), unbounded.evaluate(&at, &tau));
+        }
+        let r = range(1.0, 9.0);
+        assert_eq!(r.clamp(1.0), 1.0);
+        assert_eq!(r.clamp(9.0), 9.0);
+        assert_eq!(r.clamp(0.999_999), 1.0);
+        assert!(r.clamp(f64::NAN).is_nan());
+    }
+
+    #[test]
+    fn a_range_does_not_make_broken_inertias_valid() {
+        let (_, ranged) = ranged_base();
+        for j in [
+            [0.0, 3.0],
+            [-1.0, 3.0],
+            [3.0, f64::NAN],
+            [f64::INFINITY, 3.0],
+        ] {
+            assert!(!ranged.evaluate(&j, &[]).is_valid(), "{j:?}");
+        }
+    }
+
+    #[test]
+    fn clamping_keeps_an_overdamped_extrapolation_out() {
+        // Damping grows like 1/J at small J (the (1 + k_p/J) factor): with a large c_0 this
+        // mode is overdamped below J ~ 0.35 kg m² (ζ = 2.1 at 0.2, 0.75 at 0.6).
+        let c = MapCoefficients::reduced(10_000.0, 763.0, 1.73, 60.0, 0.038, 0.0);
+        let unbounded = ModeMap::general(c, 1);
+        let r = Some(range(0.6, 10.0));
+        let ranged = unbounded.with_ranges(r, r);
+        assert!(unbounded.evaluate(&[1.0, 0.2], &[]).zeta >= 1.0);
+        assert!(ranged.evaluate(&[1.0, 0.2], &[]).is_valid());
+        assert!(unbounded.evaluate(&[1.0, 0.6], &[]).is_valid());
+    }
+
+    #[test]
+    fn one_joint_has_one_range() {
+        let c = MapCoefficients::reduced(10_000.0, 763.0, 1.73, 0.27, 0.038, 47.2);
+        let general = ModeMap::general(c, 1);
+        let err = DynamicMap::new(vec![general.with_ranges(Some(range(1.0, 2.0)), None)])
+            .expect_err("different ranges for one joint");
+        assert!(err.to_string().contains("must be equal"), "{err}");
+        let both = Some(range(1.0, 2.0));
+        assert!(DynamicMap::new(vec![general.with_ranges(both, both)]).is_ok());
+        // Different joints may have different ranges.
+        let (_, ranged) = ranged_base();
+        assert!(DynamicMap::new(vec![ranged]).is_ok());
+    }
+
+    #[test]
+    fn the_paper_map_is_unbounded() {
+        for m in DynamicMap::paper_ur5e().mode_maps() {
+            assert_eq!((m.frequency_range, m.damping_range), (None, None));
+        }
     }
 }

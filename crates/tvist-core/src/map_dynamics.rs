@@ -2,7 +2,7 @@
 //! previous shaped output and turns them into modes with a [`DynamicMap`], every cycle.
 
 use crate::dynamics::Dynamics;
-use crate::dynmap::DynamicMap;
+use crate::dynmap::{DynamicMap, InertiaRange};
 use crate::error::{Error, Status};
 use crate::robot::Robot;
 use crate::shaper::Mode;
@@ -31,7 +31,11 @@ impl MapDynamics {
     ///
     /// Rejected: a map reading more joints than the robot has, or a map that gives an invalid
     /// mode (non-positive stiffness or inertia term, `ζ >= 1`, non-finite) at any of the
-    /// [`VALIDATION_POSES`] sampled configurations.
+    /// [`VALIDATION_POSES`] sampled configurations. The check evaluates the map exactly as
+    /// every cycle does, i.e. with the robot's inertias clamped into the map's identified
+    /// ranges (see [`crate::dynmap`]): a fitted map that would be overdamped only by
+    /// extrapolation is accepted, one that is invalid at inertias inside its own range that the
+    /// robot reaches is rejected.
     pub fn new(robot: Robot, map: DynamicMap) -> Result<MapDynamics, Error> {
         let n = robot.n_dof();
         if map.required_joints() > n {
@@ -68,11 +72,16 @@ impl MapDynamics {
             self.modes(&q, &mut modes);
             for (m, mode) in modes.iter().enumerate() {
                 if !mode.is_valid() {
+                    let mode_map = &self.map.mode_maps()[m];
                     return Err(Error::InvalidParameter(format!(
                         "the dynamic map gives no underdamped mode {m} at q = {q:?} \
-                         (J = {:?}): wn_rad_s = {}, zeta = {} \
-                         (needs positive stiffness and inertia terms and zeta < 1)",
-                        self.inertia, mode.wn_rad_s, mode.zeta
+                         (J = {:?}; inertia ranges J_f {}, J_d {}): wn_rad_s = {}, \
+                         zeta = {} (needs positive stiffness and inertia terms and zeta < 1)",
+                        self.inertia,
+                        range_text(mode_map.frequency_range),
+                        range_text(mode_map.damping_range),
+                        mode.wn_rad_s,
+                        mode.zeta
                     )));
                 }
                 lowest_wn[m] = lowest_wn[m].min(mode.wn_rad_s);
@@ -85,7 +94,9 @@ impl MapDynamics {
             let c = &mode_map.coefficients;
             // ω_n² = (1 + k_p/J)(k_0 + k_g|τ|)/J + (1 + k_p/J) k_J is non-increasing in J when
             // k_p, k_0 >= 0 and k_g|τ| >= 0 is least at τ = 0 (k_g >= 0); then the value at
-            // the inertia bound is a sound lower bound of ω_n over every configuration.
+            // the inertia bound is a sound lower bound of ω_n over every configuration. With a
+            // range, J is clamped (a non-decreasing function of J) before the map sees it, so
+            // the clamped value at the bound still bounds every clamped evaluation.
             if c.k_p >= 0.0 && c.k_0 >= 0.0 && c.k_g >= 0.0 {
                 let mut j_bound = self.inertia.clone();
                 j_bound[mode_map.frequency_joint] = j_max[mode_map.frequency_joint];
@@ -163,6 +174,11 @@ impl Dynamics for MapDynamics {
     }
 }
 
+/// A map range for messages: `[min, max] kg m²` or `unbounded`.
+fn range_text(range: Option<InertiaRange>) -> String {
+    range.map_or_else(|| "unbounded".to_string(), |r| r.to_string())
+}
+
 /// Van der Corput radical inverse of `k` in base `base`, in `[0, 1)`.
 fn radical_inverse(mut k: usize, base: usize) -> f64 {
     let inv = 1.0 / base as f64;
@@ -185,4 +201,75 @@ fn first_primes(count: usize) -> Vec<usize> {
         candidate += 1;
     }
     primes
+}
+
+#[cfg(all(test, feature = "json"))]
+mod tests {
+    use super::*;
+    use crate::dynmap::{MapCoefficients, ModeMap};
+    use crate::robot::RigidBody;
+
+    fn ur5e_5kg() -> Robot {
+        let (joints, links) =
+            crate::robot_data::robot_chain(crate::robot_data::UR_E_SERIES_JSON, "ur5e")
+                .expect("robot data");
+        Robot::new(joints, links, RigidBody::point(5.0, [0.0, 0.0, 0.05])).expect("robot")
+    }
+
+    /// A base mode (J = J_0) that is overdamped below J_0 ~ 0.35 kg m² (the (1 + k_p/J) factor
+    /// grows at small J): ζ = 2.1 at 0.2, 0.75 at 0.6. The UR5e with 5 kg reaches
+    /// J_0 ~ 0.18 kg m² with the arm pointing up.
+    fn overdamped_at_small_j(range: Option<(f64, f64)>) -> DynamicMap {
+        let c = MapCoefficients::reduced(10_000.0, 763.0, 1.73, 60.0, 0.038, 0.0);
+        let r = range.map(|(lo, hi)| InertiaRange::new(lo, hi).expect("valid range"));
+        DynamicMap::new(vec![ModeMap::general(c, 0).with_ranges(r, r)]).expect("finite")
+    }
+
+    #[test]
+    fn a_map_overdamped_only_outside_its_range_is_accepted_and_never_invalid() {
+        let err = MapDynamics::new(ur5e_5kg(), overdamped_at_small_j(None))
+            .expect_err("overdamped by extrapolation");
+        assert!(err.to_string().contains("no underdamped mode 0"), "{err}");
+
+        let mut provider = MapDynamics::new(ur5e_5kg(), overdamped_at_small_j(Some((0.6, 10.0))))
+            .expect("valid inside its range");
+        let mut rng = 0x9E37_79B9_7F4A_7C15_u64;
+        let mut modes = [Mode::new(0.0, 0.0)];
+        let mut clamped = 0;
+        for _ in 0..20_000 {
+            let q: Vec<f64> = (0..6)
+                .map(|_| {
+                    rng ^= rng << 13;
+                    rng ^= rng >> 7;
+                    rng ^= rng << 17;
+                    core::f64::consts::PI * (2.0 * (rng >> 11) as f64 / (1u64 << 53) as f64 - 1.0)
+                })
+                .collect();
+            assert!(provider.modes(&q, &mut modes).is_ok());
+            assert!(modes[0].is_valid(), "q = {q:?}: {:?}", modes[0]);
+            clamped += usize::from(provider.last_inertia()[0] < 0.6);
+        }
+        // The test means something only if the clamp was exercised.
+        assert!(clamped > 100, "only {clamped} poses below the range");
+        let (wn_lo, zeta_hi) = (
+            provider.slowest_modes()[0].wn_rad_s,
+            provider.slowest_modes()[0].zeta,
+        );
+        // The clamped map's extremes: ζ is largest at the range's lower bound.
+        let at_min = provider.map().mode_maps()[0].evaluate(&[0.6], &[]);
+        assert!(
+            (zeta_hi / at_min.zeta - 1.0).abs() < 1e-12,
+            "{zeta_hi} vs {}",
+            at_min.zeta
+        );
+        assert!(wn_lo > 0.0 && wn_lo.is_finite());
+    }
+
+    #[test]
+    fn a_map_invalid_inside_its_own_range_is_rejected() {
+        let err = MapDynamics::new(ur5e_5kg(), overdamped_at_small_j(Some((0.2, 10.0))))
+            .expect_err("overdamped inside its range");
+        assert!(err.to_string().contains("no underdamped mode 0"), "{err}");
+        assert!(err.to_string().contains("J_f [0.2, 10] kg m²"), "{err}");
+    }
 }

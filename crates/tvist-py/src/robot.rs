@@ -298,6 +298,39 @@ pub const MODE_MAP_FIELDS: [&str; 12] = [
     "frequency_gain_exponent",
 ];
 
+/// Optional fields of one mode map: the `[min, max]` inertias (kg m²) of the frequency and
+/// the damping joint the map was identified on; missing or `None` is unbounded.
+pub const MODE_MAP_RANGE_FIELDS: [&str; 2] = [
+    "frequency_inertia_range_kg_m2",
+    "damping_inertia_range_kg_m2",
+];
+
+fn range_from_dict(
+    d: &Bound<'_, pyo3::types::PyDict>,
+    index: usize,
+    key: &str,
+) -> PyResult<Option<core::InertiaRange>> {
+    let Some(item) = d.get_item(key)? else {
+        return Ok(None);
+    };
+    if item.is_none() {
+        return Ok(None);
+    }
+    let bounds = item.extract::<Vec<f64>>().ok().filter(|b| b.len() == 2);
+    let Some(bounds) = bounds else {
+        return Err(PyValueError::new_err(format!(
+            "mode {index}: field {key:?} must be [min, max] in kg m² or None"
+        )));
+    };
+    core::InertiaRange::new(bounds[0], bounds[1])
+        .map(Some)
+        .map_err(|e| PyValueError::new_err(format!("mode {index}: field {key:?}: {e}")))
+}
+
+fn range_to_py(range: Option<core::InertiaRange>) -> Option<Vec<f64>> {
+    range.map(|r| vec![r.min_kg_m2(), r.max_kg_m2()])
+}
+
 fn mode_map_from_dict(d: &Bound<'_, pyo3::types::PyDict>, index: usize) -> PyResult<core::ModeMap> {
     let get_f = |key: &str| -> PyResult<f64> {
         let item = d
@@ -332,10 +365,13 @@ fn mode_map_from_dict(d: &Bound<'_, pyo3::types::PyDict>, index: usize) -> PyRes
         damping_joint: get_u("damping_joint")?,
         damping_gain_exponent: get_f("damping_gain_exponent")?,
         frequency_gain_exponent: get_f("frequency_gain_exponent")?,
+        frequency_range: range_from_dict(d, index, MODE_MAP_RANGE_FIELDS[0])?,
+        damping_range: range_from_dict(d, index, MODE_MAP_RANGE_FIELDS[1])?,
     })
 }
 
-/// Dynamic map (eqs. 42-51): one dict of coefficients per mode, in cascade order.
+/// Dynamic map (eqs. 42-51): one dict of coefficients per mode, in cascade order. Optional
+/// inertia ranges per mode (MODE_MAP_RANGE_FIELDS) clamp the inertias the mode reads.
 #[pyclass(name = "DynamicMap", module = "tvist._core", frozen)]
 #[derive(Clone)]
 pub struct PyDynamicMap {
@@ -364,8 +400,8 @@ impl PyDynamicMap {
         }
     }
 
-    /// Modes [(wn_rad_s, zeta), ...] from joint inertias (and gravity torques when k_g != 0).
-    /// Invalid modes come back as NaN.
+    /// Modes [(wn_rad_s, zeta), ...] from joint inertias (and gravity torques when k_g != 0),
+    /// each inertia clamped into its mode's range. Invalid modes come back as NaN.
     #[pyo3(signature = (inertia_kg_m2, gravity_torque_nm=None))]
     fn modes_from_inertia(
         &self,
@@ -442,7 +478,8 @@ impl PyDynamicMap {
             .into_pyarray(py))
     }
 
-    /// The coefficients of every mode as dicts (see the constructor).
+    /// The coefficients of every mode as dicts (see the constructor), ranges as [min, max]
+    /// or None.
     #[getter]
     fn modes<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, pyo3::types::PyDict>>> {
         self.inner
@@ -467,6 +504,8 @@ impl PyDynamicMap {
                 d.set_item("damping_joint", m.damping_joint)?;
                 d.set_item("damping_gain_exponent", m.damping_gain_exponent)?;
                 d.set_item("frequency_gain_exponent", m.frequency_gain_exponent)?;
+                d.set_item(MODE_MAP_RANGE_FIELDS[0], range_to_py(m.frequency_range))?;
+                d.set_item(MODE_MAP_RANGE_FIELDS[1], range_to_py(m.damping_range))?;
                 Ok(d)
             })
             .collect()
@@ -546,5 +585,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyDynamicMap>()?;
     m.add_class::<PyMapDynamics>()?;
     m.add("MODE_MAP_FIELDS", MODE_MAP_FIELDS.to_vec())?;
+    m.add("MODE_MAP_RANGE_FIELDS", MODE_MAP_RANGE_FIELDS.to_vec())?;
     Ok(())
 }

@@ -1,9 +1,9 @@
 """The paper's section-6 experiment on the simulated flexible UR5e (``tvist demo``).
 
 Three test motions with a 5 kg payload, each run unshaped, with two-mode ZV FD-TVIST (true
-modes of the twin, and the paper's published map on the real-time path) and with zero-delay
-shaping; the residual vibration, delay and reference jerk are reported like the paper's
-Table 4, with figures like its Figs. 32-36.
+modes of the twin; the paper's published map and a map identified on the twin, both on the
+real-time path) and with zero-delay shaping; the residual vibration, delay and reference jerk
+are reported like the paper's Table 4, with figures like its Figs. 32-36.
 
 Examples
 --------
@@ -19,8 +19,9 @@ More rows (for example a map identified on the twin) are added to the list of me
     rows = [*default_methods(), fd_tvist_map("my-map", "FD-TVIST ZV, my map", identified)]
     run_demo("out/demo", methods=rows)
 
-``run_demo(identify=True)`` identifies a map on the twin itself (a reduced mapping campaign)
-and adds its row.
+By default ``run_demo`` first identifies a map on the twin itself (a reduced mapping campaign
+and the map fit, :mod:`tvist.demo.identified`) and adds its row; ``identify=False``
+(``tvist demo --no-identify``) skips that.
 """
 
 from __future__ import annotations

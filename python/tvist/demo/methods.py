@@ -8,8 +8,8 @@ example a map identified on the twin with :func:`fd_tvist_map` (the CLI's ``--ma
     methods = [*default_methods(), fd_tvist_map("my-map", "FD-TVIST ZV, my map", identified)]
     run_demo(methods=methods)
 
-``run_demo(identify=True)`` (``tvist demo --identify``) adds such a row itself from a reduced
-mapping campaign on the twin (:mod:`tvist.demo.identified`).
+``run_demo()`` (``tvist demo``) adds such a row itself from a reduced mapping campaign on the
+twin (:mod:`tvist.demo.identified`) unless ``identify=False`` (``--no-identify``).
 """
 
 from __future__ import annotations
@@ -159,9 +159,42 @@ def fd_tvist_map(key: str, label: str, dynmap: DynamicMap) -> Method:
             provider, ctx.trajectory.dt_s, ctx.trajectory.n_dof, shaper=TVIST_SHAPER
         )
         source = dynmap.metadata.get("source") or "dynamic map"
-        return _run_tv_shaper(shaper, ctx, f"MapDynamics: {source}")
+        ref = _run_tv_shaper(shaper, ctx, f"MapDynamics: {source}")
+        return Reference(ref.q, {**ref.details, "map_use": map_use(dynmap, ctx.robot, ref.q)})
 
     return Method(key=key, label=label, build=build, dynmap=dynmap)
+
+
+def map_use(dynmap: DynamicMap, robot: Robot, q: np.ndarray) -> dict[str, list]:
+    """How a map is evaluated along the reference ``q`` ``(n_samples, n_dof)`` it shaped.
+
+    Returns, per mode: ``inertia_clamped_percent``, the share of samples at which an inertia
+    it reads lies outside its identified range (the map then holds the value at the bound),
+    and ``gravity_sign_changes``, how often the gravity torque its ``k_g |τ|`` term reads
+    changes sign (``0`` without that term). Both put a kink into the modes along the move.
+    """
+    q = np.ascontiguousarray(q, dtype=float)
+    inertia = robot.joint_inertia_many(q)
+    tau = robot.gravity_torque_many(q) if dynmap.uses_gravity else None
+    clamped, sign_changes = [], []
+    for mode in dynmap.mode_maps:
+        outside = np.zeros(len(q), dtype=bool)
+        for joint_key, range_key in (
+            ("frequency_joint", "frequency_inertia_range_kg_m2"),
+            ("damping_joint", "damping_inertia_range_kg_m2"),
+        ):
+            if mode[range_key] is not None:
+                lo, hi = mode[range_key]
+                j = inertia[:, mode[joint_key]]
+                outside |= (j < lo) | (j > hi)
+        clamped.append(float(100.0 * np.mean(outside)))
+        changes = 0
+        if tau is not None and mode["k_g"] != 0.0:
+            sign = np.sign(tau[:, mode["frequency_joint"]])
+            sign = sign[sign != 0]
+            changes = int(np.count_nonzero(np.diff(sign)))
+        sign_changes.append(changes)
+    return {"inertia_clamped_percent": clamped, "gravity_sign_changes": sign_changes}
 
 
 def zero_delay_row(key: str, label: str, method: str, motions: Sequence[str]) -> Method:

@@ -315,6 +315,7 @@ def write_markdown(result: DemoResult, path: Path, figures: dict[str, list[Path]
     lines += ["", *_NOTES]
     if _jerk_spike(result):
         lines.append(_JERK_NOTE)
+    lines += _map_jerk_notes(result)
     lines.append("")
     lines += ["## Figures", ""]
     captions = {
@@ -326,6 +327,10 @@ def write_markdown(result: DemoResult, path: Path, figures: dict[str, list[Path]
         for p in paths:
             lines.append(f"- {captions[kind]}: [{p.name}]({p.name})")
             lines.append(f"  ![{p.name}]({p.name})")
+    for name in (result.identification or {}).get("figures", []):
+        caption = _IDENTIFICATION_CAPTIONS.get(name, "Identified map")
+        lines.append(f"- {caption}: [{name}]({name})")
+        lines.append(f"  ![{name}]({name})")
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
 
@@ -351,10 +356,22 @@ _NOTES = [
     "- The paper map was identified on a real UR5e; the twin is a model with its own gear "
     "stiffness and damping. The map's errors here measure how far the twin is from that "
     "robot, not the quality of the published map.",
+    "- The *identified map* row is the honest pipeline on the twin: mapping campaign "
+    "(excitation, noisy accelerometer, local fits), map fit, and the same real-time path as "
+    "the paper map. Its map knows only the inertias of the campaign and holds its modes "
+    "constant beyond them.",
     "- The twin's accelerometer has no noise, so small residual vibrations are measured "
     "exactly; on the real robot the paper reports that the shaped vibration reached the "
     "noise level.",
 ]
+
+
+def _range_text(value: Any) -> str:
+    return "unbounded" if value is None else f"{value[0]:.3g} - {value[1]:.3g}"
+
+
+def _pct(entry: dict[str, Any], key: str) -> str:
+    return f"{entry[f'{key}_rms_percent']:.1f} / {entry[f'{key}_max_percent']:.1f}"
 
 
 def _identification_section(result: DemoResult) -> list[str]:
@@ -364,31 +381,49 @@ def _identification_section(result: DemoResult) -> list[str]:
     lines = ["## Identified map (reduced campaign on the twin)", ""]
     if "error" in info:
         return [*lines, f"Identification failed, so the row is missing: `{info['error']}`.", ""]
+    plan = info["plan"]
     usable = ", ".join(f"{k}: {v}" for k, v in info["usable_identifications"].items())
+    angles = ", ".join(f"{math.degrees(a):g}°" for a in plan["angles_rad"])
+    if info["poses_reused"]:
+        cache = (
+            f"{info['poses_reused']} of the {info['poses']} pose records were reused from "
+            f"[{info['campaign_file']}]({info['campaign_file']}) (same settings and code; "
+            "delete it to rerun the campaign)"
+        )
+    else:
+        cache = (
+            f"all {info['poses']} poses were run now; their records are kept in "
+            f"[{info['campaign_file']}]({info['campaign_file']}), so the next run with the same "
+            "settings and code reuses them"
+        )
     lines.append(
-        f"{info['poses']} poses (payload {info['payload_kg']:g} kg, 4 angles x radii "
-        f"{', '.join(f'{r:g}' for r in info['radii_m'])} m), base and shoulder excited in turn "
+        f"{info['poses']} poses: payload {', '.join(f'{m:g}' for m in plan['payloads_kg'])} kg, "
+        f"angles {angles} × radii {', '.join(f'{r:g}' for r in plan['radii_m'])} m (Algorithm "
+        f"1; the radii reach from Q3 to Q1 so that the map covers the inertias of the test "
+        f"motions). Base and shoulder excited in turn for {plan['duration_s']:g} s each "
         f"(Algorithm 2), local fits (eq. 17) on the accelerometer with "
-        f"{info['accel_noise_std_m_s2']:g} m/s² noise, then the map fit (section 5.3). "
-        f"Identifications used (not low-confidence): {usable}. Campaign time "
-        f"{info['wall_time_s']:.1f} s. Files: [{info['map_file']}]({info['map_file']}), "
-        f"[{info['campaign_file']}]({info['campaign_file']})."
+        f"{plan['accel_noise_std_m_s2']:g} m/s² noise, then the map fit (section 5.3). "
+        f"Identifications used (not low-confidence): {usable}. Campaign "
+        f"{info['campaign_wall_time_s']:.1f} s ({cache}); identification in total "
+        f"{info['wall_time_s']:.1f} s. Map file: [{info['map_file']}]({info['map_file']})."
     )
     lines.append("")
     rows = []
+    stats = (info.get("fit_statistics") or {}).get("modes", [])
     for i, mode in enumerate(info["modes"]):
-        stats = (info.get("fit_statistics") or {}).get("modes", [])
         stat = stats[i] if i < len(stats) else {}
         freq_err = stat.get("frequency", {}).get("rms_relative_error")
         damp_err = stat.get("damping", {}).get("rms_relative_error")
         coeffs = ", ".join(
-            f"{k} {mode[k]:.4g}" for k in ("k_j", "k_p", "k_g", "c_0", "c_1", "c_2", "c_tau")
+            f"{k} {mode[k]:.4g}" for k in ("k_0", "k_j", "k_p", "k_g", "c_0", "c_1", "c_2", "c_tau")
         )
+        f_range = mode["frequency_inertia_range_kg_m2"]
+        d_range = mode["damping_inertia_range_kg_m2"]
         rows.append(
             [
                 ("base", "shoulder")[i] if i < 2 else str(i),
-                f"J_{mode['frequency_joint']}",
-                f"J_{mode['damping_joint']}",
+                f"J_{mode['frequency_joint']}: {_range_text(f_range)}",
+                f"J_{mode['damping_joint']}: {_range_text(d_range)}",
                 coeffs,
                 "-" if freq_err is None else f"{100 * freq_err:.1f}",
                 "-" if damp_err is None else f"{100 * damp_err:.1f}",
@@ -396,14 +431,77 @@ def _identification_section(result: DemoResult) -> list[str]:
         )
     header = [
         "mode",
-        "freq. from",
-        "damping from",
-        "coefficients",
-        "f rms err [%]",
-        "ζ rms err [%]",
+        "frequency from, range [kg m²]",
+        "damping from, range [kg m²]",
+        "coefficients (N m/rad, kg m², N m s)",
+        "f fit rms err [%]",
+        "ζ fit rms err [%]",
     ]
     lines += [_md_table(header, rows), ""]
+    lines.append(
+        "The map is evaluated only inside these inertia ranges (the inertias of the poses it "
+        "was fitted to): outside them it holds the value at the nearest bound instead of "
+        "extrapolating. " + _clamp_summary(result)
+    )
+    lines.append("")
+    versus = info.get("versus_true_modes") or {}
+    if versus:
+        vrows = [
+            [
+                name,
+                str(entry["n_poses"]),
+                _pct(entry["identified"], "f_n"),
+                _pct(entry["identified"], "zeta"),
+                _pct(entry["map"], "f_n"),
+                _pct(entry["map"], "zeta"),
+            ]
+            for name, entry in versus.items()
+        ]
+        lines.append(
+            "Against the twin's true modes (eigen-analysis) at the campaign poses, relative "
+            "errors RMS / max in %:"
+        )
+        lines.append("")
+        lines.append(
+            _md_table(
+                [
+                    "mode",
+                    "poses",
+                    "identified f_n",
+                    "identified ζ",
+                    "fitted map f_n",
+                    "fitted map ζ",
+                ],
+                vrows,
+            )
+        )
+        lines.append("")
     return lines
+
+
+def _clamp_summary(result: DemoResult) -> str:
+    """Share of each motion's reference on which the identified map clamped an inertia."""
+    from tvist.demo.identified import KEY
+
+    parts = []
+    for motion in result.motions:
+        try:
+            use = motion.run(KEY).details.get("map_use")
+        except KeyError:
+            continue
+        if use:
+            shares = ", ".join(
+                f"{name} {v:.0f} %"
+                for name, v in zip(
+                    ("base", "shoulder"), use["inertia_clamped_percent"], strict=False
+                )
+            )
+            parts.append(f"{motion.motion.name.replace('->', ' → ')}: {shares}")
+    if not parts:
+        return ""
+    return (
+        "Share of each shaped reference at which an inertia was clamped: " + "; ".join(parts) + "."
+    )
 
 
 _JERK_NOTE = (
@@ -413,6 +511,46 @@ _JERK_NOTE = (
     "(visible in the ζ panel of the mode figures). The ZV amplitudes follow it, which puts a "
     "small kink into the reference velocity; the third difference turns it into a spike."
 )
+
+
+_IDENTIFICATION_CAPTIONS = {
+    "identified_map_fit.png": "Identified map: f_n and ζ against inertia; identified, true and "
+    "fitted modes at the campaign poses and the map curve with its range (like Figs. 23-26)",
+    "identified_vs_map.png": "Identified against fitted modes at the campaign poses",
+}
+
+
+def _map_jerk_notes(result: DemoResult) -> list[str]:
+    """Why a map row's reference is jerkier than the planned one, from how the map was used
+    along it (:func:`tvist.demo.methods.map_use`)."""
+    notes = []
+    for motion in result.motions:
+        try:
+            plain = motion.run("unshaped")
+        except KeyError:
+            continue
+        for r in motion.runs:
+            use = r.details.get("map_use")
+            if not use or r.peak_jerk_rad_s3 <= plain.peak_jerk_rad_s3:
+                continue
+            causes = []
+            changes = sum(use["gravity_sign_changes"])
+            if changes:
+                causes.append(
+                    f"its stiffness term k_g |τ| has a kink where the gravity torque it reads "
+                    f"changes sign ({changes} time{'s' if changes > 1 else ''} along the move)"
+                )
+            if any(0.0 < c < 100.0 for c in use["inertia_clamped_percent"]):
+                causes.append("an inertia crosses a bound of the identified range (clamped)")
+            why = "; ".join(causes) if causes else "no kink of the map explains it"
+            notes.append(
+                f"- {r.method.label} on {motion.motion.name.replace('->', ' → ')}: peak jerk "
+                f"{r.peak_jerk_rad_s3:.0f} rad/s³ (planned move "
+                f"{plain.peak_jerk_rad_s3:.0f}): {why}. The shaper's amplitudes and delays "
+                "follow the kink in the modes, which puts a kink into the reference velocity; "
+                "the third difference turns it into a spike."
+            )
+    return notes
 
 
 def _jerk_spike(result: DemoResult) -> bool:

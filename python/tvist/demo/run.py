@@ -16,7 +16,7 @@ def run_demo(
     quick: bool = False,
     methods: Sequence[Method] | None = None,
     *,
-    identify: bool = False,
+    identify: bool = True,
     verbose: bool = True,
 ) -> DemoResult:
     """Run the experiment, print the table and write ``results.json``, ``report.md`` and the
@@ -27,18 +27,21 @@ def run_demo(
     out_dir
         Output folder (created if missing).
     quick
-        Only the first motion (Q1->Q2) with a shorter tail.
+        Only the first motion (Q1->Q2) with a shorter tail, and a smaller campaign
+        (:data:`~tvist.demo.identified.QUICK_PLAN`).
     methods
         The rows, unshaped first (default :func:`~tvist.demo.methods.default_methods`).
     identify
-        Also identify a map on the twin with a reduced campaign
-        (:func:`~tvist.demo.identified.identify_map`, 15-40 s) and add its FD-TVIST row.
+        Identify a map on the twin first: a reduced mapping campaign
+        (:func:`~tvist.demo.identified.identify_map`, :data:`~tvist.demo.identified.DEMO_PLAN`,
+        20-60 s on two cores; its records are cached in ``out_dir`` and reused by the next
+        run) and the map fit; its FD-TVIST row joins the map rows. ``False`` skips it.
     verbose
         Print progress lines and the table.
     """
     from rich.console import Console
 
-    from tvist.demo.identified import identify_map
+    from tvist.demo.identified import DEMO_PLAN, QUICK_PLAN, identify_map
     from tvist.demo.report import print_table, write_outputs
 
     console = Console(quiet=not verbose)
@@ -48,8 +51,11 @@ def run_demo(
     rows = list(default_methods() if methods is None else methods)
     identification = None
     if identify:
-        console.print("identifying a dynamic map on the twin (reduced campaign) ...")
-        identified = identify_map(out_dir, log=console.print)
+        plan = QUICK_PLAN if quick else DEMO_PLAN
+        console.print(
+            f"identifying a dynamic map on the twin (reduced campaign, {plan.n_poses} poses) ..."
+        )
+        identified = identify_map(out_dir, plan=plan, log=console.print)
         identification = identified.summary
         if identified.method is not None:
             # Right after the last map-driven row, so the map rows stand together.
@@ -63,9 +69,10 @@ def run_demo(
     )
     outputs = write_outputs(result, out_dir)
     print_table(result, console)
+    n_figures = sum(len(v) for v in outputs["figures"].values())
+    n_figures += len((identification or {}).get("figures", []))
     console.print(
-        f"wrote {outputs['results']}, {outputs['report']} and "
-        f"{sum(len(v) for v in outputs['figures'].values())} figures "
+        f"wrote {outputs['results']}, {outputs['report']} and {n_figures} figures "
         f"(total {time.perf_counter() - start:.1f} s)"
     )
     return result

@@ -250,7 +250,8 @@ class TwinRobot:
     accel_noise_std
         White noise on each accelerometer axis, m/s² (the real sensor is noisy).
     seed
-        Seed of the accelerometer noise.
+        Seed of the accelerometer noise; combined with each excitation's seed (if it has
+        one), so each excitation's noise is reproducible on its own.
     """
 
     def __init__(self, robot_name: str = "ur5e", accel_noise_std: float = 0.05, seed: int = 0):
@@ -281,7 +282,11 @@ class TwinRobot:
         return self._twin
 
     def record_excitation(self, excitation: Excitation) -> Record:
-        sim = self._require_twin().run(excitation.q, dt_s=excitation.dt_s)
+        # The noise of a seeded excitation depends only on (seed, excitation seed), not on
+        # which excitations this robot ran before: a pose's result must not depend on the
+        # order in which parallel workers happen to pick the poses up.
+        noise_seed = None if excitation.seed is None else [self.seed, excitation.seed]
+        sim = self._require_twin().run(excitation.q, dt_s=excitation.dt_s, noise_seed=noise_seed)
         return Record(
             t_s=sim.timestamp,
             target_q=sim.target_q,
@@ -415,7 +420,10 @@ def identify_pose(robot: CampaignRobot, pose: CampaignPose, settings: _Settings)
     rng = np.random.default_rng(pose.seed)
     fits: dict[int, LocalFit] = {}
     for joint in IDENTIFIED_JOINTS:
-        excitation = random_excitation(pose.q, joint, seed=rng, duration_s=settings.duration_s)
+        # An integer seed per excitation (recorded in it) also seeds a twin's sensor noise.
+        excitation = random_excitation(
+            pose.q, joint, seed=int(rng.integers(2**63)), duration_s=settings.duration_s
+        )
         try:
             log = robot.record_excitation(excitation)
             fits[joint] = identify_local(

@@ -11,6 +11,10 @@ Per mode, by nonlinear least squares on relative errors:
 A term whose estimate is smaller than ``drop_t`` standard errors (``k_g`` and ``c_1`` on the
 UR5e) is dropped (set to 0) and the step refitted, as the paper did.
 
+The fitted map is limited to the data: each mode stores the range ``[min, max]`` of ``J_f`` and
+of ``J_d`` over the poses it was fitted to, and the map clamps inertias into those ranges when
+evaluated (see :mod:`tvist.dynmap`), so it never extrapolates beyond what was identified.
+
 The map equations are evaluated only through :class:`tvist.DynamicMap` (the Rust core). The
 starting values use the fact that, for a fixed ``k_p``, ``ω_n²`` is affine in
 ``(k_J, k_g)``, and for a fixed ``c_τ``, ``ζ`` is linear in ``(c_0, c_1, c_2)``: the columns of
@@ -39,6 +43,7 @@ __all__ = [
     "DEFAULT_MODE_SPECS",
     "ModeSpec",
     "PoseTable",
+    "data_range",
     "evaluate_mode",
     "fit_map",
     "pose_table",
@@ -148,10 +153,11 @@ def pose_table(
 
 def _mode_dict(
     coefficients: Mapping[str, float], frequency_joint: int, damping_joint: int
-) -> dict[str, float | int]:
-    """A complete mode record; the exponents follow the map's two published forms."""
+) -> dict[str, Any]:
+    """A complete mode record (unbounded); the exponents follow the map's two published
+    forms."""
     same = frequency_joint == damping_joint
-    mode: dict[str, float | int] = {
+    mode: dict[str, Any] = {
         "k_0": K_0_FIXED,
         "k_j": 0.0,
         "k_g": 0.0,
@@ -172,8 +178,26 @@ def _mode_dict(
     return mode
 
 
+def data_range(table: PoseTable, joint: int) -> list[float]:
+    """``[min, max]`` of ``J_joint`` over the poses of ``table``, kg m².
+
+    Raises
+    ------
+    ValueError
+        If the inertia does not vary over the poses (no range to fit, or to trust, a map on).
+    """
+    j = table.inertia_kg_m2[:, joint]
+    lo, hi = float(np.min(j)), float(np.max(j))
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0.0 < lo < hi):
+        raise ValueError(
+            f"J_{joint} over the {table.n_poses} poses spans [{lo}, {hi}] kg m²: the map needs "
+            "poses with different, positive inertias"
+        )
+    return [lo, hi]
+
+
 def evaluate_mode(
-    mode: Mapping[str, float | int], inertia_kg_m2: np.ndarray, gravity_torque_nm: np.ndarray
+    mode: Mapping[str, Any], inertia_kg_m2: np.ndarray, gravity_torque_nm: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(ω_n, ζ)`` of one mode at every pose, through :class:`tvist.DynamicMap`.
 
@@ -390,6 +414,7 @@ def fit_map(
     drop_negligible: bool = True,
     drop_t: float = 3.0,
     include_low_confidence: bool = False,
+    limit_to_data: bool = True,
     metadata: Mapping[str, Any] | None = None,
 ) -> DynamicMap:
     """Fit a :class:`tvist.DynamicMap` to modes identified at many poses.
@@ -409,6 +434,9 @@ def fit_map(
         Significance threshold, in standard errors.
     include_low_confidence
         Also use identifications flagged low-confidence.
+    limit_to_data
+        Store, per mode, the range of ``J_f`` and ``J_d`` over the poses used, so that the map
+        clamps inertias into it (no extrapolation). ``False`` gives an unbounded map.
     metadata
         Extra map metadata (``robot``, ``payload``, ``source``); ``fit_statistics`` is filled
         in here.
@@ -417,7 +445,8 @@ def fit_map(
     -------
     DynamicMap
         With ``metadata["fit_statistics"]``: per mode the coefficients with standard errors,
-        the RMS relative errors, the dropped terms and the frequency-joint comparison.
+        the RMS relative errors, the dropped terms and the frequency-joint comparison; with
+        ``limit_to_data``, each mode carries its inertia ranges.
 
     Raises
     ------
@@ -472,6 +501,9 @@ def fit_map(
 
         damp = _fit_dropping(fit_damp, predict_damp, list(damp_terms), droppable, drop_t)
         mode = _mode_dict({**stiffness, **damp.values}, f_joint, spec.damping_joint)
+        if limit_to_data:
+            mode["frequency_inertia_range_kg_m2"] = data_range(table, f_joint)
+            mode["damping_inertia_range_kg_m2"] = data_range(table, spec.damping_joint)
         modes.append(mode)
         stats["modes"].append(
             {

@@ -6,11 +6,14 @@ a load-dependent damper. With the deflection ``delta = q_motor - q_link`` (rad):
 
 - gear spring, eq. 22: ``tau_spring = k1 * delta + k3 * delta**3`` (N m), tangent stiffness
   ``k1 + 3 k3 delta**2`` (eq. 23);
-- gear damping, eq. 35 with constant ``c``: ``tau_damping = c0 * (1 + c_load * |tau_spring|_s) *
-  d(delta)/dt`` (N m), i.e. friction that grows with the load the gear carries. ``|x|_s =
-  sqrt(x² + s²) − s`` is a smooth absolute value (``s = load_smoothing_nm``): a gear's friction
-  has no kink where its load changes sign, and a kink would put one into the true damping
-  ratio along a move (and so into references shaped with it).
+- gear damping, eq. 35 with constant ``c``: ``tau_damping = c0 * (1 + c_load * |L|_s) *
+  d(delta)/dt`` (N m), i.e. friction that grows with the load ``L`` (N m) the joint's gear and
+  bearings carry. ``L`` is the spring torque of the joint named by ``damper_load_joint``: by
+  default the joint's own gear torque; for the base of a UR arm, the shoulder's, which is the
+  tilting moment the arm exerts on the base's cross-roller bearing (see :data:`UR5E_FLEX`).
+  ``|x|_s = sqrt(x² + s²) − s`` is a smooth absolute value (``s = load_smoothing_nm``): a
+  gear's friction has no kink where its load changes sign, and a kink would put one into the
+  true damping ratio along a move (and so into references shaped with it).
 
 The stiffness is an *effective* joint stiffness: it lumps the gear with the compliance of the
 bearings and the links, which the paper also folds into the joint modes (section 4.1).
@@ -39,13 +42,16 @@ class FlexParams:
     c0_nms_per_rad
         Viscous gear damping at zero load (N m s/rad).
     c_load_per_nm
-        Load dependence of the damping (1/(N m)), >= 0: the damping coefficient is
-        ``c0 * (1 + c_load * |tau_spring|_s)``.
+        Load dependence of the damping (1/(N m)), >= 0: the damping coefficient of joint ``j``
+        is ``c0 * (1 + c_load * |tau_spring[damper_load_joint[j]]|_s)``.
     load_smoothing_nm
         Width ``s`` of the smooth absolute value ``|x|_s = sqrt(x² + s²) − s`` (N m), > 0.
     max_deflection_rad
         A gear deflection larger than this (rad) means the simulation has diverged; real
         strain-wave gears deflect a few milliradians.
+    damper_load_joint
+        For each joint, the joint whose gear spring torque is the load of its damper
+        (0-based indices); ``None``: every damper is loaded by its own gear.
     """
 
     k1_nm_per_rad: tuple[float, ...]
@@ -54,6 +60,7 @@ class FlexParams:
     c_load_per_nm: tuple[float, ...]
     load_smoothing_nm: float = 5.0
     max_deflection_rad: float = 0.1
+    damper_load_joint: tuple[int, ...] | None = None
 
     def validate(self, n_dof: int) -> None:
         """Raise ValueError unless every field is finite, has ``n_dof`` entries and a valid sign."""
@@ -77,6 +84,24 @@ class FlexParams:
             value = float(getattr(self, name))
             if not (math.isfinite(value) and value > 0.0):
                 raise ValueError(f"FlexParams.{name} must be > 0, got {value!r}")
+        if self.damper_load_joint is not None:
+            try:
+                joints = tuple(self.damper_load_joint)
+            except TypeError:
+                joints = ()
+            if len(joints) != n_dof or not all(
+                isinstance(j, (int, np.integer)) and 0 <= j < n_dof for j in joints
+            ):
+                raise ValueError(
+                    f"FlexParams.damper_load_joint: expected {n_dof} joint indices in "
+                    f"[0, {n_dof - 1}], got {self.damper_load_joint!r}"
+                )
+
+    def damper_load_index(self) -> np.ndarray:
+        """Indices ``idx`` ``(n_dof,)``: joint ``j``'s damper load is spring torque ``idx[j]``."""
+        if self.damper_load_joint is None:
+            return np.arange(len(self.c0_nms_per_rad))
+        return np.asarray(self.damper_load_joint, dtype=np.intp)
 
     def spring_torque_nm(self, delta_rad: np.ndarray) -> np.ndarray:
         """Gear spring torque ``k1 delta + k3 delta³`` (N m) for deflections ``(..., n_dof)``."""
@@ -89,8 +114,14 @@ class FlexParams:
         return np.asarray(self.k1_nm_per_rad) + 3.0 * np.asarray(self.k3_nm_per_rad3) * delta**2
 
     def damping_nms_per_rad(self, spring_torque_nm: np.ndarray) -> np.ndarray:
-        """Load-dependent gear damping ``c0 (1 + c_load |tau|_s)`` (N m s/rad)."""
-        tau = np.asarray(spring_torque_nm, dtype=float)
+        """Load-dependent gear damping ``c0 (1 + c_load |L|_s)`` (N m s/rad), ``(..., n_dof)``.
+
+        ``spring_torque_nm`` holds the gear spring torques of all joints ``(..., n_dof)``; the
+        load ``L`` of joint ``j`` is entry ``damper_load_joint[j]`` of it. This is the one
+        definition of the damping law: the time-stepping loop of :class:`tvist.sim.Twin`
+        evaluates the same expression in place.
+        """
+        tau = np.asarray(spring_torque_nm, dtype=float)[..., self.damper_load_index()]
         s = self.load_smoothing_nm
         load = np.sqrt(tau * tau + s * s) - s
         return np.asarray(self.c0_nms_per_rad) * (1.0 + np.asarray(self.c_load_per_nm) * load)
@@ -114,7 +145,8 @@ class FlexParams:
 
 #: UR5e, effective joint stiffness and damping (chosen so that with a 5 kg payload 5 cm beyond
 #: the flange the base and shoulder modes fall where the paper measured them: Q1 about 8 and
-#: 7 Hz, Q3 about 22 and 19 Hz; damping ratios 0.1 to 0.25).
+#: 7 Hz, Q3 about 22 and 19 Hz; damping ratios 0.1 to 0.25, the base's higher stretched
+#: than folded).
 #:
 #: - ``k1``: base 22 000, shoulder 18 000 N m/rad, the size-3 strain-wave gears (150 N m
 #:   rated) in series with bearings and links (the paper's base gear alone: 42 000 N m/rad).
@@ -127,12 +159,31 @@ class FlexParams:
 #: - ``k3``: the tangent stiffness ``k1 + 3 k3 delta²`` grows by 25 % at the rated torque
 #:   ``tau_r`` (the curve of the paper's Fig. 13 doubles near rated torque):
 #:   ``delta_r = 3 tau_r / (3.25 k1)``, ``k3 = 0.25 k1 / (3 delta_r²)``.
-#: - ``c0``, ``c_load``: gear damping that doubles at 100 N m of gear torque (eq. 35).
+#: - ``c0``, ``c_load`` of joints 2-6: gear damping (N m s/rad) that doubles at 100 N m of
+#:   the joint's own gear torque (eq. 35, ``c_load`` 0.01 /(N m)).
+#: - Base damping, loaded by the shoulder's spring torque (``damper_load_joint[0] = 1``): the
+#:   base joint carries no gravity torque, but its cross-roller bearing carries the arm's
+#:   tilting moment, and bearing and gear friction grow with that load. The shoulder axis is
+#:   horizontal and meets the base axis, so the shoulder gear torque is the moment of all
+#:   gravity (and inertial) forces beyond the shoulder about a horizontal axis on the base
+#:   axis; at rest the forces are vertical, so this is the tilting moment on the base bearing
+#:   in the arm's plane, whatever the height of the bearing. It is evaluated at no extra cost
+#:   in the time-stepping loop. Left out are link 1's own moment (its centre of mass lies near
+#:   the base axis) and the moment across the arm's plane from the wrist offsets d4-d6, about
+#:   13 (no payload) to 30 N m (5 kg) and changing little with the pose, so lumped into ``c0``.
+#:   ``c0 = 10`` N m s/rad is the unloaded bearing and gear friction; ``c_load = 0.2`` /(N m)
+#:   makes the damping grow about twentyfold at the ~100 N m of the stretched arm with 5 kg.
+#:   These two numbers reproduce the real UR5e's trend (SPEC Table 3: base ζ 0.26 stretched at
+#:   Q1, 0.08 folded at Q3): with 5 kg the twin's base ζ is 0.24 at Q1 and 0.11 at Q3, and
+#:   0.07-0.26 over the mapping campaign's poses. A constant base damping (no load) would
+#:   instead give ζ = c / (2 √(k J_0)), rising to 0.4-0.8 where the arm is folded near the
+#:   base axis (small J_0).
 UR5E_FLEX = FlexParams(
     k1_nm_per_rad=(22000.0, 18000.0, 120000.0, 15000.0, 15000.0, 2000.0),
     k3_nm_per_rad3=(4.63e7, 2.53e7, 7.51e9, 4.21e8, 4.21e8, 9.98e5),
-    c0_nms_per_rad=(90.0, 60.0, 40.0, 5.0, 5.0, 0.2),
-    c_load_per_nm=(0.01, 0.01, 0.01, 0.01, 0.01, 0.01),
+    c0_nms_per_rad=(10.0, 60.0, 40.0, 5.0, 5.0, 0.2),
+    c_load_per_nm=(0.2, 0.01, 0.01, 0.01, 0.01, 0.01),
+    damper_load_joint=(1, 1, 2, 3, 4, 5),
 )
 
 _DEFAULTS: dict[str, FlexParams] = {"ur5e": UR5E_FLEX}

@@ -12,7 +12,10 @@ file, plus the payload); each hinge carries the gear torque of :class:`~tvist.si
 ``tau_j = k1 delta_j + k3 delta_j³ + c_j(tau) (d/dt)delta_j``,  ``delta_j = q_motor,j - q_j``,
 
 which acts between link ``j-1`` and link ``j`` and therefore is the generalized force of hinge
-``j``. Rotor inertia does not enter: the motor's motion is prescribed.
+``j``. The damping coefficient ``c_j`` grows with the load on joint ``j``'s gear and bearing, a
+spring torque (:meth:`~tvist.sim.FlexParams.damping_nms_per_rad`; for the base, the shoulder's,
+i.e. the arm's tilting moment on the base bearing). Rotor inertia does not enter: the motor's
+motion is prescribed.
 
 Integration: semi-implicit Euler of MuJoCo's ``implicitfast`` integrator. The spring torque is
 explicit (no numerical damping of the modes); the damping of the link velocity is half explicit,
@@ -147,6 +150,7 @@ class Twin:
         self._k3 = np.asarray(self._flex.k3_nm_per_rad3, dtype=float)
         self._c0 = np.asarray(self._flex.c0_nms_per_rad, dtype=float)
         self._c_load = np.asarray(self._flex.c_load_per_nm, dtype=float)
+        self._load_index = self._flex.damper_load_index()
 
     # ------------------------------------------------------------------ properties
 
@@ -263,7 +267,10 @@ class Twin:
         ``M dq'' + C dq' + (K_gear + dG/dq) dq = 0`` with the mass matrix ``M`` of the link
         side, the tangent gear stiffness ``K_gear = diag(k1 + 3 k3 delta_g²)`` at the gravity
         deflection ``delta_g``, the gravity stiffness ``dG/dq`` and the gear damping at the
-        gravity load ``C = diag(c0 (1 + c_load |tau_g|_s))``.
+        static load ``C = diag(c(tau_g))`` of :meth:`~tvist.sim.FlexParams.damping_nms_per_rad`
+        with the gravity spring torques ``tau_g`` (the damping force ``c(tau) (d/dt)delta``
+        has no first-order term in the load: it is multiplied by a velocity that is zero at
+        rest).
         """
         theta = self._check_pose(np.asarray(q, dtype=float), "q")
         q_link = self.equilibrium(theta)
@@ -341,6 +348,7 @@ class Twin:
         *,
         initial_dq_rad: Sequence[float] | np.ndarray | None = None,
         initial_qd_rad_s: Sequence[float] | np.ndarray | None = None,
+        noise_seed: int | Sequence[int] | None = None,
     ) -> SimRecord:
         """Simulate the joint reference ``Q_ref`` and record it like RTDE at the control rate.
 
@@ -358,6 +366,10 @@ class Twin:
         initial_dq_rad, initial_qd_rad_s
             Optional link-side offsets from the rest state at ``t = 0`` (rad, rad/s), for
             free-decay experiments; ``(n_dof,)``.
+        noise_seed
+            Seed of this run's accelerometer noise (an integer or a sequence of integers);
+            ``None`` continues the twin's own generator (seeded by ``seed``), so the noise
+            then depends on the runs before. A seed makes the run reproducible on its own.
 
         Returns
         -------
@@ -409,6 +421,7 @@ class Twin:
         flange_rot = np.empty((n_samples, 9))
 
         k1, k3, c0, c_load = self._k1, self._k3, self._c0, self._c_load
+        load_index = self._load_index
         qpos, qvel, applied = data.qpos, data.qvel, data.qfrc_applied
         dof_damping = model.dof_damping
         site_xpos, site_xmat, sensordata = data.site_xpos, data.site_xmat, data.sensordata
@@ -446,8 +459,10 @@ class Twin:
                     # is applied, c / 2 is MuJoCo dof damping, which acts on v_{n+1}. This
                     # is second-order accurate; fully implicit damping would lower every
                     # mode frequency by about zeta wn dt / 2.
-                    # |tau|_s = sqrt(tau² + s²) - s, as FlexParams.damping_nms_per_rad
-                    np.multiply(tau, tau, out=damp)
+                    # Load L = tau[load_index], |L|_s = sqrt(L² + s²) - s: the law of
+                    # FlexParams.damping_nms_per_rad, in place.
+                    np.take(tau, load_index, out=damp)
+                    damp *= damp
                     damp += smoothing_sq
                     np.sqrt(damp, out=damp)
                     damp -= smoothing
@@ -487,7 +502,8 @@ class Twin:
                 bar.close()
 
         if self._noise_std > 0.0:
-            accel = accel + self._rng.normal(0.0, self._noise_std, size=accel.shape)
+            rng = self._rng if noise_seed is None else np.random.default_rng(noise_seed)
+            accel = accel + rng.normal(0.0, self._noise_std, size=accel.shape)
         from scipy.spatial.transform import Rotation
 
         rotvec = Rotation.from_matrix(flange_rot.reshape(-1, 3, 3)).as_rotvec()
