@@ -12,6 +12,7 @@ from tvist.ident.cli import (
     add_identify_command,
     add_sensitivity_command,
 )
+from tvist.shape_command import METHODS as SHAPING_METHODS
 from tvist.shape_command import add_shape_command
 
 
@@ -24,18 +25,27 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from tvist import DynamicMap
     from tvist.demo import default_methods, fd_tvist_map, run_demo
 
+    chosen = set(args.method or SHAPING_METHODS)
     methods = default_methods()
     for i, path in enumerate(args.map or []):
         methods.append(
             fd_tvist_map(f"fd-tvist-map-{i + 1}", f"FD-TVIST ZV, map {path}", DynamicMap.load(path))
         )
+    methods = [m for m in methods if _demo_row_method(m.key) in chosen | {"unshaped"}]
     run_demo(
         out_dir=args.out or "out/demo",
         quick=args.quick,
         methods=methods,
-        identify=args.identify,
+        identify=args.identify and "tvist" in chosen,
     )
     return 0
+
+
+def _demo_row_method(key: str) -> str:
+    """Which ``--method`` a demo row belongs to (``"unshaped"`` for the baseline)."""
+    if key.startswith("fd-tvist"):
+        return "tvist"
+    return {"zero-delay-ztdis": "ztdis", "zero-delay-modified": "mztdis"}.get(key, "unshaped")
 
 
 def _add_demo(sub: argparse._SubParsersAction) -> None:
@@ -49,6 +59,13 @@ def _add_demo(sub: argparse._SubParsersAction) -> None:
         action="append",
         metavar="FILE",
         help="add an FD-TVIST row driven by this dynamic map file (repeatable)",
+    )
+    p.add_argument(
+        "--method",
+        action="append",
+        choices=SHAPING_METHODS,
+        help="shaping method rows to run (repeatable; default all): tvist = FD-TVIST, "
+        "ztdis = zero-time-delay IS, mztdis = modified ZTDIS",
     )
     p.add_argument(
         "--identify",

@@ -22,6 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
+#: The shaping methods offered on the command line (``--method``): FD-TVIST, ZTDIS and
+#: modified ZTDIS.
 METHODS = ("tvist", "ztdis", "mztdis")
 
 
