@@ -273,6 +273,16 @@ def test_accelerometer_noise_is_seeded_white_noise() -> None:
     noisy_a = Twin(accel_noise_std=0.05, seed=3).run(hold(Q3, 1.0)).actual_tool_accelerometer
     noisy_b = Twin(accel_noise_std=0.05, seed=3).run(hold(Q3, 1.0)).actual_tool_accelerometer
     np.testing.assert_array_equal(noisy_a, noisy_b)
+    # A run seed makes the noise depend on that seed only, whatever ran before, and leaves
+    # the twin's own generator (used by runs without one) untouched.
+    twin = Twin(accel_noise_std=0.05, seed=3)
+    first = twin.run(hold(Q3, 1.0), noise_seed=[3, 11]).actual_tool_accelerometer
+    assert not np.array_equal(first, noisy_a)
+    np.testing.assert_array_equal(twin.run(hold(Q3, 1.0)).actual_tool_accelerometer, noisy_a)
+    again = twin.run(hold(Q3, 1.0), noise_seed=[3, 11]).actual_tool_accelerometer
+    np.testing.assert_array_equal(first, again)
+    with pytest.raises(ValueError, match="noise_seed"):
+        twin.run(hold(Q3, 0.1), noise_seed=-1)
     noise = noisy_a - clean
     # 1500 samples: the sample std has a relative standard error of 1/sqrt(2*1500) ~ 1.8 %,
     # so 10 % is more than 5 standard errors; the mean's standard error is 0.05/sqrt(1500).

@@ -369,7 +369,8 @@ class Twin:
         noise_seed
             Seed of this run's accelerometer noise (an integer or a sequence of integers);
             ``None`` continues the twin's own generator (seeded by ``seed``), so the noise
-            then depends on the runs before. A seed makes the run reproducible on its own.
+            then depends on the runs before. A seed makes the run reproducible on its own and
+            leaves the twin's generator untouched.
 
         Returns
         -------
@@ -394,6 +395,14 @@ class Twin:
                 f"physics_dt_s = {self.physics_dt_s:g} s"
             )
         self._check_speed(q_ref, dt)
+        if noise_seed is not None:
+            try:
+                np.random.SeedSequence(noise_seed)
+            except (TypeError, ValueError):
+                raise ValueError(
+                    f"noise_seed must be a non-negative integer or a sequence of them, "
+                    f"got {noise_seed!r}"
+                ) from None
         n_samples, n = q_ref.shape
         offsets = []
         for value, what in ((initial_dq_rad, "initial_dq_rad"), (initial_qd_rad_s, "initial_qd")):
@@ -461,7 +470,9 @@ class Twin:
                     # mode frequency by about zeta wn dt / 2.
                     # Load L = tau[load_index], |L|_s = sqrt(L² + s²) - s: the law of
                     # FlexParams.damping_nms_per_rad, in place.
-                    np.take(tau, load_index, out=damp)
+                    # mode="clip" writes straight into damp (mode="raise" would buffer);
+                    # the indices were validated with the FlexParams.
+                    np.take(tau, load_index, out=damp, mode="clip")
                     damp *= damp
                     damp += smoothing_sq
                     np.sqrt(damp, out=damp)
