@@ -284,7 +284,7 @@ def add_sensitivity_command(sub: argparse._SubParsersAction) -> None:
         "sensitivity",
         help="PRV sensitivity and map robustness figures (paper Figs. 27-30)",
         description="Plot the two-mode ZV shaper's PRV around the map's modes and, with "
-        "--results, the identified modes against the map's 10 %% PRV band.",
+        "--results, the identified modes against the map's 10 % PRV band.",
     )
     p.add_argument("--map", help="map file (default: the paper's UR5e map)")
     p.add_argument("--results", help="campaign results (JSON lines) to overlay and judge")
