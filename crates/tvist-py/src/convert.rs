@@ -1,7 +1,7 @@
 //! numpy <-> Rust conversions shared by the bindings, with the error messages users see.
 
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::ndarray::{ArrayD, IxDyn};
+use numpy::{IntoPyArray, PyArrayDyn, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
@@ -40,14 +40,18 @@ pub fn check_start_pose(q0: &[f64], n: usize) -> PyResult<()> {
     Ok(())
 }
 
-/// A row-major `(n, cols)` buffer as a numpy array.
-pub fn array2<'py>(
+/// A row-major buffer as a numpy array of the given shape.
+pub fn array<'py>(
     py: Python<'py>,
-    n: usize,
-    cols: usize,
+    shape: &[usize],
     data: Vec<f64>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let arr = Array2::from_shape_vec((n, cols), data)
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let arr = ArrayD::from_shape_vec(IxDyn(shape), data)
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
     Ok(arr.into_pyarray(py))
+}
+
+/// A setup error of the core as a Python `ValueError`.
+pub fn value_error(e: tvist_core::Error) -> PyErr {
+    PyValueError::new_err(e.to_string())
 }

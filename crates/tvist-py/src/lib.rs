@@ -2,7 +2,7 @@
 //! No algorithm lives here.
 
 use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+    IntoPyArray, PyArray1, PyArrayDyn, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
 };
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -11,12 +11,9 @@ use tvist_core::{Dynamics, Mode, Status};
 
 mod convert;
 mod robot;
-
 mod ztdis;
 
-fn value_error(e: core::Error) -> PyErr {
-    PyValueError::new_err(e.to_string())
-}
+use convert::value_error;
 
 fn modes_from_pairs(pairs: Vec<(f64, f64)>) -> Vec<Mode> {
     pairs.into_iter().map(|(wn, z)| Mode::new(wn, z)).collect()
@@ -375,7 +372,7 @@ impl PyTvShaper {
         &mut self,
         py: Python<'py>,
         q: PyReadonlyArray2<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let shape = q.shape();
         let (n, d) = (shape[0], shape[1]);
         if d != self.inner.n_dof() {
@@ -428,7 +425,7 @@ impl PyTvShaper {
         self.counts = counts;
         self.last_status = last;
         self.take_callable_error()?;
-        convert::array2(py, n, d, output)
+        convert::array(py, &[n, d], output)
     }
 
     /// Puts the filter at rest at q0, or (None) forgets history so the next sample starts it.

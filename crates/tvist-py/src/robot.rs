@@ -1,18 +1,14 @@
 //! Bindings of the robot model, the dynamic map and the map-driven dynamics provider.
 
-use numpy::ndarray::{Array2, Array3};
 use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2,
-    PyUntypedArrayMethods,
+    IntoPyArray, PyArray1, PyArrayDyn, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
 };
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use tvist_core as core;
 use tvist_core::{Dynamics, Mode, Status};
 
-fn value_error(e: core::Error) -> PyErr {
-    PyValueError::new_err(e.to_string())
-}
+use crate::convert::{self, rows, value_error};
 
 fn check_len(what: &str, got: usize, expected: usize) -> PyResult<()> {
     if got == expected {
@@ -22,22 +18,6 @@ fn check_len(what: &str, got: usize, expected: usize) -> PyResult<()> {
             "{what} has {got} values, expected {expected}"
         )))
     }
-}
-
-fn rows(arr: &PyReadonlyArray2<'_, f64>, cols: usize, what: &str) -> PyResult<(usize, Vec<f64>)> {
-    let shape = arr.shape();
-    if shape[1] != cols {
-        return Err(PyValueError::new_err(format!(
-            "{what} has shape ({}, {}), expected (n, {cols})",
-            shape[0], shape[1]
-        )));
-    }
-    // Row-major whatever the memory layout (`as_slice` also accepts Fortran order).
-    let data: Vec<f64> = match arr.as_slice() {
-        Ok(s) if arr.is_c_contiguous() => s.to_vec(),
-        _ => arr.as_array().iter().copied().collect(),
-    };
-    Ok((shape[0], data))
 }
 
 fn six(values: &[f64]) -> [f64; 6] {
@@ -156,12 +136,10 @@ impl PyRobot {
         &mut self,
         py: Python<'py>,
         q: PyReadonlyArray2<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let n = self.inner.n_dof();
         let (m, out) = self.many(&q, n, |r, x, y| r.joint_inertia(x, y))?;
-        Ok(Array2::from_shape_vec((m, n), out)
-            .map_err(|e| PyValueError::new_err(e.to_string()))?
-            .into_pyarray(py))
+        convert::array(py, &[m, n], out)
     }
 
     /// Joint-space inertia matrix M(q) (n, n).
@@ -169,14 +147,12 @@ impl PyRobot {
         &mut self,
         py: Python<'py>,
         q: PyReadonlyArray1<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let n = self.inner.n_dof();
         let q = self.q(&q)?;
         let mut out = vec![0.0; n * n];
         self.inner.mass_matrix(q, &mut out);
-        Ok(Array2::from_shape_vec((n, n), out)
-            .map_err(|e| PyValueError::new_err(e.to_string()))?
-            .into_pyarray(py))
+        convert::array(py, &[n, n], out)
     }
 
     /// mass_matrix for every row of Q: (n_samples, n, n).
@@ -184,12 +160,10 @@ impl PyRobot {
         &mut self,
         py: Python<'py>,
         q: PyReadonlyArray2<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let n = self.inner.n_dof();
         let (m, out) = self.many(&q, n * n, |r, x, y| r.mass_matrix(x, y))?;
-        Ok(Array3::from_shape_vec((m, n, n), out)
-            .map_err(|e| PyValueError::new_err(e.to_string()))?
-            .into_pyarray(py))
+        convert::array(py, &[m, n, n], out)
     }
 
     /// Flange pose in the base frame (4, 4).
@@ -197,13 +171,11 @@ impl PyRobot {
         &mut self,
         py: Python<'py>,
         q: PyReadonlyArray1<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let q = self.q(&q)?;
         let mut out = [0.0; 16];
         self.inner.flange_pose(q, &mut out);
-        Ok(Array2::from_shape_vec((4, 4), out.to_vec())
-            .map_err(|e| PyValueError::new_err(e.to_string()))?
-            .into_pyarray(py))
+        convert::array(py, &[4, 4], out.to_vec())
     }
 
     /// flange_pose for every row of Q: (n_samples, 4, 4).
@@ -211,16 +183,14 @@ impl PyRobot {
         &mut self,
         py: Python<'py>,
         q: PyReadonlyArray2<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let (m, out) = self.many(&q, 16, |r, x, y| {
             let mut t = [0.0; 16];
             let s = r.flange_pose(x, &mut t);
             y.copy_from_slice(&t);
             s
         })?;
-        Ok(Array3::from_shape_vec((m, 4, 4), out)
-            .map_err(|e| PyValueError::new_err(e.to_string()))?
-            .into_pyarray(py))
+        convert::array(py, &[m, 4, 4], out)
     }
 
     /// Geometric Jacobian of the flange origin, base frame, rows [linear; angular] (6, n).
@@ -228,14 +198,12 @@ impl PyRobot {
         &mut self,
         py: Python<'py>,
         q: PyReadonlyArray1<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let n = self.inner.n_dof();
         let q = self.q(&q)?;
         let mut out = vec![0.0; 6 * n];
         self.inner.jacobian(q, &mut out);
-        Ok(Array2::from_shape_vec((6, n), out)
-            .map_err(|e| PyValueError::new_err(e.to_string()))?
-            .into_pyarray(py))
+        convert::array(py, &[6, n], out)
     }
 
     /// jacobian for every row of Q: (n_samples, 6, n).
@@ -243,12 +211,10 @@ impl PyRobot {
         &mut self,
         py: Python<'py>,
         q: PyReadonlyArray2<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let n = self.inner.n_dof();
         let (m, out) = self.many(&q, 6 * n, |r, x, y| r.jacobian(x, y))?;
-        Ok(Array3::from_shape_vec((m, 6, n), out)
-            .map_err(|e| PyValueError::new_err(e.to_string()))?
-            .into_pyarray(py))
+        convert::array(py, &[m, 6, n], out)
     }
 
     /// Gravity torques (N m), g = 9.81 m/s^2 along -z of the base.
@@ -268,12 +234,10 @@ impl PyRobot {
         &mut self,
         py: Python<'py>,
         q: PyReadonlyArray2<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let n = self.inner.n_dof();
         let (m, out) = self.many(&q, n, |r, x, y| r.gravity_torque(x, y))?;
-        Ok(Array2::from_shape_vec((m, n), out)
-            .map_err(|e| PyValueError::new_err(e.to_string()))?
-            .into_pyarray(py))
+        convert::array(py, &[m, n], out)
     }
 
     /// Upper bound of each J_i over all configurations (kg m^2).
@@ -435,7 +399,7 @@ impl PyDynamicMap {
         py: Python<'py>,
         inertia_kg_m2: PyReadonlyArray2<'py, f64>,
         gravity_torque_nm: Option<PyReadonlyArray2<'py, f64>>,
-    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let cols = inertia_kg_m2.shape()[1];
         let need = self.inner.required_joints();
         if cols < need {
@@ -473,9 +437,7 @@ impl PyDynamicMap {
                 pair[1] = mode.zeta;
             }
         }
-        Ok(Array3::from_shape_vec((n, m, 2), out)
-            .map_err(|e| PyValueError::new_err(e.to_string()))?
-            .into_pyarray(py))
+        convert::array(py, &[n, m, 2], out)
     }
 
     /// The coefficients of every mode as dicts (see the constructor), ranges as [min, max]

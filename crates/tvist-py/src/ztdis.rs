@@ -1,35 +1,31 @@
 //! Bindings of `tvist_core::ztdis`: the zero-time-delay time scales and the modified-ZTDIS
 //! compensator. Thin wrappers only; the equations live in the core.
 
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{IntoPyArray, PyArray1, PyArrayDyn, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use tvist_core::ztdis::{self, Compensator, Discretization};
-use tvist_core::{Error, Mode, Status};
+use tvist_core::{Mode, Status};
 
 use crate::convert;
-
-fn to_value_error(e: Error) -> PyErr {
-    PyValueError::new_err(e.to_string())
-}
 
 /// ZTDIS time scale alpha = (T - delay)/T; ValueError unless the move is longer than the delay.
 #[pyfunction]
 fn ztdis_alpha(move_s: f64, delay_s: f64) -> PyResult<f64> {
-    ztdis::ztdis_alpha(move_s, delay_s).map_err(to_value_error)
+    ztdis::ztdis_alpha(move_s, delay_s).map_err(convert::value_error)
 }
 
 /// Modified-ZTDIS time scale alpha' = T/(T + delay).
 #[pyfunction]
 fn modified_alpha(move_s: f64, delay_s: f64) -> PyResult<f64> {
-    ztdis::modified_alpha(move_s, delay_s).map_err(to_value_error)
+    ztdis::modified_alpha(move_s, delay_s).map_err(convert::value_error)
 }
 
 /// The mode (wn_rad_s/alpha, zeta) whose registry shaper has every delay scaled by alpha.
 #[pyfunction]
 fn scaled_mode(wn_rad_s: f64, zeta: f64, alpha: f64) -> PyResult<(f64, f64)> {
     let m = ztdis::scaled_mode(Mode::new(wn_rad_s, zeta), alpha);
-    m.validate(0).map_err(to_value_error)?;
+    m.validate(0).map_err(convert::value_error)?;
     Ok((m.wn_rad_s, m.zeta))
 }
 
@@ -52,9 +48,9 @@ impl PyCompensator {
         discretization: &str,
     ) -> PyResult<Self> {
         let modes: Vec<Mode> = modes.into_iter().map(|(w, z)| Mode::new(w, z)).collect();
-        let method = Discretization::from_name(discretization).map_err(to_value_error)?;
+        let method = Discretization::from_name(discretization).map_err(convert::value_error)?;
         let inner = Compensator::with_discretization(&modes, alpha, dt_s, n_dof, method)
-            .map_err(to_value_error)?;
+            .map_err(convert::value_error)?;
         Ok(PyCompensator {
             inner,
             last_status: Status::OK,
@@ -85,12 +81,12 @@ impl PyCompensator {
         &mut self,
         py: Python<'py>,
         q: PyReadonlyArray2<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let (n, input) = convert::rows(&q, self.inner.n_channels(), "Q")?;
         let mut output = vec![0.0; input.len()];
         let inner = &mut self.inner;
         self.last_status = py.detach(|| inner.filter_into(&input, &mut output));
-        convert::array2(py, n, self.inner.n_channels(), output)
+        convert::array(py, &[n, self.inner.n_channels()], output)
     }
 
     /// Puts the compensator at rest at q0, or (None) lets the next sample start it at rest.
