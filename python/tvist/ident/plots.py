@@ -154,25 +154,7 @@ def plot_frequency_robustness(
     (the other inertia fixed at mid-range, ``J_0 = 4.5`` as in the paper); shaded: the 10 %
     PRV band of the two-mode shaper designed from the map; dots: identified frequencies.
     """
-    plt = _pyplot()
-    joint = mode if joint is None else joint
-    f_joint = dynmap.mode_maps[mode]["frequency_joint"]
-    jx, f, _ = _points(results, joint, f_joint)
-    bottom = min(0.3, float(jx.min()) * 0.9) if jx.size else 0.3
-    top = max(10.0, float(jx.max()) * 1.1) if jx.size else 10.0
-    grid = np.geomspace(bottom, top, 80)
-    centre, lo, hi = _map_curve(dynmap, mode, grid, "frequency", shaper)
-    fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
-    ax.fill_between(grid, lo, hi, color="#9ecae1", label="PRV <= 10 %")
-    ax.plot(grid, centre, "k-", label="dynamic map")
-    if jx.size:
-        ax.plot(jx, f, "o", ms=4, color="#d62728", label="identified")
-    ax.set_xscale("log")
-    ax.set_xlabel(f"J_{f_joint} (kg m²)")
-    ax.set_ylabel("natural frequency (Hz)")
-    ax.set_title(f"{'base' if mode == 0 else 'shoulder'} mode: robustness to frequency errors")
-    ax.legend()
-    return _save(fig, path)
+    return _plot_robustness(dynmap, results, path, mode, joint, shaper, "frequency")
 
 
 def plot_damping_robustness(
@@ -185,23 +167,39 @@ def plot_damping_robustness(
     shaper: str = "zv",
 ) -> Path:
     """Fig. 30: damping ratio vs inertia with the 10 % PRV band (default: shoulder mode)."""
+    return _plot_robustness(dynmap, results, path, mode, joint, shaper, "damping")
+
+
+def _plot_robustness(
+    dynmap: tvist.DynamicMap,
+    results: Sequence[Mapping[str, Any]],
+    path: str | Path,
+    mode: int,
+    joint: int | None,
+    shaper: str,
+    quantity: str,
+) -> Path:
+    """The map's frequency or damping (``quantity``) against the inertia of its frequency
+    joint, with the 10 % PRV band and the identified values."""
     plt = _pyplot()
     joint = mode if joint is None else joint
     f_joint = dynmap.mode_maps[mode]["frequency_joint"]
-    jx, _, z = _points(results, joint, f_joint)
+    jx, f, z = _points(results, joint, f_joint)
     bottom = min(0.3, float(jx.min()) * 0.9) if jx.size else 0.3
     top = max(10.0, float(jx.max()) * 1.1) if jx.size else 10.0
     grid = np.geomspace(bottom, top, 80)
-    centre, lo, hi = _map_curve(dynmap, mode, grid, "damping", shaper)
+    centre, lo, hi = _map_curve(dynmap, mode, grid, quantity, shaper)
     fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
     ax.fill_between(grid, lo, hi, color="#9ecae1", label="PRV <= 10 %")
     ax.plot(grid, centre, "k-", label="dynamic map")
     if jx.size:
-        ax.plot(jx, z, "o", ms=4, color="#d62728", label="identified")
+        ax.plot(
+            jx, f if quantity == "frequency" else z, "o", ms=4, color="#d62728", label="identified"
+        )
     ax.set_xscale("log")
     ax.set_xlabel(f"J_{f_joint} (kg m²)")
-    ax.set_ylabel("damping ratio")
-    ax.set_title(f"{'base' if mode == 0 else 'shoulder'} mode: robustness to damping errors")
+    ax.set_ylabel("natural frequency (Hz)" if quantity == "frequency" else "damping ratio")
+    ax.set_title(f"{'base' if mode == 0 else 'shoulder'} mode: robustness to {quantity} errors")
     ax.legend()
     return _save(fig, path)
 
