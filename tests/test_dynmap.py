@@ -14,6 +14,31 @@ from tvist.dynmap import MODE_FIELDS, RANGE_FIELDS, general_mode
 BASE = {"k_0": 10000.0, "k_j": 1060.0, "k_p": 2.54, "c_0": 1.53, "c_2": 0.39, "c_tau": 3.81}
 SHOULDER = {"k_0": 10000.0, "k_j": 763.0, "k_p": 1.73, "c_0": 0.27, "c_2": 0.038, "c_tau": 47.2}
 
+# The documented smoothing of the map (tvist-core dynmap module docs), typed in independently:
+#: Relative width of each blend zone of the soft clamp into an inertia range.
+RANGE_BLEND_WIDTH = 0.05
+#: Smoothing torque of the gravity term k_g (√(τ² + τ_s²) − τ_s), N m.
+GRAVITY_TORQUE_SMOOTHING_NM = 1.0
+
+
+def _soft_clamp(j: float, lo: float, hi: float) -> float:
+    """The C¹ saturation of J into [lo, hi] as documented, written out piece by piece."""
+    eps = RANGE_BLEND_WIDTH
+    if j <= lo * (1 - eps):
+        return lo
+    if j < lo * (1 + eps):
+        return j + (lo * (1 + eps) - j) ** 2 / (4 * lo * eps)
+    if j <= hi * (1 - eps):
+        return j
+    if j < hi * (1 + eps):
+        return j - (j - hi * (1 - eps)) ** 2 / (4 * hi * eps)
+    return hi
+
+
+def _smooth_abs_torque(tau_nm: float) -> float:
+    """√(τ² + τ_s²) − τ_s: the documented stand-in for |τ| in the gravity term."""
+    return float(np.sqrt(tau_nm**2 + GRAVITY_TORQUE_SMOOTHING_NM**2)) - GRAVITY_TORQUE_SMOOTHING_NM
+
 
 def _damped_hz(wn_rad_s: float, zeta: float) -> float:
     return wn_rad_s * np.sqrt(1.0 - zeta**2) / (2.0 * np.pi)
@@ -99,8 +124,8 @@ def test_general_map_with_gravity_term():
     with pytest.raises(ValueError, match="gravity torques"):
         dynmap.modes_from_inertia([2.0, 3.0])
     ((wn, zeta),) = dynmap.modes_from_inertia([2.0, 3.0], [0.0, -40.0])
-    j, tau = 3.0, 40.0
-    k = coeffs["k_0"] + coeffs["k_j"] * j + coeffs["k_g"] * tau
+    j, tau = 3.0, -40.0
+    k = coeffs["k_0"] + coeffs["k_j"] * j + coeffs["k_g"] * _smooth_abs_torque(tau)
     gain = 1 + coeffs["k_p"] / j
     wn_ref = np.sqrt(gain) * np.sqrt(k / j)
     num = (coeffs["c_0"] + coeffs["c_1"] * np.sqrt(j) + coeffs["c_2"] * j) * (
@@ -108,6 +133,32 @@ def test_general_map_with_gravity_term():
     )
     zeta_ref = np.sqrt(gain) * num / (2 * np.sqrt(k * j))
     np.testing.assert_allclose([wn, zeta], [wn_ref, zeta_ref], rtol=1e-12)
+    # The smoothing moves the stiffness by less than k_g τ_s = 30 N m/rad (0.2 % of k_0 here):
+    # with the plain |τ| of eq. 42, ω_n would be higher by less than half of that, 0.1 %.
+    k_plain = coeffs["k_0"] + coeffs["k_j"] * j + coeffs["k_g"] * abs(tau)
+    assert 0.0 < np.sqrt(k_plain / k) - 1.0 < 0.5 * coeffs["k_g"] / coeffs["k_0"]
+
+
+def test_the_gravity_term_is_smooth_where_the_torque_changes_sign():
+    dynmap = tvist.DynamicMap([general_mode(1, **dict(SHOULDER, k_g=30.0))])
+    j1 = 3.0
+    taus = np.linspace(-3.0, 3.0, 601)  # 0.01 N m steps through τ = 0
+    wn = np.array([dynmap.modes_from_inertia([1.0, j1], [0.0, t])[0][0] for t in taus])
+    k = (
+        SHOULDER["k_0"]
+        + SHOULDER["k_j"] * j1
+        + 30.0 * np.array([_smooth_abs_torque(t) for t in taus])
+    )
+    wn_ref = np.sqrt(1 + SHOULDER["k_p"] / j1) * np.sqrt(k / j1)
+    # Same formula, different operation order: 1e-12 relative.
+    np.testing.assert_allclose(wn, wn_ref, rtol=1e-12)
+    # No kink at τ = 0. The smoothed term's curvature there is 1/τ_s, so per 0.01 N m step
+    # the slope of ω_n changes by ~1.05 % of its value far from 0 (s ≈ 0.09 rad/s per N m);
+    # with |τ| it would jump from −s to +s at once, a change of 200 %.
+    slope = np.diff(wn) / np.diff(taus)
+    assert np.max(np.abs(np.diff(slope))) < 0.02 * np.max(np.abs(slope))
+    assert wn[300] == dynmap.modes_from_inertia([1.0, j1], [0.0, 0.0])[0][0]
+    assert wn[300] == pytest.approx(np.sqrt((1 + SHOULDER["k_p"] / j1) * k[300] / j1), rel=1e-15)
 
 
 def test_base_frequency_from_j0_is_a_general_mode_on_joint_0():
@@ -230,6 +281,9 @@ def test_mode_fields_are_the_cores():
 
 
 # ---- inertia ranges: the map never extrapolates beyond the inertias it was identified on ----
+# Each inertia is saturated into its range by a C¹ soft clamp: the identity on
+# [min(1 + ε), max(1 − ε)], exactly the bound beyond min(1 − ε) and max(1 + ε), quadratic
+# blends in between (tvist-core dynmap module docs).
 
 #: The paper's base mode limited to J_0 in [1, 9] (damping) and J_1 in [2, 8] (frequency).
 BASE_RANGES = {
@@ -249,31 +303,70 @@ def test_the_paper_map_has_no_range():
     assert all(m[key] is None for m in paper.mode_maps for key in RANGE_FIELDS)
 
 
-def test_ranges_clamp_each_inertia_exactly_to_its_bound():
+def test_ranges_saturate_each_inertia_into_its_range():
     ranged = _ranged_paper()
     assert ranged.inertia_ranges == [{0: (1.0, 9.0), 1: (2.0, 8.0)}, {}]
     rng = np.random.default_rng(7)
-    for j0, j1 in rng.uniform(0.05, 15.0, size=(400, 2)):
+    # Random poses, plus points in each blend zone (J_0 near 1 and 9, J_1 near 2 and 8).
+    points = np.r_[
+        rng.uniform(0.05, 15.0, size=(400, 2)),
+        np.c_[rng.uniform(0.9, 1.1, 50), rng.uniform(1.85, 2.15, 50)],
+        np.c_[rng.uniform(8.5, 9.5, 50), rng.uniform(7.5, 8.5, 50)],
+    ]
+    for j0, j1 in points:
         got = ranged.modes_from_inertia([j0, j1])
-        # Base mode: the independent equations at the clamped inertias; shoulder (no range):
-        # at the raw J_1. Same formulas, different operation order: 1e-12 relative.
-        base_ref = _paper_modes_reference(np.clip(j0, 1.0, 9.0), np.clip(j1, 2.0, 8.0))[0]
+        # Base mode: the independent equations at the saturated inertias; shoulder (no
+        # range): at the raw J_1. Same formulas, different operation order: 1e-12 relative.
+        base_ref = _paper_modes_reference(_soft_clamp(j0, 1.0, 9.0), _soft_clamp(j1, 2.0, 8.0))
         shoulder_ref = _paper_modes_reference(j0, j1)[1]
-        np.testing.assert_allclose(got, [base_ref, shoulder_ref], rtol=1e-12)
+        np.testing.assert_allclose(got, [base_ref[0], shoulder_ref], rtol=1e-12)
     paper = tvist.DynamicMap.paper_ur5e()
-    # Exact (bit-identical) at and beyond the bounds, and inside them.
+    # Exact (bit-identical): beyond the blend zones the value at the bound, inside the core
+    # zones [1.05, 8.55] x [2.1, 7.6] the unbounded map.
     for j, at in [
         ([0.3, 0.5], [1.0, 2.0]),
-        ([1.0, 2.0], [1.0, 2.0]),
+        ([0.95, 1.9], [1.0, 2.0]),
         ([40.0, 30.0], [9.0, 8.0]),
-        ([9.0, 8.0], [9.0, 8.0]),
+        ([9.5, 8.4], [9.0, 8.0]),
         ([4.0, 5.0], [4.0, 5.0]),
+        ([1.06, 7.6], [1.06, 7.6]),
     ]:
         assert ranged.modes_from_inertia(j)[0] == paper.modes_from_inertia(at)[0]
     many = ranged.modes_from_inertia_many(np.array([[0.3, 0.5], [40.0, 30.0]]))
     np.testing.assert_array_equal(
         many[:, 0], [paper.modes_from_inertia(a)[0] for a in ([1.0, 2.0], [9.0, 8.0])]
     )
+
+
+def test_the_soft_clamp_never_leaves_the_range_and_has_no_kink():
+    # A base mode whose frequency depends on J_1 only, so ω_n(J_1) shows the saturation.
+    ranged = _ranged_paper()
+    j1 = np.linspace(1.5, 9.0, 7501)  # 1e-3 kg m² steps through both blend zones of [2, 8]
+    wn = ranged.modes_from_inertia_many(np.c_[np.full_like(j1, 4.0), j1])[:, 0, 0]
+    paper = tvist.DynamicMap.paper_ur5e()
+    wn_lo, wn_hi = (paper.modes_from_inertia([4.0, b])[0][0] for b in (2.0, 8.0))
+    # Never beyond the values at the bounds (ω_n decreases with J_1), and monotone.
+    assert np.all((wn <= wn_lo) & (wn >= wn_hi))
+    assert np.all(np.diff(wn) <= 0.0)
+    # The slope changes gradually: between neighbouring 1e-3 kg m² steps the difference
+    # quotient changes by at most 0.55 % of its peak (measured; set by the blend curvature
+    # 1/(2 ε J_bound)), bounded here by 2 %; a hard clamp drops the slope to 0 in one step.
+    slope = np.diff(wn) / np.diff(j1)
+    assert np.max(np.abs(np.diff(slope))) < 0.02 * np.max(np.abs(slope))
+    hard = np.array([paper.modes_from_inertia([4.0, b])[0][0] for b in np.clip(j1, 2.0, 8.0)])
+    hard_slope = np.diff(hard) / np.diff(j1)
+    assert np.max(np.abs(np.diff(hard_slope))) > 0.5 * np.max(np.abs(hard_slope))
+
+
+def test_a_range_too_narrow_for_the_blend_zones_is_rejected(tmp_path):
+    # (1 + ε)/(1 − ε) = 1.105: [1, 1.1] leaves no room for both blend zones, [1, 1.11] does.
+    base = tvist.DynamicMap.paper_ur5e().mode_maps[0]
+    with pytest.raises(ValueError, match=r"damping_inertia_range_kg_m2.*too narrow"):
+        tvist.DynamicMap([{**base, "damping_inertia_range_kg_m2": [1.0, 1.1]}])
+    tvist.DynamicMap([{**base, "damping_inertia_range_kg_m2": [1.0, 1.11]}])
+    doc = _with_range(0, "frequency_inertia_range_kg_m2", [2.0, 2.1])
+    with pytest.raises(ValueError, match=r"frequency_inertia_range_kg_m2.*too narrow"):
+        tvist.DynamicMap.load(_write(tmp_path, doc))
 
 
 def test_a_range_does_not_turn_broken_inertias_into_modes():
@@ -287,7 +380,10 @@ def test_general_mode_with_a_range():
     mode = general_mode(1, inertia_range_kg_m2=(0.5, 4.0), **SHOULDER)
     assert mode[RANGE_FIELDS[0]] == mode[RANGE_FIELDS[1]] == [0.5, 4.0]
     dynmap = tvist.DynamicMap([mode])
-    assert dynmap.modes_from_inertia([9.0, 10.0]) == dynmap.modes_from_inertia([9.0, 4.0])
+    # Beyond the upper blend zone (J >= 4.2 kg m²) the mode is the one at the bound, exactly.
+    assert dynmap.modes_from_inertia([9.0, 10.0]) == dynmap.modes_from_inertia([9.0, 4.2])
+    unbounded = tvist.DynamicMap([general_mode(1, **SHOULDER)])
+    assert dynmap.modes_from_inertia([9.0, 10.0]) == unbounded.modes_from_inertia([9.0, 4.0])
 
 
 def test_ranges_round_trip_and_old_files_still_load(tmp_path):
@@ -372,7 +468,7 @@ def test_non_finite_range_is_rejected(tmp_path):
         tvist._core.DynamicMap([mode])
 
 
-# ---- MapDynamics validates the map as it is evaluated: clamped into its ranges ----
+# ---- MapDynamics validates the map as it is evaluated: saturated into its ranges ----
 
 ROBOT_5KG = tvist.robots.ur5e(payload_kg=5.0, payload_com_m=(0.0, 0.0, 0.05))
 
@@ -396,12 +492,14 @@ def test_map_dynamics_accepts_a_map_overdamped_only_outside_its_range():
     rng = np.random.default_rng(11)
     q = rng.uniform(-np.pi, np.pi, size=(3000, 6))
     j0 = ROBOT_5KG.joint_inertia_many(q)[:, 0]
-    assert np.sum(j0 < 0.6) > 50  # the clamp is exercised (~8 % of random poses)
+    # The range's lower bound is held exactly at and below 0.6 (1 − ε) = 0.57 kg m².
+    held = 0.6 * (1 - RANGE_BLEND_WIDTH)
+    assert np.sum(j0 <= held) > 50  # the saturation is exercised (~8 % of random poses)
     for qk, jk in zip(q, j0, strict=True):
         ((wn, zeta),) = provider.modes(qk)
         assert np.isfinite(wn) and wn > 0 and 0.0 <= zeta < 1.0, (qk, jk, wn, zeta)
         # Below the range, the mode is the map's value at the bound, exactly.
-        if jk < 0.6:
+        if jk <= held:
             assert (wn, zeta) == unbounded.modes_from_inertia([0.6])[0]
 
 

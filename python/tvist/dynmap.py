@@ -2,7 +2,7 @@
 
 The equations live in the Rust core (``tvist-core/src/dynmap.rs``). Per mode, with ``J_f`` the
 inertia of the frequency joint, ``J_d`` that of the damping joint, ``τ_f`` the gravity torque of
-the frequency joint and ``K = k_0 + k_J J_f + k_g |τ_f|``::
+the frequency joint and ``K = k_0 + k_J J_f + k_g |τ_f|_s``::
 
     ω_n = √(1 + k_p/J_f) · √(K / J_f)
     ζ   = (1 + k_p/J_d)^e_d · (1 + k_p/J_f)^e_f · (c_0 + c_1 √J_d + c_2 J_d)(1 + c_τ J_d)
@@ -10,12 +10,21 @@ the frequency joint and ``K = k_0 + k_J J_f + k_g |τ_f|``::
 
 The general map (eqs. 42-43) has ``J_f = J_d`` and ``(e_d, e_f) = (1/2, 0)``; the paper's UR5e
 base mode (eqs. 47-48) has ``J_f = J_1``, ``J_d = J_0`` and ``(e_d, e_f) = (1, -1/2)``.
+``|τ|_s = √(τ² + τ_s²) − τ_s`` with ``τ_s = 1 N m`` stands in for eq. 42's ``|τ|``, which has a
+kink where the gravity torque changes sign; it is below ``|τ|`` by less than ``τ_s`` (only
+maps with ``k_g != 0`` read it, so the paper's map and its Table 3 are unchanged).
 
 **Validity ranges.** A mode may carry the inertias it was identified on:
 ``frequency_inertia_range_kg_m2 = [J_min, J_max]`` for ``J_f`` and
 ``damping_inertia_range_kg_m2`` for ``J_d`` (equal when both read the same joint). Every
-evaluation clamps ``J_f`` and ``J_d`` into them first, so a map never extrapolates beyond the
-inertias it was identified on; a clamped evaluation is normal operation, not an error.
+evaluation first saturates ``J_f`` and ``J_d`` into them with a C¹ soft clamp of relative
+width ``ε = 0.05``: the identity on ``[J_min (1 + ε), J_max (1 − ε)]``, exactly ``J_min`` at
+or below ``J_min (1 − ε)`` and exactly ``J_max`` at or above ``J_max (1 + ε)``, with quadratic
+blends in between that stay inside ``[J_min, J_max]`` (within ``ε/4`` of a bound from the
+hard clamp). So a map never extrapolates beyond the inertias it was identified on, and the
+modes have no kink at a bound (a kink would put a jerk spike into references shaped with
+them). A saturated evaluation is normal operation, not an error. A range needs
+``J_max / J_min >= (1 + ε)/(1 − ε) ≈ 1.105`` so that the two blends do not overlap.
 Missing or ``null`` is unbounded (the paper's map, whose Table 3 values hold at any inertia).
 :func:`tvist.ident.fit_map` sets the ranges from its data.
 
@@ -177,7 +186,8 @@ class DynamicMap:
     ------
     ValueError
         Naming the offending field, for missing, unknown or non-finite values and for bad
-        ranges (non-finite, ``min <= 0``, ``min >= max``, different for one joint).
+        ranges (non-finite, ``min <= 0``, ``min >= max``, too narrow for the soft clamp,
+        different for one joint).
     """
 
     def __init__(
@@ -222,7 +232,7 @@ class DynamicMap:
 
     @property
     def inertia_ranges(self) -> list[dict[int, tuple[float, float]]]:
-        """Per mode: ``{joint: (J_min, J_max)}`` of the joints whose inertia is clamped."""
+        """Per mode: ``{joint: (J_min, J_max)}`` of the joints whose inertia is saturated."""
         out = []
         for mode in self.mode_maps:
             ranges = {}
@@ -246,9 +256,9 @@ class DynamicMap:
     ) -> list[tuple[float, float]]:
         """Modes ``[(wn_rad_s, zeta), ...]`` for joint inertias ``J_0, J_1, ...`` (kg m²).
 
-        ``gravity_torque_nm`` is needed only when :attr:`uses_gravity`. Inertias outside a
-        mode's range are clamped into it. A mode the map cannot give (non-positive stiffness
-        or inertia) is ``(nan, nan)``.
+        ``gravity_torque_nm`` is needed only when :attr:`uses_gravity`. Inertias are
+        saturated into a mode's range (soft clamp, see the module docstring). A mode the map
+        cannot give (non-positive stiffness or inertia) is ``(nan, nan)``.
         """
         j = [float(v) for v in np.asarray(inertia_kg_m2, dtype=float).ravel()]
         tau = None
@@ -332,10 +342,10 @@ class MapDynamics(_core.MapDynamics):
     """Per-cycle dynamics provider for :class:`tvist.TvShaper`: robot inertia + dynamic map.
 
     Every cycle the joint inertias of ``robot`` are evaluated at the previous shaped output
-    and mapped to modes (clamped into the map's inertia ranges, if it has any). Construction
+    and mapped to modes (saturated into the map's inertia ranges, if it has any). Construction
     rejects a map that gives an invalid mode (non-positive stiffness, ``zeta >= 1``) anywhere
     among ``MapDynamics.validation_poses`` sampled configurations, evaluated with the same
-    clamping, or reads joints the robot does not have.
+    saturation, or reads joints the robot does not have.
 
     Parameters
     ----------

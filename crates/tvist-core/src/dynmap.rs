@@ -2,7 +2,8 @@
 //!
 //! One [`ModeMap`] per mode holds the ten coefficients of eqs. 42–43 and says which joint
 //! drives it. With `J_f` the inertia of the *frequency joint*, `J_d` that of the *damping
-//! joint*, `τ_f` the gravity torque of the frequency joint and `K = k_0 + k_J J_f + k_g |τ_f|`:
+//! joint*, `τ_f` the gravity torque of the frequency joint and `K = k_0 + k_J J_f + k_g |τ_f|`
+//! (`|τ_f|` smoothed, see [Gravity term](#gravity-term)):
 //!
 //! ```text
 //! ω_n = √(1 + k_p/J_f) · √(K / J_f)
@@ -22,16 +23,58 @@
 //! # Validity ranges
 //!
 //! A map fitted to measurements is only known where it was measured. Each [`ModeMap`] may
-//! therefore carry the [`InertiaRange`] of `J_f` and of `J_d` it was identified on; evaluation
-//! clamps each inertia into its range before the equations see it. Invariant: **a map never
-//! extrapolates beyond the inertias it was identified on.** Outside its range a mode keeps the
-//! value at the nearest bound: a clamped evaluation is normal operation, not an error, and is
-//! not reported. Only inertias that are no inertia at all (`J <= 0`, non-finite) still give an
-//! invalid mode. Without a range (`None`, the paper's map) the equations are evaluated as they
-//! stand at every positive inertia.
+//! therefore carry the [`InertiaRange`] `[min, max]` of `J_f` and of `J_d` it was identified on;
+//! evaluation saturates each inertia into its range ([`InertiaRange::saturate`]) before the
+//! equations see it. Invariant: **a map never extrapolates beyond the inertias it was
+//! identified on**: the saturated inertia always lies in `[min, max]`. The saturation is a C¹
+//! soft clamp with relative blend width `ε` = [`RANGE_BLEND_WIDTH`]:
+//!
+//! ```text
+//! s(J) = min                                   J <= min(1 − ε)
+//!        J + (min(1 + ε) − J)² / (4 min ε)     min(1 − ε) < J < min(1 + ε)
+//!        J                                     min(1 + ε) <= J <= max(1 − ε)
+//!        J − (J − max(1 − ε))² / (4 max ε)     max(1 − ε) < J < max(1 + ε)
+//!        max                                   J >= max(1 + ε)
+//! ```
+//!
+//! `s` is non-decreasing, continuous with a continuous derivative, exact (the identity) in the
+//! core of the range and exactly the bound well beyond it; it differs from the hard clamp
+//! `min(max(J, min), max)` by at most `ε/4` of the bound (at the bound itself). A hard clamp
+//! has a kink at each bound, and the time-varying shaper turns any kink of the modes along a
+//! move into a step of the shaped reference's velocity slope, i.e. a jerk spike. What the C¹
+//! saturation leaves is a step of the reference acceleration where a blend's curvature
+//! switches on, much smaller. A range must leave room for both blend zones:
+//! `max/min >= (1 + ε)/(1 − ε)` ([`InertiaRange::new`]).
+//!
+//! Outside its range a mode keeps the value at the nearest bound: a saturated evaluation is
+//! normal operation, not an error, and is not reported. Only inertias that are no inertia at
+//! all (`J <= 0`, non-finite) still give an invalid mode. Without a range (`None`, the paper's
+//! map) the equations are evaluated as they stand at every positive inertia.
+//!
+//! # Gravity term
+//!
+//! The `|τ_f|` of eq. 42 has a kink where the gravity torque changes sign, which would give the
+//! same jerk spike. With `k_g != 0` the term is evaluated as
+//! `k_g (√(τ_f² + τ_s²) − τ_s)` with `τ_s` = [`GRAVITY_TORQUE_SMOOTHING_NM`]: smooth, zero at
+//! `τ_f = 0`, and below `|τ_f|` by less than `τ_s` everywhere. With `k_g = 0` (the paper's map,
+//! Table 3) the term is absent and nothing changes.
 
 use crate::error::{Error, Status};
 use crate::shaper::Mode;
+
+/// Relative width `ε` of each blend zone of the soft clamp into an [`InertiaRange`]: the
+/// saturation is the identity on `[min(1 + ε), max(1 − ε)]`, exactly `min` below `min(1 − ε)`
+/// and exactly `max` above `max(1 + ε)`. 5 % of the bound keeps the map exact over the bulk of
+/// its range, moves it by at most `ε/4` = 1.25 % of a bound, and spreads the bend over an
+/// inertia change large enough that the modes change slope gradually along a move.
+pub const RANGE_BLEND_WIDTH: f64 = 0.05;
+
+/// Smoothing torque `τ_s` of the gravity term, N m: `k_g |τ|` is evaluated as
+/// `k_g (√(τ² + τ_s²) − τ_s)`. Eq. 42's `|τ|` has a kink at `τ = 0` (where the gravity torque
+/// changes sign along a move); the smoothed value is below `|τ|` by less than `τ_s`, i.e. by
+/// less than `k_g · 1 N m` of stiffness, under 1 % of `k_0` (10⁴ N m/rad for the UR5e) for
+/// any published or fitted `k_g` (< 100 N m/rad per N m).
+pub const GRAVITY_TORQUE_SMOOTHING_NM: f64 = 1.0;
 
 /// The ten coefficients of eqs. 42–43 (SI units: N m/rad, N m s, kg m²).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -81,7 +124,8 @@ impl MapCoefficients {
     }
 }
 
-/// A closed range `[min, max]` of joint inertias, kg m², with `0 < min < max` (both finite).
+/// A closed range `[min, max]` of joint inertias, kg m², with `0 < min` and
+/// `max/min >= (1 + ε)/(1 − ε)` (both finite, `ε` = [`RANGE_BLEND_WIDTH`]).
 ///
 /// The fields are private, so every value was checked by [`InertiaRange::new`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -91,7 +135,8 @@ pub struct InertiaRange {
 }
 
 impl InertiaRange {
-    /// Rejects non-finite bounds, `min <= 0` and `min >= max`.
+    /// Rejects non-finite bounds, `min <= 0`, `min >= max`, and a range too narrow for the
+    /// two blend zones of [`Self::saturate`] not to overlap (`max(1 − ε) < min(1 + ε)`).
     pub fn new(min_kg_m2: f64, max_kg_m2: f64) -> Result<InertiaRange, Error> {
         if !(min_kg_m2.is_finite() && max_kg_m2.is_finite()) {
             return Err(Error::InvalidParameter(format!(
@@ -106,6 +151,16 @@ impl InertiaRange {
         if min_kg_m2 >= max_kg_m2 {
             return Err(Error::InvalidParameter(format!(
                 "inertia range [{min_kg_m2}, {max_kg_m2}] kg m²: min must be < max"
+            )));
+        }
+        let eps = RANGE_BLEND_WIDTH;
+        if max_kg_m2 * (1.0 - eps) < min_kg_m2 * (1.0 + eps) {
+            return Err(Error::InvalidParameter(format!(
+                "inertia range [{min_kg_m2}, {max_kg_m2}] kg m²: too narrow, max/min = {} must \
+                 be at least (1 + ε)/(1 − ε) = {:.4} so that the soft clamp's blend zones \
+                 (ε = {eps} of each bound) do not overlap",
+                max_kg_m2 / min_kg_m2,
+                (1.0 + eps) / (1.0 - eps)
             )));
         }
         Ok(InertiaRange {
@@ -124,16 +179,32 @@ impl InertiaRange {
         self.max_kg_m2
     }
 
-    /// `j_kg_m2` moved into the range: exactly `min` below it, exactly `max` above it, and
-    /// unchanged inside it (NaN stays NaN). Never panics.
+    /// `j_kg_m2` saturated into the range by the C¹ soft clamp of the module docs: unchanged
+    /// on `[min(1 + ε), max(1 − ε)]`, exactly `min` at or below `min(1 − ε)`, exactly `max` at
+    /// or above `max(1 + ε)`, quadratic blends in between. The result always lies in
+    /// `[min, max]`, is non-decreasing in `j_kg_m2`, and NaN stays NaN. Never panics.
     #[inline]
-    pub fn clamp(&self, j_kg_m2: f64) -> f64 {
-        if j_kg_m2 < self.min_kg_m2 {
-            self.min_kg_m2
-        } else if j_kg_m2 > self.max_kg_m2 {
-            self.max_kg_m2
+    pub fn saturate(&self, j_kg_m2: f64) -> f64 {
+        let (lo, hi, eps) = (self.min_kg_m2, self.max_kg_m2, RANGE_BLEND_WIDTH);
+        let (lo_out, lo_in) = (lo * (1.0 - eps), lo * (1.0 + eps));
+        let (hi_in, hi_out) = (hi * (1.0 - eps), hi * (1.0 + eps));
+        let j = j_kg_m2;
+        // Every branch is a positive comparison, so NaN falls through to the last one.
+        if j >= hi_out {
+            hi
+        } else if j > hi_in {
+            let d = j - hi_in;
+            // At most `hi` (reached at hi_out, where the slope is 0); slope 1 at hi_in.
+            (j - d * d / (4.0 * hi * eps)).min(hi)
+        } else if j >= lo_in {
+            j
+        } else if j > lo_out {
+            let d = lo_in - j;
+            (j + d * d / (4.0 * lo * eps)).max(lo)
+        } else if j <= lo_out {
+            lo
         } else {
-            j_kg_m2
+            j
         }
     }
 }
@@ -144,13 +215,20 @@ impl core::fmt::Display for InertiaRange {
     }
 }
 
-/// `j` clamped into `range`, or unchanged without one.
+/// `j` saturated into `range` ([`InertiaRange::saturate`]), or unchanged without one.
 #[inline]
-fn clamp_to(range: Option<InertiaRange>, j: f64) -> f64 {
+fn saturate_to(range: Option<InertiaRange>, j: f64) -> f64 {
     match range {
-        Some(r) => r.clamp(j),
+        Some(r) => r.saturate(j),
         None => j,
     }
+}
+
+/// `√(τ² + τ_s²) − τ_s` with `τ_s` = [`GRAVITY_TORQUE_SMOOTHING_NM`]: the smooth stand-in for
+/// `|τ|` in the gravity term (see the module docs), N m. In `[|τ| − τ_s, |τ|]`; NaN stays NaN.
+#[inline]
+pub fn smooth_abs_torque_nm(tau_nm: f64) -> f64 {
+    tau_nm.hypot(GRAVITY_TORQUE_SMOOTHING_NM) - GRAVITY_TORQUE_SMOOTHING_NM
 }
 
 /// The map of one mode: coefficients plus which joint inertias drive frequency and damping.
@@ -165,10 +243,10 @@ pub struct ModeMap {
     pub damping_gain_exponent: f64,
     /// Exponent `e_f` of `(1 + k_p/J_f)` in `ζ`.
     pub frequency_gain_exponent: f64,
-    /// Inertias of the frequency joint the map was identified on; `J_f` is clamped into it.
+    /// Inertias of the frequency joint the map was identified on; `J_f` is saturated into it.
     /// `None`: unbounded.
     pub frequency_range: Option<InertiaRange>,
-    /// Inertias of the damping joint the map was identified on; `J_d` is clamped into it.
+    /// Inertias of the damping joint the map was identified on; `J_d` is saturated into it.
     /// `None`: unbounded. When both roles read the same joint the two ranges are equal
     /// (checked by [`DynamicMap::new`]).
     pub damping_range: Option<InertiaRange>,
@@ -229,9 +307,10 @@ impl ModeMap {
 
     /// Mode for inertias `j` and gravity torques `tau_g` (ignored when `k_g == 0`).
     ///
-    /// `J_f` and `J_d` are clamped into their ranges first (if any). Returns an invalid mode
-    /// (NaN) when an inertia read is not finite and positive, or the (clamped) inertias give
-    /// no positive stiffness or gain term. Allocation-free.
+    /// `J_f` and `J_d` are saturated into their ranges first (if any, see the module docs);
+    /// the gravity term uses [`smooth_abs_torque_nm`]. Returns an invalid mode (NaN) when an
+    /// inertia read is not finite and positive, or the (saturated) inertias give no positive
+    /// stiffness or gain term. Allocation-free.
     #[inline]
     pub fn evaluate(&self, j: &[f64], tau_g: &[f64]) -> Mode {
         let invalid = Mode::new(f64::NAN, f64::NAN);
@@ -240,16 +319,16 @@ impl ModeMap {
         else {
             return invalid;
         };
-        // A broken input stays an error: clamping must not turn it into a plausible mode.
+        // A broken input stays an error: saturation must not turn it into a plausible mode.
         if !(j_f_raw.is_finite() && j_f_raw > 0.0 && j_d_raw.is_finite() && j_d_raw > 0.0) {
             return invalid;
         }
-        let j_f = clamp_to(self.frequency_range, j_f_raw);
-        let j_d = clamp_to(self.damping_range, j_d_raw);
+        let j_f = saturate_to(self.frequency_range, j_f_raw);
+        let j_d = saturate_to(self.damping_range, j_d_raw);
         let c = &self.coefficients;
         let gravity = if c.k_g != 0.0 {
             match tau_g.get(self.frequency_joint) {
-                Some(t) => c.k_g * t.abs(),
+                Some(&t) => c.k_g * smooth_abs_torque_nm(t),
                 None => return invalid,
             }
         } else {
@@ -368,7 +447,7 @@ impl DynamicMap {
 
     /// Modes from joint inertias `j` (kg m²) and gravity torques `tau_g` (N m; may be empty
     /// when [`Self::uses_gravity`] is false). `out` must hold [`Self::n_modes`] modes.
-    /// Inertias are clamped into each mode's ranges ([`ModeMap::evaluate`]); a clamp is not a
+    /// Inertias are saturated into each mode's ranges ([`ModeMap::evaluate`]); that is not a
     /// status. Allocation-free; [`Status::BAD_LENGTH`] if `j` or `out` is too short.
     pub fn modes_from_inertia(&self, j: &[f64], tau_g: &[f64], out: &mut [Mode]) -> Status {
         if out.len() != self.modes.len() || j.len() < self.required_joints() {
@@ -439,23 +518,113 @@ mod tests {
             (-1.0, 1.0, "min must be > 0"),
             (2.0, 2.0, "min must be < max"),
             (3.0, 2.0, "min must be < max"),
+            // (1 + ε)/(1 − ε) = 1.1053: the blend zones [0.95, 1.05] and [0.988, 1.092] overlap.
+            (1.0, 1.04, "too narrow"),
+            (0.95, 1.04, "too narrow"),
         ] {
             let err = InertiaRange::new(min, max).expect_err("bad range");
             assert!(err.to_string().contains(why), "{err}");
         }
         let r = range(0.5, 2.0);
         assert_eq!((r.min_kg_m2(), r.max_kg_m2()), (0.5, 2.0));
+        // Just wide enough: max/min = 1.1158 > 1.1053.
+        assert!(InertiaRange::new(0.95, 1.06).is_ok());
+    }
+
+    /// The four joints of the soft clamp of `r`: min(1 − ε), min(1 + ε), max(1 − ε), max(1 + ε).
+    fn joints(r: InertiaRange) -> [f64; 4] {
+        let eps = RANGE_BLEND_WIDTH;
+        [
+            r.min_kg_m2() * (1.0 - eps),
+            r.min_kg_m2() * (1.0 + eps),
+            r.max_kg_m2() * (1.0 - eps),
+            r.max_kg_m2() * (1.0 + eps),
+        ]
     }
 
     #[test]
-    fn clamping_is_exact_at_the_bounds_and_absent_inside() {
+    fn saturation_is_the_identity_in_the_core_and_the_bound_beyond_the_blends() {
+        let r = range(1.0, 9.0);
+        let [lo_out, lo_in, hi_in, hi_out] = joints(r);
+        for j in [lo_in, 1.2, 4.5, 8.0, hi_in] {
+            assert_eq!(r.saturate(j), j, "{j}");
+        }
+        for j in [lo_out, 0.9, 1e-9, -3.0, f64::NEG_INFINITY] {
+            assert_eq!(r.saturate(j), 1.0, "{j}");
+        }
+        for j in [hi_out, 9.5, 1e6, f64::INFINITY] {
+            assert_eq!(r.saturate(j), 9.0, "{j}");
+        }
+        assert!(r.saturate(f64::NAN).is_nan());
+        // At the bounds themselves the blend sits ε/4 of the bound inside the range.
+        let eps = RANGE_BLEND_WIDTH;
+        assert!((r.saturate(1.0) - (1.0 + 1.0 * eps / 4.0)).abs() < 1e-15);
+        assert!((r.saturate(9.0) - (9.0 - 9.0 * eps / 4.0)).abs() < 1e-14);
+    }
+
+    #[test]
+    fn saturation_is_monotone_bounded_and_close_to_the_hard_clamp() {
+        let eps = RANGE_BLEND_WIDTH;
+        for r in [range(1.0, 9.0), range(0.2, 0.25), range(0.95, 1.06)] {
+            let (lo, hi) = (r.min_kg_m2(), r.max_kg_m2());
+            let (from, to) = (0.5 * lo, 1.5 * hi);
+            let n = 20_000;
+            let mut previous = f64::NEG_INFINITY;
+            for k in 0..=n {
+                let j = from + (to - from) * k as f64 / n as f64;
+                let s = r.saturate(j);
+                assert!(lo <= s && s <= hi, "{r}: s({j}) = {s}");
+                assert!(s >= previous, "{r}: not monotone at {j}");
+                previous = s;
+                // Largest gap to the hard clamp: ε/4 of the nearer bound (at the bound);
+                // 1e-12 relative covers the rounding of the quadratic.
+                let hard = j.clamp(lo, hi);
+                let allowed = eps / 4.0 * if j < 0.5 * (lo + hi) { lo } else { hi };
+                assert!((s - hard).abs() <= allowed * (1.0 + 1e-12), "{r}: {j}");
+            }
+        }
+    }
+
+    /// One-sided difference quotients of `f` left and right of `x`, step `h`.
+    fn one_sided_slopes(f: impl Fn(f64) -> f64, x: f64, h: f64) -> (f64, f64) {
+        ((f(x) - f(x - h)) / h, (f(x + h) - f(x)) / h)
+    }
+
+    #[test]
+    fn saturation_is_c1_at_the_four_joints() {
+        let r = range(1.0, 9.0);
+        let [lo_out, lo_in, hi_in, hi_out] = joints(r);
+        // Slopes: 0 outside, 1 inside, continuous at every joint. Step 1e-8 of the joint: a
+        // one-sided quotient of a quadratic with s'' = 1/(2 ε bound) is off by h s''/2 = 1e-7,
+        // and rounding adds ~1e-16 · x / h ~ 1e-8, so the two sides agree to ~1e-7.
+        for (x, slope) in [(lo_out, 0.0), (lo_in, 1.0), (hi_in, 1.0), (hi_out, 0.0)] {
+            let (left, right) = one_sided_slopes(|j| r.saturate(j), x, 1e-8 * x);
+            assert!((left - right).abs() < 1e-6, "at {x}: {left} vs {right}");
+            assert!(
+                (left - slope).abs() < 1e-6 && (right - slope).abs() < 1e-6,
+                "at {x}"
+            );
+            // Continuity of the value: across 2e-12 x (slope <= 1) both sides meet within
+            // 2e-12 x, plus rounding of a few ulp.
+            let jump = r.saturate(x + 1e-12 * x) - r.saturate(x - 1e-12 * x);
+            assert!(jump.abs() <= 3e-12 * x, "at {x}: {jump}");
+        }
+        // The hard clamp this replaces fails the same test: its slope jumps by 1.
+        let hard = |j: f64| j.clamp(1.0, 9.0);
+        let (left, right) = one_sided_slopes(hard, 9.0, 1e-8 * 9.0);
+        assert!((left - right).abs() > 0.99);
+    }
+
+    #[test]
+    fn a_ranged_map_is_the_unbounded_map_at_the_saturated_inertias() {
         let (unbounded, ranged) = ranged_base();
+        let (r_f, r_d) = (range(2.0, 8.0), range(1.0, 9.0));
         let tau = [0.0; 2];
-        // Inside both ranges: bit-identical to the unbounded map.
-        for j in [[1.0, 2.0], [4.5, 3.3], [9.0, 8.0], [5.0, 7.999]] {
+        // Inside both core zones: bit-identical to the unbounded map.
+        for j in [[1.06, 2.2], [4.5, 3.3], [8.5, 7.5], [5.0, 7.0]] {
             assert_eq!(ranged.evaluate(&j, &tau), unbounded.evaluate(&j, &tau));
         }
-        // Outside: bit-identical to the unbounded map at the nearest bound, per joint.
+        // Beyond the blend zones: bit-identical to the unbounded map at the bound, per joint.
         for (j, at) in [
             ([0.2, 0.3], [1.0, 2.0]),
             ([0.2, 5.0], [1.0, 5.0]),
@@ -464,11 +633,84 @@ mod tests {
         ] {
             assert_eq!(ranged.evaluate(&j, &tau), unbounded.evaluate(&at, &tau));
         }
-        let r = range(1.0, 9.0);
-        assert_eq!(r.clamp(1.0), 1.0);
-        assert_eq!(r.clamp(9.0), 9.0);
-        assert_eq!(r.clamp(0.999_999), 1.0);
-        assert!(r.clamp(f64::NAN).is_nan());
+        // Anywhere (blend zones included): the unbounded map at the saturated inertias.
+        for j in [[1.0, 2.0], [0.97, 8.1], [9.2, 1.95], [9.0, 8.0]] {
+            let at = [r_d.saturate(j[0]), r_f.saturate(j[1])];
+            assert_eq!(ranged.evaluate(&j, &tau), unbounded.evaluate(&at, &tau));
+        }
+    }
+
+    #[test]
+    fn a_ranged_map_has_continuous_slopes_along_its_inertias() {
+        // ω_n of the base mode against J_1 (frequency range [2, 8]) and ζ against J_0
+        // (damping range [1, 9]) across every joint of both soft clamps. The map is smooth in
+        // the saturated inertia, so both sides agree to the difference-quotient error (~1e-6
+        // relative for steps of 1e-8 of the inertia).
+        let (_, ranged) = ranged_base();
+        let tau = [0.0; 2];
+        for x in joints(range(2.0, 8.0)) {
+            let wn = |j1: f64| ranged.evaluate(&[4.0, j1], &tau).wn_rad_s;
+            let (left, right) = one_sided_slopes(wn, x, 1e-8 * x);
+            let scale = wn(x) / x;
+            assert!(
+                (left - right).abs() < 1e-5 * scale,
+                "J_1 = {x}: {left} vs {right}"
+            );
+        }
+        for x in joints(range(1.0, 9.0)) {
+            let zeta = |j0: f64| ranged.evaluate(&[j0, 4.0], &tau).zeta;
+            let (left, right) = one_sided_slopes(zeta, x, 1e-8 * x);
+            let scale = zeta(x) / x;
+            assert!(
+                (left - right).abs() < 1e-5 * scale,
+                "J_0 = {x}: {left} vs {right}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_gravity_term_is_smooth_in_the_torque() {
+        let tau_s = GRAVITY_TORQUE_SMOOTHING_NM;
+        assert_eq!(smooth_abs_torque_nm(0.0), 0.0);
+        for tau in [-300.0, -40.0, -1.0, -1e-3, 1e-3, 0.5, 1.0, 7.0, 250.0] {
+            let s = smooth_abs_torque_nm(tau);
+            assert_eq!(s, smooth_abs_torque_nm(-tau));
+            // Below |τ| by less than τ_s, and by more than τ_s − τ_s²/(2|τ|) for large |τ|.
+            assert!(s <= tau.abs() && s > tau.abs() - tau_s, "{tau}: {s}");
+        }
+        assert!((smooth_abs_torque_nm(250.0) - (250.0 - 1.0 + 1.0 / 500.0)).abs() < 1e-5);
+        // Slope 0 from both sides at τ = 0 (|τ| has −1 and +1 there): the second derivative
+        // is 1/τ_s, so a step of 1e-6 N m gives one-sided quotients of ±5e-7.
+        let (left, right) = one_sided_slopes(smooth_abs_torque_nm, 0.0, 1e-6);
+        assert!(left.abs() < 1e-6 && right.abs() < 1e-6, "{left} {right}");
+        assert!(smooth_abs_torque_nm(f64::NAN).is_nan());
+
+        // The map uses it: K = k_0 + k_J J + k_g (√(τ² + τ_s²) − τ_s).
+        let c = MapCoefficients {
+            k_g: 30.0,
+            c_1: 0.1,
+            ..MapCoefficients::reduced(10_000.0, 763.0, 1.73, 0.27, 0.038, 47.2)
+        };
+        let mode = ModeMap::general(c, 1);
+        let (j, tau) = (3.0, -40.0);
+        let k = 10_000.0 + 763.0 * j + 30.0 * ((tau * tau + 1.0_f64).sqrt() - 1.0);
+        let wn = ((1.0 + 1.73 / j) * k / j).sqrt();
+        let got = mode.evaluate(&[2.0, j], &[0.0, tau]);
+        assert!(
+            (got.wn_rad_s / wn - 1.0).abs() < 1e-14,
+            "{} vs {wn}",
+            got.wn_rad_s
+        );
+        // ω_n is C¹ in τ across the sign change.
+        let wn_at = |t: f64| mode.evaluate(&[2.0, j], &[0.0, t]).wn_rad_s;
+        let (left, right) = one_sided_slopes(wn_at, 0.0, 1e-6);
+        assert!((left - right).abs() < 1e-6 * wn, "{left} vs {right}");
+        // Without a gravity term the torque is not read at all (the paper's map, Table 3).
+        let paper = DynamicMap::paper_ur5e().mode_maps()[1];
+        assert_eq!(
+            paper.evaluate(&[2.0, j], &[0.0, tau]),
+            paper.evaluate(&[2.0, j], &[])
+        );
     }
 
     #[test]

@@ -506,10 +506,11 @@ def _clamp_summary(result: DemoResult) -> str:
 
 _JERK_NOTE = (
     "- Peak jerk is the largest third difference of the sent reference. A true-modes row "
-    "above the unshaped value comes from a kink in the true damping: the twin's gear damping "
-    "grows with the gear torque |τ|, so ζ has a kink where a gravity torque changes sign "
-    "(visible in the ζ panel of the mode figures). The ZV amplitudes follow it, which puts a "
-    "small kink into the reference velocity; the third difference turns it into a spike."
+    "above the unshaped value comes from a sharp turn of the true damping: the twin's gear "
+    "damping grows with the magnitude of the gear torque (tvist.sim.flex), so ζ turns sharply "
+    "where a gravity torque changes sign (visible in the ζ panel of the mode figures). The ZV "
+    "amplitudes follow it, which turns the reference velocity's slope quickly; the third "
+    "difference shows that as a spike."
 )
 
 
@@ -522,7 +523,13 @@ _IDENTIFICATION_CAPTIONS = {
 
 def _map_jerk_notes(result: DemoResult) -> list[str]:
     """Why a map row's reference is jerkier than the planned one, from how the map was used
-    along it (:func:`tvist.demo.methods.map_use`)."""
+    along it (:func:`tvist.demo.methods.map_use`).
+
+    The map has no kink (tvist-core ``dynmap``: inertias are saturated into their ranges by a
+    C¹ soft clamp, the gravity term uses a smoothed ``|τ|``), so what is left are places where
+    the modes bend sharply: the edges of a clamp's blend zones (the bend switches on there, a
+    step in the reference acceleration) and a gravity torque passing through zero.
+    """
     notes = []
     for motion in result.motions:
         try:
@@ -537,18 +544,22 @@ def _map_jerk_notes(result: DemoResult) -> list[str]:
             changes = sum(use["gravity_sign_changes"])
             if changes:
                 causes.append(
-                    f"its stiffness term k_g |τ| has a kink where the gravity torque it reads "
-                    f"changes sign ({changes} time{'s' if changes > 1 else ''} along the move)"
+                    "its smoothed stiffness term k_g (√(τ² + τ_s²) − τ_s) bends sharply where the "
+                    f"gravity torque it reads changes sign ({changes} "
+                    f"time{'s' if changes > 1 else ''} along the move)"
                 )
             if any(0.0 < c < 100.0 for c in use["inertia_clamped_percent"]):
-                causes.append("an inertia crosses a bound of the identified range (clamped)")
-            why = "; ".join(causes) if causes else "no kink of the map explains it"
+                causes.append(
+                    "an inertia crosses a bound of the identified range, through the soft "
+                    "clamp's blend zone (continuous slope; the bend starts at the zone's edges)"
+                )
+            why = "; ".join(causes) if causes else "no bend of the map explains it"
             notes.append(
                 f"- {r.method.label} on {motion.motion.name.replace('->', ' → ')}: peak jerk "
                 f"{r.peak_jerk_rad_s3:.0f} rad/s³ (planned move "
                 f"{plain.peak_jerk_rad_s3:.0f}): {why}. The shaper's amplitudes and delays "
-                "follow the kink in the modes, which puts a kink into the reference velocity; "
-                "the third difference turns it into a spike."
+                "follow the modes, so a sharp bend of the modes becomes a quick change of the "
+                "reference acceleration, which the third difference shows as a spike."
             )
     return notes
 
