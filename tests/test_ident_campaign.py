@@ -139,8 +139,8 @@ def test_twin_campaign_subset(tmp_path):
     assert shoulder_ok == len(subset)  # acceptance: within 3 % in >= 90 % of poses
     # Measured on this subset (deterministic: each excitation's noise is seeded by the
     # excitation): the 6 unflagged base modes within 0.5 %, m0kg-V2-R5 flagged but within
-    # 0.2 %, m5kg-V2-R12 flagged (its base mode hidden). Over the full 208-pose campaign: base
-    # 175 within 3 % (153 of the 154 confident ones), shoulder 208.
+    # 0.1 %, m5kg-V2-R12 flagged (its base mode hidden). Over the full 208-pose campaign: base
+    # 182 within 3 % (all 155 confident ones), shoulder 208.
     assert base_ok == 6
 
 

@@ -131,13 +131,19 @@ def test_modes_in_paper_ranges(twin: Twin) -> None:
 def base_damping_from_rigid_model(robot: robots.Robot, q_link: np.ndarray) -> float:
     """The base damping of UR5E_FLEX written out from its documented law (N m s/rad).
 
-    ``c0 (1 + c_load |L|_s)`` with the load ``L`` the tilting moment on the base bearing, i.e.
-    the shoulder's gravity torque of the rigid model (at rest the shoulder spring carries it).
+    ``c0 (1 + c_load |L|_s) (1 + c_load2 |L|_s)`` with the load ``L`` the tilting moment on the
+    base bearing, i.e. the shoulder's gravity torque of the rigid model (at rest the shoulder
+    spring carries it).
     """
     load = robot.gravity_torque(q_link)[1]
     s = UR5E_FLEX.load_smoothing_nm
     smooth_abs = math.sqrt(load * load + s * s) - s
-    return UR5E_FLEX.c0_nms_per_rad[0] * (1.0 + UR5E_FLEX.c_load_per_nm[0] * smooth_abs)
+    assert UR5E_FLEX.c_load2_per_nm is not None
+    return (
+        UR5E_FLEX.c0_nms_per_rad[0]
+        * (1.0 + UR5E_FLEX.c_load_per_nm[0] * smooth_abs)
+        * (1.0 + UR5E_FLEX.c_load2_per_nm[0] * smooth_abs)
+    )
 
 
 def test_base_mode_at_q1_matches_single_joint_formula(twin: Twin, robot: robots.Robot) -> None:
@@ -156,8 +162,8 @@ def test_base_mode_at_q1_matches_single_joint_formula(twin: Twin, robot: robots.
     j0 = mass[0, 0]
     k1 = UR5E_FLEX.k1_nm_per_rad[0]
     c = base_damping_from_rigid_model(robot, q_link)
-    # The load term dominates: the stretched arm's ~100 N m multiply the unloaded damping
-    # about twentyfold, so a modal analysis (or loop) without it would be far off.
+    # The load terms dominate: the stretched arm's ~100 N m multiply the unloaded damping
+    # about fortyfold, so a modal analysis (or loop) without them would be far off.
     assert c > 10.0 * UR5E_FLEX.c0_nms_per_rad[0]
     (wn, zeta), _ = twin.modes(Q1)
     assert wn == pytest.approx(math.sqrt(k1 / j0), rel=1e-3)
@@ -173,7 +179,9 @@ def test_base_damping_ratio_falls_when_the_arm_folds(twin: Twin) -> None:
     (_, zeta_q3), _ = twin.modes(Q3)
     assert zeta_q1 > 1.5 * zeta_q3
     # A constant base damping would give the opposite: ζ ∝ 1/sqrt(J0), J0 ~9.7 vs ~1.1 kg m².
-    constant = dataclasses.replace(UR5E_FLEX, c_load_per_nm=(0.0, *UR5E_FLEX.c_load_per_nm[1:]))
+    constant = dataclasses.replace(
+        UR5E_FLEX, c_load_per_nm=(0.0, *UR5E_FLEX.c_load_per_nm[1:]), c_load2_per_nm=None
+    )
     plain = Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M, flex=constant)
     assert plain.modes(Q1)[0][1] < plain.modes(Q3)[0][1]
 
@@ -197,8 +205,8 @@ def test_free_decay_after_base_impulse_matches_modes(load_joint) -> None:
 
     This checks that the time-stepping loop's damping (evaluated in place for speed) is the
     law of FlexParams.damping_nms_per_rad used by the modal analysis: with the base damper
-    loaded by the shoulder (default) the base ζ is ~0.24, loaded by its own, torque-free gear
-    ~0.01; either way the simulation must ring at the modal analysis' ζ."""
+    loaded by the shoulder (default) the base ζ is ~0.25, loaded by its own, torque-free gear
+    ~0.006; either way the simulation must ring at the modal analysis' ζ."""
     flex = dataclasses.replace(UR5E_FLEX, damper_load_joint=load_joint)
     twin = Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M, flex=flex)
     (wn, zeta), _ = twin.modes(Q1)
@@ -292,7 +300,9 @@ def test_accelerometer_noise_is_seeded_white_noise() -> None:
 
 def test_motion_deflects_the_gears_and_rings_after_the_stop(twin: Twin) -> None:
     """A fast move leaves residual vibration at the end pose's modes (no shaping)."""
-    record = twin.run(smooth_move(Q1, Q3, 1.5, 2.5))
+    # 1.5 s of hold: the slowest-decaying mode at Q3 (base, ζ ≈ 0.05 at 20 Hz) falls by e in
+    # 1 / (ζ wn) ≈ 0.15 s, so by ~1e-4 at the end.
+    record = twin.run(smooth_move(Q1, Q3, 1.5, 3.0))
     residual = record.actual_tool_accelerometer[int(1.5 / DT_S) :]
     residual = residual - residual[-50:].mean(axis=0)
     assert np.max(np.abs(residual[:25])) > 0.05  # m/s², rings right after the stop
@@ -341,6 +351,8 @@ def test_bad_twin_arguments_raise_value_error(kwargs: dict, message: str) -> Non
         ("k3_nm_per_rad3", (0.0,) * 5, "expected 6 values"),
         ("c0_nms_per_rad", (float("nan"),) * 6, "NaN"),
         ("c_load_per_nm", (-0.1,) * 6, "must be >= 0"),
+        ("c_load2_per_nm", (0.1, -0.1, 0.0, 0.0, 0.0, 0.0), "c_load2_per_nm: must be >= 0"),
+        ("c_load2_per_nm", (0.1,) * 5, "c_load2_per_nm: expected 6 values"),
         ("damper_load_joint", (1, 1, 2, 3, 4), "damper_load_joint"),
         ("damper_load_joint", (1, 1, 2, 3, 4, 6), "damper_load_joint"),
         ("damper_load_joint", (1, 1, 2, 3, 4, 0.5), "damper_load_joint"),
@@ -374,7 +386,8 @@ def test_bad_trajectory_raises_before_simulating(twin: Twin, q_ref, dt_s, messag
 
 
 def test_damping_law_reads_the_load_of_the_named_joint() -> None:
-    """c_j = c0_j (1 + c_load_j |tau[load_joint[j]]|_s), |x|_s = sqrt(x² + s²) - s."""
+    """c_j = c0_j (1 + c_load_j |L_j|_s) (1 + c_load2_j |L_j|_s), L_j = tau[load_joint[j]],
+    |x|_s = sqrt(x² + s²) - s."""
     flex = FlexParams(
         (1.0, 1.0, 1.0), (0.0,) * 3, (2.0, 3.0, 4.0), (0.5, 0.1, 0.0), 5.0, 0.1, (1, 1, 0)
     )
@@ -386,6 +399,12 @@ def test_damping_law_reads_the_load_of_the_named_joint() -> None:
     own = dataclasses.replace(flex, damper_load_joint=None).damping_nms_per_rad(tau[0])
     smooth_40 = math.sqrt(40.0**2 + 25.0) - 5.0
     np.testing.assert_allclose(own, [2.0 * (1 + 0.5 * smooth_40), 3.0 * (1 + 0.1 * smooth_12), 4.0])
+    # The second load factor multiplies: c0 (1 + c_load |L|_s) (1 + c_load2 |L|_s).
+    quadratic = dataclasses.replace(flex, c_load2_per_nm=(0.25, 0.0, 2.0))
+    expected_q = [2.0 * (1 + 0.5 * smooth_12) * (1 + 0.25 * smooth_12), 3.0 * (1 + 0.1 * smooth_12)]
+    np.testing.assert_allclose(quadratic.damping_nms_per_rad(tau[0])[:2], expected_q, rtol=1e-14)
+    own_quadratic = quadratic.damping_nms_per_rad(tau[0])[2]
+    np.testing.assert_allclose(own_quadratic, 4.0 * (1 + 2.0 * smooth_40), rtol=1e-14)
 
 
 def test_flex_params_inverse_spring_law() -> None:

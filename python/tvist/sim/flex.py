@@ -7,10 +7,12 @@ a load-dependent damper. With the deflection ``delta = q_motor - q_link`` (rad):
 - gear spring, eq. 22: ``tau_spring = k1 * delta + k3 * delta**3`` (N m), tangent stiffness
   ``k1 + 3 k3 delta**2`` (eq. 23);
 - gear damping, eq. 35 with constant ``c``: ``tau_damping = c0 * (1 + c_load * |L|_s) *
-  d(delta)/dt`` (N m), i.e. friction that grows with the load ``L`` (N m) the joint's gear and
-  bearings carry. ``L`` is the spring torque of the joint named by ``damper_load_joint``: by
-  default the joint's own gear torque; for the base of a UR arm, the shoulder's, which is the
-  tilting moment the arm exerts on the base's cross-roller bearing (see :data:`UR5E_FLEX`).
+  (1 + c_load2 * |L|_s) * d(delta)/dt`` (N m), i.e. friction that grows with the load ``L``
+  (N m) the joint's gear and bearings carry, linearly (``c_load2 = 0``) or, as the paper's
+  measured damping map (eq. 48), faster than linearly. ``L`` is the spring torque of the joint
+  named by ``damper_load_joint``: by default the joint's own gear torque; for the base of a UR
+  arm, the shoulder's, which is the tilting moment the arm exerts on the base's cross-roller
+  bearing (see :data:`UR5E_FLEX`).
   ``|x|_s = sqrt(x² + s²) − s`` is a smooth absolute value (``s = load_smoothing_nm``): a
   gear's friction has no kink where its load changes sign, and a kink would put one into the
   true damping ratio along a move (and so into references shaped with it).
@@ -43,7 +45,8 @@ class FlexParams:
         Viscous gear damping at zero load (N m s/rad).
     c_load_per_nm
         Load dependence of the damping (1/(N m)), >= 0: the damping coefficient of joint ``j``
-        is ``c0 * (1 + c_load * |tau_spring[damper_load_joint[j]]|_s)``.
+        is ``c0 * (1 + c_load * |L|_s) * (1 + c_load2 * |L|_s)`` with the load
+        ``L = tau_spring[damper_load_joint[j]]``.
     load_smoothing_nm
         Width ``s`` of the smooth absolute value ``|x|_s = sqrt(x² + s²) − s`` (N m), > 0.
     max_deflection_rad
@@ -52,6 +55,11 @@ class FlexParams:
     damper_load_joint
         For each joint, the joint whose gear spring torque is the load of its damper
         (0-based indices); ``None``: every damper is loaded by its own gear.
+    c_load2_per_nm
+        Second load factor (1/(N m)), >= 0, making the damping grow quadratically with the
+        load: the coefficient is ``c0 (1 + c_load |L|_s) (1 + c_load2 |L|_s)``, the form of the
+        paper's measured damping map (eq. 48, ``(c_0 + c_2 J)(1 + c_τ J)``) with the load in
+        place of the inertia. ``None``: zero for every joint (damping linear in the load).
     """
 
     k1_nm_per_rad: tuple[float, ...]
@@ -61,6 +69,7 @@ class FlexParams:
     load_smoothing_nm: float = 5.0
     max_deflection_rad: float = 0.1
     damper_load_joint: tuple[int, ...] | None = None
+    c_load2_per_nm: tuple[float, ...] | None = None
 
     def validate(self, n_dof: int) -> None:
         """Raise ValueError unless every field is finite, has ``n_dof`` entries and a valid sign."""
@@ -70,6 +79,8 @@ class FlexParams:
             "c0_nms_per_rad": (self.c0_nms_per_rad, False),
             "c_load_per_nm": (self.c_load_per_nm, False),
         }
+        if self.c_load2_per_nm is not None:
+            per_joint["c_load2_per_nm"] = (self.c_load2_per_nm, False)
         for name, (values, strictly_positive) in per_joint.items():
             arr = np.asarray(values, dtype=float)
             if arr.shape != (n_dof,):
@@ -97,6 +108,12 @@ class FlexParams:
                     f"[0, {n_dof - 1}], got {self.damper_load_joint!r}"
                 )
 
+    def c_load2(self) -> np.ndarray:
+        """Second load factors ``(n_dof,)`` (1/(N m)); zeros if ``c_load2_per_nm`` is None."""
+        if self.c_load2_per_nm is None:
+            return np.zeros(len(self.c0_nms_per_rad))
+        return np.asarray(self.c_load2_per_nm, dtype=float)
+
     def damper_load_index(self) -> np.ndarray:
         """Indices ``idx`` ``(n_dof,)``: joint ``j``'s damper load is spring torque ``idx[j]``."""
         if self.damper_load_joint is None:
@@ -114,7 +131,9 @@ class FlexParams:
         return np.asarray(self.k1_nm_per_rad) + 3.0 * np.asarray(self.k3_nm_per_rad3) * delta**2
 
     def damping_nms_per_rad(self, spring_torque_nm: np.ndarray) -> np.ndarray:
-        """Load-dependent gear damping ``c0 (1 + c_load |L|_s)`` (N m s/rad), ``(..., n_dof)``.
+        """Load-dependent gear damping ``c0 (1 + c_load |L|_s) (1 + c_load2 |L|_s)`` (N m s/rad).
+
+        Returns an array ``(..., n_dof)``.
 
         ``spring_torque_nm`` holds the gear spring torques of all joints ``(..., n_dof)``; the
         load ``L`` of joint ``j`` is entry ``damper_load_joint[j]`` of it. This is the one
@@ -124,7 +143,8 @@ class FlexParams:
         tau = np.asarray(spring_torque_nm, dtype=float)[..., self.damper_load_index()]
         s = self.load_smoothing_nm
         load = np.sqrt(tau * tau + s * s) - s
-        return np.asarray(self.c0_nms_per_rad) * (1.0 + np.asarray(self.c_load_per_nm) * load)
+        c0 = np.asarray(self.c0_nms_per_rad)
+        return c0 * (1.0 + np.asarray(self.c_load_per_nm) * load) * (1.0 + self.c_load2() * load)
 
     def deflection_rad(self, torque_nm: np.ndarray) -> np.ndarray:
         """Deflection that carries ``torque_nm`` (inverse of eq. 22, the real root; Newton)."""
@@ -171,19 +191,25 @@ class FlexParams:
 #:   in the time-stepping loop. Left out are link 1's own moment (its centre of mass lies near
 #:   the base axis) and the moment across the arm's plane from the wrist offsets d4-d6, about
 #:   13 (no payload) to 30 N m (5 kg) and changing little with the pose, so lumped into ``c0``.
-#:   ``c0 = 10`` N m s/rad is the unloaded bearing and gear friction; ``c_load = 0.2`` /(N m)
-#:   makes the damping grow about twentyfold at the ~100 N m of the stretched arm with 5 kg.
-#:   These two numbers reproduce the real UR5e's trend (SPEC Table 3: base ζ 0.26 stretched at
-#:   Q1, 0.08 folded at Q3): with 5 kg the twin's base ζ is 0.24 at Q1 and 0.11 at Q3, and
-#:   0.07-0.26 over the mapping campaign's poses. A constant base damping (no load) would
-#:   instead give ζ = c / (2 √(k J_0)), rising to 0.4-0.8 where the arm is folded near the
-#:   base axis (small J_0).
+#:   The damping grows faster than linearly with that load, as the real UR5e's measured base
+#:   damping does: the paper's map (eq. 48) has the coefficient ``(c_0 + c_2 J_0)(1 + c_τ J_0)``,
+#:   about ``J_0^1.3`` over ``J_0 = 1 … 9`` kg m²; at a fixed payload ``J_0`` grows about as
+#:   the square of the reach and the tilting moment about linearly (a point mass at reach r:
+#:   ``J_0 ∝ r²``, ``L ∝ r``), so in the load that is about ``L^2.6``. The twin uses the same
+#:   product form in the load, ``c0 (1 + c_load L)(1 + c_load2 L)``, with ``c0 = 5`` N m s/rad
+#:   (unloaded bearing and gear friction) and ``c_load = c_load2 = 0.056`` /(N m): 5, 18, 62
+#:   and 200 N m s/rad at 0, 20, 50 and 100 N m. With 5 kg the twin's base ζ is 0.25 at Q1 and
+#:   0.053 at Q3 (real UR5e, SPEC Table 3: 0.26 and 0.08), and 0.04-0.25 over the mapping
+#:   campaign's poses, within 0.4 (log-rms) of the published map's ζ_0 at the same inertias
+#:   (a damping linear in the load: 0.9). A constant base damping (no load) would instead give
+#:   ζ = c / (2 √(k J_0)), rising where the arm is folded near the base axis.
 UR5E_FLEX = FlexParams(
     k1_nm_per_rad=(22000.0, 18000.0, 120000.0, 15000.0, 15000.0, 2000.0),
     k3_nm_per_rad3=(4.63e7, 2.53e7, 7.51e9, 4.21e8, 4.21e8, 9.98e5),
-    c0_nms_per_rad=(10.0, 60.0, 40.0, 5.0, 5.0, 0.2),
-    c_load_per_nm=(0.2, 0.01, 0.01, 0.01, 0.01, 0.01),
+    c0_nms_per_rad=(5.0, 60.0, 40.0, 5.0, 5.0, 0.2),
+    c_load_per_nm=(0.056, 0.01, 0.01, 0.01, 0.01, 0.01),
     damper_load_joint=(1, 1, 2, 3, 4, 5),
+    c_load2_per_nm=(0.056, 0.0, 0.0, 0.0, 0.0, 0.0),
 )
 
 _DEFAULTS: dict[str, FlexParams] = {"ur5e": UR5E_FLEX}

@@ -150,6 +150,7 @@ class Twin:
         self._k3 = np.asarray(self._flex.k3_nm_per_rad3, dtype=float)
         self._c0 = np.asarray(self._flex.c0_nms_per_rad, dtype=float)
         self._c_load = np.asarray(self._flex.c_load_per_nm, dtype=float)
+        self._c_load2 = self._flex.c_load2()
         self._load_index = self._flex.damper_load_index()
 
     # ------------------------------------------------------------------ properties
@@ -429,7 +430,8 @@ class Twin:
         flange_pos = np.empty((n_samples, 3))
         flange_rot = np.empty((n_samples, 9))
 
-        k1, k3, c0, c_load = self._k1, self._k3, self._c0, self._c_load
+        k1, k3, c0, c_load, c_load2 = self._k1, self._k3, self._c0, self._c_load, self._c_load2
+        quadratic = bool(np.any(c_load2 != 0.0))  # skip the second factor when it is 1
         load_index = self._load_index
         qpos, qvel, applied = data.qpos, data.qvel, data.qfrc_applied
         dof_damping = model.dof_damping
@@ -444,6 +446,7 @@ class Twin:
         delta = np.empty(n)
         tau = np.empty(n)
         damp = np.empty(n)
+        growth = np.empty(n)
         force = np.empty(n)
 
         bar = _ProgressBar(n_samples, dt) if progress else None
@@ -463,7 +466,8 @@ class Twin:
                     tau *= k3
                     tau += k1
                     tau *= delta
-                    # Gear damping c (q_motor' - q_link') with c = c0 (1 + c_load |tau|_s) and
+                    # Gear damping c (q_motor' - q_link') with
+                    # c = c0 (1 + c_load |L|_s) (1 + c_load2 |L|_s) and
                     # the trapezoidal link velocity (v_n + v_{n+1}) / 2: c (q_motor' - v_n / 2)
                     # is applied, c / 2 is MuJoCo dof damping, which acts on v_{n+1}. This
                     # is second-order accurate; fully implicit damping would lower every
@@ -477,8 +481,13 @@ class Twin:
                     damp += smoothing_sq
                     np.sqrt(damp, out=damp)
                     damp -= smoothing
+                    if quadratic:
+                        np.multiply(damp, c_load2, out=growth)
+                        growth += 1.0
                     damp *= c_load
                     damp += 1.0
+                    if quadratic:
+                        damp *= growth
                     damp *= c0
                     np.multiply(qvel, -0.5, out=force)
                     force += vel_ref
