@@ -256,7 +256,7 @@ def identify_map(
         )
         dynmap.save(out / MAP_FILE)
         # The real-time provider rejects a map that gives no valid mode at some reachable pose
-        # (evaluated as it runs: clamped into the identified inertia ranges); fail here.
+        # (evaluated as it runs: saturated into the identified inertia ranges); fail here.
         MapDynamics(robots.ur5e(payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M), dynmap)
     except Exception as exc:  # noqa: BLE001 (any failure is reported, not fatal)
         summary = {"error": f"{type(exc).__name__}: {exc}"}

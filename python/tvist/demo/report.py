@@ -440,8 +440,9 @@ def _identification_section(result: DemoResult) -> list[str]:
     lines += [_md_table(header, rows), ""]
     lines.append(
         "The map is evaluated only inside these inertia ranges (the inertias of the poses it "
-        "was fitted to): outside them it holds the value at the nearest bound instead of "
-        "extrapolating. " + _clamp_summary(result)
+        "was fitted to): an inertia is saturated smoothly into its range (a 5 % blend at "
+        "each bound, so the modes stay differentiable along a move) and beyond it the map "
+        "holds the value at the bound instead of extrapolating. " + _clamp_summary(result)
     )
     lines.append("")
     versus = info.get("versus_true_modes") or {}
@@ -500,7 +501,9 @@ def _clamp_summary(result: DemoResult) -> str:
     if not parts:
         return ""
     return (
-        "Share of each shaped reference at which an inertia was clamped: " + "; ".join(parts) + "."
+        "Share of each shaped reference at which an inertia was outside its range: "
+        + "; ".join(parts)
+        + "."
     )
 
 
