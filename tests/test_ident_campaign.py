@@ -133,14 +133,19 @@ def test_twin_campaign_subset(tmp_path):
             # little of the base excitation's response (0.1-0.4 % with 3-5 kg; the paper's
             # Fig. 22 situation).
             assert "-V2-" in record["key"], record["key"]
+            # Even a weak base component of the two-mode fit is the best estimate of the base
+            # mode (the single-mode value would be the shoulder mode's): it is reported,
+            # flagged. Measured: m0kg-V2-R5 0.05 %, m5kg-V2-R12 3.2 % (1 % of the response).
+            assert fits[0]["method"] == "two-mode", record["key"]
+            assert base_error < 0.05, (record["key"], base_error)
         else:
             base_ok += base_error < 0.03
             assert base_error < 0.03, (record["key"], base_error)
     assert shoulder_ok == len(subset)  # acceptance: within 3 % in >= 90 % of poses
     # Measured on this subset (deterministic: each excitation's noise is seeded by the
-    # excitation): the 6 unflagged base modes within 0.5 %, m0kg-V2-R5 flagged but within
-    # 0.1 %, m5kg-V2-R12 flagged (its base mode hidden). Over the full 208-pose campaign: base
-    # 182 within 3 % (all 155 confident ones), shoulder 208.
+    # excitation): the 6 unflagged base modes within 0.8 %, m0kg-V2-R5 and m5kg-V2-R12 flagged
+    # (weak base mode). Over the full 208-pose campaign: base 196 within 3 % (94 %; all 155
+    # confident ones), shoulder 208.
     assert base_ok == 6
 
 

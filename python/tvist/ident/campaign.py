@@ -458,7 +458,8 @@ def _separated_base_mode(base: LocalFit, shoulder: LocalFit, options: FitOptions
       it is the base mode (the single-mode fit if the other component is no real mode);
     - if the dominant component is at the shoulder frequency, the base mode is the other
       component when that one is significant and well determined; with less than
-      :data:`CLEAR_SHARE` of the response it is flagged low-confidence;
+      :data:`CLEAR_SHARE` of the response it is flagged low-confidence (it is still the best
+      estimate of the base mode: the single-mode value would be the shoulder mode's);
     - otherwise the base and shoulder modes cannot be told apart (hidden or coincident
       modes): the single-mode fit is kept, flagged.
 
@@ -482,11 +483,7 @@ def _separated_base_mode(base: LocalFit, shoulder: LocalFit, options: FitOptions
         if other.zeta >= 0.9 or not other.wn_se_rad_s < 0.5 * other.wn_rad_s:
             return entry
         chosen = dominant
-    elif (
-        split.significant
-        and other.energy_share >= MIN_SHARE
-        and other.wn_se_rad_s <= options.max_wn_rel_se * 5 * other.wn_rad_s
-    ):
+    elif split.significant and other.wn_se_rad_s <= options.max_wn_rel_se * 5 * other.wn_rad_s:
         chosen = other
         if other.energy_share < CLEAR_SHARE:
             reasons.append(
@@ -528,8 +525,6 @@ def _separated_base_mode(base: LocalFit, shoulder: LocalFit, options: FitOptions
 #: Modes closer than this frequency ratio are taken for the same mode (twice the 1 % accuracy
 #: of a local fit, plus margin).
 SAME_MODE_RATIO = 1.03
-#: A second component with less than this share of the base response is not used.
-MIN_SHARE = 0.05
 #: A base component with less than this share of the response is flagged low-confidence.
 CLEAR_SHARE = 0.3
 
