@@ -143,6 +143,8 @@ EI_TOLERANCES = [0.02, 0.05, 0.1, 0.2]
 # The EI range: zeta <= 0.4, and for V = 20 % zeta <= 0.28 (the exact design's limit).
 EI_MAX_ZETA = {0.02: 0.4, 0.05: 0.4, 0.1: 0.4, 0.2: 0.28}
 EI_ZETAS = [0.0, 0.1, 0.2, 0.28, 0.3, 0.4]
+#: (tolerance, zeta) pairs inside the EI range.
+EI_CASES = [(v, z) for v in EI_TOLERANCES for z in EI_ZETAS if z <= EI_MAX_ZETA[v]]
 
 
 def ei_conditions(x: np.ndarray, v_tol: float, zeta: float) -> np.ndarray:
@@ -187,11 +189,8 @@ def test_undamped_ei_equals_its_closed_form(v_tol: float) -> None:
     np.testing.assert_allclose(s.times_s, [0, period / 2, period], rtol=0, atol=1e-12 * period)
 
 
-@pytest.mark.parametrize("v_tol", EI_TOLERANCES)
-@pytest.mark.parametrize("zeta", EI_ZETAS)
+@pytest.mark.parametrize(("v_tol", "zeta"), EI_CASES)
 def test_ei_equals_an_independent_solution_of_its_conditions(v_tol: float, zeta: float) -> None:
-    if zeta > EI_MAX_ZETA[v_tol]:
-        pytest.skip("beyond the EI range for this tolerance")
     wn = 2 * np.pi * 10
     s = tvist.shaper("ei", wn, zeta, tolerance=v_tol)
     a1, a3, tau2, tau3, _, _ = ei_reference(v_tol, zeta)
@@ -213,11 +212,8 @@ def band_edge(s: tvist.Impulses, wn: float, zeta: float, v_tol: float, start: fl
     return brentq(lambda r: tvist.prv(s, r * wn, zeta) - v_tol, ratio[i - 1], ratio[i], xtol=1e-14)
 
 
-@pytest.mark.parametrize("v_tol", EI_TOLERANCES)
-@pytest.mark.parametrize("zeta", EI_ZETAS)
+@pytest.mark.parametrize(("v_tol", "zeta"), EI_CASES)
 def test_ei_tolerance_at_design_point_and_over_its_band(v_tol: float, zeta: float) -> None:
-    if zeta > EI_MAX_ZETA[v_tol]:
-        pytest.skip("beyond the EI range for this tolerance")
     wn = 2 * np.pi * 10
     s = tvist.shaper("ei", wn, zeta, tolerance=v_tol)
     # Exact design: V at the design point to rounding (1e-9), a local maximum there.
