@@ -8,36 +8,16 @@ import numpy as np
 import pytest
 
 import tvist
+from map_smoothing_reference import (
+    RANGE_BLEND_WIDTH,
+    smooth_abs_torque,
+    soft_clamp,
+)
 from tvist.dynmap import MODE_FIELDS, RANGE_FIELDS, general_mode
 
 # Table 1 / Table 2 of the paper (UR5e), typed in independently of the core.
 BASE = {"k_0": 10000.0, "k_j": 1060.0, "k_p": 2.54, "c_0": 1.53, "c_2": 0.39, "c_tau": 3.81}
 SHOULDER = {"k_0": 10000.0, "k_j": 763.0, "k_p": 1.73, "c_0": 0.27, "c_2": 0.038, "c_tau": 47.2}
-
-# The documented smoothing of the map (tvist-core dynmap module docs), typed in independently:
-#: Relative width of each blend zone of the soft clamp into an inertia range.
-RANGE_BLEND_WIDTH = 0.05
-#: Smoothing torque of the gravity term k_g (√(τ² + τ_s²) − τ_s), N m.
-GRAVITY_TORQUE_SMOOTHING_NM = 1.0
-
-
-def _soft_clamp(j: float, lo: float, hi: float) -> float:
-    """The C¹ saturation of J into [lo, hi] as documented, written out piece by piece."""
-    eps = RANGE_BLEND_WIDTH
-    if j <= lo * (1 - eps):
-        return lo
-    if j < lo * (1 + eps):
-        return j + (lo * (1 + eps) - j) ** 2 / (4 * lo * eps)
-    if j <= hi * (1 - eps):
-        return j
-    if j < hi * (1 + eps):
-        return j - (j - hi * (1 - eps)) ** 2 / (4 * hi * eps)
-    return hi
-
-
-def _smooth_abs_torque(tau_nm: float) -> float:
-    """√(τ² + τ_s²) − τ_s: the documented stand-in for |τ| in the gravity term."""
-    return float(np.sqrt(tau_nm**2 + GRAVITY_TORQUE_SMOOTHING_NM**2)) - GRAVITY_TORQUE_SMOOTHING_NM
 
 
 def _damped_hz(wn_rad_s: float, zeta: float) -> float:
@@ -125,7 +105,7 @@ def test_general_map_with_gravity_term():
         dynmap.modes_from_inertia([2.0, 3.0])
     ((wn, zeta),) = dynmap.modes_from_inertia([2.0, 3.0], [0.0, -40.0])
     j, tau = 3.0, -40.0
-    k = coeffs["k_0"] + coeffs["k_j"] * j + coeffs["k_g"] * _smooth_abs_torque(tau)
+    k = coeffs["k_0"] + coeffs["k_j"] * j + coeffs["k_g"] * smooth_abs_torque(tau)
     gain = 1 + coeffs["k_p"] / j
     wn_ref = np.sqrt(gain) * np.sqrt(k / j)
     num = (coeffs["c_0"] + coeffs["c_1"] * np.sqrt(j) + coeffs["c_2"] * j) * (
@@ -147,7 +127,7 @@ def test_the_gravity_term_is_smooth_where_the_torque_changes_sign():
     k = (
         SHOULDER["k_0"]
         + SHOULDER["k_j"] * j1
-        + 30.0 * np.array([_smooth_abs_torque(t) for t in taus])
+        + 30.0 * np.array([smooth_abs_torque(t) for t in taus])
     )
     wn_ref = np.sqrt(1 + SHOULDER["k_p"] / j1) * np.sqrt(k / j1)
     # Same formula, different operation order: 1e-12 relative.
@@ -317,7 +297,7 @@ def test_ranges_saturate_each_inertia_into_its_range():
         got = ranged.modes_from_inertia([j0, j1])
         # Base mode: the independent equations at the saturated inertias; shoulder (no
         # range): at the raw J_1. Same formulas, different operation order: 1e-12 relative.
-        base_ref = _paper_modes_reference(_soft_clamp(j0, 1.0, 9.0), _soft_clamp(j1, 2.0, 8.0))
+        base_ref = _paper_modes_reference(soft_clamp(j0, 1.0, 9.0), soft_clamp(j1, 2.0, 8.0))
         shoulder_ref = _paper_modes_reference(j0, j1)[1]
         np.testing.assert_allclose(got, [base_ref[0], shoulder_ref], rtol=1e-12)
     paper = tvist.DynamicMap.paper_ur5e()

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import tvist
+from map_smoothing_reference import smooth_abs_torque, soft_clamp
 from tvist.analysis.metrics import peak_jerk
 from tvist.trajectory import PAPER_POSES, double_s
 
@@ -129,8 +130,6 @@ def test_map_dynamics_rejects_wrong_types_and_the_shaper_wrong_n_dof():
 K_G = 20.0
 RANGE_KG_M2 = (2.0, 7.0)
 # The documented smoothing (tvist-core dynmap module docs), typed in independently.
-RANGE_BLEND_WIDTH = 0.05
-GRAVITY_TORQUE_SMOOTHING_NM = 1.0
 
 
 def _kinked_map_parts() -> tuple[dict, dict]:
@@ -141,23 +140,6 @@ def _kinked_map_parts() -> tuple[dict, dict]:
 
 def _hard_clamp(j: float, lo: float, hi: float) -> float:
     return min(max(j, lo), hi)
-
-
-def _soft_clamp(j: float, lo: float, hi: float) -> float:
-    eps = RANGE_BLEND_WIDTH
-    if j <= lo * (1 - eps):
-        return lo
-    if j < lo * (1 + eps):
-        return j + (lo * (1 + eps) - j) ** 2 / (4 * lo * eps)
-    if j <= hi * (1 - eps):
-        return j
-    if j < hi * (1 + eps):
-        return j - (j - hi * (1 - eps)) ** 2 / (4 * hi * eps)
-    return hi
-
-
-def _smooth_abs(tau_nm: float) -> float:
-    return np.sqrt(tau_nm**2 + GRAVITY_TORQUE_SMOOTHING_NM**2) - GRAVITY_TORQUE_SMOOTHING_NM
 
 
 def _numpy_provider(robot, clamp, magnitude):
@@ -220,7 +202,7 @@ def test_the_smooth_map_keeps_the_shaped_reference_free_of_jerk_spikes():
     # The numpy stand-in with the documented formulas reproduces the real-time path (same
     # modes to ~1e-15, so the shaped outputs agree to round-off; measured 9e-16 rad): the
     # comparison below differs only in the formulas.
-    np.testing.assert_allclose(shaped_by(_soft_clamp, _smooth_abs), smooth, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(shaped_by(soft_clamp, smooth_abs_torque), smooth, rtol=0, atol=1e-12)
 
     # C¹ map: 178 rad/s³ measured (1.8x the planned move's 100). What is left is where the
     # soft clamp's curvature switches on at the edges of its blend zones: a step in the
@@ -232,8 +214,8 @@ def test_the_smooth_map_keeps_the_shaped_reference_free_of_jerk_spikes():
     # with the hard clamp alone, 1125 with |τ| alone, i.e. 6-27x the smooth map's peak.
     kinked = {
         "hard clamp and |τ|": peak_jerk(shaped_by(_hard_clamp, abs), DT_S),
-        "hard clamp": peak_jerk(shaped_by(_hard_clamp, _smooth_abs), DT_S),
-        "|τ|": peak_jerk(shaped_by(_soft_clamp, abs), DT_S),
+        "hard clamp": peak_jerk(shaped_by(_hard_clamp, smooth_abs_torque), DT_S),
+        "|τ|": peak_jerk(shaped_by(soft_clamp, abs), DT_S),
     }
     for kink, jerk in kinked.items():
         assert jerk >= 5.0 * jerk_smooth, (kink, jerk, jerk_smooth)
