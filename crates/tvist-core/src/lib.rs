@@ -6,6 +6,11 @@
 //! - [`delay_line`]: circular buffer with fractional-delay (Lagrange) reads.
 //! - [`tvist`]: the single-mode time-varying filter (eq. 7).
 //! - [`multimode`]: the multi-mode cascade driven by a [`dynamics::Dynamics`] provider.
+//! - [`robot`]: serial revolute chains from DH parameters: flange pose, Jacobian, joint-space
+//!   inertia (composite rigid body) and gravity torques, allocation-free per call.
+//! - [`dynmap`]: the dynamic map from joint-axis inertias to modes (eqs. 42–51).
+//! - [`map_dynamics`]: the provider that evaluates robot inertia and map every cycle.
+//! - `robot_data` (feature `json`): the UR e-series parameter file, embedded.
 //! - [`ztdis`]: zero-time-delay shaping: time scales and the modified-ZTDIS compensator.
 //!
 //! Conventions: SI units with the unit in the name (`dt_s`, `wn_rad_s`); block data is
