@@ -2,7 +2,7 @@
 //!
 //! - [`shaper`]: the shaper library (ZV … 3-hump EI, custom sets, convolution).
 //! - [`ei`]: the extra-insensitive shaper designed exactly for a damped mode.
-//! - [`prv`]: percent residual vibration of any impulse set.
+//! - [`prv`](mod@prv): percent residual vibration of any impulse set.
 //! - [`delay_line`]: circular buffer with fractional-delay (Lagrange) reads.
 //! - [`tvist`]: the single-mode time-varying filter (eq. 7).
 //! - [`multimode`]: the multi-mode cascade driven by a [`dynamics::Dynamics`] provider.
