@@ -111,7 +111,11 @@ COMMANDS += [
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="tvist", description=__doc__)
+    parser = argparse.ArgumentParser(
+        prog="tvist",
+        description="Vibration suppression for robot arms: shaping, identification, the "
+        "simulated twin and reports.",
+    )
     sub = parser.add_subparsers(dest="command", required=True)
     for _, add in COMMANDS:
         add(sub)
