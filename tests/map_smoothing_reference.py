@@ -12,16 +12,20 @@ GRAVITY_TORQUE_SMOOTHING_NM = 1.0
 
 
 def soft_clamp(j: float, lo: float, hi: float) -> float:
-    """The C¹ saturation of J into [lo, hi] as documented, written out piece by piece."""
+    """The C² saturation of J into [lo, hi] as documented, written out piece by piece."""
     eps = RANGE_BLEND_WIDTH
+
+    def blend(x: float) -> float:  # B(x) = x − x³ + x⁴/2
+        return x - x**3 + x**4 / 2
+
     if j <= lo * (1 - eps):
         return lo
     if j < lo * (1 + eps):
-        return j + (lo * (1 + eps) - j) ** 2 / (4 * lo * eps)
+        return lo * (1 + eps) - 2 * lo * eps * blend((lo * (1 + eps) - j) / (2 * lo * eps))
     if j <= hi * (1 - eps):
         return j
     if j < hi * (1 + eps):
-        return j - (j - hi * (1 - eps)) ** 2 / (4 * hi * eps)
+        return hi * (1 - eps) + 2 * hi * eps * blend((j - hi * (1 - eps)) / (2 * hi * eps))
     return hi
 
 

@@ -261,8 +261,8 @@ def test_mode_fields_are_the_cores():
 
 
 # ---- inertia ranges: the map never extrapolates beyond the inertias it was identified on ----
-# Each inertia is saturated into its range by a C¹ soft clamp: the identity on
-# [min(1 + ε), max(1 − ε)], exactly the bound beyond min(1 − ε) and max(1 + ε), quadratic
+# Each inertia is saturated into its range by a C² soft clamp: the identity on
+# [min(1 + ε), max(1 − ε)], exactly the bound beyond min(1 − ε) and max(1 + ε), quartic
 # blends in between (tvist-core dynmap module docs).
 
 #: The paper's base mode limited to J_0 in [1, 9] (damping) and J_1 in [2, 8] (frequency).

@@ -17,10 +17,10 @@ maps with ``k_g != 0`` read it, so the paper's map and its Table 3 are unchanged
 **Validity ranges.** A mode may carry the inertias it was identified on:
 ``frequency_inertia_range_kg_m2 = [J_min, J_max]`` for ``J_f`` and
 ``damping_inertia_range_kg_m2`` for ``J_d`` (equal when both read the same joint). Every
-evaluation first saturates ``J_f`` and ``J_d`` into them with a C¹ soft clamp of relative
+evaluation first saturates ``J_f`` and ``J_d`` into them with a C² soft clamp of relative
 width ``ε = 0.05``: the identity on ``[J_min (1 + ε), J_max (1 − ε)]``, exactly ``J_min`` at
-or below ``J_min (1 − ε)`` and exactly ``J_max`` at or above ``J_max (1 + ε)``, with quadratic
-blends in between that stay inside ``[J_min, J_max]`` (within ``ε/4`` of a bound from the
+or below ``J_min (1 − ε)`` and exactly ``J_max`` at or above ``J_max (1 + ε)``, with quartic
+blends in between that stay inside ``[J_min, J_max]`` (within ``3ε/16`` of a bound from the
 hard clamp). So a map never extrapolates beyond the inertias it was identified on, and the
 modes have no kink at a bound (a kink would put a jerk spike into references shaped with
 them). A saturated evaluation is normal operation, not an error. A range needs

@@ -26,25 +26,27 @@
 //! therefore carry the [`InertiaRange`] `[min, max]` of `J_f` and of `J_d` it was identified on;
 //! evaluation saturates each inertia into its range ([`InertiaRange::saturate`]) before the
 //! equations see it. Invariant: **a map never extrapolates beyond the inertias it was
-//! identified on**: the saturated inertia always lies in `[min, max]`. The saturation is a C¹
+//! identified on**: the saturated inertia always lies in `[min, max]`. The saturation is a C²
 //! soft clamp with relative blend width `ε` = [`RANGE_BLEND_WIDTH`]:
 //!
 //! ```text
 //! s(J) = min                                   J <= min(1 − ε)
-//!        J + (min(1 + ε) − J)² / (4 min ε)     min(1 − ε) < J < min(1 + ε)
+//!        min(1 + ε) − 2 min ε B(v)             min(1 − ε) < J < min(1 + ε),  v = (min(1 + ε) − J)/(2 min ε)
 //!        J                                     min(1 + ε) <= J <= max(1 − ε)
-//!        J − (J − max(1 − ε))² / (4 max ε)     max(1 − ε) < J < max(1 + ε)
+//!        max(1 − ε) + 2 max ε B(u)             max(1 − ε) < J < max(1 + ε),  u = (J − max(1 − ε))/(2 max ε)
 //!        max                                   J >= max(1 + ε)
+//!
+//! B(x) = x − x³ + x⁴/2   (B' = 1 − smoothstep(x) = 1 − 3x² + 2x³, B(1) = ½)
 //! ```
 //!
-//! `s` is non-decreasing, continuous with a continuous derivative, exact (the identity) in the
-//! core of the range and exactly the bound well beyond it; it differs from the hard clamp
-//! `min(max(J, min), max)` by at most `ε/4` of the bound (at the bound itself). A hard clamp
+//! `s` is non-decreasing and twice continuously differentiable (its slope falls from 1 to 0
+//! along a smoothstep, whose own slope is 0 at both ends), exact (the identity) in the core of
+//! the range and exactly the bound well beyond it; it differs from the hard clamp
+//! `min(max(J, min), max)` by at most `3ε/16` of the bound (at the bound itself). A hard clamp
 //! has a kink at each bound, and the time-varying shaper turns any kink of the modes along a
-//! move into a step of the shaped reference's velocity slope, i.e. a jerk spike. What the C¹
-//! saturation leaves is a step of the reference acceleration where a blend's curvature
-//! switches on, much smaller. A range must leave room for both blend zones:
-//! `max/min >= (1 + ε)/(1 − ε)` ([`InertiaRange::new`]).
+//! move into a step of the shaped reference's velocity slope, i.e. a jerk spike; a blend that
+//! is only C¹ still steps the reference acceleration where its curvature switches on. A range
+//! must leave room for both blend zones: `max/min >= (1 + ε)/(1 − ε)` ([`InertiaRange::new`]).
 //!
 //! Outside its range a mode keeps the value at the nearest bound: a saturated evaluation is
 //! normal operation, not an error, and is not reported. Only inertias that are no inertia at
@@ -65,7 +67,7 @@ use crate::shaper::Mode;
 /// Relative width `ε` of each blend zone of the soft clamp into an [`InertiaRange`]: the
 /// saturation is the identity on `[min(1 + ε), max(1 − ε)]`, exactly `min` below `min(1 − ε)`
 /// and exactly `max` above `max(1 + ε)`. 5 % of the bound keeps the map exact over the bulk of
-/// its range, moves it by at most `ε/4` = 1.25 % of a bound, and spreads the bend over an
+/// its range, moves it by at most `3ε/16` ≈ 0.94 % of a bound, and spreads the bend over an
 /// inertia change large enough that the modes change slope gradually along a move.
 pub const RANGE_BLEND_WIDTH: f64 = 0.05;
 
@@ -179,9 +181,9 @@ impl InertiaRange {
         self.max_kg_m2
     }
 
-    /// `j_kg_m2` saturated into the range by the C¹ soft clamp of the module docs: unchanged
+    /// `j_kg_m2` saturated into the range by the C² soft clamp of the module docs: unchanged
     /// on `[min(1 + ε), max(1 − ε)]`, exactly `min` at or below `min(1 − ε)`, exactly `max` at
-    /// or above `max(1 + ε)`, quadratic blends in between. The result always lies in
+    /// or above `max(1 + ε)`, quartic blends in between. The result always lies in
     /// `[min, max]`, is non-decreasing in `j_kg_m2`, and NaN stays NaN. Never panics.
     #[inline]
     pub fn saturate(&self, j_kg_m2: f64) -> f64 {
@@ -193,14 +195,15 @@ impl InertiaRange {
         if j >= hi_out {
             hi
         } else if j > hi_in {
-            let d = j - hi_in;
-            // At most `hi` (reached at hi_out, where the slope is 0); slope 1 at hi_in.
-            (j - d * d / (4.0 * hi * eps)).min(hi)
+            // At most `hi` (reached at hi_out, where slope and curvature are 0); slope 1 and
+            // curvature 0 at hi_in.
+            let u = (j - hi_in) / (2.0 * hi * eps);
+            (hi_in + 2.0 * hi * eps * blend(u)).min(hi)
         } else if j >= lo_in {
             j
         } else if j > lo_out {
-            let d = lo_in - j;
-            (j + d * d / (4.0 * lo * eps)).max(lo)
+            let v = (lo_in - j) / (2.0 * lo * eps);
+            (lo_in - 2.0 * lo * eps * blend(v)).max(lo)
         } else if j <= lo_out {
             lo
         } else {
@@ -213,6 +216,13 @@ impl core::fmt::Display for InertiaRange {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         write!(f, "[{}, {}] kg m²", self.min_kg_m2, self.max_kg_m2)
     }
+}
+
+/// `B(x) = x − x³ + x⁴/2` on `[0, 1]`: the integral of `1 − smoothstep(x)`, so `B' = 1` and
+/// `B'' = 0` at 0, `B' = B'' = 0` at 1, `B(1) = ½`.
+#[inline]
+fn blend(x: f64) -> f64 {
+    x * (1.0 - x * x * (1.0 - 0.5 * x))
 }
 
 /// `j` saturated into `range` ([`InertiaRange::saturate`]), or unchanged without one.
@@ -556,10 +566,11 @@ mod tests {
             assert_eq!(r.saturate(j), 9.0, "{j}");
         }
         assert!(r.saturate(f64::NAN).is_nan());
-        // At the bounds themselves the blend sits ε/4 of the bound inside the range.
+        // At the bounds themselves (u = v = ½, B = 13/32) the blend sits 3ε/16 of the bound
+        // inside the range.
         let eps = RANGE_BLEND_WIDTH;
-        assert!((r.saturate(1.0) - (1.0 + 1.0 * eps / 4.0)).abs() < 1e-15);
-        assert!((r.saturate(9.0) - (9.0 - 9.0 * eps / 4.0)).abs() < 1e-14);
+        assert!((r.saturate(1.0) - (1.0 + 1.0 * 3.0 * eps / 16.0)).abs() < 1e-15);
+        assert!((r.saturate(9.0) - (9.0 - 9.0 * 3.0 * eps / 16.0)).abs() < 1e-14);
     }
 
     #[test]
@@ -576,10 +587,10 @@ mod tests {
                 assert!(lo <= s && s <= hi, "{r}: s({j}) = {s}");
                 assert!(s >= previous, "{r}: not monotone at {j}");
                 previous = s;
-                // Largest gap to the hard clamp: ε/4 of the nearer bound (at the bound);
-                // 1e-12 relative covers the rounding of the quadratic.
+                // Largest gap to the hard clamp: 3ε/16 of the nearer bound (at the bound);
+                // 1e-12 relative covers the rounding of the quartic.
                 let hard = j.clamp(lo, hi);
-                let allowed = eps / 4.0 * if j < 0.5 * (lo + hi) { lo } else { hi };
+                let allowed = 3.0 * eps / 16.0 * if j < 0.5 * (lo + hi) { lo } else { hi };
                 assert!((s - hard).abs() <= allowed * (1.0 + 1e-12), "{r}: {j}");
             }
         }
@@ -594,9 +605,9 @@ mod tests {
     fn saturation_is_c1_at_the_four_joints() {
         let r = range(1.0, 9.0);
         let [lo_out, lo_in, hi_in, hi_out] = joints(r);
-        // Slopes: 0 outside, 1 inside, continuous at every joint. Step 1e-8 of the joint: a
-        // one-sided quotient of a quadratic with s'' = 1/(2 ε bound) is off by h s''/2 = 1e-7,
-        // and rounding adds ~1e-16 · x / h ~ 1e-8, so the two sides agree to ~1e-7.
+        // Slopes: 0 outside, 1 inside, continuous at every joint. Step 1e-8 of the joint: the
+        // curvature is 0 at every joint, so a one-sided quotient is off by O(h²) only, and
+        // rounding adds ~1e-16 · x / h ~ 1e-8.
         for (x, slope) in [(lo_out, 0.0), (lo_in, 1.0), (hi_in, 1.0), (hi_out, 0.0)] {
             let (left, right) = one_sided_slopes(|j| r.saturate(j), x, 1e-8 * x);
             assert!((left - right).abs() < 1e-6, "at {x}: {left} vs {right}");
@@ -613,6 +624,36 @@ mod tests {
         let hard = |j: f64| j.clamp(1.0, 9.0);
         let (left, right) = one_sided_slopes(hard, 9.0, 1e-8 * 9.0);
         assert!((left - right).abs() > 0.99);
+    }
+
+    #[test]
+    fn saturation_is_c2_at_the_four_joints() {
+        let r = range(1.0, 9.0);
+        // One-sided second difference quotients with step h = 1e-4 x: for a C² function with
+        // zero curvature at the joint both sides are O(h |s'''|) ~ 6 h/(2 ε x)² ≈ 0.06/x; a C¹
+        // quadratic blend's curvature jumps by 1/(2 ε x) = 10/x there. Rounding: ~4e-16 x/h²
+        // = 4e-8/x. Bound: 1/x (a tenth of the jump that a C¹ blend would show).
+        let second = |f: &dyn Fn(f64) -> f64, x: f64, h: f64| {
+            let left = (f(x) - 2.0 * f(x - h) + f(x - 2.0 * h)) / (h * h);
+            let right = (f(x + 2.0 * h) - 2.0 * f(x + h) + f(x)) / (h * h);
+            (left, right)
+        };
+        for x in joints(r) {
+            let (left, right) = second(&|j| r.saturate(j), x, 1e-4 * x);
+            assert!((left - right).abs() < 1.0 / x, "at {x}: {left} vs {right}");
+        }
+        // A C¹ quadratic blend fails it: its curvature jumps at hi_in.
+        let (hi, eps) = (9.0, RANGE_BLEND_WIDTH);
+        let hi_in = hi * (1.0 - eps);
+        let quadratic = |j: f64| {
+            if j > hi_in {
+                j - (j - hi_in) * (j - hi_in) / (4.0 * hi * eps)
+            } else {
+                j
+            }
+        };
+        let (left, right) = second(&quadratic, hi_in, 1e-4 * hi_in);
+        assert!((left - right).abs() > 5.0 / hi_in);
     }
 
     #[test]

@@ -529,9 +529,8 @@ def _map_jerk_notes(result: DemoResult) -> list[str]:
     along it (:func:`tvist.demo.methods.map_use`).
 
     The map has no kink (tvist-core ``dynmap``: inertias are saturated into their ranges by a
-    C¹ soft clamp, the gravity term uses a smoothed ``|τ|``), so what is left are places where
-    the modes bend sharply: the edges of a clamp's blend zones (the bend switches on there, a
-    step in the reference acceleration) and a gravity torque passing through zero.
+    C² soft clamp, the gravity term uses a smoothed ``|τ|``), so what is left are places where
+    the modes bend sharply: a clamp's blend zones and a gravity torque passing through zero.
     """
     notes = []
     for motion in result.motions:
@@ -554,7 +553,7 @@ def _map_jerk_notes(result: DemoResult) -> list[str]:
             if any(0.0 < c < 100.0 for c in use["inertia_clamped_percent"]):
                 causes.append(
                     "an inertia crosses a bound of the identified range, through the soft "
-                    "clamp's blend zone (continuous slope; the bend starts at the zone's edges)"
+                    "clamp's blend zone (continuous slope and curvature, but a sharp bend)"
                 )
             why = "; ".join(causes) if causes else "no bend of the map explains it"
             notes.append(
