@@ -23,3 +23,21 @@ def test_demo_rows_belong_to_the_methods_a_user_can_choose():
     assert _demo_row_method("fd-tvist-identified-map") == "tvist"
     with pytest.raises(SystemExit):
         build_parser().parse_args(["demo", "--method", "bogus"])
+
+
+def test_subpackages_load_on_first_access_without_heavy_imports():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, tvist\n"
+        "assert 'mujoco' not in sys.modules and 'matplotlib' not in sys.modules\n"
+        "assert callable(tvist.trajectory.double_s) and callable(tvist.ident.read_rtde_csv)\n"
+        "assert tvist.sim.Twin and callable(tvist.analysis.residual_vibration)\n"
+        "assert 'mujoco' not in sys.modules  # the simulator loads only with a Twin\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+    with pytest.raises(AttributeError, match="no attribute"):
+        import tvist
+
+        _ = tvist.not_a_subpackage

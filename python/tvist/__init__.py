@@ -31,6 +31,18 @@ __all__ = [
     "zero_delay",
 ]
 
+#: Subpackages imported on first access (``tvist.sim`` etc.), so ``import tvist`` stays light.
+_LAZY_SUBPACKAGES = ("analysis", "ident", "sim", "trajectory")
+
+
+def __getattr__(name: str):
+    if name in _LAZY_SUBPACKAGES:
+        import importlib
+
+        return importlib.import_module(f"tvist.{name}")
+    raise AttributeError(f"module 'tvist' has no attribute {name!r}")
+
+
 #: Names of the registry shapers, for :func:`shaper` and ``TvShaper(shaper=...)``.
 SHAPERS: tuple[str, ...] = tuple(_core.SHAPERS)
 
