@@ -1,8 +1,6 @@
 //! Bindings of the robot model, the dynamic map and the map-driven dynamics provider.
 
-use numpy::{
-    IntoPyArray, PyArray1, PyArrayDyn, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
-};
+use numpy::{PyArrayDyn, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use tvist_core as core;
@@ -34,12 +32,6 @@ pub struct PyRobot {
 }
 
 impl PyRobot {
-    fn q<'a>(&self, q: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
-        let s = q.as_slice()?;
-        check_len("q", s.len(), self.inner.n_dof())?;
-        Ok(s)
-    }
-
     /// Runs `f` on every row of `q` (n_samples, n_dof), writing `width` values per row.
     fn many(
         &mut self,
@@ -119,18 +111,6 @@ impl PyRobot {
         self.inner.n_dof()
     }
 
-    /// Diagonal of the joint-space inertia matrix, J_i = M[i, i] (kg m^2).
-    fn joint_inertia<'py>(
-        &mut self,
-        py: Python<'py>,
-        q: PyReadonlyArray1<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let q = self.q(&q)?;
-        let mut out = vec![0.0; q.len()];
-        self.inner.joint_inertia(q, &mut out);
-        Ok(out.into_pyarray(py))
-    }
-
     /// joint_inertia for every row of Q (n_samples, n_dof).
     fn joint_inertia_many<'py>(
         &mut self,
@@ -142,19 +122,6 @@ impl PyRobot {
         convert::array(py, &[m, n], out)
     }
 
-    /// Joint-space inertia matrix M(q) (n, n).
-    fn mass_matrix<'py>(
-        &mut self,
-        py: Python<'py>,
-        q: PyReadonlyArray1<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let n = self.inner.n_dof();
-        let q = self.q(&q)?;
-        let mut out = vec![0.0; n * n];
-        self.inner.mass_matrix(q, &mut out);
-        convert::array(py, &[n, n], out)
-    }
-
     /// mass_matrix for every row of Q: (n_samples, n, n).
     fn mass_matrix_many<'py>(
         &mut self,
@@ -164,18 +131,6 @@ impl PyRobot {
         let n = self.inner.n_dof();
         let (m, out) = self.many(&q, n * n, |r, x, y| r.mass_matrix(x, y))?;
         convert::array(py, &[m, n, n], out)
-    }
-
-    /// Flange pose in the base frame (4, 4).
-    fn flange_pose<'py>(
-        &mut self,
-        py: Python<'py>,
-        q: PyReadonlyArray1<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let q = self.q(&q)?;
-        let mut out = [0.0; 16];
-        self.inner.flange_pose(q, &mut out);
-        convert::array(py, &[4, 4], out.to_vec())
     }
 
     /// flange_pose for every row of Q: (n_samples, 4, 4).
@@ -193,19 +148,6 @@ impl PyRobot {
         convert::array(py, &[m, 4, 4], out)
     }
 
-    /// Geometric Jacobian of the flange origin, base frame, rows [linear; angular] (6, n).
-    fn jacobian<'py>(
-        &mut self,
-        py: Python<'py>,
-        q: PyReadonlyArray1<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let n = self.inner.n_dof();
-        let q = self.q(&q)?;
-        let mut out = vec![0.0; 6 * n];
-        self.inner.jacobian(q, &mut out);
-        convert::array(py, &[6, n], out)
-    }
-
     /// jacobian for every row of Q: (n_samples, 6, n).
     fn jacobian_many<'py>(
         &mut self,
@@ -215,18 +157,6 @@ impl PyRobot {
         let n = self.inner.n_dof();
         let (m, out) = self.many(&q, 6 * n, |r, x, y| r.jacobian(x, y))?;
         convert::array(py, &[m, 6, n], out)
-    }
-
-    /// Gravity torques (N m), g = 9.81 m/s^2 along -z of the base.
-    fn gravity_torque<'py>(
-        &mut self,
-        py: Python<'py>,
-        q: PyReadonlyArray1<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let q = self.q(&q)?;
-        let mut out = vec![0.0; q.len()];
-        self.inner.gravity_torque(q, &mut out);
-        Ok(out.into_pyarray(py))
     }
 
     /// gravity_torque for every row of Q (n_samples, n_dof).

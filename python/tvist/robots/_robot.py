@@ -85,6 +85,9 @@ class Robot:
         """Number of joints."""
         return self._params.n_dof
 
+    # Single poses go through the batch entry points of the core (one row): one binding per
+    # quantity.
+
     @property
     def core(self) -> _core.Robot:
         """The Rust model (pass-through for :class:`tvist.MapDynamics`)."""
@@ -92,7 +95,7 @@ class Robot:
 
     def joint_inertia(self, q: Sequence[float] | np.ndarray) -> np.ndarray:
         """Diagonal of the joint-space inertia matrix, ``J_i = M[i, i]`` (kg m²), ``(n_dof,)``."""
-        return self._core.joint_inertia(_as_q(q, self.n_dof))
+        return self._core.joint_inertia_many(_as_q(q, self.n_dof)[None])[0]
 
     def joint_inertia_many(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
         """:meth:`joint_inertia` for every row of ``q`` ``(n_samples, n_dof)``."""
@@ -100,7 +103,7 @@ class Robot:
 
     def mass_matrix(self, q: Sequence[float] | np.ndarray) -> np.ndarray:
         """Joint-space inertia matrix ``M(q)`` (composite rigid body algorithm), ``(n, n)``."""
-        return self._core.mass_matrix(_as_q(q, self.n_dof))
+        return self._core.mass_matrix_many(_as_q(q, self.n_dof)[None])[0]
 
     def mass_matrix_many(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
         """:meth:`mass_matrix` for every row of ``q``, ``(n_samples, n_dof, n_dof)``."""
@@ -108,7 +111,7 @@ class Robot:
 
     def flange_pose(self, q: Sequence[float] | np.ndarray) -> np.ndarray:
         """Homogeneous transform of the flange (DH frame ``n``) in the base frame, ``(4, 4)``."""
-        return self._core.flange_pose(_as_q(q, self.n_dof))
+        return self._core.flange_pose_many(_as_q(q, self.n_dof)[None])[0]
 
     def flange_pose_many(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
         """:meth:`flange_pose` for every row of ``q``, ``(n_samples, 4, 4)``."""
@@ -119,7 +122,7 @@ class Robot:
 
         Returns shape ``(6, n_dof)``.
         """
-        return self._core.jacobian(_as_q(q, self.n_dof))
+        return self._core.jacobian_many(_as_q(q, self.n_dof)[None])[0]
 
     def jacobian_many(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
         """:meth:`jacobian` for every row of ``q``, ``(n_samples, 6, n_dof)``."""
@@ -127,7 +130,7 @@ class Robot:
 
     def gravity_torque(self, q: Sequence[float] | np.ndarray) -> np.ndarray:
         """Joint torques that hold the arm against gravity, ``τ_g(q)`` (N m), ``(n_dof,)``."""
-        return self._core.gravity_torque(_as_q(q, self.n_dof))
+        return self._core.gravity_torque_many(_as_q(q, self.n_dof)[None])[0]
 
     def gravity_torque_many(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
         """:meth:`gravity_torque` for every row of ``q``, ``(n_samples, n_dof)``."""
