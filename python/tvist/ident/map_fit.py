@@ -241,6 +241,20 @@ def _covariance_se(
     return {name: float(math.sqrt(max(cov[i, i], 0.0))) for i, name in enumerate(names)}
 
 
+def _refine(residual, starts, terms: list[str], nonnegative: str, what: str):
+    """Bounded least squares of ``residual`` from the best of the ``starts`` (smallest sum of
+    squared residuals); the coefficient ``nonnegative`` is kept >= 0."""
+    best: tuple[float, np.ndarray] | None = None
+    for x in starts:
+        cost = float(np.sum(residual(x) ** 2))
+        if best is None or cost < best[0]:
+            best = (cost, x)
+    if best is None:
+        raise ValueError(f"map fit: no valid starting point for the {what} coefficients")
+    lower = [0.0 if t == nonnegative else -np.inf for t in terms]
+    return optimize.least_squares(residual, best[1], bounds=(lower, np.inf), **_LSQ)
+
+
 def _fit_frequency(
     table: PoseTable, f_joint: int, d_joint: int, terms: list[str], k_0: float
 ) -> _StepResult:
@@ -256,27 +270,22 @@ def _fit_frequency(
 
     # Start: for fixed k_p, ω_n² is affine in (k_J, k_g); columns from map evaluations.
     linear = [t for t in terms if t != "k_p"]
-    best: tuple[float, np.ndarray] | None = None
-    for k_p in (0.0, 0.3, 1.0, 2.0, 4.0, 8.0, 16.0):
-        base = {"k_p": k_p, **{t: 0.0 for t in linear}}
-        w0, _ = evaluate_mode(mode_for(base), j, tau)
-        cols = []
-        for t in linear:
-            w1, _ = evaluate_mode(mode_for({**base, t: 1.0}), j, tau)
-            cols.append((w1**2 - w0**2) / w_meas**2)
-        if not np.all(np.isfinite(w0)) or not all(np.all(np.isfinite(c)) for c in cols):
-            continue
-        a = np.column_stack(cols)
-        coef, *_ = np.linalg.lstsq(a, 1.0 - w0**2 / w_meas**2, rcond=None)
-        values = dict(zip(linear, coef, strict=True))
-        x = np.array([k_p if t == "k_p" else values[t] for t in terms])
-        cost = float(np.sum(residual(x) ** 2))
-        if best is None or cost < best[0]:
-            best = (cost, x)
-    if best is None:
-        raise ValueError("map fit: no valid starting point for the frequency coefficients")
-    lower = [0.0 if t == "k_p" else -np.inf for t in terms]
-    res = optimize.least_squares(residual, best[1], bounds=(lower, np.inf), **_LSQ)
+
+    def starts():
+        for k_p in (0.0, 0.3, 1.0, 2.0, 4.0, 8.0, 16.0):
+            base = {"k_p": k_p, **{t: 0.0 for t in linear}}
+            w0, _ = evaluate_mode(mode_for(base), j, tau)
+            cols = []
+            for t in linear:
+                w1, _ = evaluate_mode(mode_for({**base, t: 1.0}), j, tau)
+                cols.append((w1**2 - w0**2) / w_meas**2)
+            if not np.all(np.isfinite(w0)) or not all(np.all(np.isfinite(c)) for c in cols):
+                continue
+            coef, *_ = np.linalg.lstsq(np.column_stack(cols), 1.0 - w0**2 / w_meas**2, rcond=None)
+            values = dict(zip(linear, coef, strict=True))
+            yield np.array([k_p if t == "k_p" else values[t] for t in terms])
+
+    res = _refine(residual, starts(), terms, "k_p", "frequency")
     se = _covariance_se(res.jac, res.fun, terms, raise_if_singular=True)
     return _StepResult(
         values=dict(zip(terms, (float(v) for v in res.x), strict=True)),
@@ -302,25 +311,21 @@ def _fit_damping(
 
     # Start: for fixed c_τ, ζ is linear in (c_0, c_1, c_2); columns from map evaluations.
     linear = [t for t in terms if t != "c_tau"]
-    best: tuple[float, np.ndarray] | None = None
-    for c_tau in (0.0, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0, 300.0):
-        cols = []
-        for t in linear:
-            _, z1 = evaluate_mode(mode_for({"c_tau": c_tau, t: 1.0}), j, tau)
-            cols.append(z1 / z_meas)
-        a = np.column_stack(cols)
-        if not np.all(np.isfinite(a)):
-            continue
-        coef, *_ = np.linalg.lstsq(a, np.ones(len(z_meas)), rcond=None)
-        values = dict(zip(linear, coef, strict=True))
-        x = np.array([c_tau if t == "c_tau" else values[t] for t in terms])
-        cost = float(np.sum(residual(x) ** 2))
-        if best is None or cost < best[0]:
-            best = (cost, x)
-    if best is None:
-        raise ValueError("map fit: no valid starting point for the damping coefficients")
-    lower = [0.0 if t == "c_tau" else -np.inf for t in terms]
-    res = optimize.least_squares(residual, best[1], bounds=(lower, np.inf), **_LSQ)
+
+    def starts():
+        for c_tau in (0.0, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0, 300.0):
+            cols = []
+            for t in linear:
+                _, z1 = evaluate_mode(mode_for({"c_tau": c_tau, t: 1.0}), j, tau)
+                cols.append(z1 / z_meas)
+            a = np.column_stack(cols)
+            if not np.all(np.isfinite(a)):
+                continue
+            coef, *_ = np.linalg.lstsq(a, np.ones(len(z_meas)), rcond=None)
+            values = dict(zip(linear, coef, strict=True))
+            yield np.array([c_tau if t == "c_tau" else values[t] for t in terms])
+
+    res = _refine(residual, starts(), terms, "c_tau", "damping")
     values = dict(zip(terms, (float(v) for v in res.x), strict=True))
     if "c_1" not in terms and _other_branch_is_canonical(values):
         # Without c_1, (c_0 + c_2 J)(1 + c_τ J) = (c_0 + c_0 c_τ J)(1 + (c_2/c_0) J): the two
@@ -328,7 +333,7 @@ def _fit_damping(
         swapped = {**values, "c_2": values["c_0"] * values["c_tau"]}
         swapped["c_tau"] = values["c_2"] / values["c_0"]
         x0 = np.array([swapped[t] for t in terms])
-        res = optimize.least_squares(residual, x0, bounds=(lower, np.inf), **_LSQ)
+        res = _refine(residual, [x0], terms, "c_tau", "damping")
         values = dict(zip(terms, (float(v) for v in res.x), strict=True))
     # The frequency step has already rejected poses without inertia variation; here an
     # ill-conditioned Jacobian means c_0 and c_τ trade off (reported as poorly determined).
