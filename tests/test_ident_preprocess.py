@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -105,14 +107,7 @@ def test_sensor_offset_is_removed_with_gravity():
     # emulate it by adding a base-frame offset rotated into the sensor frame.
     offset_base = np.array([0.3, -0.2, 0.1])
     rot = NumpyUR5e().flange_pose_many(rec.actual_q)[:, :3, :3]
-    shifted = Record(
-        t_s=rec.t_s,
-        target_q=rec.target_q,
-        target_qd=rec.target_qd,
-        target_qdd=rec.target_qdd,
-        actual_q=rec.actual_q,
-        tool_accel=rec.tool_accel + np.einsum("nji,j->ni", rot, offset_base),
-    )
+    shifted = replace(rec, tool_accel=rec.tool_accel + np.einsum("nji,j->ni", rot, offset_base))
     out = tangential_acceleration(shifted, 0, NumpyUR5e())
     np.testing.assert_allclose(out.gravity_base, G_UP + offset_base, atol=1e-9)
     np.testing.assert_allclose(out.psi, expected, atol=1e-6 * np.max(np.abs(expected)))
@@ -123,14 +118,7 @@ def test_base_frame_readings_are_not_rotated():
     rec, expected, _ = rigid_record(1, q0, seed=4)
     rot = NumpyUR5e().flange_pose_many(rec.actual_q)[:, :3, :3]
     in_base = np.einsum("nij,nj->ni", rot, rec.tool_accel)
-    rec_base = Record(
-        t_s=rec.t_s,
-        target_q=rec.target_q,
-        target_qd=rec.target_qd,
-        target_qdd=rec.target_qdd,
-        actual_q=rec.actual_q,
-        tool_accel=in_base,
-    )
+    rec_base = replace(rec, tool_accel=in_base)
     out = tangential_acceleration(rec_base, 1, NumpyUR5e(), accel_frame="base")
     np.testing.assert_allclose(out.psi, expected, atol=1e-6 * np.max(np.abs(expected)))
 
@@ -224,14 +212,7 @@ def test_identify_local_saturation_is_flagged_or_rejected():
         dev = accel[:, 0] - np.median(accel[:, 0])
         level = np.quantile(np.abs(dev), level_quantile)
         accel[:, 0] = np.median(accel[:, 0]) + np.clip(dev, -level, level)
-        return Record(
-            t_s=rec.t_s,
-            target_q=rec.target_q,
-            target_qd=rec.target_qd,
-            target_qdd=rec.target_qdd,
-            actual_q=rec.actual_q,
-            tool_accel=accel,
-        )
+        return replace(rec, tool_accel=accel)
 
     few = identify_local(clipped(0.995), 0, NumpyUR5e())  # 0.5 % of samples clipped
     assert few.low_confidence and "saturated" in few.reason
