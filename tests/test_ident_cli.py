@@ -24,15 +24,7 @@ def twin_log(tmp_path_factory):
     twin = Twin("ur5e", payload_kg=3.0, payload_com_m=(0.0, 0.0, 0.05), accel_noise_std=0.05)
     ex = random_excitation(Q0, 1, seed=2)
     sim = twin.run(ex.q)
-    record = Record(
-        t_s=sim.timestamp,
-        target_q=sim.target_q,
-        target_qd=sim.target_qd,
-        target_qdd=sim.target_qdd,
-        actual_q=sim.actual_q,
-        tool_accel=sim.actual_tool_accelerometer,
-        actual_TCP_pose=sim.actual_TCP_pose,
-    )
+    record = Record.from_rtde_fields(sim)
     folder = tmp_path_factory.mktemp("logs")
     paths = {
         fmt: record.to_csv(folder / f"shoulder_{fmt}.csv", fmt=fmt)

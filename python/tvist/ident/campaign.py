@@ -287,15 +287,7 @@ class TwinRobot:
         # order in which parallel workers happen to pick the poses up.
         noise_seed = None if excitation.seed is None else [self.seed, excitation.seed]
         sim = self._require_twin().run(excitation.q, dt_s=excitation.dt_s, noise_seed=noise_seed)
-        return Record(
-            t_s=sim.timestamp,
-            target_q=sim.target_q,
-            target_qd=sim.target_qd,
-            target_qdd=sim.target_qdd,
-            actual_q=sim.actual_q,
-            tool_accel=sim.actual_tool_accelerometer,
-            actual_TCP_pose=sim.actual_TCP_pose,
-        )
+        return Record.from_rtde_fields(sim)
 
     def true_modes(self, q: np.ndarray) -> list[tuple[float, float]] | None:
         return self._require_twin().modes(q)

@@ -27,7 +27,7 @@ from __future__ import annotations
 import warnings
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -114,6 +114,14 @@ class Record:
             if arr.shape != (n, width):
                 raise ValueError(f"{name} must have shape ({n}, {width}), got {arr.shape}")
             object.__setattr__(self, name, arr)
+
+    @classmethod
+    def from_rtde_fields(cls, source: Any) -> Record:
+        """A record from any object with RTDE-named attributes (``timestamp``, ``target_q``,
+        …, ``actual_tool_accelerometer``, optional ``actual_TCP_pose``), such as a run of the
+        simulated twin (:class:`tvist.sim.SimRecord`)."""
+        kwargs = {name: getattr(source, rtde, None) for name, (rtde, _) in _FIELDS.items()}
+        return cls(t_s=source.timestamp, **kwargs)
 
     @property
     def n_samples(self) -> int:
