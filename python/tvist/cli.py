@@ -116,15 +116,60 @@ def build_parser() -> argparse.ArgumentParser:
         description="Vibration suppression for robot arms: shaping, identification, the "
         "simulated twin and reports.",
     )
+    parser.add_argument("--version", action="version", version=f"tvist {_version()}")
+    parser.add_argument(
+        "--debug",
+        action="store_true",
+        help="show the full traceback of an error (accepted anywhere on the command line)",
+    )
     sub = parser.add_subparsers(dest="command", required=True)
     for _, add in COMMANDS:
         add(sub)
     return parser
 
 
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("tvist")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+#: Exceptions that mean "the input or the environment is wrong", not "tvist is broken": the
+#: library raises ``ValueError`` (and its subclasses) for bad input and ``OSError`` for files
+#: and connections. They are reported in one line; anything else keeps its traceback.
+USER_ERRORS = (ValueError, OSError)
+
+
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    return int(args.func(args) or 0)
+    """Run one command; user errors print ``tvist <command>: error: ...`` and return 2."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv
+    args = build_parser().parse_args([a for a in argv if a != "--debug"])
+    where = f"tvist {args.command}"
+    try:
+        return int(args.func(args) or 0)
+    except KeyboardInterrupt:
+        if debug:
+            raise
+        print(f"{where}: interrupted", file=sys.stderr)
+        return 130
+    except USER_ERRORS as exc:
+        if debug:
+            raise
+        print(f"{where}: error: {_one_line(exc)}", file=sys.stderr)
+        return 2
+
+
+def _one_line(exc: BaseException) -> str:
+    """The exception's message on one line (file errors keep their path)."""
+    if isinstance(exc, OSError) and exc.strerror and exc.filename:
+        text = f"{exc.strerror}: {exc.filename}"
+    else:
+        text = " ".join(str(exc).split()) or type(exc).__name__
+    return f"{text} (--debug shows the traceback)"
 
 
 if __name__ == "__main__":
