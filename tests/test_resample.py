@@ -130,11 +130,11 @@ def test_on_grid_waypoints_are_reproduced_exactly_and_1d_input_stays_1d():
             "velocities has shape",
         ),
         (
-            {"times_s": [0.0, 1.0], "positions": np.zeros((2, 2)), "velocities": [[0, 0], [0, np.inf]]},
+            {"times_s": [0, 1], "positions": np.zeros((2, 2)), "velocities": [[0, 0], [0, np.inf]]},
             r"velocities\[1, 1\]",
         ),
         (
-            {"times_s": [0.0, 1.0], "positions": np.zeros((2, 2)), "accelerations": np.zeros((2, 2))},
+            {"times_s": [0, 1], "positions": np.zeros((2, 2)), "accelerations": np.ones((2, 2))},
             "without velocities",
         ),
         ({"times_s": [], "positions": np.zeros((0, 2))}, "empty"),

@@ -159,7 +159,8 @@ def test_padded_move_file_uses_the_motion_only_rule(tmp_path, capsys):
     assert main([*args, "--method", "mztdis"]) == 0
     assert "alpha 0.6516" in capsys.readouterr().out
     stored = np.loadtxt(path)
-    ref = tvist.zero_delay(stored, DT, [(2 * np.pi * 2.55, 0.04)], method="modified", interp="linear")
+    mode = [(2 * np.pi * 2.55, 0.04)]
+    ref = tvist.zero_delay(stored, DT, mode, method="modified", interp="linear")
     np.testing.assert_allclose(np.loadtxt(out), ref.Q, atol=ATOL_FILE)
     assert main([*args, "--method", "ztdis"]) == 0
     assert "alpha 0.4653" in capsys.readouterr().out

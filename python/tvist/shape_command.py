@@ -126,9 +126,7 @@ def read_trajectory_csv(path: str | Path) -> JointFile:
         return JointFile(data[:, cols], [header[c] for c in cols])
     time_cols = [i for i, h in enumerate(header) if h.lower() in TIME_COLUMNS]
     if len(time_cols) > 1:
-        raise ValueError(
-            f"{path}: several time columns {[header[i] for i in time_cols]}; keep one"
-        )
+        raise ValueError(f"{path}: several time columns {[header[i] for i in time_cols]}; keep one")
     joints = [i for i in range(width) if i not in time_cols]
     if not joints:
         raise ValueError(f"{path}: no joint columns besides the time column")

@@ -91,9 +91,10 @@ class ZeroDelayResult:
         times scaled by ``α'``).
     tail_error
         Largest ``|q − q_end|`` of the output (continued past the input's end) from the end
-        of the motion on, in position units: what cutting the reference at ``T`` leaves out. ``"ztdis"`` is a finite filter and ends
-        exactly (up to interpolation); ``"modified"`` relies on the shaper cancelling the
-        compensator's own ringing, which a sampled shaper does up to its interpolation error.
+        of the motion on, in position units: what cutting the reference at ``T`` leaves out.
+        ``"ztdis"`` is a finite filter and ends exactly (up to interpolation); ``"modified"``
+        relies on the shaper cancelling the compensator's own ringing, which a sampled shaper
+        does up to its interpolation error.
     """
 
     Q: np.ndarray
@@ -331,10 +332,10 @@ def zero_delay(
     ValueError
         NaN/inf in ``Q``, a move not at rest at both ends or that never moves, an unknown
         method or shaper, invalid modes, a move not longer than the shaper delay (ZTDIS) or
-        more than :data:`MAX_DELAY_TO_MOVE` times shorter than it (modified: a mode far too slow for
-        the move), a compensator mode above the
-        Nyquist frequency (modified), or a compressed move or reference that breaks ``v_max``
-        or ``a_max`` (the message names the limit).
+        more than :data:`MAX_DELAY_TO_MOVE` times shorter (modified: a mode far too slow for
+        the move; the message says what to do), a compensator mode above the Nyquist
+        frequency (modified), or a compressed move or reference that breaks ``v_max`` or
+        ``a_max`` (the message names the limit).
     """
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")

@@ -174,7 +174,9 @@ def shape_bag(
         if topic not in topics:
             raise ValueError(f"{in_path}: no topic {topic!r}; the bag has {sorted(topics)}")
         if topics[topic] != JOINT_TRAJECTORY:
-            raise ValueError(f"{in_path}: topic {topic!r} carries {topics[topic]}, not {JOINT_TRAJECTORY}")
+            raise ValueError(
+                f"{in_path}: topic {topic!r} carries {topics[topic]}, not {JOINT_TRAJECTORY}"
+            )
         mcap = any(p.suffix == ".mcap" for p in in_path.glob("*")) or in_path.suffix == ".mcap"
         plugin = StoragePlugin.MCAP if mcap else StoragePlugin.SQLITE3
         with Writer(out_path, version=Writer.VERSION_LATEST, storage_plugin=plugin) as writer:
@@ -195,10 +197,13 @@ def shape_bag(
                     continue
                 msg = typestore.deserialize_cdr(raw, conn.msgtype)
                 try:
-                    shaped, info = _shape_message(msg, typestore, dt_s, dynamics, n_dof, robot, **kwargs)
+                    shaped, info = _shape_message(
+                        msg, typestore, dt_s, dynamics, n_dof, robot, **kwargs
+                    )
                 except ValueError as e:
                     raise ValueError(f"{in_path}: message at {stamp} ns on {topic}: {e}") from None
-                writer.write(out_conn[conn.id], stamp, typestore.serialize_cdr(shaped, conn.msgtype))
+                raw_out = typestore.serialize_cdr(shaped, conn.msgtype)
+                writer.write(out_conn[conn.id], stamp, raw_out)
                 reports.append(ShapedMessage(stamp, *info))
     if not reports:
         raise ValueError(f"{in_path}: no messages on {topic!r}")

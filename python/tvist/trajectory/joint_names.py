@@ -58,7 +58,8 @@ def joint_order(names: Sequence[str], n_dof: int) -> tuple[list[int], str]:
     if len(names) == n_dof and all(numbered):
         prefixes = {m.group(1) for m in numbered if m}
         numbers = [int(m.group(2)) for m in numbered if m]
-        if len(prefixes) == 1 and sorted(numbers) in (list(range(n_dof)), list(range(1, n_dof + 1))):
+        ranges = (list(range(n_dof)), list(range(1, n_dof + 1)))
+        if len(prefixes) == 1 and sorted(numbers) in ranges:
             base = min(numbers)
             order = [numbers.index(base + j) for j in range(n_dof)]
             return order, "by joint number"
