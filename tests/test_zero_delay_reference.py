@@ -97,7 +97,9 @@ def zero_delay_reference(
     if method == "modified":
         drive = matched_compensator(drive, alpha, WN, ZETA)
         times = alpha * times  # the shaper of the alpha-scaled mode (eq. 13)
-    return sum(a * lagrange_delay(drive, t / DT) for a, t in zip(amps, times, strict=True))
+    out = sum(a * lagrange_delay(drive, t / DT) for a, t in zip(amps, times, strict=True))
+    out[k1 + 1 : q.shape[0]] = q[-1]  # the rest after the motion is kept as given
+    return out
 
 
 @pytest.mark.parametrize("method", ["ztdis", "modified"])
@@ -133,8 +135,10 @@ def test_padded_benchmark_keeps_the_papers_time_scales_and_ends_at_t(before_s, a
         assert r.move_s == pytest.approx(T_MOVE, abs=1e-12)
         assert r.motion_start_s == pytest.approx(before_s, abs=1e-12)
         assert r.Q.shape == q.shape
-        # The leading rest is untouched.
+        # The rest before and after the motion is kept as given.
+        k_end = int(round(before_s / DT)) + N_MOVE - 1
         np.testing.assert_array_equal(r.Q[: int(round(before_s / DT))], q_move[0])
+        np.testing.assert_array_equal(r.Q[k_end + 1 :], q_move[-1])
         # Settled (within 1e-6 of the distance, the benchmark's completion tolerance) from
         # T after the motion start on: the zero added delay survives the padding.
         k_done = int(round((before_s + T_MOVE) / DT))

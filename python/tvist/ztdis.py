@@ -70,7 +70,8 @@ class ZeroDelayResult:
     Attributes
     ----------
     Q
-        The zero-delay reference, same shape as the input; it ends at the input's end time.
+        The zero-delay reference, same shape as the input: the input's rest padding, and the
+        shaped motion in between, which ends where the input's motion ends.
     compressed
         The time-compressed input (held at its end pose after ``alpha * T``), same shape.
     alpha
@@ -402,6 +403,9 @@ def zero_delay(
     tail_error = float(np.max(np.abs(shaped[k_end:] - q[-1])))
 
     out = np.array(shaped[:n])
+    # The rest after the motion is kept as given: the reference is cut at the motion's end
+    # (what that leaves out is tail_error), exactly as a move without padding is cut at T.
+    out[k_end + 1 :] = q[k_end + 1 :]
     _check_limits("zero-delay reference", out, dt_s, vlim, alim, method, alpha)
     if was_1d:
         out, compressed = out[:, 0], compressed[:, 0]

@@ -136,6 +136,8 @@ def path_deviation(
             )
         arrays.append(q)
     planned = _tool_positions(robot, arrays[0], tcp)
+    # Rest samples repeat a vertex: drop consecutive repeats (zero-length segments).
+    planned = planned[np.concatenate([[True], np.any(np.diff(planned, axis=0) != 0.0, axis=1)])]
     shaped = _tool_positions(robot, arrays[1], tcp)
     dist, arc = point_to_polyline_distance(shaped, planned)
     total = float(np.sum(np.linalg.norm(np.diff(planned, axis=0), axis=1)))

@@ -266,6 +266,17 @@ def write_markdown(result: DemoResult, path: Path, figures: dict[str, list[Path]
         lines.append(_md_table(_HEADER, _rows(motion)))
         lines.append("")
         lines.append(
+            "Flange path deviation from the planned path (nearest point; joint-space shaping "
+            "bends the tool path): "
+            + "; ".join(
+                f"{r.method.label} {1e3 * r.path_deviation_m:.2f} mm"
+                for r in motion.runs
+                if r.method.key != "unshaped"
+            )
+            + "."
+        )
+        lines.append("")
+        lines.append(
             f"Analytic two-mode ZV delay at {motion.motion.end} from the twin's true modes: "
             f"**{1e3 * motion.analytic_zv_delay_s:.1f} ms**."
         )
