@@ -203,3 +203,27 @@ def test_the_longest_accepted_shaper_keeps_the_reference_inside_the_move():
     assert -1e-6 * DIST < np.min(ok.Q) and np.max(ok.Q) < (1 + 1e-6) * DIST
     with pytest.raises(ValueError, match="too short for the shaper"):
         zero_delay(q, DT, [(delay_per_rad_s / (1.01 * MAX_DELAY_TO_MOVE * 0.8), 0.04)])
+
+
+def test_zero_delay_command_applies_the_same_rule_to_a_padded_move(capsys):
+    from tvist.cli import main
+
+    assert main(["zero-delay", "--reference", "min_jerk", "--rest-s", "0.2", "1.5"]) == 0
+    said = capsys.readouterr().out
+    assert "alpha = 0.4653" in said and "alpha' = 0.6516" in said and "rest padding" in said
+    rows = {
+        cells[1]: cells[2:]
+        for line in said.splitlines()
+        if line.startswith("| ") and not line.startswith("| method")
+        for cells in [[c.strip() for c in line.split("|")]]
+    }
+    done = {k: float(v[0]) for k, v in rows.items()}
+    residual_pct = {k: float(v[1]) for k, v in rows.items()}
+    # Counted from the move's start, the zero-delay references are done when the unshaped
+    # move is (the 1e-6-of-distance completion reading puts that at 0.732 s), conventional
+    # shaping a ZVD delay (0.3925 s) later; all three leave < 1e-4 of the unshaped residual.
+    for key in ("ZTDIS", "modified ZTDIS"):
+        assert done[key] == pytest.approx(done["unshaped"], abs=2 * DT)
+        assert done[key] <= T_MOVE
+        assert residual_pct[key] < 1e-2
+    assert done["conventional IS"] - T_MOVE == pytest.approx(0.3925, abs=3 * DT)

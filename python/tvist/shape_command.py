@@ -269,6 +269,11 @@ def _cmd_shape_csv(args: argparse.Namespace, robot, dynamics) -> int:
             f"path deviation ({args.robot} flange): {dev.max_m * 1e3:.3f} mm at "
             f"{100 * dev.path_fraction:.0f} % of the planned path"
         )
+    else:
+        print(
+            f"path deviation: not computed (the file has {n_joints} joints, the {args.robot} "
+            f"{robot.n_dof}; choose the robot with --robot)"
+        )
     if any(counts.values()):
         print(f"status counts: {counts}")
     return 0
