@@ -366,13 +366,17 @@ def test_move_shorter_than_the_shaper_is_refused_by_ztdis():
 
 
 def test_compensator_above_nyquist_is_refused():
-    # A 250 rad/s mode at 100 Hz (Nyquist 314 rad/s): ZVD delay 0.0251 s, T = 0.06 s gives
-    # alpha' = 0.705 and a compensator pole at wn/alpha' = 355 rad/s, above Nyquist.
-    dt, wn = 0.01, 250.0
-    q = np.array([0.0, 0.0, 0.0, 0.5, 1.0, 1.0, 1.0])
+    # A 1550 rad/s mode at 500 Hz (Nyquist 1570.8 rad/s): ZVD delay 2 pi / 1550 = 4.05 ms, a
+    # 0.24 s move gives alpha' = 0.983 and a compensator pole at wn/alpha' = 1576 rad/s, above
+    # Nyquist. (120 samples: a sampled quintic is "at rest" at its ends only when finely
+    # sampled, and rest padding would not count as part of the move.)
+    dt, wn, n = 0.002, 1550.0, 120
+    s = np.arange(n + 1) / n
+    q = s**3 * (10.0 - 15.0 * s + 6.0 * s**2)
     with pytest.raises(ValueError, match="Nyquist"):
         zero_delay(q, dt, [(wn, 0.0)], method="modified")
-    assert zero_delay(q, dt, [(wn, 0.0)], method="ztdis").alpha == pytest.approx(0.581, abs=1e-3)
+    alpha = zero_delay(q, dt, [(wn, 0.0)], method="ztdis").alpha
+    assert alpha == pytest.approx((n * dt - 2.0 * np.pi / wn) / (n * dt), rel=1e-12)
 
 
 @pytest.mark.parametrize(

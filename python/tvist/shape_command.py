@@ -1,30 +1,53 @@
-"""``tvist shape``: shape a recorded or planned joint trajectory file offline.
+"""``tvist shape``: shape a planned or recorded joint trajectory offline (CSV file or ROS 2 bag).
 
-The input is a CSV of joint positions, one row per control cycle (``(n_samples, n_dof)``,
-rad), with or without a header row; an RTDE log (``target_q_0 …``) is read through its
-``target_q`` columns. The output CSV has the same columns. Three methods:
+CSV input: one row per sample or waypoint, joint positions in rad, with or without a header
+row (comma- or whitespace-separated). Columns:
 
-- ``tvist``: multi-mode FD-TVIST (``TvShaper``); the output is longer than the input by the
-  shaper delay at the end pose (the last sample is repeated while the filter settles).
-- ``ztdis`` / ``mztdis``: zero-time-delay shaping of a rest-to-rest move (same length), with
-  the modes at the end pose.
+- a **time column** named ``time``, ``t``, ``time_s`` or ``time_from_start`` (s) is never
+  shaped: the rows are waypoints at those times, resampled to ``--dt-s``
+  (:func:`tvist.trajectory.resample`, a C² spline at rest at both ends) and the output has a
+  ``time_s`` column; without one, rows are samples every ``--dt-s``. The command says which.
+- **joint columns** are matched to the robot by name (UR joint names, or numbered names such
+  as ``q0 … q5``); an RTDE log (``target_q_0 …``) is read through its ``target_q`` columns.
 
-Modes come from ``--modes`` (fixed, ``FREQ_HZ:ZETA,...``) or from a dynamic map (``--map
-FILE`` or ``--paper-map``) with the robot model (``--robot``, ``--payload-kg``,
-``--payload-com``).
+ROS 2 bag input (``--bag IN --topic T``, needs ``pip install tvist[ros]``): every
+``trajectory_msgs/msg/JointTrajectory`` on the topic is resampled, shaped and written to a new
+bag; other topics are copied unchanged (:func:`tvist.trajectory.bags.shape_bag`).
+
+Methods: ``tvist`` (multi-mode FD-TVIST: the output is longer by the shaper delay at the end
+pose), ``ztdis`` / ``mztdis`` (zero added delay, same length; rest padding is kept and only
+the motion is compressed). Modes come from ``--modes`` (fixed, ``FREQ_HZ:ZETA,...``) or from
+a dynamic map (``--map FILE`` or ``--paper-map``) with the robot model (``--robot``,
+``--payload-kg``, ``--payload-com X Y Z``). The largest distance of the shaped tool path from
+the planned one (:func:`tvist.analysis.path_deviation`) is reported for the ``--robot`` model.
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
+import io
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-#: The shaping methods offered on the command line (``--method``): FD-TVIST, ZTDIS and
-#: modified ZTDIS.
-METHODS = ("tvist", "ztdis", "mztdis")
+from tvist.trajectory.joint_names import joint_order
+from tvist.trajectory.shaping import METHODS, shape_samples
+
+__all__ = [
+    "METHODS",
+    "TIME_COLUMNS",
+    "JointFile",
+    "ShapedFile",
+    "parse_modes",
+    "read_joint_csv",
+    "read_trajectory_csv",
+    "shape_file",
+]
+
+#: Header names (case-insensitive) of a time column, s.
+TIME_COLUMNS = ("time", "t", "time_s", "time_from_start")
 
 
 @dataclass(frozen=True)
@@ -35,36 +58,94 @@ class ShapedFile:
     added_delay_s: float
     end_modes: list[tuple[float, float]]
     status_counts: dict[str, int]
+    alpha: float = float("nan")
 
 
-def read_joint_csv(path: str | Path) -> tuple[np.ndarray, list[str] | None]:
-    """Joint positions ``(n_samples, n_dof)`` and the header (``None`` if the file has none).
+@dataclass(frozen=True)
+class JointFile:
+    """A trajectory file: joint positions, their column names and an optional time column.
 
-    An RTDE log is recognized by its ``target_q_0`` column; only ``target_q_*`` is read.
+    ``Q`` is ``(n_rows, n_joints)`` rad in file column order; ``times_s`` ``(n_rows,)`` or
+    ``None``; ``names`` the joint column names (``None`` without a header); ``time_name`` the
+    time column's name as written in the file.
     """
-    text = Path(path).read_text().splitlines()
-    if not text:
-        raise ValueError(f"{path}: empty file")
-    first = [c.strip() for c in text[0].replace(" ", ",").split(",") if c.strip()]
+
+    Q: np.ndarray
+    names: list[str] | None
+    times_s: np.ndarray | None = None
+    time_name: str | None = None
+
+
+def _rows(path: Path) -> list[list[str]]:
     try:
-        [float(c) for c in first]
+        text = path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as e:
+        raise ValueError(f"{path}: not a UTF-8 text file (byte {e.start})") from None
+    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    if not lines:
+        raise ValueError(f"{path}: empty file")
+    if "," in lines[0]:
+        return [[c.strip() for c in row] for row in csv.reader(io.StringIO("\n".join(lines)))]
+    return [ln.split() for ln in lines]
+
+
+def read_trajectory_csv(path: str | Path) -> JointFile:
+    """Read a joint trajectory CSV (see the module docstring). Errors name the file and row."""
+    path = Path(path)
+    rows = _rows(path)
+    try:
+        [float(c) for c in rows[0]]
         header = None
     except ValueError:
-        header = first
-    delimiter = "," if "," in text[0] else None
-    data = np.loadtxt(path, delimiter=delimiter, skiprows=0 if header is None else 1, ndmin=2)
-    if header is not None and "target_q_0" in header:
-        columns = [header.index(f"target_q_{j}") for j in range(6) if f"target_q_{j}" in header]
-        header = [header[c] for c in columns]
-        data = data[:, columns]
-    if header is not None and len(header) != data.shape[1]:
-        raise ValueError(f"{path}: {len(header)} header names but {data.shape[1]} columns")
+        header = rows[0]
+    body = rows if header is None else rows[1:]
+    width = len(rows[0])
+    data = np.empty((len(body), width))
+    first_row = 1 if header is None else 2
+    for i, row in enumerate(body):
+        if len(row) != width:
+            raise ValueError(
+                f"{path}: row {i + first_row} has {len(row)} fields, the first row {width}"
+            )
+        try:
+            data[i] = [float(c) for c in row]
+        except ValueError:
+            raise ValueError(f"{path}: row {i + first_row} is not numeric: {row}") from None
     bad = np.flatnonzero(~np.all(np.isfinite(data), axis=1))
     if bad.size:
         raise ValueError(f"{path}: non-finite value in data row {int(bad[0]) + 1}")
     if data.shape[0] < 2:
-        raise ValueError(f"{path}: needs at least 2 samples, got {data.shape[0]}")
-    return data, header
+        raise ValueError(f"{path}: needs at least 2 rows of data, got {data.shape[0]}")
+    if header is None:
+        return JointFile(data, None)
+    if len(set(header)) != len(header):
+        dup = next(h for h in header if header.count(h) > 1)
+        raise ValueError(f"{path}: column {dup!r} appears more than once")
+    if "target_q_0" in header:  # an RTDE log: its commanded joint positions
+        cols = [header.index(f"target_q_{j}") for j in range(6) if f"target_q_{j}" in header]
+        return JointFile(data[:, cols], [header[c] for c in cols])
+    time_cols = [i for i, h in enumerate(header) if h.lower() in TIME_COLUMNS]
+    if len(time_cols) > 1:
+        raise ValueError(f"{path}: several time columns {[header[i] for i in time_cols]}; keep one")
+    joints = [i for i in range(width) if i not in time_cols]
+    if not joints:
+        raise ValueError(f"{path}: no joint columns besides the time column")
+    times = data[:, time_cols[0]] if time_cols else None
+    return JointFile(
+        data[:, joints],
+        [header[i] for i in joints],
+        times,
+        header[time_cols[0]] if time_cols else None,
+    )
+
+
+def read_joint_csv(path: str | Path) -> tuple[np.ndarray, list[str] | None]:
+    """Joint positions ``(n_rows, n_joints)`` and their names (``None`` without a header).
+
+    A time column is not a joint: it is left out (see :func:`read_trajectory_csv`).
+    """
+    f = read_trajectory_csv(path)
+    return f.Q, f.names
 
 
 def parse_modes(text: str) -> list[tuple[float, float]]:
@@ -89,84 +170,188 @@ def shape_file(
     robot=None,
     dynmap=None,
 ) -> ShapedFile:
-    """Shape ``Q`` with ``method``: fixed ``modes``, or a ``robot`` with a ``dynmap``."""
+    """Shape samples ``Q`` with ``method``: fixed ``modes``, or a ``robot`` with a ``dynmap``."""
     import tvist
 
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
     if (modes is None) == (dynmap is None or robot is None):
         raise ValueError("give either fixed modes or a robot with a dynamic map")
-    if modes is not None:
-        provider, end_modes = tvist.ConstantModes(modes), modes
-    else:
-        provider, end_modes = tvist.MapDynamics(robot, dynmap), dynmap.modes(robot, Q[-1])
-    if method == "tvist":
-        shaper_ = tvist.TvShaper(provider, dt_s=dt_s, n_dof=Q.shape[1], shaper=shaper)
-        end_delay = tvist.convolve(*(tvist.shaper(shaper, w, z) for w, z in end_modes))
-        # Hold the last sample until the filter has settled at the end pose (plus one sample).
-        n_tail = int(np.ceil(end_delay.duration_s / dt_s)) + 1
-        padded = np.vstack([Q, np.repeat(Q[-1:], n_tail, axis=0)])
-        out = shaper_.shape(padded)
-        return ShapedFile(out, n_tail * dt_s, list(end_modes), dict(shaper_.status_counts))
-    result = tvist.zero_delay(
-        Q, dt_s, end_modes, shaper=shaper, method="ztdis" if method == "ztdis" else "modified"
+    dynamics = modes if modes is not None else tvist.MapDynamics(robot, dynmap)
+    out, added, end_modes, alpha, counts = shape_samples(
+        Q, dt_s, dynamics, method=method, shaper=shaper
     )
-    return ShapedFile(result.Q, 0.0, list(end_modes), {})
+    return ShapedFile(out, added, end_modes, counts, alpha)
 
 
-def _mode_source(args: argparse.Namespace, n_dof: int) -> dict:
-    """Keyword arguments of :func:`shape_file` that say where the modes come from."""
+def _robot(args: argparse.Namespace):
+    import tvist
+
+    return tvist.robots.Robot(
+        tvist.robots.params(args.robot),
+        tvist.robots.Payload(args.payload_kg, tuple(args.payload_com)),
+    )
+
+
+def _dynamics(args: argparse.Namespace, robot):
+    """Fixed modes or the map provider for ``robot``."""
     import tvist
 
     if args.modes:
-        return {"modes": parse_modes(args.modes)}
+        return parse_modes(args.modes)
     if not (args.map or args.paper_map):
         raise ValueError("give --modes, --map FILE or --paper-map")
     dynmap = tvist.DynamicMap.paper_ur5e() if args.paper_map else tvist.DynamicMap.load(args.map)
-    com = tuple(float(v) for v in args.payload_com.split(","))
-    robot = tvist.robots.Robot(
-        tvist.robots.params(args.robot), tvist.robots.Payload(args.payload_kg, com)
-    )
-    if robot.n_dof != n_dof:
-        raise ValueError(f"the file has {n_dof} joints, the {args.robot} has {robot.n_dof}")
-    return {"robot": robot, "dynmap": dynmap}
+    return tvist.MapDynamics(robot, dynmap)
 
 
-def _cmd_shape(args: argparse.Namespace) -> int:
-    Q, header = read_joint_csv(args.input)
-    shaped = shape_file(
-        Q, args.dt, args.method, shaper=args.shaper, **_mode_source(args, Q.shape[1])
+def _describe_modes(end_modes: list[tuple[float, float]]) -> str:
+    return ", ".join(
+        f"{w * np.sqrt(1 - z * z) / (2 * np.pi):.2f} Hz / ζ {z:.3f}" for w, z in end_modes
     )
+
+
+def _cmd_shape_csv(args: argparse.Namespace, robot, dynamics) -> int:
+    from tvist.analysis.path import path_deviation
+    from tvist.trajectory import resample
+
+    f = read_trajectory_csv(args.input)
+    n_joints = f.Q.shape[1]
+    uses_map = not args.modes
+    if uses_map and n_joints != robot.n_dof:
+        raise ValueError(
+            f"the file has {n_joints} joint columns, the {args.robot} has {robot.n_dof} "
+            "(choose the robot with --robot)"
+        )
+    order, how = list(range(n_joints)), "in file order"
+    if f.names is not None and n_joints == robot.n_dof:
+        order, how = joint_order(f.names, robot.n_dof)
+    print(f"joint columns matched {how}" + (f": {[f.names[i] for i in order]}" if f.names else ""))
+    Q = f.Q[:, order]
+    if f.times_s is not None:
+        t, Q = resample(f.times_s, Q, args.dt_s)
+        print(
+            f"time column {f.time_name!r}: {f.Q.shape[0]} waypoints over "
+            f"{f.times_s[-1] - f.times_s[0]:.4g} s resampled to --dt-s {args.dt_s:g} s "
+            f"({Q.shape[0]} samples, C² spline at rest at both ends)"
+        )
+    else:
+        t = None
+        print(
+            f"no time column (time, t, time_s or time_from_start): rows taken as samples "
+            f"every --dt-s {args.dt_s:g} s"
+        )
+    shaped_q, added, end_modes, alpha, counts = shape_samples(
+        Q, args.dt_s, dynamics, method=args.method, shaper=args.shaper
+    )
+    inverse = np.argsort(order)
+    columns = shaped_q[:, inverse]
+    names = None if f.names is None else list(f.names)
+    if t is not None:
+        t_out = t[0] + args.dt_s * np.arange(shaped_q.shape[0])
+        columns = np.column_stack([t_out, columns])
+        names = ["time_s"] + (names or [f"q{j}" for j in range(n_joints)])
     np.savetxt(
         args.out,
-        shaped.Q,
+        columns,
         delimiter=",",
         fmt="%.9f",
-        header=",".join(header) if header else "",
+        header=",".join(names) if names else "",
         comments="",
     )
-    freq = ", ".join(
-        f"{w * np.sqrt(1 - z * z) / (2 * np.pi):.2f} Hz / ζ {z:.3f}" for w, z in shaped.end_modes
-    )
-    print(f"{args.method}: modes at the end pose {freq}")
-    print(f"wrote {shaped.Q.shape[0]} samples to {args.out} (+{shaped.added_delay_s * 1e3:.0f} ms)")
-    if any(shaped.status_counts.values()):
-        print(f"status counts: {shaped.status_counts}")
+    extra = f", alpha {alpha:.4f}" if np.isfinite(alpha) else ""
+    print(f"{args.method}: modes at the end pose {_describe_modes(end_modes)}{extra}")
+    print(f"wrote {shaped_q.shape[0]} samples to {args.out} (+{added * 1e3:.0f} ms)")
+    if n_joints == robot.n_dof:
+        planned = np.vstack([Q, np.repeat(Q[-1:], shaped_q.shape[0] - Q.shape[0], axis=0)])
+        dev = path_deviation(robot, planned, shaped_q)
+        print(
+            f"path deviation ({args.robot} flange): {dev.max_m * 1e3:.3f} mm at "
+            f"{100 * dev.path_fraction:.0f} % of the planned path"
+        )
+    else:
+        print(
+            f"path deviation: not computed (the file has {n_joints} joints, the {args.robot} "
+            f"{robot.n_dof}; choose the robot with --robot)"
+        )
+    if any(counts.values()):
+        print(f"status counts: {counts}")
     return 0
 
 
+def _cmd_shape_bag(args: argparse.Namespace, robot, dynamics) -> int:
+    from tvist.trajectory.bags import shape_bag
+
+    if not args.topic:
+        raise ValueError("--bag needs --topic (the JointTrajectory topic, e.g. /joint_trajectory)")
+    reports = shape_bag(
+        args.bag,
+        args.out,
+        args.topic,
+        args.dt_s,
+        dynamics,
+        robot=robot,
+        method=args.method,
+        shaper=args.shaper,
+    )
+    for r in reports:
+        extra = f", alpha {r.alpha:.4f}" if np.isfinite(r.alpha) else ""
+        print(
+            f"{args.topic} @ {r.timestamp_ns} ns: {r.n_waypoints} waypoints -> {r.n_points} "
+            f"points at --dt-s {args.dt_s:g} s (+{r.added_delay_s * 1e3:.0f} ms{extra}), joints "
+            f"matched {r.matched}, path deviation {r.path_deviation_m * 1e3:.3f} mm"
+        )
+    print(f"wrote {args.out} ({len(reports)} shaped messages, other topics copied)")
+    return 0
+
+
+def _cmd_shape(args: argparse.Namespace) -> int:
+    if (args.input is None) == (args.bag is None):
+        raise ValueError("give a CSV file or --bag BAG (one of them)")
+    if not (np.isfinite(args.dt_s) and args.dt_s > 0):
+        raise ValueError(f"--dt-s must be > 0; got {args.dt_s}")
+    robot = _robot(args)
+    dynamics = _dynamics(args, robot)
+    if args.bag is not None:
+        return _cmd_shape_bag(args, robot, dynamics)
+    return _cmd_shape_csv(args, robot, dynamics)
+
+
 def add_shape_command(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("shape", help="shape a joint trajectory CSV file offline")
-    p.add_argument("input", help="CSV of joint positions (rad), one row per cycle")
-    p.add_argument("--out", required=True, help="output CSV")
-    p.add_argument("--dt", type=float, default=0.002, help="sample period, s (default 0.002)")
+    p = sub.add_parser(
+        "shape", help="shape a joint trajectory (CSV, with or without times, or a ROS 2 bag)"
+    )
+    p.add_argument(
+        "input",
+        nargs="?",
+        help="CSV of joint positions (rad); a time/t/time_s/time_from_start column marks "
+        "waypoints to resample",
+    )
+    p.add_argument("--bag", help="ROS 2 bag directory to shape instead of a CSV (tvist[ros])")
+    p.add_argument("--topic", help="JointTrajectory topic of --bag (e.g. /joint_trajectory)")
+    p.add_argument("--out", required=True, help="output CSV (or bag directory with --bag)")
+    p.add_argument(
+        "--dt-s",
+        "--dt",
+        dest="dt_s",
+        type=float,
+        default=0.002,
+        help="control period, s (default 0.002)",
+    )
     p.add_argument("--method", choices=METHODS, default="tvist", help="default tvist")
     p.add_argument("--shaper", default="zv", help="registry shaper name (default zv)")
     source = p.add_mutually_exclusive_group()
     source.add_argument("--modes", help="fixed modes FREQ_HZ:ZETA,... (undamped frequency)")
     source.add_argument("--map", help="dynamic map file (tvist fit-map)")
     source.add_argument("--paper-map", action="store_true", help="the paper's UR5e map")
-    p.add_argument("--robot", default="ur5e", help="robot model for a map (default ur5e)")
-    p.add_argument("--payload-kg", type=float, default=0.0)
-    p.add_argument("--payload-com", default="0,0,0", help="payload CoM in the flange frame, m")
+    p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
+    p.add_argument("--payload-kg", type=float, default=0.0, help="payload mass (kg)")
+    p.add_argument(
+        "--payload-com",
+        type=float,
+        nargs=3,
+        default=(0.0, 0.0, 0.05),
+        metavar=("X", "Y", "Z"),
+        help="payload centre of mass in the flange frame (m, default 0 0 0.05)",
+    )
     p.set_defaults(func=_cmd_shape)

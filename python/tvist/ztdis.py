@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike
 
 from tvist import _core
 
-__all__ = ["METHODS", "ZeroDelayResult", "compress", "zero_delay"]
+__all__ = ["METHODS", "ZeroDelayResult", "compress", "motion_span", "zero_delay"]
 
 Method = Literal["ztdis", "modified"]
 
@@ -43,6 +43,21 @@ METHODS: tuple[str, ...] = ("ztdis", "modified")
 #: starts or ends with a visible velocity.
 REST_TOLERANCE = 1e-3
 
+#: Rest padding: a sample is at the start (end) pose when every joint is within this many
+#: radians of it, times ``max(1, max |q|)`` (rounding of stored poses). Padding written by a
+#: planner or read back from a file repeats the pose exactly; anything that moves more is
+#: part of the motion.
+REST_POSITION_TOLERANCE = 1e-12
+
+#: The shaper may be at most this many times longer than the motion it shapes with zero
+#: delay (modified ZTDIS; ZTDIS itself needs ``Δ_n < T``). The compressed motion lasts
+#: ``α'T = T²/(T + Δ_n)`` and the compensator's high-frequency gain is ``1/α'²``: on a
+#: 0.8 s minimum-jerk move (ZVD, ζ 0.04) the reference stays inside the move's range up to
+#: ``Δ_n = 1.5 T`` (α' = 0.40, peak speed 3.8× the unshaped one), then overshoots the move by
+#: 2.6 % at 1.6 T, 18 % at 1.75 T, 47 % at 2 T, 3× its length at 3 T and hundreds of radians
+#: for ω_n = 0.1 rad/s (Δ_n ≈ 80 T).
+MAX_DELAY_TO_MOVE = 1.5
+
 #: Samples of the continued output inspected beyond ``T`` to measure what truncation leaves
 #: out, in periods of the slowest shaped mode (plus the shaper delay).
 _TAIL_PERIODS = 2.0
@@ -55,7 +70,8 @@ class ZeroDelayResult:
     Attributes
     ----------
     Q
-        The zero-delay reference, same shape as the input; it ends at the input's end time.
+        The zero-delay reference, same shape as the input: the input's rest padding, and the
+        shaped motion in between, which ends where the input's motion ends.
     compressed
         The time-compressed input (held at its end pose after ``alpha * T``), same shape.
     alpha
@@ -65,15 +81,21 @@ class ZeroDelayResult:
     method
         ``"ztdis"`` or ``"modified"``.
     move_s
-        Length ``T`` of the input, ``(n_samples − 1) * dt_s``, s.
+        Length ``T`` of the motion, s: ``(n_samples − 1) * dt_s`` without rest padding; with
+        padding, from the last sample at the start pose to the first sample at the end pose
+        (see :func:`motion_span`).
+    motion_start_s
+        When the motion starts in the input (end of the leading rest), s; the shaped motion
+        ends at ``motion_start_s + move_s``.
     impulses
         The impulse sequence actually applied (multi-mode: the convolution; ``"modified"``:
         times scaled by ``α'``).
     tail_error
-        Largest ``|q − q_end|`` of the continued output after ``T``, in position units: what
-        cutting the reference at ``T`` leaves out. ``"ztdis"`` is a finite filter and ends
-        exactly (up to interpolation); ``"modified"`` relies on the shaper cancelling the
-        compensator's own ringing, which a sampled shaper does up to its interpolation error.
+        Largest ``|q − q_end|`` of the output (continued past the input's end) from the end
+        of the motion on, in position units: what cutting the reference at ``T`` leaves out.
+        ``"ztdis"`` is a finite filter and ends exactly (up to interpolation); ``"modified"``
+        relies on the shaper cancelling the compensator's own ringing, which a sampled shaper
+        does up to its interpolation error.
     """
 
     Q: np.ndarray
@@ -82,6 +104,7 @@ class ZeroDelayResult:
     delay_s: float
     method: str
     move_s: float
+    motion_start_s: float
     impulses: _core.Impulses
     tail_error: float
 
@@ -140,7 +163,7 @@ def _as_moves(Q: ArrayLike) -> tuple[np.ndarray, bool]:
     return q, False
 
 
-def _check_move(q: np.ndarray, dt_s: float) -> None:
+def _check_samples(q: np.ndarray, dt_s: float) -> None:
     if not (np.isfinite(dt_s) and dt_s > 0.0):
         raise ValueError(f"dt_s = {dt_s} must be finite and > 0")
     n, n_dof = q.shape
@@ -150,6 +173,30 @@ def _check_move(q: np.ndarray, dt_s: float) -> None:
     if bad.size:
         k, j = bad[0]
         raise ValueError(f"Q contains NaN or inf (first at sample {k}, joint {j})")
+
+
+def motion_span(Q: ArrayLike) -> tuple[int, int]:
+    """First and last sample of the motion inside rest padding: ``(k_start, k_end)``.
+
+    ``k_start`` is the last sample still at the start pose before the first sample that leaves
+    it, ``k_end`` the first sample at the end pose after the last sample away from it (a
+    sample is at a pose when every joint is within :data:`REST_POSITION_TOLERANCE` of it).
+    Without padding this is ``(0, n_samples − 1)``. Raises ``ValueError`` if nothing moves.
+    """
+    q, _ = _as_moves(Q)
+    scale = max(1.0, float(np.max(np.abs(q))))
+    tol = REST_POSITION_TOLERANCE * scale
+    away_start = np.flatnonzero(np.any(np.abs(q - q[0]) > tol, axis=1))
+    away_end = np.flatnonzero(np.any(np.abs(q - q[-1]) > tol, axis=1))
+    if away_start.size == 0:
+        raise ValueError("Q never leaves its first pose; there is no move to shape")
+    if away_end.size == 0:  # pragma: no cover - a move that leaves q[0] is away from q[-1] too
+        raise ValueError("Q never leaves its last pose; there is no move to shape")
+    return max(0, int(away_start[0]) - 1), min(q.shape[0] - 1, int(away_end[-1]) + 1)
+
+
+def _check_rest(q: np.ndarray, dt_s: float, where: str) -> None:
+    """Refuse a motion ``q`` (n, n_dof) whose ends move (velocity estimated from samples)."""
     v_peak = np.max(np.abs(np.diff(q, axis=0)), axis=0) / dt_s
     # A joint that does not move has v_peak = 0; its end-velocity estimate is round-off, so the
     # scale has a floor of 1e-6 of the fastest joint's peak.
@@ -162,9 +209,29 @@ def _check_move(q: np.ndarray, dt_s: float) -> None:
         if moving.any():
             j = int(np.argmax(moving))
             raise ValueError(
-                f"Q is not at rest at its {name}: joint {j} moves at {v[j]:.4g} /s there "
-                f"(peak speed {v_peak[j]:.4g} /s); zero-delay shaping needs a rest-to-rest move"
+                f"Q is not at rest at its {name}{where}: joint {j} moves at {v[j]:.4g} /s "
+                f"there (peak speed {v_peak[j]:.4g} /s); zero-delay shaping needs a "
+                "rest-to-rest move"
             )
+
+
+def _check_shaper_fits(
+    delay_s: float, move_s: float, modes: list[tuple[float, float]], method: str
+) -> None:
+    """Refuse a shaper that is far longer than the motion (see :data:`MAX_DELAY_TO_MOVE`)."""
+    limit = 1.0 if method == "ztdis" else MAX_DELAY_TO_MOVE
+    if delay_s < limit * move_s:
+        return
+    w_slow = min(w for w, _ in modes)
+    hint = "use conventional shaping (tvist.TvShaper) or lengthen the move"
+    if method == "ztdis" and delay_s < MAX_DELAY_TO_MOVE * move_s:
+        hint = "use method 'modified' (mztdis), conventional shaping or a longer move"
+    raise ValueError(
+        f"{method}: the motion of T = {move_s:.4g} s is too short for the shaper, which lasts "
+        f"{delay_s:.4g} s (slowest mode {w_slow:.4g} rad/s = {w_slow / (2 * np.pi):.4g} Hz); "
+        f"zero-delay shaping needs a shaper shorter than {limit:g} T. Check that the modes "
+        f"are in rad/s, or {hint}"
+    )
 
 
 def _per_joint_limit(name: str, value: ArrayLike | None, n_dof: int) -> np.ndarray | None:
@@ -234,8 +301,9 @@ def zero_delay(
     ----------
     Q
         The move, ``(n_samples, n_dof)`` (or ``(n_samples,)``), sampled every ``dt_s``, at rest
-        at both ends. Its whole length ``T = (n_samples − 1) dt_s`` is compressed, so rest
-        padding counts as part of the move.
+        at both ends. Rest padding (samples repeating the start or end pose) is kept as it is:
+        only the motion between is compressed and shaped (:func:`motion_span`), so ``T`` and
+        ``α`` are those of the motion and the shaped motion ends where the planned one ends.
     dt_s
         Sample period, s.
     modes
@@ -257,22 +325,34 @@ def zero_delay(
     Returns
     -------
     ZeroDelayResult
-        ``.Q`` ends at ``T``; see :class:`ZeroDelayResult`.
+        ``.Q`` has the input's shape; its motion ends where the input's does. See
+        :class:`ZeroDelayResult`.
 
     Raises
     ------
     ValueError
-        NaN/inf in ``Q``, a move not at rest at both ends, an unknown method or shaper, invalid
-        modes, a move not longer than the shaper delay (ZTDIS), a compensator mode above the
-        Nyquist frequency (modified), or a compressed move or reference that breaks ``v_max``
-        or ``a_max`` (the message names the limit).
+        NaN/inf in ``Q``, a move not at rest at both ends or that never moves, an unknown
+        method or shaper, invalid modes, a move not longer than the shaper delay (ZTDIS) or
+        more than :data:`MAX_DELAY_TO_MOVE` times shorter (modified: a mode far too slow for
+        the move; the message says what to do), a compensator mode above the Nyquist
+        frequency (modified), or a compressed move or reference that breaks ``v_max`` or
+        ``a_max`` (the message names the limit).
     """
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
     q, was_1d = _as_moves(Q)
     dt_s = float(dt_s)
-    _check_move(q, dt_s)
+    _check_samples(q, dt_s)
     n, n_dof = q.shape
+    k_start, k_end = motion_span(q)
+    motion = q[k_start : k_end + 1]
+    if motion.shape[0] < 4:
+        raise ValueError(
+            f"the motion inside the rest padding has only {motion.shape[0]} samples "
+            f"(samples {k_start}..{k_end}); zero-delay shaping needs at least 4"
+        )
+    padded = (k_start, k_end) != (0, n - 1)
+    _check_rest(motion, dt_s, " (of the motion inside the rest padding)" if padded else "")
     vlim = _per_joint_limit("v_max", v_max, n_dof)
     alim = _per_joint_limit("a_max", a_max, n_dof)
     mode_list = [(float(w), float(z)) for w, z in modes]
@@ -281,7 +361,8 @@ def zero_delay(
 
     per_mode = [_core.design_shaper(shaper, w, z) for w, z in mode_list]
     delay_s = float(sum(s.duration_s for s in per_mode))
-    move_s = (n - 1) * dt_s
+    move_s = (k_end - k_start) * dt_s
+    _check_shaper_fits(delay_s, move_s, mode_list, method)
     try:
         if method == "ztdis":
             alpha = _core.ztdis_alpha(move_s, delay_s)
@@ -290,7 +371,10 @@ def zero_delay(
     except ValueError as e:
         raise ValueError(f"{method}: the move of T = {move_s:.4g} s is too short: {e}") from None
 
-    compressed = compress(q, dt_s, alpha)
+    # Only the motion is compressed; the rest before and after it is kept as it is.
+    compressed = np.array(q)
+    compressed[k_start : k_end + 1] = compress(motion, dt_s, alpha)
+    compressed[k_end + 1 :] = q[k_end]
     _check_limits("compressed move", compressed, dt_s, vlim, alim, method, alpha)
 
     if method == "ztdis":
@@ -299,7 +383,7 @@ def zero_delay(
         shaped_modes = [_core.scaled_mode(w, z, alpha) for w, z in mode_list]
     impulses = _core.convolve(*(_core.design_shaper(shaper, w, z) for w, z in shaped_modes))
 
-    # Continue past T to see what truncation at T leaves out.
+    # Continue past the end of the input to see what truncation leaves out.
     slowest_period_s = max(2.0 * np.pi / w for w, _ in shaped_modes)
     n_tail = int(np.ceil((impulses.duration_s + _TAIL_PERIODS * slowest_period_s) / dt_s))
     drive = np.vstack([compressed, np.repeat(compressed[-1:], n_tail, axis=0)])
@@ -315,9 +399,13 @@ def zero_delay(
     )
     shaper_filter.reset(np.ascontiguousarray(q[0]))
     shaped = shaper_filter.shape(np.ascontiguousarray(drive))
-    tail_error = float(np.max(np.abs(shaped[n - 1 :] - q[-1])))
+    # From the end of the motion on, the shaped reference should sit at the end pose.
+    tail_error = float(np.max(np.abs(shaped[k_end:] - q[-1])))
 
     out = np.array(shaped[:n])
+    # The rest after the motion is kept as given: the reference is cut at the motion's end
+    # (what that leaves out is tail_error), exactly as a move without padding is cut at T.
+    out[k_end + 1 :] = q[k_end + 1 :]
     _check_limits("zero-delay reference", out, dt_s, vlim, alim, method, alpha)
     if was_1d:
         out, compressed = out[:, 0], compressed[:, 0]
@@ -328,6 +416,7 @@ def zero_delay(
         delay_s=delay_s,
         method=method,
         move_s=move_s,
+        motion_start_s=k_start * dt_s,
         impulses=impulses,
         tail_error=tail_error,
     )

@@ -93,6 +93,7 @@ class Benchmark:
     distance: float
     shaper: str
     model_error: float
+    rest_s: tuple[float, float]
     delay_s: float
     alpha: float
     alpha_modified: float
@@ -172,6 +173,7 @@ def run_benchmark(
     distance: float = 0.3,
     shaper: str = "zvd",
     model_error: float = 0.1,
+    rest_s: tuple[float, float] = (0.0, 0.0),
 ) -> Benchmark:
     """Run the four methods on one reference and measure them on the simulated payload.
 
@@ -191,10 +193,16 @@ def run_benchmark(
         Registry shaper.
     model_error
         Relative frequency error of the plant for the robustness columns (``±model_error``).
+    rest_s
+        Rest before and after the move, s, as a planner pads it. The zero-delay methods
+        compress only the move (:func:`tvist.zero_delay`); completion times are counted from
+        the start of the move.
     """
     wn = 2.0 * np.pi * freq_hz
     modes = [(wn, zeta)]
     q = reference_move(reference, move_s, dt_s, distance)
+    before, after = (int(round(max(0.0, float(r)) / dt_s)) for r in rest_s)
+    q = np.concatenate([np.full(before, q[0]), q, np.full(after, q[-1])])
     n = q.shape[0]
     delay_s = _core.design_shaper(shaper, wn, zeta).duration_s
 
@@ -219,9 +227,10 @@ def run_benchmark(
     tip_velocity: dict[str, np.ndarray] = {}
     base: dict[str, float] = {}
     for key, r in refs.items():
-        done = _completion_s(r, dt_s, distance)
+        done_in_array = _completion_s(r, dt_s, distance)
+        done = done_in_array - before * dt_s  # counted from the start of the move
         residuals = [
-            _residual(r, dt_s, wn * f, zeta, done)
+            _residual(r, dt_s, wn * f, zeta, done_in_array)
             for f in (1.0, 1.0 - model_error, 1.0 + model_error)
         ]
         if key == "unshaped":
@@ -249,6 +258,7 @@ def run_benchmark(
         distance=distance,
         shaper=shaper,
         model_error=model_error,
+        rest_s=(before * dt_s, after * dt_s),
         delay_s=delay_s,
         alpha=ztdis.alpha,
         alpha_modified=modified.alpha,
@@ -268,7 +278,13 @@ def format_table(bench: Benchmark) -> str:
         f"(delay {bench.delay_s:.4f} s), alpha = {bench.alpha:.4f}, "
         f"alpha' = {bench.alpha_modified:.4f}, dt = {bench.dt_s} s; unshaped residual "
         f"{bench.metrics['unshaped'].residual:.3g} (exact plant), residual = peak tip "
-        f"deflection after the reference is done (within {COMPLETION_TOLERANCE:g} of the distance)",
+        f"deflection after the reference is done (within {COMPLETION_TOLERANCE:g} of the distance)"
+        + (
+            f"; rest padding {bench.rest_s[0]:g} s before / {bench.rest_s[1]:g} s after the move, "
+            "done counted from the move's start"
+            if any(bench.rest_s)
+            else ""
+        ),
         "",
         f"| method | done [s] | residual [% unshaped] | at -{e:.0f} % / +{e:.0f} % freq "
         "| peak v | peak a | peak jerk | v peaks |",
@@ -300,14 +316,14 @@ def plot_benchmark(benches: list[Benchmark], path: str | Path) -> Path:
     )
     for col, bench in enumerate(benches):
         t = bench.t_s
-        t_end = bench.metrics["is"].completion_s + 1.0
+        t_end = bench.rest_s[0] + bench.metrics["is"].completion_s + 1.0
         keep = t <= t_end
         for key, label in METHOD_LABELS.items():
             v = np.gradient(bench.references[key], bench.dt_s)
             axes[0, col].plot(t[keep], v[keep], label=label, lw=1.2)
             axes[1, col].plot(t[keep], bench.tip_velocity[key][keep], label=label, lw=1.0)
         for ax in axes[:, col]:
-            ax.axvline(bench.move_s, color="k", ls=":", lw=0.8)
+            ax.axvline(bench.rest_s[0] + bench.move_s, color="k", ls=":", lw=0.8)
             ax.grid(True, alpha=0.3)
         axes[0, col].set_title(
             f"{bench.reference}: T = {bench.move_s} s, {bench.freq_hz} Hz, {bench.shaper.upper()}"
@@ -334,12 +350,23 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="reference move(s) (default: both)",
     )
     p.add_argument("--dt", type=float, default=0.002, help="control period, s (default 0.002)")
+    p.add_argument(
+        "--rest-s",
+        type=float,
+        nargs=2,
+        default=(0.0, 0.0),
+        metavar=("BEFORE", "AFTER"),
+        help="pad the move with rest before and after it, s (zero-delay shaping compresses "
+        "only the move; default 0 0)",
+    )
     p.add_argument("--plot", default=None, help="write the Fig. 13-style plot to this PNG path")
 
 
 def run_from_args(args: argparse.Namespace) -> int:
     """Run the benchmark as described by parsed :func:`add_arguments` options; print tables."""
-    benches = [run_benchmark(ref, dt_s=args.dt) for ref in args.reference]
+    benches = [
+        run_benchmark(ref, dt_s=args.dt, rest_s=tuple(args.rest_s)) for ref in args.reference
+    ]
     for bench in benches:
         print(format_table(bench))
         print()

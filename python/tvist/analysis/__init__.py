@@ -5,6 +5,7 @@
 - :func:`energy_spectrum`: vibration energy per frequency bin (eq. 56).
 - :func:`settling_time`, :func:`peak_velocity`, :func:`peak_acceleration`, :func:`peak_jerk`,
   :func:`count_velocity_peaks`: scalar measures of a move.
+- :func:`path_deviation`: how far the shaped tool path strays from the planned one.
 - :func:`sensitivity_grid`: percent residual vibration of a shaper over a grid of modes.
 
 Signals are ``(n_samples,)`` or ``(n_samples, k)``, time along rows.
@@ -19,16 +20,19 @@ from tvist.analysis.metrics import (
     peak_velocity,
     settling_time,
 )
+from tvist.analysis.path import PathDeviation, path_deviation
 from tvist.analysis.residual import ResidualVibration, estimate_noise_std, residual_vibration
 from tvist.analysis.sensitivity import sensitivity_grid
 from tvist.analysis.spectrum import EnergySpectrum, energy_spectrum
 
 __all__ = [
     "EnergySpectrum",
+    "PathDeviation",
     "ResidualVibration",
     "count_velocity_peaks",
     "energy_spectrum",
     "estimate_noise_std",
+    "path_deviation",
     "peak_acceleration",
     "peak_jerk",
     "peak_velocity",

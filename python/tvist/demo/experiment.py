@@ -26,6 +26,7 @@ from tvist import robots
 from tvist.analysis import (
     EnergySpectrum,
     ResidualVibration,
+    path_deviation,
     peak_acceleration,
     peak_jerk,
     peak_velocity,
@@ -112,6 +113,9 @@ class MethodRun:
         Largest third difference of the reference over all joints, rad/s³.
     spectrum
         Energy spectrum (eq. 56) of the acceleration after the stop.
+    path_deviation_m
+        Largest distance of the reference's flange path from the planned one, m
+        (:func:`tvist.analysis.path_deviation`).
     details
         How the reference was made (from :class:`~tvist.demo.methods.Reference`).
     """
@@ -126,6 +130,7 @@ class MethodRun:
     peak_jerk_rad_s3: float
     spectrum: EnergySpectrum
     details: dict[str, Any] = field(default_factory=dict)
+    path_deviation_m: float = math.nan
 
     def to_json(self) -> dict[str, Any]:
         """The row as stored in ``results.json``."""
@@ -139,6 +144,7 @@ class MethodRun:
             "peak_velocity_rad_s": peak_velocity(self.q, DT_S),
             "peak_acceleration_rad_s2": peak_acceleration(self.q, DT_S),
             "t_stop_s": self.t_stop_s,
+            "path_deviation_m": self.path_deviation_m,
             "residual_fit": {
                 "method": rv.method,
                 "reliable": rv.reliable,
@@ -331,6 +337,7 @@ def run_motion(
                 peak_jerk_rad_s3=peak_jerk(ref.q, traj.dt_s),
                 spectrum=residual_spectrum(psi, t, t_stop, spectrum_window_s, traj.dt_s),
                 details=ref.details,
+                path_deviation_m=path_deviation(robot, traj.q, ref.q).max_m,
             )
         )
         if log is not None:

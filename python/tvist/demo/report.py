@@ -266,6 +266,18 @@ def write_markdown(result: DemoResult, path: Path, figures: dict[str, list[Path]
         lines.append(_md_table(_HEADER, _rows(motion)))
         lines.append("")
         lines.append(
+            "Flange path deviation from the planned path (distance to its nearest point; the "
+            "planned path is the polyline through its 2 ms samples, whose chords cut its arcs "
+            "by up to ~2 µm here): "
+            + "; ".join(
+                f"{r.method.label} {1e6 * r.path_deviation_m:.1f} µm"
+                for r in motion.runs
+                if r.method.key != "unshaped"
+            )
+            + "."
+        )
+        lines.append("")
+        lines.append(
             f"Analytic two-mode ZV delay at {motion.motion.end} from the twin's true modes: "
             f"**{1e3 * motion.analytic_zv_delay_s:.1f} ms**."
         )
