@@ -36,6 +36,16 @@ def _json_safe(value: Any) -> Any:
     return value
 
 
+def format_reduction(percent: float) -> str:
+    """A reduction in % with enough decimals that it never rounds to 100: one decimal, and
+    one more per decade the remainder ``100 − percent`` falls below 1 (99.2, 99.98, 99.996)."""
+    if not math.isfinite(percent):
+        return "n/a"
+    rest = 100.0 - percent
+    decimals = 1 if rest >= 1.0 or rest <= 0.0 else max(1, math.ceil(-math.log10(rest)) + 1)
+    return f"{percent:.{min(decimals, 6)}f}"
+
+
 def write_json(result: DemoResult, path: Path) -> Path:
     """Write ``results.json``."""
     path.write_text(json.dumps(_json_safe(result.to_json()), indent=2) + "\n", encoding="utf-8")
