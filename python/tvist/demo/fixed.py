@@ -40,6 +40,16 @@ ROBUST_PRV_LIMIT = 0.05
 ROBUST_STRIDE = 10
 #: Registry shapers the search combines.
 SEARCH_SHAPERS = ("zv", "zvd", "zvdd", "mzv", "ei", "2hump_ei", "3hump_ei")
+#: How the registry shapers are written in reports.
+SHAPER_NAMES = {
+    "zv": "ZV",
+    "zvd": "ZVD",
+    "zvdd": "ZVDD",
+    "mzv": "MZV",
+    "ei": "EI",
+    "2hump_ei": "2-hump EI",
+    "3hump_ei": "3-hump EI",
+}
 #: Design frequencies: a geometric grid over this multiple of the range of natural
 #: frequencies along the move (a robust design may sit outside it) ...
 GRID_SPAN = (0.6, 1.5)
@@ -60,7 +70,7 @@ class Stage:
         return tvist.shaper(self.shaper, self.wn_rad_s, self.zeta)
 
     def text(self) -> str:
-        name = self.shaper.upper().replace("_", "-")
+        name = SHAPER_NAMES.get(self.shaper, self.shaper)
         return f"{name} at f_n {self.wn_rad_s / (2 * math.pi):.2f} Hz, ζ {self.zeta:.3f}"
 
 
