@@ -47,7 +47,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 def _demo_row_method(key: str) -> str:
     """Which ``--method`` a demo row belongs to (``"unshaped"`` for the baseline)."""
-    if key.startswith("fd-tvist"):
+    if key.startswith(("fd-tvist", "fixed-")):  # fixed shapers: FD-TVIST's baselines
         return "tvist"
     return {"zero-delay-ztdis": "ztdis", "zero-delay-modified": "mztdis"}.get(key, "unshaped")
 
