@@ -278,10 +278,15 @@ def shape_tcp(
         else:
             of_joints = modes
 
+        # The shaper probes its provider once when it is built, before it holds any TCP
+        # sample; that probe is answered at the start of X.
+        armed = [False]
+
         def provider(x_prev: np.ndarray) -> Any:
-            return of_joints(joints_of(np.asarray(x_prev)))
+            return of_joints(joints_of(np.asarray(x_prev) if armed[0] else x[0]))
 
         shaper_filter = tvist.TvShaper(provider, dt_s, 6, shaper=shaper, max_delay_s=max_delay_s)
+        armed[0] = True
     shaper_filter.reset(np.ascontiguousarray(x[0]))
     out = np.array(shaper_filter.shape(x))
     if np.max(np.abs(out[-1] - x[-1])) > 1e-9:
