@@ -403,6 +403,19 @@ def _pct(entry: dict[str, Any], key: str) -> str:
     return f"{entry[f'{key}_rms_percent']:.1f} / {entry[f'{key}_max_percent']:.1f}"
 
 
+#: Map coefficients as the paper writes them (eqs. 42-51), by their keys in the map file.
+_COEFFICIENT_NAMES = {
+    "k_0": "k_0",
+    "k_j": "k_J",
+    "k_p": "k_p",
+    "k_g": "k_g",
+    "c_0": "c_0",
+    "c_1": "c_1",
+    "c_2": "c_2",
+    "c_tau": "c_τ",
+}
+
+
 def _identification_section(result: DemoResult) -> list[str]:
     info = result.identification
     if info is None:
@@ -443,9 +456,7 @@ def _identification_section(result: DemoResult) -> list[str]:
         stat = stats[i] if i < len(stats) else {}
         freq_err = stat.get("frequency", {}).get("rms_relative_error")
         damp_err = stat.get("damping", {}).get("rms_relative_error")
-        coeffs = ", ".join(
-            f"{k} {mode[k]:.4g}" for k in ("k_0", "k_j", "k_p", "k_g", "c_0", "c_1", "c_2", "c_tau")
-        )
+        coeffs = ", ".join(f"{shown} {mode[k]:.4g}" for k, shown in _COEFFICIENT_NAMES.items())
         f_range = mode["frequency_inertia_range_kg_m2"]
         d_range = mode["damping_inertia_range_kg_m2"]
         rows.append(
