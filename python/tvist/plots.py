@@ -40,7 +40,28 @@ def plot_traces(
 
 
 #: Line colours of the methods in the experiment figures, in row order.
-_COLOURS = ("black", "tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
+#: The marker lines of the spectra use gray, olive and cyan, so those are left out here. The
+#: colours repeat (``_colours``) when there are more rows than colours: no row is dropped.
+_COLOURS = (
+    "black",
+    "tab:blue",
+    "tab:orange",
+    "tab:green",
+    "tab:red",
+    "tab:purple",
+    "tab:brown",
+    "tab:pink",
+    "goldenrod",
+    "navy",
+    "lime",
+)
+
+
+def _colours(start: int = 0):
+    """The row colours, endlessly (zip with the rows: every row gets one)."""
+    import itertools
+
+    return itertools.islice(itertools.cycle(_COLOURS), start, None)
 
 
 def plot_stop_aligned_acceleration(
@@ -79,7 +100,7 @@ def plot_stop_aligned_acceleration(
     fig = new_figure(figsize=(10, 7.5))
     top, bottom = fig.subplots(2, 1)
     floor = np.inf
-    for (label, (mag, t_stop, rv, decay)), colour in zip(traces.items(), _COLOURS, strict=False):
+    for (label, (mag, t_stop, rv, decay)), colour in zip(traces.items(), _colours(), strict=False):
         width = 1.4 if label == next(iter(traces)) else 1.1
         x = t_s - t_ref_s
         shown = (x >= -before_s) & (x <= after_s + 0.2)
@@ -137,7 +158,7 @@ def plot_energy_spectra(
     axes = np.atleast_1d(axes)
     for ax, (panel_title, spectra, marks) in zip(axes, panels, strict=True):
         peak, lowest_peak = 0.0, np.inf
-        for (label, (freq, energy)), colour in zip(spectra.items(), _COLOURS, strict=False):
+        for (label, (freq, energy)), colour in zip(spectra.items(), _colours(), strict=False):
             band = (freq > 0.0) & (freq <= f_max_hz)
             ax.semilogy(freq[band], energy[band], color=colour, lw=1.1, label=label)
             peak = max(peak, float(energy[band].max()))
@@ -197,7 +218,7 @@ def plot_mode_tracks(
     axes[0].set_ylabel("inertia [kg m²]")
     axes[0].set_title(title)
     mode_names, styles = ("base", "shoulder"), ("-", "--")
-    for (label, track), colour in zip(modes.items(), _COLOURS, strict=False):
+    for (label, track), colour in zip(modes.items(), _colours(), strict=False):
         for i in range(track.shape[1]):
             name = mode_names[i] if i < len(mode_names) else f"mode {i}"
             style = styles[i % len(styles)]
@@ -244,7 +265,7 @@ def plot_tip_acceleration(
     axes = np.atleast_1d(fig.subplots(len(runs), 1, sharex=True, sharey=True))
     t_end = max(stops_s.values()) + 2.0
     shown = t_s <= t_end
-    for ax, (label, (tip, ref)), colour in zip(axes, runs.items(), _COLOURS, strict=False):
+    for ax, (label, (tip, ref)), colour in zip(axes, runs.items(), _colours(), strict=False):
         ax.plot(t_s[shown], ref[shown], color="0.6", lw=1.0, label="reference acceleration")
         ax.plot(t_s[shown], tip[shown], color=colour, lw=1.1, label="tip acceleration (measured)")
         ax.axvline(t_planned_stop_s, color="k", ls=":", lw=1.0, label="planned stop")
@@ -277,7 +298,7 @@ def plot_velocity_references(
     lo = t_s[max(moving[0] - 25, 0)] if moving.size else t_s[0]
     hi = t_s[min(moving[-1] + 50, len(t_s) - 1)] if moving.size else t_s[-1]
     shown = (t_s >= lo) & (t_s <= hi)
-    for (label, v), colour in zip(velocities.items(), _COLOURS, strict=False):
+    for (label, v), colour in zip(velocities.items(), _colours(), strict=False):
         ax.plot(t_s[shown], v[shown], color=colour, lw=1.3, label=label)
     ax.axvline(t_planned_stop_s, color="k", ls=":", lw=1.0, label="planned stop")
     ax.set_xlabel("time [s]")
@@ -299,7 +320,7 @@ def plot_path_deviation(
     """Distance of shaped flange paths from the planned path against time, µm (log scale)."""
     fig = new_figure(figsize=(9, 4))
     ax = fig.subplots()
-    for (label, dev), colour in zip(deviations_m.items(), _COLOURS[1:], strict=False):
+    for (label, dev), colour in zip(deviations_m.items(), _colours(1), strict=False):
         ax.semilogy(
             t_s,
             np.maximum(1e6 * dev, 1e-6),
