@@ -470,6 +470,8 @@ def run_from_args(args: Any) -> int:
     from rich.console import Console
 
     console = Console()
+    if not console.is_terminal and console.width < 160:
+        console.width = 160  # a log file or pipe: keep table rows on one line
     payload = FlexiblePayload(freq_hz=args.payload_hz, zeta=args.payload_zeta)
     console.print(
         f"flexible payload {payload.freq_hz:g} Hz, ζ {payload.zeta:g}: {DISTANCE_M:g} m along X "
