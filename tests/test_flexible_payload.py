@@ -122,3 +122,26 @@ def test_experiment_reproduces_the_papers_qualitative_result(experiment):
     deviation = results["path_deviation_m"]
     assert deviation["cartesian_zvd_max"] < 1e-8
     assert deviation["joint_space_zvd_max"] > 1e-5
+
+
+def test_figures_leave_the_global_matplotlib_backend_alone(tmp_path):
+    # Plotting must not select a backend or import pyplot (that breaks inline plots in
+    # Jupyter): run the figure code in a fresh interpreter and inspect it afterwards.
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, numpy as np, matplotlib\n"
+        "matplotlib.use('svg')\n"
+        "from tvist import plots, DynamicMap\n"
+        "from tvist.ident.plots import plot_prv_sensitivity\n"
+        "t = np.linspace(0, 1, 50)\n"
+        f"plots.plot_velocity_references(t, {{'a': np.sin(t)}}, 0.5, r'{tmp_path}/v.png',\n"
+        "    title='t', ylabel='v [m/s]')\n"
+        f"plot_prv_sensitivity(DynamicMap.paper_ur5e(), r'{tmp_path}/prv.png',\n"
+        "    j1_values_kg_m2=(3.2,))\n"
+        "assert matplotlib.get_backend() == 'svg', matplotlib.get_backend()\n"
+        "assert 'matplotlib.pyplot' not in sys.modules\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+    assert (tmp_path / "v.png").read_bytes()[:4] == b"\x89PNG"
