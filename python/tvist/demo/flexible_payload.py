@@ -449,7 +449,7 @@ def write_flexible_payload(exp: PayloadExperiment, out_dir: str | Path) -> dict[
         "## Cartesian against joint-space shaping",
         "",
         f"The same ZVD shaper applied to the TCP reference keeps the flange within "
-        f"{1e6 * conv_dev:.2g} µm of the straight line (inverse-kinematics tolerance); "
+        f"{conv_dev:.2g} m of the straight line (inverse-kinematics tolerance); "
         f"applied to the joint reference it leaves the line by up to {1e3 * joint_dev:.2f} mm.",
         "",
         f"Wall time: {exp.wall_time_s:.1f} s.",
