@@ -317,19 +317,26 @@ def plot_path_deviation(
     *,
     title: str,
 ) -> Path:
-    """Distance of shaped flange paths from the planned path against time, µm (log scale)."""
+    """Distance of shaped flange paths from the planned path against time, µm (log scale);
+    distances below 0.1 nm (the inverse-kinematics tolerance) are drawn at 0.1 nm."""
     fig = new_figure(figsize=(9, 4))
     ax = fig.subplots()
+    off = np.flatnonzero(np.max(np.array(list(deviations_m.values())), axis=0) > 0.0)
+    shown = (
+        (t_s >= t_s[max(off[0] - 50, 0)]) & (t_s <= t_s[min(off[-1] + 100, len(t_s) - 1)])
+        if off.size
+        else np.ones(len(t_s), dtype=bool)
+    )
     for (label, dev), colour in zip(deviations_m.items(), _colours(1), strict=False):
         ax.semilogy(
-            t_s,
-            np.maximum(1e6 * dev, 1e-6),
+            t_s[shown],
+            np.maximum(1e6 * dev[shown], 1e-4),
             color=colour,
             lw=1.2,
-            label=f"{label}: max {1e6 * np.max(dev):.3g} µm",
+            label=f"{label}: max {np.max(dev):.2g} m",
         )
     ax.set_xlabel("time [s]")
-    ax.set_ylabel("distance from the planned path [µm]")
+    ax.set_ylabel("distance from the planned path [µm]\n(floor: 0.1 nm)")
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=9)
