@@ -145,3 +145,11 @@ def test_figures_leave_the_global_matplotlib_backend_alone(tmp_path):
     )
     subprocess.run([sys.executable, "-c", code], check=True)
     assert (tmp_path / "v.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_cli_names_the_flag_of_a_bad_payload(capsys, tmp_path):
+    assert main(["demo", "--experiment", "flexible-payload", "--payload-hz", "0"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("tvist demo: error: --payload-hz") and err.count("\n") == 1
+    assert main(["demo", "--experiment", "flexible-payload", "--payload-zeta", "1.5"]) == 2
+    assert "--payload-zeta" in capsys.readouterr().err

@@ -472,6 +472,10 @@ def run_from_args(args: Any) -> int:
     console = Console()
     if not console.is_terminal and console.width < 160:
         console.width = 160  # a log file or pipe: keep table rows on one line
+    if not (math.isfinite(args.payload_hz) and args.payload_hz > 0.0):
+        raise ValueError(f"--payload-hz must be a frequency > 0 Hz, got {args.payload_hz:g}")
+    if not (math.isfinite(args.payload_zeta) and 0.0 <= args.payload_zeta < 1.0):
+        raise ValueError(f"--payload-zeta must be in [0, 1), got {args.payload_zeta:g}")
     payload = FlexiblePayload(freq_hz=args.payload_hz, zeta=args.payload_zeta)
     console.print(
         f"flexible payload {payload.freq_hz:g} Hz, ζ {payload.zeta:g}: {DISTANCE_M:g} m along X "
