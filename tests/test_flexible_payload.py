@@ -147,7 +147,7 @@ def test_figures_leave_the_global_matplotlib_backend_alone(tmp_path):
     assert (tmp_path / "v.png").read_bytes()[:4] == b"\x89PNG"
 
 
-def test_cli_names_the_flag_of_a_bad_payload(capsys, tmp_path):
+def test_cli_names_the_flag_of_a_bad_payload(capsys):
     assert main(["demo", "--experiment", "flexible-payload", "--payload-hz", "0"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("tvist demo: error: --payload-hz") and err.count("\n") == 1
