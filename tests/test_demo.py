@@ -48,6 +48,8 @@ def test_quick_demo_writes_results_report_and_figures(quick_run):
         "fd-tvist-identified-map",
         "zero-delay-modified",
         "zero-delay-ztdis",
+        "fixed-start",
+        "fixed-robust",
     }
     for key, row in motion["methods"].items():
         for field in ROW_KEYS:

@@ -17,6 +17,10 @@ from tvist.shape_command import add_shape_command
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
+    if args.experiment == "flexible-payload":
+        from tvist.demo.flexible_payload import run_from_args
+
+        return run_from_args(args)
     if args.linear:
         from tvist.demo.linear import run_linear_demo
 
@@ -43,7 +47,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 def _demo_row_method(key: str) -> str:
     """Which ``--method`` a demo row belongs to (``"unshaped"`` for the baseline)."""
-    if key.startswith("fd-tvist"):
+    if key.startswith(("fd-tvist", "fixed-")):  # fixed shapers: FD-TVIST's baselines
         return "tvist"
     return {"zero-delay-ztdis": "ztdis", "zero-delay-modified": "mztdis"}.get(key, "unshaped")
 
@@ -78,6 +82,26 @@ def _add_demo(sub: argparse._SubParsersAction) -> None:
         "--linear",
         action="store_true",
         help="run the small two-mode linear-plant example instead (default out/demo-linear)",
+    )
+    p.add_argument(
+        "--experiment",
+        choices=("ur5e-motions", "flexible-payload"),
+        default="ur5e-motions",
+        help="ur5e-motions: the FD-TVIST paper's three test motions (default); "
+        "flexible-payload: the zero-delay paper's experiment, a flexible payload on the twin "
+        "moved rapidly along X (default out/demo-payload)",
+    )
+    p.add_argument(
+        "--payload-hz",
+        type=float,
+        default=2.55,
+        help="flexible-payload: natural frequency of the payload mount, Hz (default 2.55)",
+    )
+    p.add_argument(
+        "--payload-zeta",
+        type=float,
+        default=0.04,
+        help="flexible-payload: damping ratio of the payload mount (default 0.04)",
     )
     p.set_defaults(func=_cmd_demo)
 

@@ -306,14 +306,10 @@ def plot_benchmark(benches: list[Benchmark], path: str | Path) -> Path:
 
     Like the paper's Fig. 13, with the unshaped and conventionally shaped moves added.
     """
-    import matplotlib
+    from tvist.plots import new_figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(
-        2, len(benches), figsize=(6 * len(benches), 6), sharex=True, squeeze=False
-    )
+    fig = new_figure(figsize=(6 * len(benches), 6), layout="tight")
+    axes = fig.subplots(2, len(benches), sharex=True, squeeze=False)
     for col, bench in enumerate(benches):
         t = bench.t_s
         t_end = bench.rest_s[0] + bench.metrics["is"].completion_s + 1.0
@@ -328,15 +324,13 @@ def plot_benchmark(benches: list[Benchmark], path: str | Path) -> Path:
         axes[0, col].set_title(
             f"{bench.reference}: T = {bench.move_s} s, {bench.freq_hz} Hz, {bench.shaper.upper()}"
         )
-        axes[0, col].set_ylabel("reference velocity")
-        axes[1, col].set_ylabel("payload tip velocity")
+        axes[0, col].set_ylabel("reference velocity [rad/s]")
+        axes[1, col].set_ylabel("payload tip velocity [rad/s]")
         axes[1, col].set_xlabel("time [s]")
     axes[0, 0].legend(fontsize=8)
-    fig.tight_layout()
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=120)
-    plt.close(fig)
     return out
 
 

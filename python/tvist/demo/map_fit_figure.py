@@ -35,15 +35,11 @@ def _usable(records: Sequence[dict], index: int) -> list[tuple[dict, dict, dict 
 
 def plot_identified_map(dynmap: DynamicMap, records: Sequence[dict], path: str | Path) -> Path:
     """Write the figure to ``path`` (PNG) and return the path."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from tvist.plots import new_figure
 
     n_modes = min(dynmap.n_modes, len(_MODE_NAMES))
-    fig, axes = plt.subplots(
-        n_modes, 2, figsize=(12, 4.2 * n_modes), squeeze=False, constrained_layout=True
-    )
+    fig = new_figure(figsize=(12, 4.2 * n_modes))
+    axes = fig.subplots(n_modes, 2, squeeze=False)
     for index in range(n_modes):
         mode_map = dynmap.mode_maps[index]
         rows = _usable(records, index)
@@ -102,12 +98,17 @@ def plot_identified_map(dynmap: DynamicMap, records: Sequence[dict], path: str |
             ax.set_xscale("log")
             ax.set_xlabel(f"J_{joint} (kg m²)")
             ax.set_ylabel(ylabel)
-            ax.set_title(f"{_MODE_NAMES[index]} mode: {ylabel.split(' (')[0]} from J_{joint}")
+            ax.set_title(
+                f"{_MODE_NAMES[index]} mode: {ylabel.split(' (')[0]} from J_{joint} "
+                f"({len(rows)} poses)"
+            )
             ax.grid(True, alpha=0.3)
             ax.legend(fontsize=8)
-    fig.suptitle("Identified dynamic map: campaign on the twin (local fits) and the fitted map")
+    fig.suptitle(
+        f"Identified dynamic map: campaign on the twin ({len(records)} poses, local fits; "
+        "low-confidence identifications left out) and the fitted map"
+    )
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return path

@@ -250,4 +250,12 @@ def default_methods() -> list[Method]:
             ZERO_DELAY_MOTIONS,
         ),
         zero_delay_row("zero-delay-ztdis", "ZTDIS ZV, end-pose modes", "ztdis", ZERO_DELAY_MOTIONS),
+        *_fixed_rows(),
     ]
+
+
+def _fixed_rows() -> list[Method]:
+    """The time-invariant baselines (:mod:`tvist.demo.fixed`)."""
+    from tvist.demo.fixed import fixed_robust_row, fixed_start_row
+
+    return [fixed_start_row(), fixed_robust_row()]

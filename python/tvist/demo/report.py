@@ -36,6 +36,25 @@ def _json_safe(value: Any) -> Any:
     return value
 
 
+def format_reduction(percent: float) -> str:
+    """A reduction in % with enough decimals that it never rounds to 100: one decimal, and
+    one more per decade the remainder ``100 − percent`` falls below 1 (99.2, 99.98, 99.996)."""
+    if not math.isfinite(percent):
+        return "n/a"
+    rest = 100.0 - percent
+    decimals = 1 if rest >= 1.0 or rest <= 0.0 else max(1, math.ceil(-math.log10(rest)) + 1)
+    return f"{percent:.{min(decimals, 6)}f}"
+
+
+#: How each residual-vibration estimate is named in tables (see
+#: :class:`tvist.analysis.ResidualVibration`).
+RV_ESTIMATES = {
+    "damped_sine_fit": "one-mode fit",
+    "log_decay": "peak decay",
+    "max_abs": "largest peak (upper bound)",
+}
+
+
 def write_json(result: DemoResult, path: Path) -> Path:
     """Write ``results.json``."""
     path.write_text(json.dumps(_json_safe(result.to_json()), indent=2) + "\n", encoding="utf-8")
@@ -53,9 +72,10 @@ def _rows(motion: MotionRun) -> list[list[str]]:
                 f"{1e3 * r.delay_s:.0f}",
                 "-" if baseline else analytic_ms,
                 f"{r.residual.amplitude:.4f}",
-                "-" if baseline else f"{r.reduction_percent:.1f}",
+                "-" if baseline else format_reduction(r.reduction_percent),
                 f"{r.peak_jerk_rad_s3:.0f}",
-                r.residual.method + ("" if r.residual.reliable else " (unreliable)"),
+                RV_ESTIMATES.get(r.residual.method, r.residual.method)
+                + ("" if r.residual.reliable else " (unreliable)"),
             ]
         )
     return rows
@@ -94,7 +114,7 @@ def print_table(result: DemoResult, console: Any = None) -> None:
         console.width = 120  # a log file or pipe: keep each row on one line
     for motion in result.motions:
         modes = ", ".join(
-            f"{name} f_d {damped_frequency_hz(w, z):.2f} Hz ζ {z:.3f}"
+            f"{name} damped f_d {damped_frequency_hz(w, z):.2f} Hz ζ {z:.3f}"
             for name, (w, z) in zip(("base", "shoulder"), motion.true_end_modes, strict=False)
         )
         table = Table(
@@ -107,6 +127,7 @@ def print_table(result: DemoResult, console: Any = None) -> None:
         for row in _rows(motion):
             table.add_row(*(Text(cell) for cell in row))
         console.print(table)
+        console.print(recommendation(motion))
     console.print(f"simulation and analysis wall time: {result.wall_time_s:.1f} s")
 
 
@@ -138,12 +159,12 @@ def make_figures(result: DemoResult, out: Path) -> dict[str, list[Path]]:
         )
         spectra = {r.method.label: (r.spectrum.freq_hz, r.spectrum.energy) for r in motion.runs}
         marks = {
-            f"twin (true): f_d at {motion.motion.end}": [
+            f"twin (true): damped f_d at {motion.motion.end}": [
                 damped_frequency_hz(w, z) for w, z in motion.true_end_modes
             ]
         }
         for label, modes in motion.map_end_modes.items():
-            marks[f"{label}: f_d at {motion.motion.end}"] = [
+            marks[f"{label}: damped f_d at {motion.motion.end}"] = [
                 damped_frequency_hz(w, z) for w, z in modes
             ]
         panels.append((f"{name}: residual vibration after the stop", spectra, marks))
@@ -156,8 +177,8 @@ def make_figures(result: DemoResult, out: Path) -> dict[str, list[Path]]:
                 out / f"modes_{motion.motion.slug}.png",
                 title=f"{name}: inertias and modes along the planned move",
                 t_marks_s={
-                    "move starts": _move_start(motion) - traj_start,
-                    "t_b": motion.t_stop_unshaped_s - traj_start,
+                    "planned move starts": _move_start(motion) - traj_start,
+                    "planned move stops (t_b)": motion.t_stop_unshaped_s - traj_start,
                 },
             )
         )
@@ -193,7 +214,7 @@ def _discussion(result: DemoResult) -> list[str]:
         parts = []
         analytic = motion.analytic_zv_delay_s
         for r in motion.runs[1:]:
-            parts.append(f"{r.method.label} {r.reduction_percent:.1f} %")
+            parts.append(f"{r.method.label} {format_reduction(r.reduction_percent)} %")
         out.append(f"- **{name.replace('->', ' → ')}**: reduction " + ", ".join(parts) + ".")
         try:
             truth = motion.run("fd-tvist-truth")
@@ -221,7 +242,7 @@ def _discussion(result: DemoResult) -> list[str]:
             paper_map = None
         if paper and paper_map is not None:
             out.append(
-                f"  Paper map on the twin: {paper_map.reduction_percent:.1f} % here, "
+                f"  Paper map on the twin: {format_reduction(paper_map.reduction_percent)} % here, "
                 f"{paper['reduction']} % on the real UR5e in the paper."
             )
         for label, modes in motion.map_end_modes.items():
@@ -234,8 +255,8 @@ def _discussion(result: DemoResult) -> list[str]:
                 for m, t in zip(modes, motion.true_end_modes, strict=False)
             )
             out.append(
-                f"  {label} at {motion.motion.end}: f_d error base {errs[0]:+.1f} %, shoulder "
-                f"{errs[1]:+.1f} %; ζ (map vs true) {zetas}; its ZV delay "
+                f"  {label} at {motion.motion.end}: damped f_d error base {errs[0]:+.1f} %, "
+                f"shoulder {errs[1]:+.1f} %; ζ (map vs true) {zetas}; its ZV delay "
                 f"{1e3 * zv_delay_s(modes):.1f} ms."
             )
     return out
@@ -260,6 +281,7 @@ def write_markdown(result: DemoResult, path: Path, figures: dict[str, list[Path]
         + (" (quick run: first motion only, shorter tail)." if result.config["quick"] else "."),
         "",
     ]
+    lines += ["## Which method to use", "", *_recommendation_lines(result), ""]
     for motion in result.motions:
         name = motion.motion.name
         lines += [f"## {name.replace('->', ' → ')}", ""]
@@ -299,7 +321,12 @@ def write_markdown(result: DemoResult, path: Path, figures: dict[str, list[Path]
             )
         lines.append(
             _md_table(
-                [f"modes at {motion.motion.end}", "base f_d / ζ", "shoulder f_d / ζ"], mode_rows
+                [
+                    f"modes at {motion.motion.end}",
+                    "base damped f_d / ζ",
+                    "shoulder damped f_d / ζ",
+                ],
+                mode_rows,
             )
         )
         lines.append("")
@@ -321,6 +348,7 @@ def write_markdown(result: DemoResult, path: Path, figures: dict[str, list[Path]
                 "sample (2 ms) after the planned move."
             )
             lines.append("")
+    lines += _fixed_section(result)
     lines += _identification_section(result)
     lines += ["## Discussion", ""]
     lines += _discussion(result)
@@ -333,7 +361,8 @@ def write_markdown(result: DemoResult, path: Path, figures: dict[str, list[Path]
     captions = {
         "acceleration": "Tool acceleration around the stop (like Fig. 35)",
         "spectra": "Residual vibration spectra, eq. 56 (like Fig. 36)",
-        "modes": "J_0, J_1, f_d and ζ along the move: map vs twin (like Figs. 32-34)",
+        "modes": "J_0, J_1, damped frequency f_d and ζ along the move: map vs twin "
+        "(like Figs. 32-34)",
     }
     for kind, paths in figures.items():
         for p in paths:
@@ -386,6 +415,19 @@ def _pct(entry: dict[str, Any], key: str) -> str:
     return f"{entry[f'{key}_rms_percent']:.1f} / {entry[f'{key}_max_percent']:.1f}"
 
 
+#: Map coefficients as the paper writes them (eqs. 42-51), by their keys in the map file.
+_COEFFICIENT_NAMES = {
+    "k_0": "k_0",
+    "k_j": "k_J",
+    "k_p": "k_p",
+    "k_g": "k_g",
+    "c_0": "c_0",
+    "c_1": "c_1",
+    "c_2": "c_2",
+    "c_tau": "c_τ",
+}
+
+
 def _identification_section(result: DemoResult) -> list[str]:
     info = result.identification
     if info is None:
@@ -426,9 +468,7 @@ def _identification_section(result: DemoResult) -> list[str]:
         stat = stats[i] if i < len(stats) else {}
         freq_err = stat.get("frequency", {}).get("rms_relative_error")
         damp_err = stat.get("damping", {}).get("rms_relative_error")
-        coeffs = ", ".join(
-            f"{k} {mode[k]:.4g}" for k in ("k_0", "k_j", "k_p", "k_g", "c_0", "c_1", "c_2", "c_tau")
-        )
+        coeffs = ", ".join(f"{shown} {mode[k]:.4g}" for k, shown in _COEFFICIENT_NAMES.items())
         f_range = mode["frequency_inertia_range_kg_m2"]
         d_range = mode["damping_inertia_range_kg_m2"]
         rows.append(
@@ -588,6 +628,157 @@ def _jerk_spike(result: DemoResult) -> bool:
         if truth.peak_jerk_rad_s3 > plain.peak_jerk_rad_s3:
             return True
     return False
+
+
+#: Rows a user cannot run on a real robot (they read the twin's own modes every cycle); they
+#: are references, never recommended.
+REFERENCE_ONLY = ("fd-tvist-truth",)
+#: A method is "good enough" when its reduction is at least this (%) ...
+GOOD_REDUCTION = 95.0
+#: ... or within this many percentage points of the best usable row.
+GOOD_MARGIN = 1.0
+
+
+def recommendation(motion: MotionRun) -> str:
+    """One line: which usable method to run on this motion and why.
+
+    Usable rows are all but :data:`REFERENCE_ONLY`. Among those whose reduction is at least
+    :data:`GOOD_REDUCTION` % or within :data:`GOOD_MARGIN` points of the best, the one with
+    the shortest delay wins (ties within one 2 ms sample: the higher reduction).
+    """
+    name = motion.motion.name.replace("->", " → ")
+    usable = [r for r in motion.runs[1:] if r.method.key not in REFERENCE_ONLY]
+    if not usable:
+        return f"{name}: no shaped row to compare."
+    best = max(r.reduction_percent for r in usable)
+    good = [r for r in usable if r.reduction_percent >= min(GOOD_REDUCTION, best - GOOD_MARGIN)]
+    pick = min(good, key=lambda r: (round(r.delay_s / DT_S), -r.reduction_percent))
+    others = sorted((r for r in usable if r is not pick), key=lambda r: -r.reduction_percent)[:2]
+    why = f"{format_reduction(pick.reduction_percent)} % less residual vibration"
+    why += f" for {1e3 * pick.delay_s:.0f} ms of delay"
+    if others:
+        why += "; next: " + ", ".join(
+            f"{r.method.label} {format_reduction(r.reduction_percent)} % / {1e3 * r.delay_s:.0f} ms"
+            for r in others
+        )
+    caveat = ""
+    if "alpha" in pick.details:
+        caveat = (
+            " (zero-delay shaping needs the whole rest-to-rest move in advance and the modes "
+            "at its end pose)"
+        )
+    return f"{name}: use **{pick.method.label}**: {why}{caveat}."
+
+
+def _recommendation_lines(result: DemoResult) -> list[str]:
+    lines = [f"- {recommendation(m)}" for m in result.motions]
+    lines.append(
+        f"- (Rule: among the rows a user can run, those with at least {GOOD_REDUCTION:g} % "
+        f"reduction or within {GOOD_MARGIN:g} point of the best, the shortest delay. The "
+        "true-modes row reads the twin's own modes every cycle and is only a reference.)"
+    )
+    return lines
+
+
+def _fixed_section(result: DemoResult) -> list[str]:
+    """Fixed shapers (tune once at the start pose; robust over the move) against FD-TVIST
+    with the identified map, per motion, with what the time variation buys."""
+    from tvist.demo.identified import KEY
+
+    lines: list[str] = []
+    for motion in result.motions:
+        try:
+            start, robust = motion.run("fixed-start"), motion.run("fixed-robust")
+        except KeyError:
+            continue
+        try:
+            tv = motion.run(KEY)
+        except KeyError:
+            tv = None
+        name = motion.motion.name.replace("->", " → ")
+        parts = [
+            f"- **{name}**: fixed ZV at the start pose ({start.details['design']}): "
+            f"{format_reduction(start.reduction_percent)} % for {1e3 * start.delay_s:.0f} ms; "
+            f"fixed robust shaper ({robust.details['design']}): "
+            f"{format_reduction(robust.reduction_percent)} % for {1e3 * robust.delay_s:.0f} ms"
+        ]
+        if not robust.details["robust_design"]["feasible"]:
+            parts.append(
+                " (no design of the library reaches the 5 % PRV over this range; this is the "
+                "one with the lowest PRV)"
+            )
+        if tv is None:
+            lines.append("".join(parts) + ".")
+            continue
+        parts.append(
+            f"; FD-TVIST with the identified map: {format_reduction(tv.reduction_percent)} % "
+            f"for {1e3 * tv.delay_s:.0f} ms. "
+        )
+        parts.append(_time_variation_buys(tv, start, robust))
+        parts.append(_why_fixed_wins(motion, tv, start, robust))
+        lines.append("".join(parts))
+    if not lines:
+        return []
+    return [
+        "## Fixed shapers against FD-TVIST",
+        "",
+        "What a user would run instead of a time-varying shaper: a two-mode ZV tuned once at "
+        "the start pose and held for the whole move, or the shortest time-invariant shaper of "
+        "tvist's library (one registry shaper, or two convolved, each designed for one mode) "
+        "that keeps every mode the twin has along the planned move (both modes, every 20 ms) "
+        "within 5 % residual vibration (PRV, eqs. 52-55).",
+        "",
+        *lines,
+        "",
+    ]
+
+
+def _why_fixed_wins(motion: MotionRun, tv: Any, start: Any, robust: Any) -> str:
+    """Where a fixed shaper beats FD-TVIST, the reason the numbers show."""
+    notes = []
+    start_modes = [tuple(m) for m in start.details["modes"]]
+    change = max(
+        abs(damped_frequency_hz(*a) / damped_frequency_hz(*b) - 1.0)
+        for a, b in zip(start_modes, motion.true_end_modes, strict=False)
+    )
+    if tv.reduction_percent < start.reduction_percent and change < 0.02:
+        notes.append(
+            f" The modes do not change along this move (start and end within "
+            f"{100 * change:.1f} %), so the start-pose ZV is exactly tuned and the identified "
+            "map's errors are all FD-TVIST can add."
+        )
+    stages = robust.details["robust_design"]["stages"]
+    if robust.delay_s < tv.delay_s and len(stages) == 1:
+        f_end = [damped_frequency_hz(*m) for m in motion.true_end_modes]
+        notes.append(
+            f" Both modes ring at nearly the same frequency here (damped {f_end[0]:.2f} and "
+            f"{f_end[1]:.2f} Hz), so one robust shaper covers both, while the two-mode ZV "
+            "cascade pays a half period for each."
+        )
+    return "".join(notes)
+
+
+def _time_variation_buys(tv: Any, start: Any, robust: Any) -> str:
+    """One sentence from the numbers: reduction against the start-pose ZV and delay against
+    the robust shaper, said plainly either way."""
+    d_red = tv.reduction_percent - start.reduction_percent
+    d_delay_ms = 1e3 * (robust.delay_s - tv.delay_s)
+    if d_red >= 0.0:
+        first = (
+            f"Retuning along the move buys {d_red:.1f} points of reduction over the start-pose ZV"
+        )
+    else:
+        first = (
+            f"FD-TVIST with the identified map does **not** reach the start-pose ZV's "
+            f"reduction here ({-d_red:.1f} points less)"
+        )
+    if d_delay_ms >= 0.0:
+        second = f"and {d_delay_ms:.0f} ms less delay than the robust shaper"
+    else:
+        second = (
+            f"and it is **not** faster than the robust shaper ({-d_delay_ms:.0f} ms more delay)"
+        )
+    return f"{first}, {second}."
 
 
 def write_outputs(result: DemoResult, out_dir: str | Path) -> dict[str, Any]:

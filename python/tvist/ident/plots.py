@@ -1,8 +1,8 @@
 """Figures of the identification: PRV sensitivity (Fig. 27), map robustness to frequency and
 damping errors (Figs. 28-30) and identified modes against the map (Figs. 23-26).
 
-matplotlib is imported lazily (Agg backend). Every function writes one PNG and returns its
-path.
+matplotlib is imported lazily; every figure is a standalone ``Figure`` (no global pyplot
+backend is selected). Every function writes one PNG and returns its path.
 """
 
 from __future__ import annotations
@@ -28,13 +28,12 @@ __all__ = [
 J0_FIXED_KG_M2 = 4.5
 
 
-def _pyplot():
-    import matplotlib
+def _figure(nrows: int, ncols: int, figsize: tuple[float, float], **kwargs):
+    """A standalone figure and its axes (no pyplot state)."""
+    from tvist.plots import new_figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    fig = new_figure(figsize=figsize)
+    return fig, fig.subplots(nrows, ncols, **kwargs)
 
 
 def _inertia(j0: float, j1: float, n_dof: int = 6) -> list[float]:
@@ -53,7 +52,6 @@ def _save(fig, path: str | Path) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=120)
-    _pyplot().close(fig)
     return path
 
 
@@ -70,10 +68,7 @@ def plot_prv_sensitivity(
     The shaper is designed from the map at ``(J_0, J_1)``; the filled region is PRV <= 10 %,
     the markers are the two design modes.
     """
-    plt = _pyplot()
-    fig, axes = plt.subplots(
-        1, len(j1_values_kg_m2), figsize=(5 * len(j1_values_kg_m2), 4), constrained_layout=True
-    )
+    fig, axes = _figure(1, len(j1_values_kg_m2), (5 * len(j1_values_kg_m2), 4))
     axes = np.atleast_1d(axes)
     for ax, j1 in zip(axes, j1_values_kg_m2, strict=True):
         modes = _modes(dynmap, j0_kg_m2, j1)
@@ -181,7 +176,6 @@ def _plot_robustness(
 ) -> Path:
     """The map's frequency or damping (``quantity``) against the inertia of its frequency
     joint, with the 10 % PRV band and the identified values."""
-    plt = _pyplot()
     joint = mode if joint is None else joint
     f_joint = dynmap.mode_maps[mode]["frequency_joint"]
     jx, f, z = _points(results, joint, f_joint)
@@ -189,7 +183,7 @@ def _plot_robustness(
     top = max(10.0, float(jx.max()) * 1.1) if jx.size else 10.0
     grid = np.geomspace(bottom, top, 80)
     centre, lo, hi = _map_curve(dynmap, mode, grid, quantity, shaper)
-    fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
+    fig, ax = _figure(1, 1, (7, 4.5))
     ax.fill_between(grid, lo, hi, color="#9ecae1", label="PRV <= 10 %")
     ax.plot(grid, centre, "k-", label="dynamic map")
     if jx.size:
@@ -212,9 +206,7 @@ def plot_map_fit(
     joints: Sequence[int] = (0, 1),
 ) -> Path:
     """Figs. 23-26: identified against map-predicted frequency and damping, per mode."""
-    plt = _pyplot()
-    fig, axes = plt.subplots(2, len(joints), figsize=(5 * len(joints), 8), constrained_layout=True)
-    axes = np.atleast_2d(axes).reshape(2, len(joints))
+    fig, axes = _figure(2, len(joints), (5 * len(joints), 8), squeeze=False)
     for col, joint in enumerate(joints):
         ident, pred = [], []
         for record in results:
@@ -228,13 +220,21 @@ def plot_map_fit(
         if not ident:
             continue
         ident_a, pred_a = np.array(ident), np.array(pred)
-        for row, (scale, label) in enumerate(((1 / (2 * math.pi), "f_n (Hz)"), (1.0, "ζ"))):
+        quantities = ((1 / (2 * math.pi), "natural frequency f_n (Hz)"), (1.0, "damping ratio ζ"))
+        for row, (scale, label) in enumerate(quantities):
             ax = axes[row, col]
             x, y = pred_a[:, row] * scale, ident_a[:, row] * scale
-            ax.plot(x, y, "o", ms=4)
+            ax.plot(x, y, "o", ms=4, label=f"identified at a pose ({len(ident)} poses)")
             lim = [min(x.min(), y.min()), max(x.max(), y.max())]
-            ax.plot(lim, lim, "k--", lw=1)
+            ax.plot(lim, lim, "k--", lw=1, label="identified = map")
             ax.set_xlabel(f"map {label}")
             ax.set_ylabel(f"identified {label}")
-            ax.set_title(f"{'base' if joint == 0 else 'shoulder'} mode")
+            mode_name = "base" if joint == 0 else "shoulder"
+            ax.set_title(f"{mode_name} mode, {label.split(' (')[0]}: {len(ident)} poses")
+            ax.grid(True, alpha=0.3)
+            ax.legend(fontsize=8, loc="upper left")
+    fig.suptitle(
+        "Identified modes against the fitted map at the campaign poses "
+        "(low-confidence identifications left out)"
+    )
     return _save(fig, path)
