@@ -14,6 +14,7 @@ from tvist.ident.cli import (
 )
 from tvist.shape_command import METHODS as SHAPING_METHODS
 from tvist.shape_command import add_shape_command
+from tvist.urserver.cli import add_twin_server_command
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
@@ -108,6 +109,7 @@ COMMANDS += [
     ("sensitivity", add_sensitivity_command),
     ("shape", add_shape_command),
 ]
+COMMANDS += [("twin-server", add_twin_server_command)]
 
 
 def build_parser() -> argparse.ArgumentParser:
