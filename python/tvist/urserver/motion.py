@@ -91,8 +91,9 @@ class JointMotion:
 
     @property
     def moving(self) -> bool:
-        """Whether a movej is under way or any joint target is still moving."""
-        return self.mode == "movej" or bool(np.any(self.qd != 0.0))
+        """Whether a movej is under way or the joint target is still moving or decelerating
+        (a move has ended once the target stands still with zero acceleration)."""
+        return self.mode == "movej" or bool(np.any(self.qd != 0.0) or np.any(self.qdd != 0.0))
 
     # ----------------------------------------------------------------- commands
 

@@ -367,8 +367,8 @@ class TwinServer:
             if lower == "isprogramsaved":
                 return "false <unnamed>", False
             if lower == "stop":
-                if not running:
-                    return "Failed to execute: stop", False
+                # A UR answers "Stopped" with no program running too (ur_rtde relies on it
+                # right after stopScript).
                 c.stop_program()
                 return "Stopped", False
             if lower == "unlock protective stop":

@@ -1,0 +1,227 @@
+"""The twin server driven by the unmodified ur_rtde client, over UR's ports on localhost.
+
+One server (5 kg payload, starting at the stretched pose Q1) serves every test of this module;
+each test leaves no control script running. Expected values come from a separate
+:class:`tvist.sim.Twin` (static equilibrium, rigid kinematics), not from the server's code.
+"""
+
+from __future__ import annotations
+
+import socket
+import struct
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from tvist.sim import Twin
+from tvist.trajectory import PAPER_POSES
+
+from .twin_server_fixture import HOST, PAYLOAD_COM_M, PAYLOAD_KG, twin_server
+
+rtde_control = pytest.importorskip("rtde_control")
+rtde_receive = pytest.importorskip("rtde_receive")
+
+Q1 = np.array(PAPER_POSES["Q1"])
+G_M_S2 = 9.81
+
+
+@pytest.fixture(scope="module")
+def server():
+    with twin_server() as proc:
+        yield proc
+
+
+@pytest.fixture(scope="module")
+def twin() -> Twin:
+    return Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M)
+
+
+def _control():
+    return rtde_control.RTDEControlInterface(HOST)
+
+
+def _end(control) -> None:
+    control.stopScript()
+    control.disconnect()
+
+
+def _rtde_request(sock: socket.socket, kind: str, payload: bytes) -> tuple[int, bytes]:
+    """Send one RTDE package and read the next reply package ``(type, payload)``."""
+    sock.sendall(struct.pack(">HB", 3 + len(payload), ord(kind)) + payload)
+    return _rtde_read(sock)
+
+
+def _rtde_read(sock: socket.socket) -> tuple[int, bytes]:
+    header = b""
+    while len(header) < 3:
+        chunk = sock.recv(3 - len(header))
+        if not chunk:
+            raise ConnectionError("closed")
+        header += chunk
+    size, kind = struct.unpack(">HB", header)
+    body = b""
+    while len(body) < size - 3:
+        chunk = sock.recv(size - 3 - len(body))
+        if not chunk:
+            raise ConnectionError("closed")
+        body += chunk
+    return kind, body
+
+
+def test_receive_interface_reads_joints_and_accelerometer(server, twin) -> None:
+    """ur_rtde's default receive recipe is served; the arm rests at Q1 under gravity.
+
+    At rest the link side sags by the gear deflection under gravity: actual_q equals the
+    static equilibrium of an independent twin (Newton solve) to 1e-6 rad (the server's
+    sample is its own integration of the settled state: residual motion ~1e-8 rad). The
+    accelerometer reads gravity in the flange frame, R^T [0, 0, g], with R from the reported
+    TCP pose: to 0.02 m/s² (the deflection tilts the flange by ~1e-3 rad, ~0.01 m/s²).
+    """
+    receive = rtde_receive.RTDEReceiveInterface(HOST)
+    try:
+        t0 = receive.getTimestamp()
+        time.sleep(0.3)
+        q = np.array(receive.getActualQ())
+        accel = np.array(receive.getActualToolAccelerometer())
+        pose = np.array(receive.getActualTCPPose())
+        assert receive.getTimestamp() > t0
+        assert np.allclose(receive.getTargetQ(), Q1, atol=1e-12)
+    finally:
+        receive.disconnect()
+    from scipy.spatial.transform import Rotation
+
+    np.testing.assert_allclose(q, twin.equilibrium(Q1), atol=1e-6)
+    gravity_in_flange = Rotation.from_rotvec(pose[3:]).as_matrix().T @ [0.0, 0.0, G_M_S2]
+    np.testing.assert_allclose(accel, gravity_in_flange, atol=0.02)
+
+
+def test_unknown_variable_is_not_found(server) -> None:
+    """A variable the controller does not have: ur_rtde raises, naming it (UR's NOT_FOUND)."""
+    with pytest.raises(RuntimeError, match="no_such_variable"):
+        rtde_receive.RTDEReceiveInterface(HOST, 500.0, ["actual_q", "no_such_variable"])
+    with socket.create_connection((HOST, 30004), timeout=5) as sock:
+        assert _rtde_request(sock, "V", struct.pack(">H", 2)) == (ord("V"), b"\x01")
+        kind, reply = _rtde_request(sock, "O", struct.pack(">d", 500.0) + b"actual_q,bogus")
+        assert kind == ord("O")
+        assert reply[0] == 0  # no recipe
+        assert reply[1:] == b"VECTOR6D,NOT_FOUND"
+        kind, reply = _rtde_request(sock, "I", b"input_int_register_40,bogus_input")
+        assert reply[1:] == b"INT32,NOT_FOUND"
+
+
+def test_malformed_packages_do_not_crash_the_server(server) -> None:
+    """Garbage on the RTDE port ends that connection only; a bad data package is ignored."""
+    with socket.create_connection((HOST, 30004), timeout=5) as sock:
+        _rtde_request(sock, "V", struct.pack(">H", 2))
+        kind, reply = _rtde_request(sock, "I", b"input_double_register_40")
+        assert reply[0] == 1
+        # A data package of the wrong size, and one for a recipe that does not exist.
+        kind, _ = _rtde_request(sock, "U", b"\x01\x00\x00")
+        assert kind == ord("M")
+        kind, _ = _rtde_request(sock, "U", b"\x07" + bytes(8))
+        assert kind == ord("M")
+        # An unknown package type.
+        kind, _ = _rtde_request(sock, "Z", b"xyz")
+        assert kind == ord("M")
+        # A header whose size is below the header's own: the stream is lost, the server
+        # says so and closes this connection.
+        sock.sendall(b"\x00\x01U")
+        kind, _ = _rtde_read(sock)
+        assert kind == ord("M")
+        with pytest.raises(ConnectionError):
+            _rtde_read(sock)
+    with socket.create_connection((HOST, 29999), timeout=5) as sock:
+        sock.sendall(b"\xff\xfe not a command\n")
+        reader = sock.makefile("rb")
+        assert reader.readline().startswith(b"Connected")
+        assert b"could not understand" in reader.readline()
+    with socket.create_connection((HOST, 30002), timeout=5) as sock:
+        sock.sendall(b"def nonsense():\n  this is not urscript\nend\n")
+    receive = rtde_receive.RTDEReceiveInterface(HOST, 500.0, ["actual_q"])
+    assert len(receive.getActualQ()) == 6
+    receive.disconnect()
+    assert server.poll() is None
+
+
+def test_second_control_client_is_refused(server) -> None:
+    """A second RTDEControlInterface gets IN_USE registers (as on a UR); the first goes on."""
+    first = _control()
+    try:
+        with pytest.raises(RuntimeError, match="already in use"):
+            _control()
+        q = list(Q1)
+        q[5] += 0.05
+        assert first.moveJ(q, 1.0, 4.0)
+        q[5] -= 0.05
+        assert first.moveJ(q, 1.0, 4.0)
+    finally:
+        _end(first)
+
+
+def test_unsupported_command_fails_loudly(server) -> None:
+    """moveL is not implemented: the call returns False and the program stops."""
+    control = _control()
+    try:
+        assert control.isProgramRunning()
+        pose = rtde_receive.RTDEReceiveInterface(HOST, 500.0, ["actual_TCP_pose"])
+        target = pose.getActualTCPPose()
+        pose.disconnect()
+        assert control.moveL(target, 0.1, 0.1) is False
+        assert not control.isProgramRunning()
+    finally:
+        _end(control)
+
+
+_STREAM_AND_DIE = """
+import sys, time, rtde_control
+c = rtde_control.RTDEControlInterface("127.0.0.1")
+q = [float(v) for v in sys.argv[1:7]]
+for k in range(250):  # 0.5 s of servoJ moving joint 5, then killed mid-stream
+    t = c.initPeriod()
+    q[5] += 0.0004
+    c.servoJ(q, 0.0, 0.0, 0.002, 0.03, 1000.0)
+    c.waitPeriod(t)
+print("streaming", flush=True)
+while True:
+    t = c.initPeriod()
+    c.servoJ(q, 0.0, 0.0, 0.002, 0.03, 1000.0)
+    c.waitPeriod(t)
+"""
+
+
+def test_client_disconnect_mid_stream_holds(server) -> None:
+    """The servo client dies: the arm settles at the last servoJ target and holds it."""
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _STREAM_AND_DIE, *(str(v) for v in Q1)],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert proc.stdout.readline().strip() == "streaming"
+        proc.kill()
+    finally:
+        proc.wait()
+        proc.stdout.close()
+    expected = Q1.copy()
+    expected[5] += 250 * 0.0004
+    receive = rtde_receive.RTDEReceiveInterface(HOST, 500.0, ["target_q", "target_qd"])
+    try:
+        time.sleep(0.5)  # the servo filters (30 ms lookahead, gain 1000) have converged
+        first = np.array(receive.getTargetQ())
+        time.sleep(0.5)
+        second = np.array(receive.getTargetQ())
+        speed = np.array(receive.getTargetQd())
+    finally:
+        receive.disconnect()
+    np.testing.assert_allclose(first, expected, atol=1e-9)
+    np.testing.assert_array_equal(first, second)
+    assert np.all(speed == 0.0)
+    # The next client takes over (ur_rtde stops the orphaned script and uploads its own).
+    control = _control()
+    try:
+        assert control.moveJ(list(Q1), 1.0, 4.0)
+    finally:
+        _end(control)
