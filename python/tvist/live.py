@@ -49,6 +49,9 @@ STOP_DECEL_RAD_S2 = 2.0
 #: Speed and acceleration of the approach to the trajectory's first pose.
 APPROACH_SPEED_RAD_S = 0.5
 APPROACH_ACCEL_RAD_S2 = 0.5
+#: FIFO priority of the servo loop's thread where the OS allows it (Linux, privileged):
+#: a 500 Hz loop on a busy machine otherwise misses periods.
+REALTIME_PRIORITY = 10
 #: The shaped reference has settled when it is this close to the end pose (rad).
 SETTLED_TOL_RAD = 1e-9
 
@@ -292,29 +295,65 @@ def run_shaped_move(
 
 
 def _stream(control, recorder, q_ref, shaper, dt_s, lookahead_s, gain, max_settle_s):
-    """The 500 Hz loop; ``(start_s, end_s, n_commands, reference_end_s)`` (controller time)."""
+    """The 500 Hz loop; ``(start_s, end_s, n_commands, reference_end_s)`` (controller time).
+
+    The loop follows the wall clock: sample ``k`` is due ``k dt_s`` after the start. A late
+    wake-up steps the shaper over the missed periods and sends the sample due now, so a
+    descheduled client never stretches the move in time (it only holds one target longer).
+    """
     n = q_ref.shape[0]
     end = q_ref[-1]
     limit = n + int(np.ceil(max_settle_s / dt_s))
     start_s = float(recorder.latest["timestamp"])
-    k = 0
-    while True:
-        period = control.initPeriod()
-        row = q_ref[min(k, n - 1)]
-        # ur_rtde takes lists; TvShaper.step takes a float64 array.
-        q = row if shaper is None else shaper.step(row)
-        if not control.servoJ([float(v) for v in q], 0.0, 0.0, dt_s, lookahead_s, gain):
-            raise RuntimeError(f"the robot refused servoJ at period {k}")
-        k += 1
-        control.waitPeriod(period)
-        if k >= n and float(np.max(np.abs(q - end))) <= SETTLED_TOL_RAD:
-            break
-        if k >= limit:
-            raise RuntimeError(
-                f"the shaped reference has not settled {max_settle_s:g} s after the move's end"
-            )
+    previous = _realtime_priority()
+    try:
+        t0 = time.perf_counter()
+        k = -1  # last sample stepped through the shaper
+        sent = 0
+        while True:
+            period = control.initPeriod()
+            due = max(k + 1, int((time.perf_counter() - t0) / dt_s + 0.5))
+            while k < due:
+                k += 1
+                row = q_ref[min(k, n - 1)]
+                # ur_rtde takes lists; TvShaper.step takes a float64 array.
+                q = row if shaper is None else shaper.step(row)
+            if not control.servoJ([float(v) for v in q], 0.0, 0.0, dt_s, lookahead_s, gain):
+                raise RuntimeError(f"the robot refused servoJ at period {k}")
+            sent += 1
+            control.waitPeriod(period)
+            if k >= n - 1 and float(np.max(np.abs(q - end))) <= SETTLED_TOL_RAD:
+                break
+            if k >= limit:
+                raise RuntimeError(
+                    f"the shaped reference has not settled {max_settle_s:g} s after the move's end"
+                )
+    finally:
+        _restore_priority(previous)
     reference_end_s = start_s + (n - 1) * dt_s
-    return start_s, float(recorder.latest["timestamp"]), k, reference_end_s
+    return start_s, float(recorder.latest["timestamp"]), sent, reference_end_s
+
+
+def _realtime_priority():
+    """Raise this thread to real-time FIFO scheduling if allowed; the policy to restore."""
+    import os
+
+    try:
+        previous = (os.sched_getscheduler(0), os.sched_getparam(0))
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(REALTIME_PRIORITY))
+        return previous
+    except (AttributeError, OSError):  # not Linux, or not permitted: run as a normal thread
+        return None
+
+
+def _restore_priority(previous) -> None:
+    import os
+
+    if previous is not None:
+        try:
+            os.sched_setscheduler(0, previous[0], previous[1])
+        except OSError:
+            log.warning("could not restore the thread's scheduling policy")
 
 
 def safe_stop(control) -> None:

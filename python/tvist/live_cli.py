@@ -65,9 +65,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"tvist run: error: {exc}; the arm was stopped (servoStop, stopScript)")
         return 1
     print(
-        f"streamed {result.n_commands} servoJ commands "
-        f"({result.n_commands - Q.shape[0]} after the reference for the shaper to settle); "
-        f"log {result.log_path}"
+        f"sent {result.n_commands} servoJ commands over "
+        f"{result.stream_end_s - result.stream_start_s:.3f} s; log {result.log_path}"
     )
     return 0
 

@@ -11,6 +11,8 @@ def _cmd_twin_server(args: argparse.Namespace) -> int:
     from tvist.urserver import PortInUse, start_twin_server
 
     logging.basicConfig(level=logging.INFO, format="twin-server: %(levelname)s: %(message)s")
+    # Client threads hand the interpreter to the 2 ms tick quickly (default 5 ms).
+    sys.setswitchinterval(0.0005)
     try:
         server = start_twin_server(
             args.robot,

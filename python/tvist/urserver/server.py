@@ -11,6 +11,7 @@ only; the server and the arm go on.
 from __future__ import annotations
 
 import logging
+import os
 import socket
 import struct
 import threading
@@ -31,8 +32,12 @@ CONTROLLER_VERSION = (5, 11, 8, 0)
 POLYSCOPE_VERSION = "5.11.8.0"
 #: Publishing is capped at the controller rate (e-Series: 500 Hz).
 MAX_FREQUENCY_HZ = 500.0
-#: If the tick thread falls this far behind the wall clock (s), it stops catching up.
-MAX_LAG_S = 0.1
+#: FIFO priority of the tick thread where the OS allows it (Linux, privileged).
+TICK_PRIORITY = 20
+#: If the tick thread falls this far behind the wall clock (s), it does not catch up: the
+#: simulated time slips instead of running a burst of ticks (a burst would hand a streaming
+#: client several ticks without a new command).
+MAX_LAG_S = 0.004
 
 
 @dataclass
@@ -172,6 +177,10 @@ class TwinServer:
     # ------------------------------------------------------------------ tick
 
     def _tick_loop(self) -> None:
+        try:  # the controller's tick is a real-time thread where the OS allows it
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(TICK_PRIORITY))
+        except (AttributeError, OSError):
+            log.info("the tick runs without real-time priority (not permitted here)")
         dt = self.controller.dt_s
         deadline = time.perf_counter()
         while not self._stop.is_set():
