@@ -301,13 +301,16 @@ def test_record_keeps_every_sample_until_interrupted(server, tmp_path) -> None:
         text=True,
     )
     control = _control()
+    receive = rtde_receive.RTDEReceiveInterface(HOST, 500.0, ["target_q"])
+    start = receive.getTargetQ()
+    receive.disconnect()
     try:
         assert proc.stdout.readline().startswith("recording")
         time.sleep(0.3)
-        q = list(Q1)
-        q[0] += 0.2
+        q = list(start)
+        q[0] -= 0.2
         assert control.moveJ(q, 1.0, 2.0)
-        assert control.moveJ(list(Q1), 1.0, 2.0)
+        assert control.moveJ(start, 1.0, 2.0)
         time.sleep(0.3)
     finally:
         _end(control)
@@ -317,7 +320,7 @@ def test_record_keeps_every_sample_until_interrupted(server, tmp_path) -> None:
     assert proc.returncode == 0
     record = read_rtde_csv(out)
     np.testing.assert_allclose(np.diff(record.t_s), 0.002, atol=1e-9)
-    assert np.max(record.target_q[:, 0]) == pytest.approx(Q1[0] + 0.2, abs=1e-12)
+    assert np.min(record.target_q[:, 0]) == pytest.approx(start[0] - 0.2, abs=1e-12)
     assert record.n_samples > 500
 
 
