@@ -110,6 +110,7 @@ class RtdeRecorder:
         self.path = Path(path)
         self.latest: dict = {}
         self.n_samples = 0
+        self._new_sample = threading.Condition()
         self._stop = threading.Event()
         self._sock = socket.create_connection((host, port), timeout=5.0)
         self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
@@ -167,8 +168,23 @@ class RtdeRecorder:
             if got == kind:
                 return reply
 
+    def wait_newer(self, n_samples: int, timeout_s: float = 1.0) -> int:
+        """Block until more than ``n_samples`` packages have arrived; the new count.
+
+        Raises
+        ------
+        TimeoutError
+            If none arrives within ``timeout_s``.
+        """
+        with self._new_sample:
+            if not self._new_sample.wait_for(lambda: self.n_samples > n_samples, timeout_s):
+                raise TimeoutError(f"no RTDE data package within {timeout_s:g} s")
+            return self.n_samples
+
     def _run(self) -> None:
         data_kind = self._rtde.DATA_PACKAGE
+        # Real-time where allowed: a client clocked by these packages must see them on time.
+        _realtime_priority()  # nothing to restore: the thread ends with the recording
         try:
             while not self._stop.is_set():
                 kind, payload = self._read_package()
@@ -180,8 +196,10 @@ class RtdeRecorder:
                     value = values[name]
                     row.extend(value if isinstance(value, list) else [value])
                 self._file.write(",".join(f"{float(v):.6f}" for v in row) + "\n")
-                self.latest = values
-                self.n_samples += 1
+                with self._new_sample:
+                    self.latest = values
+                    self.n_samples += 1
+                    self._new_sample.notify_all()
                 self._first.set()
         except OSError:
             if not self._stop.is_set():
@@ -295,24 +313,26 @@ def run_shaped_move(
 
 
 def _stream(control, recorder, q_ref, shaper, dt_s, lookahead_s, gain, max_settle_s):
-    """The 500 Hz loop; ``(start_s, end_s, n_commands, reference_end_s)`` (controller time).
+    """The servo loop; ``(start_s, end_s, n_commands, reference_end_s)`` (controller time).
 
-    The loop follows the wall clock: sample ``k`` is due ``k dt_s`` after the start. A late
-    wake-up steps the shaper over the missed periods and sends the sample due now, so a
-    descheduled client never stretches the move in time (it only holds one target longer).
+    The loop is clocked by the controller: it waits for each RTDE data package (one per
+    controller tick), then sends the sample due at that package's timestamp, so every
+    command reaches the controller early in the tick it is meant for. If the loop wakes late
+    it steps the shaper over the missed samples and sends the one due now: the move is never
+    stretched in time.
     """
     n = q_ref.shape[0]
     end = q_ref[-1]
     limit = n + int(np.ceil(max_settle_s / dt_s))
-    start_s = float(recorder.latest["timestamp"])
     previous = _realtime_priority()
     try:
-        t0 = time.perf_counter()
+        count = recorder.wait_newer(recorder.n_samples)
+        start_s = float(recorder.latest["timestamp"])
         k = -1  # last sample stepped through the shaper
         sent = 0
         while True:
-            period = control.initPeriod()
-            due = max(k + 1, int((time.perf_counter() - t0) / dt_s + 0.5))
+            now_s = float(recorder.latest["timestamp"])
+            due = max(k + 1, int(round((now_s - start_s) / dt_s)))
             while k < due:
                 k += 1
                 row = q_ref[min(k, n - 1)]
@@ -321,13 +341,13 @@ def _stream(control, recorder, q_ref, shaper, dt_s, lookahead_s, gain, max_settl
             if not control.servoJ([float(v) for v in q], 0.0, 0.0, dt_s, lookahead_s, gain):
                 raise RuntimeError(f"the robot refused servoJ at period {k}")
             sent += 1
-            control.waitPeriod(period)
             if k >= n - 1 and float(np.max(np.abs(q - end))) <= SETTLED_TOL_RAD:
                 break
             if k >= limit:
                 raise RuntimeError(
                     f"the shaped reference has not settled {max_settle_s:g} s after the move's end"
                 )
+            count = recorder.wait_newer(count)
     finally:
         _restore_priority(previous)
     reference_end_s = start_s + (n - 1) * dt_s
@@ -398,3 +418,29 @@ def record(
     finally:
         recorder.stop()
     return recorder.path
+
+
+def residual_vibration(log_path: str | Path, window_s: float = 1.0) -> float:
+    """Residual vibration of a logged move (m/s²): the RMS over ``window_s`` after the servo
+    target came to rest of the accelerometer's deviation from its value at rest.
+
+    The target is at rest from the first sample after which it stays within 1e-7 rad of its
+    final value; the rest value is the accelerometer's mean over the last 0.2 s of the log.
+
+    Raises
+    ------
+    ValueError
+        If the log does not extend ``window_s`` + 0.2 s beyond the move.
+    """
+    from tvist.ident import read_rtde_csv
+
+    record = read_rtde_csv(log_path)
+    t, target, accel = record.t_s, record.target_q, record.tool_accel
+    away = np.flatnonzero(np.max(np.abs(target - target[-1]), axis=1) > 1e-7)
+    t_rest = t[away[-1] + 1] if away.size else t[0]
+    if t[-1] < t_rest + window_s + 0.2:
+        raise ValueError(f"{log_path}: the log ends less than {window_s + 0.2:g} s after the move")
+    rest = accel[t >= t[-1] - 0.2].mean(axis=0)
+    window = (t >= t_rest) & (t < t_rest + window_s)
+    deviation = np.linalg.norm(accel[window] - rest, axis=1)
+    return float(np.sqrt(np.mean(deviation**2)))

@@ -36,7 +36,7 @@ def _shaper(args: argparse.Namespace, n_dof: int):
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from tvist.live import run_shaped_move
+    from tvist.live import residual_vibration, run_shaped_move
     from tvist.shape_command import read_joint_csv
 
     if not (args.unshaped or args.modes or args.map or args.paper_map):
@@ -68,6 +68,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
         f"sent {result.n_commands} servoJ commands over "
         f"{result.stream_end_s - result.stream_start_s:.3f} s; log {result.log_path}"
     )
+    if args.tail >= 1.2:
+        rms = residual_vibration(result.log_path)
+        print(f"residual vibration (accelerometer RMS, 1 s after the move): {rms:.2e} m/s²")
     return 0
 
 

@@ -32,7 +32,8 @@ CONTROLLER_VERSION = (5, 11, 8, 0)
 POLYSCOPE_VERSION = "5.11.8.0"
 #: Publishing is capped at the controller rate (e-Series: 500 Hz).
 MAX_FREQUENCY_HZ = 500.0
-#: FIFO priority of the tick thread where the OS allows it (Linux, privileged).
+#: FIFO priority of the tick thread where the OS allows it (Linux, privileged); the RTDE
+#: readers run just below it.
 TICK_PRIORITY = 20
 #: If the tick thread falls this far behind the wall clock (s), it does not catch up: the
 #: simulated time slips instead of running a burst of ticks (a burst would hand a streaming
@@ -177,9 +178,7 @@ class TwinServer:
     # ------------------------------------------------------------------ tick
 
     def _tick_loop(self) -> None:
-        try:  # the controller's tick is a real-time thread where the OS allows it
-            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(TICK_PRIORITY))
-        except (AttributeError, OSError):
+        if not _realtime(TICK_PRIORITY):
             log.info("the tick runs without real-time priority (not permitted here)")
         dt = self.controller.dt_s
         deadline = time.perf_counter()
@@ -230,6 +229,9 @@ class TwinServer:
     # ------------------------------------------------------------------ RTDE
 
     def _serve_rtde(self, conn: socket.socket, address: str) -> None:
+        # A streaming client's commands must reach the registers within the tick they
+        # arrive in: the RTDE reader is real-time too (just below the tick).
+        _realtime(TICK_PRIORITY - 1)
         session = _RtdeSession(conn, address)
         with self._lock:
             self._sessions.append(session)
@@ -438,6 +440,15 @@ def _split_program(buffer: str) -> tuple[str | None, str]:
         return None, buffer
     line, rest = stripped.split("\n", 1)
     return line, rest
+
+
+def _realtime(priority: int) -> bool:
+    """Put the calling thread under FIFO real-time scheduling; False where not permitted."""
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+    except (AttributeError, OSError):
+        return False
+    return True
 
 
 def _recv_exact(conn: socket.socket, n: int) -> bytes | None:
