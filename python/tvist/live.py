@@ -18,7 +18,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -401,8 +401,11 @@ def record(
     duration_s: float | None = None,
     stop: threading.Event | None = None,
     fields: Sequence[str] = LOG_FIELDS,
+    on_start: Callable[[], object] | None = None,
 ) -> Path:
     """Record RTDE ``fields`` to ``out`` until ``duration_s`` passes, ``stop`` is set or Ctrl-C.
+
+    ``on_start`` is called once the first sample has arrived.
 
     Every data package is written as it arrives (:class:`RtdeRecorder`); stopping closes the
     file after the last one, so an interrupt loses nothing that was received.
@@ -410,6 +413,8 @@ def record(
     stop = stop or threading.Event()
     deadline = None if duration_s is None else time.monotonic() + duration_s
     recorder = RtdeRecorder(robot_ip, out, fields, frequency_hz)
+    if on_start is not None:
+        on_start()
     try:
         while not stop.is_set():
             if deadline is not None and time.monotonic() >= deadline:

@@ -77,11 +77,21 @@ def _cmd_run(args: argparse.Namespace) -> int:
 def _cmd_record(args: argparse.Namespace) -> int:
     from tvist.live import record
 
-    print(f"recording {args.robot_ip} to {args.out}; Ctrl-C stops", flush=True)
+    def started() -> None:
+        print(f"recording {args.robot_ip} to {args.out}; Ctrl-C stops", flush=True)
+
     try:
-        record(args.robot_ip, args.out, frequency_hz=args.frequency, duration_s=args.duration)
+        record(
+            args.robot_ip,
+            args.out,
+            frequency_hz=args.frequency,
+            duration_s=args.duration,
+            on_start=started,
+        )
     except KeyboardInterrupt:
         pass
+    except (OSError, ValueError) as exc:
+        return _error("record", f"{exc} (check --robot-ip)")
     print(f"wrote {args.out}")
     return 0
 
