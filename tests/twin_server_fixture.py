@@ -39,7 +39,7 @@ def check_ports_free() -> None:
 def twin_server(*extra: str) -> Iterator[subprocess.Popen]:
     """A running twin server (5 kg payload); stopped (and checked alive) afterwards."""
     check_ports_free()
-    args = [sys.executable, "-m", "tvist.cli", "twin-server", "--payload-kg", str(PAYLOAD_KG)]
+    args = [sys.executable, "-m", "tvist.urserver", "--payload-kg", str(PAYLOAD_KG)]
     args += ["--payload-com", *(str(v) for v in PAYLOAD_COM_M), *extra]
     proc = subprocess.Popen(
         args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1

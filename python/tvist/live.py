@@ -288,6 +288,8 @@ def run_shaped_move(
     ------
     ValueError
         Malformed ``Q``.
+    ConnectionError
+        No controller (or no free control interface) at ``robot_ip``.
     RuntimeError
         The robot refused a command or the shaper did not settle; the arm was stopped.
     """
@@ -296,7 +298,10 @@ def run_shaped_move(
         raise ValueError("Q must be a finite array (n_samples >= 2, n_dof)")
     rtde_control = _rtde_control()
     path = Path(log_path)
-    control = rtde_control.RTDEControlInterface(robot_ip)
+    try:
+        control = rtde_control.RTDEControlInterface(robot_ip)
+    except RuntimeError as exc:  # ur_rtde reports a failed connection as RuntimeError
+        raise ConnectionError(f"cannot take control of {robot_ip}: {exc}") from exc
     try:
         if not control.moveJ(list(q_ref[0]), APPROACH_SPEED_RAD_S, APPROACH_ACCEL_RAD_S2):
             raise RuntimeError("the robot refused the approach moveJ to the first pose")

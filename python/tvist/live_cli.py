@@ -58,6 +58,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
             gain=args.gain,
             tail_s=args.tail,
         )
+    except ConnectionError as exc:
+        return _error("run", f"{exc} (check --robot-ip)")
     except KeyboardInterrupt:
         print("tvist run: interrupted; the arm was stopped (servoStop, stopScript)")
         return 130

@@ -44,6 +44,12 @@ def add_twin_server_command(sub: argparse._SubParsersAction) -> None:
         "twin-server",
         help="serve the flexible twin on UR's RTDE, dashboard and script ports (for ur_rtde)",
     )
+    add_arguments(p)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """The twin server's options (shared by ``tvist twin-server`` and
+    ``python -m tvist.urserver``)."""
     p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
     p.add_argument("--payload-kg", type=float, default=0.0, help="mounted payload, kg")
     p.add_argument(
@@ -70,3 +76,12 @@ def add_twin_server_command(sub: argparse._SubParsersAction) -> None:
         help="white noise on each accelerometer axis, m/s² (default 0)",
     )
     p.set_defaults(func=_cmd_twin_server)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m tvist.urserver``: the twin server without loading the rest of the CLI."""
+    parser = argparse.ArgumentParser(
+        prog="python -m tvist.urserver", description="Serve the flexible twin on UR's ports."
+    )
+    add_arguments(parser)
+    return _cmd_twin_server(parser.parse_args(argv))
