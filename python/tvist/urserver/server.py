@@ -188,8 +188,8 @@ class TwinServer:
                     values = self.controller.tick()
                 except Exception:  # the tick must survive anything a client commanded
                     log.exception("controller tick failed")
-                    continue
-                sessions = [s for s in self._sessions if s.started]
+                    values = None
+                sessions = [s for s in self._sessions if s.started] if values else []
             for session in sessions:
                 session.phase += session.frequency_hz * dt
                 if session.phase >= 1.0 - 1e-9:
