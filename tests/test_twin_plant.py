@@ -185,3 +185,22 @@ def test_script_port_splits_programs_and_statements() -> None:
     assert _split_program(program + "textmsg(1)\n") == (program, "textmsg(1)\n")
     assert _split_program(program[:-1]) == (None, program[:-1])  # waits for the last newline
     assert _split_program("stopj(2)\nrest") == ("stopj(2)", "rest")
+
+
+def test_server_names_a_taken_port(twin) -> None:
+    """Starting on a taken port fails at once with PortInUse naming it; nothing stays open."""
+    import socket
+
+    from tvist.urserver import PortInUse, ServerPorts, TwinServer
+    from tvist.urserver.controller import TwinController
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen(1)
+        port = taken.getsockname()[1]
+        server = TwinServer(
+            TwinController(twin, Q1), ports=ServerPorts(rtde=0, dashboard=port, script=(0,))
+        )
+        with pytest.raises(PortInUse, match=f"port {port} "):
+            server.start()
+        assert all(s.fileno() == -1 for s in server._listeners)

@@ -288,6 +288,44 @@ def test_run_shaped_move_cuts_residual_vibration(server, twin, tmp_path) -> None
     np.testing.assert_allclose(actual_end, twin.equilibrium(motion.q_end), atol=1e-4)
 
 
+def test_run_interrupted_stops_the_arm(server, tmp_path) -> None:
+    """Ctrl-C during ``tvist run``: servoStop then stopScript; the program ends, the arm
+    comes to rest and the command reports the interruption."""
+    import signal
+
+    receive = rtde_receive.RTDEReceiveInterface(HOST, 500.0, ["target_q", "target_qd"])
+    try:
+        start = np.array(receive.getTargetQ())
+        blend = np.clip(np.arange(0.0, 3.0, 0.002) / 3.0, 0.0, 1.0)
+        move = start + np.outer(blend**2 * (3.0 - 2.0 * blend), [-0.5, 0, 0, 0, 0, 0])
+        path = tmp_path / "move.csv"
+        np.savetxt(path, move, delimiter=",", fmt="%.12f")
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "tvist.cli", "run", str(path), "--robot-ip", HOST]
+            + ["--unshaped", "--log", str(tmp_path / "log.csv")],
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        deadline = time.monotonic() + 60.0
+        while abs(receive.getTargetQd()[0]) < 0.05 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert abs(receive.getTargetQd()[0]) >= 0.05, "the streamed move never started"
+        proc.send_signal(signal.SIGINT)
+        out, _ = proc.communicate(timeout=60)
+        assert proc.returncode == 130 and "interrupted" in out
+        time.sleep(0.5)
+        assert np.all(np.array(receive.getTargetQd()) == 0.0)
+        stopped_at = np.array(receive.getTargetQ())[0]
+        assert move[-1, 0] < stopped_at < start[0]  # stopped on the way
+    finally:
+        receive.disconnect()
+    with socket.create_connection((HOST, 29999), timeout=5) as sock:
+        reader = sock.makefile("rb")
+        reader.readline()
+        sock.sendall(b"running\n")
+        assert reader.readline().strip() == b"Program running: false"
+
+
 def test_record_keeps_every_sample_until_interrupted(server, tmp_path) -> None:
     """``tvist record`` writes every 2 ms sample, a moveJ included, and stops on Ctrl-C."""
     import signal
@@ -320,7 +358,8 @@ def test_record_keeps_every_sample_until_interrupted(server, tmp_path) -> None:
     assert proc.returncode == 0
     record = read_rtde_csv(out)
     np.testing.assert_allclose(np.diff(record.t_s), 0.002, atol=1e-9)
-    assert np.min(record.target_q[:, 0]) == pytest.approx(start[0] - 0.2, abs=1e-12)
+    # The log has ur_rtde's 6 decimals.
+    assert np.min(record.target_q[:, 0]) == pytest.approx(start[0] - 0.2, abs=1e-6)
     assert record.n_samples > 500
 
 
