@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import select
 import socket
 import subprocess
 import sys
@@ -48,6 +49,10 @@ def twin_server(*extra: str) -> Iterator[subprocess.Popen]:
         deadline = time.monotonic() + STARTUP_TIMEOUT_S
         line = ""
         while time.monotonic() < deadline:
+            # Wait for output without blocking past the deadline (a hung server must fail).
+            ready, _, _ = select.select([proc.stdout], [], [], deadline - time.monotonic())
+            if not ready:
+                break
             line = proc.stdout.readline()
             if "twin server ready" in line or not line:
                 break
