@@ -12,8 +12,10 @@ from tvist.ident.cli import (
     add_identify_command,
     add_sensitivity_command,
 )
+from tvist.live_cli import add_record_command, add_run_command
 from tvist.shape_command import METHODS as SHAPING_METHODS
 from tvist.shape_command import add_shape_command
+from tvist.urserver.cli import add_twin_server_command
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
@@ -131,6 +133,11 @@ COMMANDS += [
     ("fit-map", add_fit_map_command),
     ("sensitivity", add_sensitivity_command),
     ("shape", add_shape_command),
+]
+COMMANDS += [
+    ("twin-server", add_twin_server_command),
+    ("run", add_run_command),
+    ("record", add_record_command),
 ]
 
 

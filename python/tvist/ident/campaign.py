@@ -354,6 +354,9 @@ class URRobot:
     def record_excitation(self, excitation: Excitation) -> Record:
         c = self._control
         c.moveJ(list(excitation.q0), 0.5, 0.5)
+        # The receive connection may still be a few packages behind the control connection
+        # that reported the move done: let it catch up so the log starts at rest.
+        time.sleep(0.1)
         path = self._log_dir / f"excitation_{self._count:04d}_joint{excitation.joint}.csv"
         self._count += 1
         self._receive.startFileRecording(str(path), list(RECORDED_FIELDS))

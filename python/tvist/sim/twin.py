@@ -34,6 +34,7 @@ from tvist import robots
 from tvist.sim.flex import FlexParams, default_flex
 from tvist.sim.mjcf import GRAVITY_M_S2, build_mjcf
 from tvist.sim.modal import ModalAnalysis, modal_analysis
+from tvist.sim.plant import FlexIntegrator
 from tvist.sim.record import SimRecord
 
 if TYPE_CHECKING:
@@ -146,12 +147,6 @@ class Twin:
         self._flange = self._model.site("flange").id
         accel = self._model.sensor("accelerometer")
         self._accel_slice = slice(int(accel.adr[0]), int(accel.adr[0]) + 3)
-        self._k1 = np.asarray(self._flex.k1_nm_per_rad, dtype=float)
-        self._k3 = np.asarray(self._flex.k3_nm_per_rad3, dtype=float)
-        self._c0 = np.asarray(self._flex.c0_nms_per_rad, dtype=float)
-        self._c_load = np.asarray(self._flex.c_load_per_nm, dtype=float)
-        self._c_load2 = self._flex.c_load2()
-        self._load_index = self._flex.damper_load_index()
 
     # ------------------------------------------------------------------ properties
 
@@ -195,9 +190,52 @@ class Twin:
         model = self._mujoco.MjModel.from_xml_string(self.mjcf)
         return model, self._mujoco.MjData(model)
 
+    @property
+    def accel_noise_std(self) -> float:
+        """Standard deviation of the accelerometer noise on each axis (m/s²)."""
+        return self._noise_std
+
+    def noise(self, std: float, size: int | tuple[int, ...]) -> np.ndarray:
+        """White noise of standard deviation ``std`` from the twin's own generator."""
+        return self._rng.normal(0.0, std, size=size)
+
+    def _control_period(self, dt_s: float) -> float:
+        """``dt_s`` as a float; ValueError unless a whole multiple of ``physics_dt_s``."""
+        dt = _finite_float(dt_s, "dt_s")
+        n_sub = round(dt / self.physics_dt_s)
+        if n_sub < 1 or abs(n_sub * self.physics_dt_s - dt) > 1e-9 * dt:
+            raise ValueError(
+                f"dt_s = {dt:g} s must be a whole multiple of "
+                f"physics_dt_s = {self.physics_dt_s:g} s"
+            )
+        return dt
+
+    def integrator(self, dt_s: float) -> FlexIntegrator:
+        """The twin's equations of motion, advanced one control period ``dt_s`` (s) at a time.
+
+        Shares the twin's MuJoCo data: one integrator (or run) at a time.
+
+        Raises
+        ------
+        ValueError
+            If ``dt_s`` is not a whole multiple of ``physics_dt_s``.
+        """
+        dt = self._control_period(dt_s)
+        return FlexIntegrator(
+            self._mujoco,
+            self._model,
+            self._data,
+            self._flex,
+            dt,
+            self._flange,
+            self._accel_slice,
+        )
+
     # ------------------------------------------------------------------ statics
 
-    def _check_pose(self, q: np.ndarray, what: str) -> np.ndarray:
+    def check_pose(self, q: np.ndarray, what: str) -> np.ndarray:
+        """``q`` as a float array ``(n_dof,)``; ValueError naming ``what`` if malformed or
+        outside the joint limits."""
         arr = np.asarray(q, dtype=float)
         if arr.shape != (self.n_dof,):
             raise ValueError(f"{what} must have shape ({self.n_dof},), got {arr.shape}")
@@ -243,7 +281,7 @@ class Twin:
 
         Solves ``k1 delta + k3 delta³ = G(q_motor - delta)`` by Newton's method.
         """
-        theta = self._check_pose(np.asarray(q_motor, dtype=float), "q_motor")
+        theta = self.check_pose(np.asarray(q_motor, dtype=float), "q_motor")
         delta = self._flex.deflection_rad(self._gravity_torque(theta))
         for _ in range(50):
             q_link = theta - delta
@@ -273,7 +311,7 @@ class Twin:
         has no first-order term in the load: it is multiplied by a velocity that is zero at
         rest).
         """
-        theta = self._check_pose(np.asarray(q, dtype=float), "q")
+        theta = self.check_pose(np.asarray(q, dtype=float), "q")
         q_link = self.equilibrium(theta)
         delta = theta - q_link
         tau = self._flex.spring_torque_nm(delta)
@@ -386,15 +424,8 @@ class Twin:
         SimulationDiverged
             If the simulation blows up; nothing is returned then.
         """
-        mujoco = self._mujoco
         q_ref = self._check_trajectory(Q_ref)
-        dt = _finite_float(dt_s, "dt_s")
-        n_sub = round(dt / self.physics_dt_s)
-        if n_sub < 1 or abs(n_sub * self.physics_dt_s - dt) > 1e-9 * dt:
-            raise ValueError(
-                f"dt_s = {dt:g} s must be a whole multiple of "
-                f"physics_dt_s = {self.physics_dt_s:g} s"
-            )
+        dt = self._control_period(dt_s)
         self._check_speed(q_ref, dt)
         if noise_seed is not None:
             try:
@@ -412,16 +443,14 @@ class Twin:
                 raise ValueError(f"{what} must be {n} finite values")
             offsets.append(arr)
 
-        model, data = self._model, self._data
         q_start = self.equilibrium(q_ref[0])
-        mujoco.mj_resetData(model, data)
-        data.qpos[:] = q_start + offsets[0]
-        data.qvel[:] = offsets[1]
+        integrator = self.integrator(dt)
+        integrator.reset(q_start + offsets[0], offsets[1])
+        qpos, qvel = integrator.data.qpos, integrator.data.qvel
 
         # Motor reference: linear interpolation within each control period.
         q_next = np.vstack([q_ref[1:], q_ref[-1:]])
         slope = (q_next - q_ref) / dt  # rad/s, motor velocity within period k
-        fractions = np.arange(n_sub) / n_sub
 
         actual_q = np.empty((n_samples, n))
         actual_qd = np.empty((n_samples, n))
@@ -430,91 +459,16 @@ class Twin:
         flange_pos = np.empty((n_samples, 3))
         flange_rot = np.empty((n_samples, 9))
 
-        k1, k3, c0, c_load, c_load2 = self._k1, self._k3, self._c0, self._c_load, self._c_load2
-        quadratic = bool(np.any(c_load2 != 0.0))  # skip the second factor when it is 1
-        load_index = self._load_index
-        qpos, qvel, applied = data.qpos, data.qvel, data.qfrc_applied
-        dof_damping = model.dof_damping
-        site_xpos, site_xmat, sensordata = data.site_xpos, data.site_xmat, data.sensordata
-        step = mujoco.mj_step
-        flange, accel_slice = self._flange, self._accel_slice
-        limit = self._flex.max_deflection_rad
-        smoothing = self._flex.load_smoothing_nm
-        smoothing_sq = smoothing * smoothing
-        bad_qacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
-        theta = np.empty(n)
-        delta = np.empty(n)
-        tau = np.empty(n)
-        damp = np.empty(n)
-        growth = np.empty(n)
-        force = np.empty(n)
-
         bar = _ProgressBar(n_samples, dt) if progress else None
         try:
             for k in range(n_samples):
-                base_ref = q_ref[k]
-                vel_ref = slope[k]
                 actual_q[k] = qpos
                 actual_qd[k] = qvel
-                deflection[k] = base_ref - qpos
-                for s in range(n_sub):
-                    np.multiply(vel_ref, fractions[s] * dt, out=theta)
-                    theta += base_ref
-                    np.subtract(theta, qpos, out=delta)
-                    # tau = k1 delta + k3 delta^3
-                    np.multiply(delta, delta, out=tau)
-                    tau *= k3
-                    tau += k1
-                    tau *= delta
-                    # Gear damping c (q_motor' - q_link') with
-                    # c = c0 (1 + c_load |L|_s) (1 + c_load2 |L|_s) and
-                    # the trapezoidal link velocity (v_n + v_{n+1}) / 2: c (q_motor' - v_n / 2)
-                    # is applied, c / 2 is MuJoCo dof damping, which acts on v_{n+1}. This
-                    # is second-order accurate; fully implicit damping would lower every
-                    # mode frequency by about zeta wn dt / 2.
-                    # Load L = tau[load_index], |L|_s = sqrt(L² + s²) - s: the law of
-                    # FlexParams.damping_nms_per_rad, in place.
-                    # mode="clip" writes straight into damp (mode="raise" would buffer);
-                    # the indices were validated with the FlexParams.
-                    np.take(tau, load_index, out=damp, mode="clip")
-                    damp *= damp
-                    damp += smoothing_sq
-                    np.sqrt(damp, out=damp)
-                    damp -= smoothing
-                    if quadratic:
-                        np.multiply(damp, c_load2, out=growth)
-                        growth += 1.0
-                    damp *= c_load
-                    damp += 1.0
-                    if quadratic:
-                        damp *= growth
-                    damp *= c0
-                    np.multiply(qvel, -0.5, out=force)
-                    force += vel_ref
-                    force *= damp
-                    force += tau
-                    damp *= 0.5
-                    dof_damping[:] = damp
-                    applied[:] = force
-                    step(model, data)
-                    if s == 0:
-                        # mj_step evaluated sensors and kinematics before integrating, so
-                        # these belong to the sample instant t_k.
-                        accel[k] = sensordata[accel_slice]
-                        flange_pos[k] = site_xpos[flange]
-                        flange_rot[k] = site_xmat[flange]
-                if (
-                    data.warning[bad_qacc].number
-                    or not np.all(np.isfinite(qpos))
-                    or not np.all(np.isfinite(qvel))
-                ):
-                    raise SimulationDiverged((k + 1) * dt, "non-finite state")
-                worst = float(np.max(np.abs(q_next[k] - qpos)))
-                if worst > limit:
-                    raise SimulationDiverged(
-                        (k + 1) * dt,
-                        f"gear deflection {worst:.3g} rad exceeds {limit:g} rad",
-                    )
+                deflection[k] = q_ref[k] - qpos
+                integrator.advance(q_ref[k], slope[k], accel[k], flange_pos[k], flange_rot[k])
+                reason = integrator.divergence(q_next[k])
+                if reason is not None:
+                    raise SimulationDiverged((k + 1) * dt, reason)
                 if bar is not None and k % 250 == 0:
                     bar.update(k)
         finally:

@@ -1,0 +1,456 @@
+"""Live moves on a UR through ur_rtde: the shaped 500 Hz servo loop, and RTDE recording.
+
+:func:`run_shaped_move` streams a planned joint trajectory to the robot with ``servoJ`` at the
+controller rate, the shaper in the loop (each period: one reference sample in, one shaped
+sample out, one ``servoJ``), keeps streaming until the shaped reference has settled at the
+end pose, and records the RTDE log meanwhile. Whatever happens (an error, Ctrl-C), it ends
+with ``servoStop`` then ``stopScript``: the arm is never left streaming.
+
+:func:`record` records the RTDE fields identification needs while the robot runs a program
+of the user's (for example an excitation exported with :func:`tvist.ident.to_urscript`).
+
+The servo loop needs ur_rtde (``pip install 'tvist[robot]'``); the recorder reads the RTDE
+stream itself (:class:`RtdeRecorder`). Both work against ``tvist twin-server``.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+log = logging.getLogger("tvist.live")
+
+#: RTDE fields of the logs (what :func:`tvist.ident.read_rtde_csv` reads, plus actual_qd).
+LOG_FIELDS = (
+    "timestamp",
+    "target_q",
+    "target_qd",
+    "target_qdd",
+    "actual_q",
+    "actual_qd",
+    "actual_TCP_pose",
+    "actual_tool_accelerometer",
+)
+#: servoJ's lookahead time (s): UR's minimum. The shaper has already removed the arm's modes
+#: from the reference; a longer lookahead only adds smoothing and lag the shaper does not
+#: account for (and, on the arm's time-varying modes, delays the reference further).
+SERVO_LOOKAHEAD_S = 0.03
+#: servoJ's proportional gain: high enough to follow the shaped reference closely (lag
+#: ~1/gain = 1 ms), below UR's maximum 2000 where a real arm starts to sound rough.
+SERVO_GAIN = 1000.0
+#: Joint deceleration of the final servoStop (rad/s²; the arm is at rest by then).
+STOP_DECEL_RAD_S2 = 2.0
+#: Speed and acceleration of the approach to the trajectory's first pose.
+APPROACH_SPEED_RAD_S = 0.5
+APPROACH_ACCEL_RAD_S2 = 0.5
+#: FIFO priority of the servo loop's thread where the OS allows it (Linux, privileged):
+#: a 500 Hz loop on a busy machine otherwise misses periods.
+REALTIME_PRIORITY = 10
+#: The shaped reference has settled when it is this close to the end pose (rad).
+SETTLED_TOL_RAD = 1e-9
+
+
+def _rtde_control():
+    try:
+        import rtde_control
+    except ImportError as exc:  # pragma: no cover - needs the optional dependency
+        raise ImportError("a robot needs ur_rtde: pip install 'tvist[robot]' (or ur-rtde)") from exc
+    return rtde_control
+
+
+class RtdeRecorder:
+    """Write every RTDE data package of ``fields`` to a CSV, in ur_rtde's log format.
+
+    ur_rtde's ``startFileRecording`` writes the latest received state on a timer of its own,
+    so a late or early wake-up repeats or skips samples; this recorder reads the output
+    stream package by package in a thread and writes each one (comma-separated, 6
+    decimals, vector fields as ``name_0 ..``), so nothing the controller sent is lost.
+
+    Parameters
+    ----------
+    host
+        Robot (or twin server) address.
+    path
+        CSV to write.
+    fields
+        RTDE output variables (scalars or vectors of doubles).
+    frequency_hz
+        Output rate asked of the controller (e-Series: up to 500 Hz).
+    port
+        RTDE port.
+
+    Raises
+    ------
+    ValueError
+        If the controller does not know one of the fields (naming it) or refuses the rate.
+    OSError
+        If the controller cannot be reached.
+    """
+
+    def __init__(
+        self,
+        host: str,
+        path: str | Path,
+        fields: Sequence[str] = LOG_FIELDS,
+        frequency_hz: float = 500.0,
+        port: int = 30004,
+    ) -> None:
+        import socket
+        import struct
+
+        from tvist.urserver import rtde
+
+        self._rtde = rtde
+        self.path = Path(path)
+        self.latest: dict = {}
+        self.n_samples = 0
+        self._new_sample = threading.Condition()
+        self._stop = threading.Event()
+        self._sock = socket.create_connection((host, port), timeout=5.0)
+        self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self._buffer = b""
+        reply = self._request(rtde.REQUEST_PROTOCOL_VERSION, struct.pack(">H", 2))
+        if reply[:1] != b"\x01":
+            raise ValueError(f"{host}: the controller refused RTDE protocol version 2")
+        names = ",".join(fields).encode()
+        reply = self._request(
+            rtde.CONTROL_PACKAGE_SETUP_OUTPUTS, struct.pack(">d", frequency_hz) + names
+        )
+        types = reply[1:].decode().split(",")
+        unknown = [f for f, t in zip(fields, types, strict=False) if t == "NOT_FOUND"]
+        if unknown or reply[0] == 0:
+            raise ValueError(
+                f"{host}: the controller does not provide {', '.join(unknown) or 'these fields'}"
+                f" at {frequency_hz:g} Hz"
+            )
+        self._recipe = rtde.Recipe(reply[0], list(fields), types)
+        self._columns = []
+        for name, kind in zip(fields, types, strict=True):
+            width = rtde.TYPE_WIDTHS.get(kind, 0)
+            self._columns += [name] if width == 0 else [f"{name}_{i}" for i in range(width)]
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._file = self.path.open("w")
+        self._file.write(",".join(self._columns) + "\n")
+        if self._request(rtde.CONTROL_PACKAGE_START, b"")[:1] != b"\x01":
+            raise ValueError(f"{host}: the controller refused to start the output stream")
+        self._first = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="rtde-recorder", daemon=True)
+        self._thread.start()
+        if not self._first.wait(5.0):
+            raise OSError(f"{host}: no RTDE data within 5 s")
+
+    def _read_package(self) -> tuple[int, bytes]:
+        header = self._rtde.HEADER
+        while True:
+            if len(self._buffer) >= header.size:
+                size, kind = header.unpack_from(self._buffer)
+                if size < header.size:
+                    raise OSError("malformed RTDE package from the controller")
+                if len(self._buffer) >= size:
+                    payload = self._buffer[header.size : size]
+                    self._buffer = self._buffer[size:]
+                    return kind, payload
+            chunk = self._sock.recv(65536)
+            if not chunk:
+                raise OSError("the controller closed the RTDE connection")
+            self._buffer += chunk
+
+    def _request(self, kind: int, payload: bytes) -> bytes:
+        self._sock.sendall(self._rtde.package(kind, payload))
+        while True:
+            got, reply = self._read_package()
+            if got == kind:
+                return reply
+
+    def wait_newer(self, n_samples: int, timeout_s: float = 1.0) -> int:
+        """Block until more than ``n_samples`` packages have arrived; the new count.
+
+        Raises
+        ------
+        TimeoutError
+            If none arrives within ``timeout_s``.
+        """
+        with self._new_sample:
+            if not self._new_sample.wait_for(lambda: self.n_samples > n_samples, timeout_s):
+                raise TimeoutError(f"no RTDE data package within {timeout_s:g} s")
+            return self.n_samples
+
+    def _run(self) -> None:
+        data_kind = self._rtde.DATA_PACKAGE
+        # Real-time where allowed: a client clocked by these packages must see them on time.
+        _realtime_priority()  # nothing to restore: the thread ends with the recording
+        try:
+            while not self._stop.is_set():
+                kind, payload = self._read_package()
+                if kind != data_kind or payload[:1] != bytes([self._recipe.recipe_id]):
+                    continue
+                values = self._recipe.unpack(payload)
+                row = []
+                for name in self._recipe.names:
+                    value = values[name]
+                    row.extend(value if isinstance(value, list) else [value])
+                self._file.write(",".join(f"{float(v):.6f}" for v in row) + "\n")
+                with self._new_sample:
+                    self.latest = values
+                    self.n_samples += 1
+                    self._new_sample.notify_all()
+                self._first.set()
+        except OSError:
+            if not self._stop.is_set():
+                log.error("RTDE recording ended: the connection was lost")
+
+    def stop(self) -> Path:
+        """Stop reading, close the connection and the file; the file's path."""
+        self._stop.set()
+        try:
+            self._sock.shutdown(2)
+        except OSError:
+            pass
+        self._thread.join(timeout=5.0)
+        self._sock.close()
+        self._file.close()
+        return self.path
+
+    def __enter__(self) -> RtdeRecorder:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
+
+
+@dataclass(frozen=True)
+class LiveRun:
+    """What :func:`run_shaped_move` did.
+
+    Attributes
+    ----------
+    log_path
+        The RTDE log (ur_rtde's CSV format).
+    stream_start_s, stream_end_s
+        Controller timestamps (s, the log's ``timestamp``) of the first and the last servoJ.
+    n_commands
+        servoJ commands sent (one per period).
+    reference_end_s
+        Controller time at which the unshaped reference ended (s).
+    final_q
+        Joint angles read at the end (rad), ``(n_dof,)``.
+    """
+
+    log_path: Path
+    stream_start_s: float
+    stream_end_s: float
+    n_commands: int
+    reference_end_s: float
+    final_q: np.ndarray
+
+
+def run_shaped_move(
+    robot_ip: str,
+    Q: np.ndarray,  # noqa: N803 (the paper's Q)
+    log_path: str | Path,
+    *,
+    shaper=None,
+    dt_s: float = 0.002,
+    lookahead_s: float = SERVO_LOOKAHEAD_S,
+    gain: float = SERVO_GAIN,
+    tail_s: float = 2.0,
+    max_settle_s: float = 5.0,
+) -> LiveRun:
+    """Run the joint trajectory ``Q`` on the robot with ``servoJ``, shaped live.
+
+    Parameters
+    ----------
+    robot_ip
+        Robot (or twin server) address.
+    Q
+        Joint reference (rad), one row per control period, ``(n_samples, n_dof)``.
+    log_path
+        Where to write the RTDE log (the approach move is not in it).
+    shaper
+        A :class:`tvist.TvShaper` (reset to ``Q[0]`` here) or ``None`` to stream ``Q`` as is.
+    dt_s
+        Control period (s): the controller's (0.002 on e-Series).
+    lookahead_s, gain
+        servoJ's lookahead time (s) and gain; see :data:`SERVO_LOOKAHEAD_S`, :data:`SERVO_GAIN`.
+    tail_s
+        Recording after the last command (s): the arm holds the end pose meanwhile.
+    max_settle_s
+        Give up (``RuntimeError``) if the shaped reference has not settled this long after
+        the reference's end.
+
+    Raises
+    ------
+    ValueError
+        Malformed ``Q``.
+    ConnectionError
+        No controller (or no free control interface) at ``robot_ip``.
+    RuntimeError
+        The robot refused a command or the shaper did not settle; the arm was stopped.
+    """
+    q_ref = np.asarray(Q, dtype=float)
+    if q_ref.ndim != 2 or q_ref.shape[0] < 2 or not np.all(np.isfinite(q_ref)):
+        raise ValueError("Q must be a finite array (n_samples >= 2, n_dof)")
+    rtde_control = _rtde_control()
+    path = Path(log_path)
+    try:
+        control = rtde_control.RTDEControlInterface(robot_ip)
+    except RuntimeError as exc:  # ur_rtde reports a failed connection as RuntimeError
+        raise ConnectionError(f"cannot take control of {robot_ip}: {exc}") from exc
+    try:
+        if not control.moveJ(list(q_ref[0]), APPROACH_SPEED_RAD_S, APPROACH_ACCEL_RAD_S2):
+            raise RuntimeError("the robot refused the approach moveJ to the first pose")
+        time.sleep(0.5)  # let the approach's vibration pass before the log starts
+        if shaper is not None:
+            shaper.reset(q_ref[0].copy())
+        with RtdeRecorder(robot_ip, path, LOG_FIELDS, 1.0 / dt_s) as recorder:
+            run = _stream(control, recorder, q_ref, shaper, dt_s, lookahead_s, gain, max_settle_s)
+            time.sleep(tail_s)
+            final_q = np.array(recorder.latest["actual_q"])
+    finally:
+        safe_stop(control)
+    return LiveRun(path, *run, final_q)
+
+
+def _stream(control, recorder, q_ref, shaper, dt_s, lookahead_s, gain, max_settle_s):
+    """The servo loop; ``(start_s, end_s, n_commands, reference_end_s)`` (controller time).
+
+    The loop is clocked by the controller: it waits for each RTDE data package (one per
+    controller tick), then sends the sample due at that package's timestamp, so every
+    command reaches the controller early in the tick it is meant for. If the loop wakes late
+    it steps the shaper over the missed samples and sends the one due now: the move is never
+    stretched in time.
+    """
+    n = q_ref.shape[0]
+    end = q_ref[-1]
+    limit = n + int(np.ceil(max_settle_s / dt_s))
+    previous = _realtime_priority()
+    try:
+        count = recorder.wait_newer(recorder.n_samples)
+        start_s = float(recorder.latest["timestamp"])
+        k = -1  # last sample stepped through the shaper
+        sent = 0
+        while True:
+            now_s = float(recorder.latest["timestamp"])
+            due = max(k + 1, int(round((now_s - start_s) / dt_s)))
+            while k < due:
+                k += 1
+                row = q_ref[min(k, n - 1)]
+                # ur_rtde takes lists; TvShaper.step takes a float64 array.
+                q = row if shaper is None else shaper.step(row)
+            if not control.servoJ([float(v) for v in q], 0.0, 0.0, dt_s, lookahead_s, gain):
+                raise RuntimeError(f"the robot refused servoJ at period {k}")
+            sent += 1
+            if k >= n - 1 and float(np.max(np.abs(q - end))) <= SETTLED_TOL_RAD:
+                break
+            if k >= limit:
+                raise RuntimeError(
+                    f"the shaped reference has not settled {max_settle_s:g} s after the move's end"
+                )
+            count = recorder.wait_newer(count)
+    finally:
+        _restore_priority(previous)
+    reference_end_s = start_s + (n - 1) * dt_s
+    return start_s, float(recorder.latest["timestamp"]), sent, reference_end_s
+
+
+def _realtime_priority():
+    """Raise this thread to real-time FIFO scheduling if allowed; the policy to restore."""
+    import os
+
+    try:
+        previous = (os.sched_getscheduler(0), os.sched_getparam(0))
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(REALTIME_PRIORITY))
+        return previous
+    except (AttributeError, OSError):  # not Linux, or not permitted: run as a normal thread
+        return None
+
+
+def _restore_priority(previous) -> None:
+    import os
+
+    if previous is not None:
+        try:
+            os.sched_setscheduler(0, previous[0], previous[1])
+        except OSError:
+            log.warning("could not restore the thread's scheduling policy")
+
+
+def safe_stop(control) -> None:
+    """``servoStop`` then ``stopScript``, each attempted even if the other fails."""
+    try:
+        control.servoStop(STOP_DECEL_RAD_S2)
+    except Exception:  # the connection may be gone: still try to end the script
+        log.exception("servoStop failed")
+    finally:
+        try:
+            control.stopScript()
+        except Exception:
+            log.exception("stopScript failed")
+        try:
+            control.disconnect()
+        except Exception:
+            log.exception("disconnect failed")
+
+
+def record(
+    robot_ip: str,
+    out: str | Path,
+    *,
+    frequency_hz: float = 500.0,
+    duration_s: float | None = None,
+    stop: threading.Event | None = None,
+    fields: Sequence[str] = LOG_FIELDS,
+    on_start: Callable[[], object] | None = None,
+) -> Path:
+    """Record RTDE ``fields`` to ``out`` until ``duration_s`` passes, ``stop`` is set or Ctrl-C.
+
+    ``on_start`` is called once the first sample has arrived.
+
+    Every data package is written as it arrives (:class:`RtdeRecorder`); stopping closes the
+    file after the last one, so an interrupt loses nothing that was received.
+    """
+    stop = stop or threading.Event()
+    deadline = None if duration_s is None else time.monotonic() + duration_s
+    recorder = RtdeRecorder(robot_ip, out, fields, frequency_hz)
+    if on_start is not None:
+        on_start()
+    try:
+        while not stop.is_set():
+            if deadline is not None and time.monotonic() >= deadline:
+                break
+            stop.wait(0.05)
+    finally:
+        recorder.stop()
+    return recorder.path
+
+
+def residual_vibration(log_path: str | Path, window_s: float = 1.0) -> float:
+    """Residual vibration of a logged move (m/s²): the RMS over ``window_s`` after the servo
+    target came to rest of the accelerometer's deviation from its value at rest.
+
+    The target is at rest from the first sample after which it stays within 1e-7 rad of its
+    final value; the rest value is the accelerometer's mean over the last 0.2 s of the log.
+
+    Raises
+    ------
+    ValueError
+        If the log does not extend ``window_s`` + 0.2 s beyond the move.
+    """
+    from tvist.ident import read_rtde_csv
+
+    record = read_rtde_csv(log_path)
+    t, target, accel = record.t_s, record.target_q, record.tool_accel
+    away = np.flatnonzero(np.max(np.abs(target - target[-1]), axis=1) > 1e-7)
+    t_rest = t[away[-1] + 1] if away.size else t[0]
+    if t[-1] < t_rest + window_s + 0.2:
+        raise ValueError(f"{log_path}: the log ends less than {window_s + 0.2:g} s after the move")
+    rest = accel[t >= t[-1] - 0.2].mean(axis=0)
+    window = (t >= t_rest) & (t < t_rest + window_s)
+    deviation = np.linalg.norm(accel[window] - rest, axis=1)
+    return float(np.sqrt(np.mean(deviation**2)))

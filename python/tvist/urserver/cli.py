@@ -1,0 +1,87 @@
+"""``tvist twin-server``: serve the flexible twin on UR's ports."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+
+
+def _cmd_twin_server(args: argparse.Namespace) -> int:
+    from tvist.urserver import PortInUse, start_twin_server
+
+    logging.basicConfig(level=logging.INFO, format="twin-server: %(levelname)s: %(message)s")
+    # Client threads hand the interpreter to the 2 ms tick quickly (default 5 ms).
+    sys.setswitchinterval(0.0005)
+    try:
+        server = start_twin_server(
+            args.robot,
+            args.payload_kg,
+            args.payload_com,
+            host=args.host,
+            q0=args.q0,
+            accel_noise_std=args.accel_noise,
+        )
+    except PortInUse as exc:
+        print(f"tvist twin-server: error: {exc}", file=sys.stderr)
+        return 2
+    except ValueError as exc:
+        print(f"tvist twin-server: error: {exc}", file=sys.stderr)
+        return 2
+    ports = ", ".join(str(p) for p in server.ports.all())
+    print(f"twin server ready on {args.host}: ports {ports} (Ctrl-C stops it)", flush=True)
+    try:
+        server.serve_forever()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.close()
+    return 0
+
+
+def add_twin_server_command(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "twin-server",
+        help="serve the flexible twin on UR's RTDE, dashboard and script ports (for ur_rtde)",
+    )
+    add_arguments(p)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """The twin server's options (shared by ``tvist twin-server`` and
+    ``python -m tvist.urserver``)."""
+    p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
+    p.add_argument("--payload-kg", type=float, default=0.0, help="mounted payload, kg")
+    p.add_argument(
+        "--payload-com",
+        type=float,
+        nargs=3,
+        default=(0.0, 0.0, 0.0),
+        metavar=("X", "Y", "Z"),
+        help="payload centre of mass in the flange frame, m",
+    )
+    p.add_argument("--host", default="127.0.0.1", help="address to listen on")
+    p.add_argument(
+        "--q0",
+        type=float,
+        nargs=6,
+        default=None,
+        metavar="Q",
+        help="initial joint angles, rad (default the stretched pose Q1)",
+    )
+    p.add_argument(
+        "--accel-noise",
+        type=float,
+        default=0.0,
+        help="white noise on each accelerometer axis, m/s² (default 0)",
+    )
+    p.set_defaults(func=_cmd_twin_server)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m tvist.urserver``: the twin server without loading the rest of the CLI."""
+    parser = argparse.ArgumentParser(
+        prog="python -m tvist.urserver", description="Serve the flexible twin on UR's ports."
+    )
+    add_arguments(parser)
+    return _cmd_twin_server(parser.parse_args(argv))

@@ -1,0 +1,226 @@
+"""The twin's controller: the 2 ms tick that runs the program, the motion and the arm.
+
+Each :meth:`TwinController.tick` runs one pass of the loaded program (ur_rtde's control
+script), advances the joint motion by one tick, moves the twin's motors to the new target over
+the tick (:class:`tvist.sim.plant.TwinPlant`) and returns the RTDE output values measured at
+the tick's start. Not thread-safe: the server calls it under its lock.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+
+import numpy as np
+
+from tvist.sim import SimulationDiverged, Twin
+from tvist.sim.plant import TwinPlant
+from tvist.urserver import rtde
+from tvist.urserver.control_script import (
+    ControlScript,
+    Registers,
+    is_control_script,
+    register_offsets,
+)
+from tvist.urserver.motion import JointMotion, SafetyViolation
+
+log = logging.getLogger("tvist.urserver")
+
+#: RTDE ``runtime_state`` values.
+RUNTIME_STOPPED = 1
+RUNTIME_PLAYING = 2
+#: ``robot_mode`` RUNNING, ``joint_mode`` RUNNING, ``safety_mode`` NORMAL / PROTECTIVE_STOP.
+ROBOT_MODE_RUNNING = 7
+JOINT_MODE_RUNNING = 253
+SAFETY_MODE_NORMAL = 1
+SAFETY_MODE_PROTECTIVE_STOP = 3
+#: ``robot_status_bits``: bit 0 power on, bit 1 program running.
+STATUS_POWER_ON = 1
+STATUS_PROGRAM_RUNNING = 2
+#: ``safety_status_bits``: bit 0 normal mode, bit 2 protective stopped.
+SAFETY_BIT_NORMAL = 1
+SAFETY_BIT_PROTECTIVE_STOPPED = 4
+#: Deceleration when a program stops while the arm moves (rad/s²).
+PROGRAM_STOP_DECEL_RAD_S2 = 4.0
+
+
+class TwinController:
+    """The simulated controller of a UR e-Series arm.
+
+    Parameters
+    ----------
+    twin
+        The flexible twin (robot and physical payload).
+    q0
+        Initial joint angles (rad).
+    dt_s
+        Controller tick (s), 0.002 on e-Series.
+    """
+
+    def __init__(self, twin: Twin, q0, dt_s: float = 0.002) -> None:
+        self.twin = twin
+        self.dt_s = float(dt_s)
+        self.plant = TwinPlant(twin, q0, self.dt_s)
+        params = twin.params
+        self.motion = JointMotion(
+            self.plant.q_motor, self.dt_s, params.max_velocity_rad_s, params.joint_limits_rad
+        )
+        self.registers = Registers.zeros(rtde.N_REGISTERS)
+        self.script: ControlScript | None = None
+        self.program_name = ""
+        self.protective_stop = False
+        self.payload_kg = float(twin.payload.mass_kg)
+        self.payload_cog_m = [float(v) for v in twin.payload.com_m]
+        self.last_error: str | None = None
+        self._execution_ms = 0.0
+        self._q_prev = self.plant.q_motor
+        self._started = time.monotonic()
+
+    # ------------------------------------------------------------------ programs
+
+    @property
+    def program_running(self) -> bool:
+        return self.script is not None and self.script.running
+
+    def load_program(self, program: str) -> str | None:
+        """Run a URScript program received on a script port; an error message if refused.
+
+        A program replaces the running one, as on a UR.
+        """
+        self.stop_program()
+        if self.protective_stop:
+            return "the robot is protective-stopped: unlock it first (dashboard)"
+        if not is_control_script(program):
+            first = program.strip().splitlines()[0] if program.strip() else ""
+            return (
+                f"program {first[:60]!r} not run: the twin runs ur_rtde's control script "
+                "(RTDEControlInterface), not arbitrary URScript"
+            )
+        int_offset, float_offset = register_offsets(program)
+        self.script = ControlScript(
+            self.registers, self.motion, int_offset, float_offset, self._set_payload
+        )
+        self.program_name = "rtde_control"
+        log.info("control script started (register offsets %d/%d)", int_offset, float_offset)
+        return None
+
+    def stop_program(self) -> None:
+        """Stop the running program (dashboard ``stop``): the arm decelerates to rest."""
+        if self.script is not None and self.script.running:
+            self.script.running = False
+        self._on_program_end()
+
+    def _on_program_end(self) -> None:
+        if self.script is not None and self.script.error:
+            self.last_error = self.script.error
+        if self.motion.mode not in ("hold", "stop"):
+            self.motion.stop(PROGRAM_STOP_DECEL_RAD_S2)
+
+    def unlock_protective_stop(self) -> bool:
+        """Clear a protective stop; False if there is none."""
+        if not self.protective_stop:
+            return False
+        self.protective_stop = False
+        return True
+
+    def _set_payload(self, mass_kg: float, cog_m: list[float] | None) -> None:
+        # A controller's set_payload declares the payload; the physical one is the twin's.
+        self.payload_kg = float(mass_kg)
+        if cog_m is not None:
+            self.payload_cog_m = [float(v) for v in cog_m]
+
+    # ------------------------------------------------------------------ tick
+
+    def tick(self) -> dict:
+        """Advance one controller tick; the RTDE output values at the tick's start."""
+        t0 = time.perf_counter()
+        script = self.script
+        if script is not None and script.running:
+            try:
+                script.tick()
+            except SafetyViolation as exc:
+                self._protective_stop(str(exc))
+            if not script.running:
+                self._on_program_end()
+        q_start = self.motion.q.copy()
+        qd_start, qdd_start = self.motion.qd.copy(), self.motion.qdd.copy()
+        try:
+            q_next = self.motion.advance()
+        except SafetyViolation as exc:
+            self._protective_stop(str(exc))
+            q_next = self.motion.q.copy()
+        try:
+            sample = self.plant.step(q_next)
+        except SimulationDiverged as exc:  # pragma: no cover - needs an impossible motion
+            log.error("%s: the twin restarts at rest", exc)
+            self.plant = TwinPlant(self.twin, q_start, self.dt_s)
+            self.motion.hold()
+            self._protective_stop(str(exc))
+            sample = self.plant.step(q_start)
+        values = self._outputs(sample, q_start, qd_start, qdd_start)
+        self._execution_ms = (time.perf_counter() - t0) * 1e3
+        return values
+
+    def _protective_stop(self, reason: str) -> None:
+        log.error("protective stop: %s", reason)
+        self.protective_stop = True
+        self.last_error = reason
+        if self.script is not None and self.script.running:
+            self.script.fail(reason)
+        self.motion.hold()
+
+    def _outputs(self, sample, q, qd, qdd) -> dict:
+        regs = self.registers
+        running = self.program_running
+        nan6 = [math.nan] * 6
+        values = {
+            "timestamp": sample.time_s,
+            "target_q": q.tolist(),
+            "target_qd": qd.tolist(),
+            "target_qdd": qdd.tolist(),
+            "actual_q": sample.q_link.tolist(),
+            "actual_qd": sample.qd_link.tolist(),
+            "actual_TCP_pose": sample.flange_pose.tolist(),
+            "actual_tool_accelerometer": sample.accelerometer.tolist(),
+            "actual_execution_time": self._execution_ms,
+            "robot_mode": ROBOT_MODE_RUNNING,
+            "joint_mode": [JOINT_MODE_RUNNING] * 6,
+            "safety_mode": SAFETY_MODE_PROTECTIVE_STOP
+            if self.protective_stop
+            else SAFETY_MODE_NORMAL,
+            "speed_scaling": 1.0,
+            "target_speed_fraction": 1.0,
+            "actual_digital_input_bits": 0,
+            "actual_digital_output_bits": 0,
+            "standard_analog_output0": 0.0,
+            "standard_analog_output1": 0.0,
+            "runtime_state": RUNTIME_PLAYING if running else RUNTIME_STOPPED,
+            "robot_status_bits": STATUS_POWER_ON | (STATUS_PROGRAM_RUNNING if running else 0),
+            "safety_status_bits": SAFETY_BIT_PROTECTIVE_STOPPED
+            if self.protective_stop
+            else SAFETY_BIT_NORMAL,
+            "payload": self.payload_kg,
+            "payload_cog": list(self.payload_cog_m),
+            "payload_inertia": [0.0] * 6,
+            "output_bit_registers0_to_31": 0,
+            "output_bit_registers32_to_63": 0,
+            "input_bit_registers0_to_31": 0,
+            "input_bit_registers32_to_63": 0,
+        }
+        values["safety_status"] = values["safety_mode"]
+        for name in rtde.UNMEASURED_OUTPUTS:
+            values[name] = nan6 if rtde.OUTPUTS[name] == "VECTOR6D" else math.nan
+        for i in range(rtde.N_REGISTERS):
+            values[f"output_int_register_{i}"] = regs.out_int[i]
+            values[f"output_double_register_{i}"] = regs.out_double[i]
+            values[f"input_int_register_{i}"] = regs.in_int[i]
+            values[f"input_double_register_{i}"] = regs.in_double[i]
+        return values
+
+
+def initial_pose(twin: Twin) -> np.ndarray:
+    """The pose the twin starts in: the paper's stretched pose Q1 (arm horizontal)."""
+    from tvist.trajectory import PAPER_POSES
+
+    return np.array(PAPER_POSES["Q1"], dtype=float)

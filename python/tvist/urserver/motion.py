@@ -1,0 +1,248 @@
+"""The controller's joint motion: what the servo is told to do, one 2 ms tick at a time.
+
+The motion owns the joint target ``q`` (rad) that the motors follow (the twin's motor side
+follows it exactly, see :mod:`tvist.sim.plant`), with its velocity ``qd`` (rad/s) and
+acceleration ``qdd`` (rad/s²). Modes, as URScript's functions:
+
+- ``movej(q, a, v)``: a trapezoidal speed profile in joint space, all joints starting and
+  arriving together; the joint with the longest way moves at most at speed ``v`` and
+  acceleration ``a`` (a triangle when the way is too short to reach ``v``).
+- ``servoj(q, t, lookahead_time, gain)``: the target moves linearly to ``q`` within ``t``;
+  the servo reference follows it through a first-order low-pass of time constant
+  ``lookahead_time`` (the smoothing: a longer lookahead is smoother and lags more), and the
+  joint target follows the reference with the proportional gain ``gain`` (1/s, i.e. a second
+  first-order lag of time constant ``1/gain``). Both lags are discretized exactly (zero-order
+  hold), so every gain in UR's range 100-2000 is stable at 2 ms. When servoj commands stop
+  arriving, the target stays at the last one: the arm holds.
+- ``speedj(qd, a)``: every joint speed ramps to ``qd`` at acceleration ``a`` and keeps it.
+- ``stopj(a)``: all joints decelerate together (the fastest at ``a``) and stop.
+
+Every mode clips the joint speed to the robot's limits; a target outside the joint limits
+raises :class:`SafetyViolation` (a UR protective-stops).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+class SafetyViolation(RuntimeError):
+    """A commanded motion would leave the joint limits (the controller protective-stops)."""
+
+
+def trapezoid_duration(distance: float, v_max: float, a_max: float) -> tuple[float, float]:
+    """``(duration_s, cruise_speed)`` of a rest-to-rest trapezoidal profile over ``distance``."""
+    if distance <= 0.0:
+        return 0.0, 0.0
+    v = min(v_max, math.sqrt(distance * a_max))  # triangle if v_max is not reached
+    return distance / v + v / a_max, v
+
+
+class JointMotion:
+    """Joint target generator of the twin's controller.
+
+    Parameters
+    ----------
+    q0
+        Initial joint target (rad), ``(n_dof,)``.
+    dt_s
+        Controller tick (s).
+    max_speed_rad_s
+        Joint speed limits (rad/s), ``(n_dof,)``.
+    joint_limits_rad
+        ``(n_dof, 2)`` lower and upper joint limits (rad).
+    """
+
+    def __init__(
+        self,
+        q0: np.ndarray,
+        dt_s: float,
+        max_speed_rad_s: np.ndarray,
+        joint_limits_rad: np.ndarray,
+    ) -> None:
+        self.dt_s = float(dt_s)
+        self.q = np.array(q0, dtype=float)
+        self.qd = np.zeros_like(self.q)
+        self.qdd = np.zeros_like(self.q)
+        self._max_speed = np.asarray(max_speed_rad_s, dtype=float)
+        self._limits = np.asarray(joint_limits_rad, dtype=float)
+        self.mode = "hold"
+        # movej
+        self._move_from = self.q.copy()
+        self._move_to = self.q.copy()
+        self._move_t = 0.0
+        self._move_duration = 0.0
+        self._move_speed = 0.0
+        self._move_accel = 0.0
+        # servoj: target ramp, low-passed reference
+        self._servo_from = self.q.copy()
+        self._servo_to = self.q.copy()
+        self._servo_ramp_s = self.dt_s
+        self._servo_elapsed = 0.0
+        self._servo_ref = self.q.copy()
+        self._lookahead_s = 0.1
+        self._gain = 300.0
+        # speedj / stop
+        self._speed_target = np.zeros_like(self.q)
+        self._vel = np.zeros_like(self.q)  # speed state of speedj / stop (rad/s)
+        self._accel = 1.0
+
+    @property
+    def moving(self) -> bool:
+        """Whether a movej is under way or the joint target is still moving or decelerating
+        (a move has ended once the target stands still with zero acceleration)."""
+        return self.mode == "movej" or bool(np.any(self.qd != 0.0) or np.any(self.qdd != 0.0))
+
+    # ----------------------------------------------------------------- commands
+
+    def _check_target(self, q: np.ndarray, what: str) -> np.ndarray:
+        arr = np.asarray(q, dtype=float)
+        if arr.shape != self.q.shape or not np.all(np.isfinite(arr)):
+            raise SafetyViolation(f"{what}: target must be {self.q.size} finite joint angles")
+        lower, upper = self._limits.T
+        bad = np.flatnonzero((arr < lower) | (arr > upper))
+        if bad.size:
+            j = int(bad[0])
+            raise SafetyViolation(
+                f"{what}: joint {j} target {arr[j]:.4f} rad is outside its limits"
+            )
+        return arr
+
+    def movej(self, q, speed_rad_s: float, accel_rad_s2: float) -> None:
+        """Start a movej from the current target (a UR blends nothing here: from rest or not,
+        the profile starts at the current target)."""
+        target = self._check_target(q, "movej")
+        if not (speed_rad_s > 0.0 and accel_rad_s2 > 0.0):
+            raise SafetyViolation("movej: speed and acceleration must be > 0")
+        self._move_from = self.q.copy()
+        self._move_to = target
+        distance = float(np.max(np.abs(target - self.q)))
+        self._move_duration, self._move_speed = trapezoid_duration(
+            distance, speed_rad_s, accel_rad_s2
+        )
+        self._move_accel = accel_rad_s2
+        self._move_distance = distance
+        self._move_t = 0.0
+        self.mode = "movej"
+
+    def servoj(self, q, time_s: float, lookahead_s: float, gain: float) -> None:
+        """New servo target ``q`` (rad), reached by the target ramp within ``time_s``."""
+        target = self._check_target(q, "servoj")
+        if self.mode != "servoj":
+            self._servo_ref = self.q.copy()
+            self._servo_to = self.q.copy()
+        ramp_now = self._servo_ramp_value()
+        self._servo_from = ramp_now
+        self._servo_to = target
+        self._servo_ramp_s = max(float(time_s), self.dt_s)
+        self._servo_elapsed = 0.0
+        self._lookahead_s = min(max(float(lookahead_s), 0.03), 0.2)
+        self._gain = min(max(float(gain), 100.0), 2000.0)
+        self.mode = "servoj"
+
+    def speedj(self, qd, accel_rad_s2: float) -> None:
+        """Ramp every joint speed to ``qd`` (rad/s) at ``accel_rad_s2`` and keep it."""
+        target = np.asarray(qd, dtype=float)
+        if target.shape != self.q.shape or not np.all(np.isfinite(target)):
+            raise SafetyViolation(f"speedj: speeds must be {self.q.size} finite values")
+        if self.mode not in ("speedj", "stop"):
+            self._vel = self.qd.copy()
+        self._speed_target = np.clip(target, -self._max_speed, self._max_speed)
+        self._accel = max(float(accel_rad_s2), 1e-6)
+        self.mode = "speedj"
+
+    def stop(self, accel_rad_s2: float) -> None:
+        """Decelerate all joints together to rest (the fastest at ``accel_rad_s2``)."""
+        if self.mode not in ("speedj", "stop"):
+            self._vel = self.qd.copy()  # stop from the target's current speed
+        self._speed_target = np.zeros_like(self.q)
+        self._accel = max(float(accel_rad_s2), 1e-6)
+        self.mode = "stop"
+
+    def hold(self) -> None:
+        """Stand still at the current target (only from rest; otherwise use :meth:`stop`)."""
+        self.qd[:] = 0.0
+        self.qdd[:] = 0.0
+        self.mode = "hold"
+
+    # ----------------------------------------------------------------- tick
+
+    def _servo_ramp_value(self) -> np.ndarray:
+        frac = min(self._servo_elapsed / self._servo_ramp_s, 1.0)
+        return self._servo_from + frac * (self._servo_to - self._servo_from)
+
+    def advance(self) -> np.ndarray:
+        """Advance one tick; the new joint target (rad), a copy.
+
+        Raises
+        ------
+        SafetyViolation
+            If the target would leave the joint limits.
+        """
+        dt = self.dt_s
+        q_old = self.q.copy()
+        qd_old = self.qd.copy()
+        if self.mode == "movej":
+            self._move_t = min(self._move_t + dt, self._move_duration)
+            self.q = self._move_from + self._movej_fraction(self._move_t) * (
+                self._move_to - self._move_from
+            )
+            if self._move_t >= self._move_duration:
+                self.q = self._move_to.copy()
+                self.mode = "hold"
+        elif self.mode == "servoj":
+            self._servo_elapsed += dt
+            ramp = self._servo_ramp_value()
+            alpha_ref = 1.0 - math.exp(-dt / self._lookahead_s)
+            self._servo_ref += alpha_ref * (ramp - self._servo_ref)
+            alpha_gain = 1.0 - math.exp(-dt * self._gain)
+            step = alpha_gain * (self._servo_ref - self.q)
+            self.q = self.q + np.clip(step, -self._max_speed * dt, self._max_speed * dt)
+        elif self.mode in ("speedj", "stop"):
+            vel = self._vel
+            dv = self._speed_target - vel
+            if self.mode == "stop":
+                # All joints reach rest together: the fastest decelerates at the given rate.
+                fastest = float(np.max(np.abs(vel)))
+                scale = 1.0 if fastest == 0.0 else np.abs(vel) / fastest
+                limit = self._accel * dt * scale
+            else:
+                limit = np.full_like(vel, self._accel * dt)
+            vel_new = vel + np.clip(dv, -limit, limit)
+            if self.mode == "stop" and np.all(np.abs(vel_new) <= 1e-12):
+                vel_new[:] = 0.0
+            self.q = self.q + 0.5 * (vel + vel_new) * dt
+            self._vel = vel_new
+            if self.mode == "stop" and not np.any(vel_new):
+                self.mode = "hold"
+        lower, upper = self._limits.T
+        outside = np.flatnonzero((self.q < lower) | (self.q > upper))
+        if outside.size:
+            j = int(outside[0])
+            self.q = q_old
+            self.qd[:] = 0.0
+            self.qdd[:] = 0.0
+            self.mode = "hold"
+            raise SafetyViolation(f"joint {j} reached its position limit")
+        self.qd = (self.q - q_old) / dt
+        self.qdd = (self.qd - qd_old) / dt
+        return self.q.copy()
+
+    def _movej_fraction(self, t: float) -> float:
+        """Fraction of the movej's way done at time ``t`` into it (trapezoid in the leading
+        joint's distance, scaled to [0, 1])."""
+        distance = self._move_distance
+        if distance <= 0.0 or self._move_duration <= 0.0:
+            return 1.0
+        v, a, total = self._move_speed, self._move_accel, self._move_duration
+        t_acc = v / a
+        if t <= t_acc:
+            s = 0.5 * a * t * t
+        elif t <= total - t_acc:
+            s = 0.5 * a * t_acc * t_acc + v * (t - t_acc)
+        else:
+            rest = total - t
+            s = distance - 0.5 * a * rest * rest
+        return min(max(s / distance, 0.0), 1.0)

@@ -1,0 +1,473 @@
+"""The UR twin server: the controller's network interfaces in front of :class:`TwinController`.
+
+Ports (UR's): 30004 RTDE, 29999 dashboard, 30001-30003 the primary, secondary and real-time
+script interfaces (programs sent there replace the running one). One thread paces the
+controller to the wall clock at its 2 ms tick and publishes RTDE data packages; every client
+connection has its own thread. A client's mistake (a malformed package, an unknown variable,
+a register another client owns, a dropped connection) is answered or closes that connection
+only; the server and the arm go on.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import socket
+import struct
+import threading
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+from tvist.urserver import rtde
+from tvist.urserver.controller import TwinController
+
+log = logging.getLogger("tvist.urserver")
+
+RTDE_PORT = 30004
+DASHBOARD_PORT = 29999
+SCRIPT_PORTS = (30001, 30002, 30003)
+#: Controller version reported over RTDE (an e-Series, PolyScope 5.11).
+CONTROLLER_VERSION = (5, 11, 8, 0)
+POLYSCOPE_VERSION = "5.11.8.0"
+#: Publishing is capped at the controller rate (e-Series: 500 Hz).
+MAX_FREQUENCY_HZ = 500.0
+#: FIFO priority of the tick thread where the OS allows it (Linux, privileged); the RTDE
+#: readers run just below it.
+TICK_PRIORITY = 20
+#: If the tick thread falls this far behind the wall clock (s), it does not catch up: the
+#: simulated time slips instead of running a burst of ticks (a burst would hand a streaming
+#: client several ticks without a new command).
+MAX_LAG_S = 0.004
+
+
+@dataclass
+class ServerPorts:
+    """The ports to listen on (tests and a second twin on one machine may move them)."""
+
+    rtde: int = RTDE_PORT
+    dashboard: int = DASHBOARD_PORT
+    script: Sequence[int] = SCRIPT_PORTS
+
+    def all(self) -> list[int]:
+        return [self.rtde, self.dashboard, *self.script]
+
+
+class PortInUse(OSError):
+    """A UR port is taken on this host (another twin, URSim, or a robot driver)."""
+
+
+@dataclass
+class _RtdeSession:
+    sock: socket.socket
+    address: str
+    outputs: list[rtde.Recipe] = field(default_factory=list)
+    inputs: dict[int, rtde.Recipe] = field(default_factory=dict)
+    n_inputs: int = 0
+    frequency_hz: float = MAX_FREQUENCY_HZ
+    phase: float = 0.0
+    started: bool = False
+    pending: bytes = b""
+    owned: set = field(default_factory=set)
+    send_lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def send(self, data: bytes) -> None:
+        with self.send_lock:
+            self.sock.sendall(data)
+
+    def publish(self, data: bytes) -> None:
+        """Queue a data package without blocking the tick; drop it if the client lags."""
+        with self.send_lock:
+            try:
+                if self.pending:
+                    sent = self.sock.send(self.pending, socket.MSG_DONTWAIT)
+                    self.pending = self.pending[sent:]
+                    if self.pending:
+                        return  # the client is not reading: drop this package
+                sent = self.sock.send(data, socket.MSG_DONTWAIT)
+                self.pending = data[sent:]
+            except BlockingIOError:
+                return
+            except OSError:
+                self.started = False
+
+
+class TwinServer:
+    """Serve a :class:`TwinController` on UR's ports.
+
+    Parameters
+    ----------
+    controller
+        The simulated controller.
+    host
+        Address to listen on (``127.0.0.1``: this machine only).
+    ports
+        Ports to listen on (UR's by default).
+    """
+
+    def __init__(
+        self, controller: TwinController, host: str = "127.0.0.1", ports: ServerPorts | None = None
+    ) -> None:
+        self.controller = controller
+        self.host = host
+        self.ports = ports or ServerPorts()
+        self._lock = threading.Lock()  # the controller, its registers, the owners
+        self._sessions: list[_RtdeSession] = []
+        self._owners: dict[str, _RtdeSession] = {}  # input variable -> session owning it
+        self._listeners: list[socket.socket] = []
+        self._threads: list[threading.Thread] = []
+        self._stop = threading.Event()
+        self.overruns = 0
+
+    # ------------------------------------------------------------------ lifecycle
+
+    def start(self) -> None:
+        """Bind every port, then start the tick and the listeners.
+
+        Raises
+        ------
+        PortInUse
+            Naming the first port that is taken (nothing is left listening then).
+        """
+        handlers = {self.ports.rtde: self._serve_rtde, self.ports.dashboard: self._serve_dashboard}
+        for port in self.ports.script:
+            handlers[port] = self._serve_script
+        for port in self.ports.all():
+            sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            try:
+                sock.bind((self.host, port))
+            except OSError as exc:
+                sock.close()
+                self.close()
+                raise PortInUse(
+                    f"port {port} on {self.host} is in use ({exc.strerror}); stop whatever "
+                    "listens there (another twin server, URSim, a robot driver)"
+                ) from None
+            sock.listen(8)
+            self._listeners.append(sock)
+        for sock in self._listeners:
+            port = sock.getsockname()[1]
+            self._spawn(self._accept_loop, sock, handlers[port], name=f"accept-{port}")
+        self._spawn(self._tick_loop, name="tick")
+
+    def _spawn(self, target, *args, name: str) -> None:
+        thread = threading.Thread(target=target, args=args, name=name, daemon=True)
+        thread.start()
+        self._threads.append(thread)
+
+    def close(self) -> None:
+        """Stop ticking and close every socket."""
+        self._stop.set()
+        for sock in self._listeners:
+            try:
+                sock.close()
+            except OSError:
+                pass
+        for session in list(self._sessions):
+            _close(session.sock)
+
+    def serve_forever(self) -> None:
+        """Block until :meth:`close` (or Ctrl-C)."""
+        try:
+            while not self._stop.wait(0.5):
+                pass
+        finally:
+            self.close()
+
+    # ------------------------------------------------------------------ tick
+
+    def _tick_loop(self) -> None:
+        if not _realtime(TICK_PRIORITY):
+            log.info("the tick runs without real-time priority (not permitted here)")
+        dt = self.controller.dt_s
+        deadline = time.perf_counter()
+        while not self._stop.is_set():
+            with self._lock:
+                try:
+                    values = self.controller.tick()
+                except Exception:  # the tick must survive anything a client commanded
+                    log.exception("controller tick failed")
+                    values = None
+                sessions = [s for s in self._sessions if s.started] if values else []
+            for session in sessions:
+                session.phase += session.frequency_hz * dt
+                if session.phase >= 1.0 - 1e-9:
+                    session.phase -= 1.0
+                    for recipe in session.outputs:
+                        if recipe.recipe_id:
+                            session.publish(recipe.pack(values))
+            deadline += dt
+            delay = deadline - time.perf_counter()
+            if delay > 0.0:
+                time.sleep(delay)
+            elif delay < -MAX_LAG_S:
+                self.overruns += 1
+                deadline = time.perf_counter()
+
+    # ------------------------------------------------------------------ accepting
+
+    def _accept_loop(self, listener: socket.socket, handler) -> None:
+        while not self._stop.is_set():
+            try:
+                conn, address = listener.accept()
+            except OSError:
+                return
+            conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            self._spawn(self._guard, handler, conn, f"{address[0]}:{address[1]}", name="client")
+
+    def _guard(self, handler, conn: socket.socket, address: str) -> None:
+        try:
+            handler(conn, address)
+        except (OSError, ConnectionError):
+            pass
+        except Exception:  # a client must never take the server down
+            log.exception("client %s: handler failed", address)
+        finally:
+            _close(conn)
+
+    # ------------------------------------------------------------------ RTDE
+
+    def _serve_rtde(self, conn: socket.socket, address: str) -> None:
+        # A streaming client's commands must reach the registers within the tick they
+        # arrive in: the RTDE reader is real-time too (just below the tick).
+        _realtime(TICK_PRIORITY - 1)
+        session = _RtdeSession(conn, address)
+        with self._lock:
+            self._sessions.append(session)
+        try:
+            while not self._stop.is_set():
+                header = _recv_exact(conn, rtde.HEADER.size)
+                if header is None:
+                    return
+                size, kind = rtde.HEADER.unpack(header)
+                if size < rtde.HEADER.size:
+                    # The stream can no longer be split into packages: end this connection.
+                    session.send(rtde.text_message(f"malformed package header (size {size})"))
+                    log.warning("RTDE %s: malformed package (size %d), closing", address, size)
+                    return
+                payload = _recv_exact(conn, size - rtde.HEADER.size)
+                if payload is None:
+                    return
+                self._rtde_package(session, kind, payload)
+        finally:
+            with self._lock:
+                self._sessions.remove(session)
+                for name in session.owned:
+                    self._owners.pop(name, None)
+
+    def _rtde_package(self, session: _RtdeSession, kind: int, payload: bytes) -> None:
+        if kind == rtde.REQUEST_PROTOCOL_VERSION:
+            ok = len(payload) == 2 and struct.unpack(">H", payload)[0] == rtde.PROTOCOL_VERSION
+            session.send(rtde.package(kind, bytes([int(ok)])))
+        elif kind == rtde.GET_URCONTROL_VERSION:
+            session.send(rtde.package(kind, struct.pack(">IIII", *CONTROLLER_VERSION)))
+        elif kind == rtde.CONTROL_PACKAGE_SETUP_OUTPUTS:
+            session.send(rtde.package(kind, self._setup_outputs(session, payload)))
+        elif kind == rtde.CONTROL_PACKAGE_SETUP_INPUTS:
+            session.send(rtde.package(kind, self._setup_inputs(session, payload)))
+        elif kind == rtde.CONTROL_PACKAGE_START:
+            ok = any(r.recipe_id for r in session.outputs) or bool(session.inputs)
+            session.phase = 1.0  # first package at the next tick
+            session.started = ok
+            session.send(rtde.package(kind, bytes([int(ok)])))
+        elif kind == rtde.CONTROL_PACKAGE_PAUSE:
+            session.started = False
+            session.send(rtde.package(kind, b"\x01"))
+        elif kind == rtde.DATA_PACKAGE:
+            self._data_package(session, payload)
+        else:
+            session.send(rtde.text_message(f"unknown package type {kind}"))
+
+    def _setup_outputs(self, session: _RtdeSession, payload: bytes) -> bytes:
+        if len(payload) < 8:
+            return b"\x00" + b"NOT_FOUND"
+        frequency = struct.unpack(">d", payload[:8])[0]
+        names = rtde.split_names(payload[8:])
+        types = [rtde.OUTPUTS.get(n, "NOT_FOUND") for n in names]
+        valid = bool(names) and "NOT_FOUND" not in types and 0.0 < frequency <= MAX_FREQUENCY_HZ
+        if not 0.0 < frequency <= MAX_FREQUENCY_HZ:
+            session.send(rtde.text_message(f"output frequency {frequency:g} Hz not in (0, 500] Hz"))
+        recipe_id = len([r for r in session.outputs if r.recipe_id]) + 1 if valid else 0
+        if valid:
+            session.outputs.append(rtde.Recipe(recipe_id, names, types))
+            session.frequency_hz = frequency
+        return bytes([recipe_id]) + ",".join(types).encode()
+
+    def _setup_inputs(self, session: _RtdeSession, payload: bytes) -> bytes:
+        names = rtde.split_names(payload)
+        with self._lock:
+            types = []
+            for name in names:
+                owner = self._owners.get(name)
+                if name not in rtde.INPUTS:
+                    types.append("NOT_FOUND")
+                elif owner is not None and owner is not session:
+                    types.append("IN_USE")
+                else:
+                    types.append(rtde.INPUTS[name])
+            valid = bool(names) and all(t in rtde.TYPE_FORMATS for t in types)
+            recipe_id = 0
+            if valid:
+                session.n_inputs += 1
+                recipe_id = session.n_inputs
+                session.inputs[recipe_id] = rtde.Recipe(recipe_id, names, types)
+                for name in names:
+                    self._owners[name] = session
+                    session.owned.add(name)
+        return bytes([recipe_id]) + ",".join(types).encode()
+
+    def _data_package(self, session: _RtdeSession, payload: bytes) -> None:
+        recipe = session.inputs.get(payload[0]) if payload else None
+        if recipe is None:
+            session.send(rtde.text_message("data package for an unknown input recipe ignored"))
+            return
+        try:
+            values = recipe.unpack(payload)
+        except (ValueError, struct.error) as exc:
+            session.send(rtde.text_message(f"malformed data package ignored: {exc}"))
+            return
+        regs = self.controller.registers
+        with self._lock:
+            for name, value in values.items():
+                if name.startswith("input_int_register_"):
+                    regs.in_int[int(name.rsplit("_", 1)[1])] = int(value)
+                elif name.startswith("input_double_register_"):
+                    regs.in_double[int(name.rsplit("_", 1)[1])] = float(value)
+
+    # ------------------------------------------------------------------ dashboard
+
+    def _serve_dashboard(self, conn: socket.socket, address: str) -> None:
+        conn.sendall(b"Connected: Universal Robots Dashboard Server\n")
+        reader = conn.makefile("rb")
+        for raw in reader:
+            command = raw.decode(errors="replace").strip()
+            if not command:
+                continue
+            reply, close = self._dashboard_reply(command)
+            conn.sendall(reply.encode() + b"\n")
+            if close:
+                return
+
+    def _dashboard_reply(self, command: str) -> tuple[str, bool]:
+        c = self.controller
+        lower = command.lower()
+        with self._lock:
+            running = c.program_running
+            if lower == "polyscopeversion":
+                return f"URSoftware {POLYSCOPE_VERSION} (twin)", False
+            if lower == "get serial number":
+                return "0", False
+            if lower == "get robot model":
+                return c.twin.params.name.upper().rstrip("E"), False
+            if lower == "is in remote control":
+                return "true", False
+            if lower == "robotmode":
+                return "Robotmode: RUNNING", False
+            if lower == "safetymode":
+                return f"Safetymode: {'PROTECTIVE_STOP' if c.protective_stop else 'NORMAL'}", False
+            if lower == "safetystatus":
+                status = "PROTECTIVE_STOP" if c.protective_stop else "NORMAL"
+                return f"Safetystatus: {status}", False
+            if lower == "running":
+                return f"Program running: {'true' if running else 'false'}", False
+            if lower == "programstate":
+                return ("PLAYING " + c.program_name) if running else "STOPPED <unnamed>", False
+            if lower == "get loaded program":
+                return "No program loaded", False
+            if lower == "isprogramsaved":
+                return "false <unnamed>", False
+            if lower == "stop":
+                # A UR answers "Stopped" with no program running too (ur_rtde relies on it
+                # right after stopScript).
+                c.stop_program()
+                return "Stopped", False
+            if lower == "unlock protective stop":
+                if c.unlock_protective_stop():
+                    return "Protective stop releasing", False
+                return "Failed to execute: unlock protective stop (the robot is not stopped)", False
+            if lower in ("power on", "brake release", "close popup", "close safety popup"):
+                replies = {
+                    "power on": "Powering on",
+                    "brake release": "Brake releasing",
+                    "close popup": "closing popup",
+                    "close safety popup": "closing safety popup",
+                }
+                return replies[lower], False
+            if lower.startswith("load "):
+                return f"File not found: {command[5:]}", False
+            if lower == "play":
+                return "Failed to execute: play", False
+            if lower == "quit":
+                return "Disconnected", True
+        return f"could not understand: '{command}'", False
+
+    # ------------------------------------------------------------------ script ports
+
+    def _serve_script(self, conn: socket.socket, address: str) -> None:
+        buffer = ""
+        while not self._stop.is_set():
+            data = conn.recv(65536)
+            if not data:
+                return
+            buffer += data.decode(errors="replace")
+            while True:
+                program, buffer = _split_program(buffer)
+                if program is None:
+                    break
+                with self._lock:
+                    error = self.controller.load_program(program)
+                if error:
+                    log.error("script port %s: %s", address, error)
+
+
+def _split_program(buffer: str) -> tuple[str | None, str]:
+    """The first complete program or statement in ``buffer`` and the rest.
+
+    A program runs from ``def name():`` / ``sec name():`` to an ``end`` at the start of a line;
+    anything else is one statement per line.
+    """
+    stripped = buffer.lstrip()
+    if not stripped:
+        return None, ""
+    if stripped.startswith(("def ", "sec ")):
+        lines = stripped.split("\n")
+        for i, line in enumerate(lines[1:], start=1):
+            if line.rstrip() == "end" and i < len(lines) - 1:
+                return "\n".join(lines[: i + 1]) + "\n", "\n".join(lines[i + 1 :])
+        return None, buffer
+    if "\n" not in stripped:
+        return None, buffer
+    line, rest = stripped.split("\n", 1)
+    return line, rest
+
+
+def _realtime(priority: int) -> bool:
+    """Put the calling thread under FIFO real-time scheduling; False where not permitted."""
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+    except (AttributeError, OSError):
+        return False
+    return True
+
+
+def _recv_exact(conn: socket.socket, n: int) -> bytes | None:
+    chunks = []
+    while n > 0:
+        chunk = conn.recv(n)
+        if not chunk:
+            return None
+        chunks.append(chunk)
+        n -= len(chunk)
+    return b"".join(chunks)
+
+
+def _close(sock: socket.socket) -> None:
+    try:
+        sock.shutdown(socket.SHUT_RDWR)
+    except OSError:
+        pass
+    try:
+        sock.close()
+    except OSError:
+        pass
