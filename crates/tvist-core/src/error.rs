@@ -200,6 +200,21 @@ impl StatusCounter {
     }
 }
 
+impl core::ops::BitOr for Status {
+    type Output = Status;
+    #[inline]
+    fn bitor(self, rhs: Status) -> Status {
+        Status(self.0 | rhs.0)
+    }
+}
+
+impl core::ops::BitOrAssign for Status {
+    #[inline]
+    fn bitor_assign(&mut self, rhs: Status) {
+        self.0 |= rhs.0;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -221,20 +236,5 @@ mod tests {
         assert_eq!(c.count(Status::MODE_ABOVE_NYQUIST), 1);
         assert_eq!(c.count(Status::MODES_HELD), 0);
         assert_eq!(c.counts().iter().sum::<u64>(), 3);
-    }
-}
-
-impl core::ops::BitOr for Status {
-    type Output = Status;
-    #[inline]
-    fn bitor(self, rhs: Status) -> Status {
-        Status(self.0 | rhs.0)
-    }
-}
-
-impl core::ops::BitOrAssign for Status {
-    #[inline]
-    fn bitor_assign(&mut self, rhs: Status) {
-        self.0 |= rhs.0;
     }
 }
