@@ -158,7 +158,7 @@ impl MapFile {
     pub fn from_value(doc: &Value) -> Result<MapFile, Error> {
         let doc = doc
             .as_object()
-            .ok_or_else(|| Error::document("(document)", "the top level must be an object"))?;
+            .ok_or_else(|| Error::document("(document)", "top level must be a JSON object"))?;
         let unknown: Vec<&str> = doc
             .keys()
             .map(String::as_str)
@@ -402,7 +402,8 @@ fn range_to_value(range: Option<InertiaRange>) -> Value {
     })
 }
 
-fn mode_to_value(m: &ModeMap) -> Value {
+/// One `paper10` mode as written in a map file.
+pub fn mode_to_value(m: &ModeMap) -> Value {
     let c = &m.coefficients;
     let mut out = Map::new();
     for (key, x) in [
