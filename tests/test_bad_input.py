@@ -236,6 +236,7 @@ def test_reset_accepts_non_contiguous_and_integer_arrays() -> None:
     np.testing.assert_allclose(shaper.step(integers), [1.0, 2.0, 3.0], rtol=1e-15)
     shaper.reset([1, 2, 3])
     np.testing.assert_allclose(shaper.step([1, 2, 3]), [1.0, 2.0, 3.0], rtol=1e-15)
+    shaper.reset(np.ones(3, dtype=np.int32))
     out = shaper.shape(np.ones((4, 3), dtype=np.int32))
     np.testing.assert_allclose(out, np.ones((4, 3)), rtol=1e-15)
     with pytest.raises(ValueError, match="q0 has 2 values"):

@@ -414,15 +414,15 @@ def _with_range(mode: int, key: str, value):
     [
         (
             _with_range(0, "damping_inertia_range_kg_m2", [0.0, 2.0]),
-            r"modes\[0\]\.damping_inertia_range_kg_m2: min must be > 0",
+            r"modes\[0\]\.damping_inertia_range_kg_m2: .*min must be > 0",
         ),
         (
             _with_range(0, "damping_inertia_range_kg_m2", [-1.0, 2.0]),
-            r"modes\[0\]\.damping_inertia_range_kg_m2: min must be > 0",
+            r"modes\[0\]\.damping_inertia_range_kg_m2: .*min must be > 0",
         ),
         (
             _with_range(0, "frequency_inertia_range_kg_m2", [3.0, 3.0]),
-            r"modes\[0\]\.frequency_inertia_range_kg_m2: min must be < max",
+            r"modes\[0\]\.frequency_inertia_range_kg_m2: .*min must be < max",
         ),
         (
             _with_range(0, "frequency_inertia_range_kg_m2", [3.0, 1.0]),

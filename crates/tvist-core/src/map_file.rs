@@ -262,7 +262,15 @@ fn paper10_from(doc: &Map<String, Value>) -> Result<DynamicMap, Error> {
         .enumerate()
         .map(|(i, m)| mode_from(m, &format!("modes[{i}]")))
         .collect::<Result<Vec<_>, _>>()?;
-    DynamicMap::new(maps).map_err(|e| Error::document("modes", e.to_string()))
+    DynamicMap::new(maps).map_err(|e| Error::document("modes", reason(e)))
+}
+
+/// The text of a core error without its kind prefix ("invalid parameter: ").
+fn reason(e: Error) -> String {
+    match e {
+        Error::InvalidParameter(msg) => msg,
+        other => other.to_string(),
+    }
 }
 
 fn number(value: Option<&Value>, path: &str) -> Result<f64, Error> {
@@ -304,7 +312,7 @@ fn range(value: Option<&Value>, path: &str) -> Result<Option<InertiaRange>, Erro
             let hi = number(bounds.get(1), &format!("{path}[1]"))?;
             InertiaRange::new(lo, hi)
                 .map(Some)
-                .map_err(|e| Error::document(path, e.to_string()))
+                .map_err(|e| Error::document(path, reason(e)))
         }
         Some(other) => Err(Error::document(
             path,

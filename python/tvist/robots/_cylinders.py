@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import Any
 
 #: The robot-data file in a source checkout (the core embeds it when it is built).
-DATA_PATH = Path(__file__).resolve().parents[3] / "crates" / "tvist-core" / "data" / "ur_e_series.json"
+DATA_PATH = Path(__file__).resolve().parents[3] / "crates/tvist-core/data/ur_e_series.json"
 SIGNIFICANT_DIGITS = 10
 AXES = ("x", "y", "z")
 
