@@ -663,4 +663,35 @@ mod tests {
         let MapForm::Paper10(map) = file.form();
         assert_eq!(map.robot(), Some("ur10e"));
     }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::test_runner::Config::with_cases(500))]
+
+        /// Every finite coefficient reads back bit-identical (the serde_json parser is set to
+        /// round-trip floats exactly; its default is not correctly rounded).
+        #[test]
+        fn every_double_reads_back_bit_identical(
+            bits in proptest::collection::vec(proptest::prelude::any::<u64>(), 8),
+        ) {
+            let finite: Vec<f64> = bits
+                .iter()
+                .map(|&b| f64::from_bits(b))
+                .map(|x| if x.is_finite() { x } else { 1.0 })
+                .collect();
+            let c = MapCoefficients {
+                k_0: finite[0], k_j: finite[1], k_g: finite[2], k_p: finite[3],
+                c_0: finite[4], c_1: finite[5], c_2: finite[6], c_tau: finite[7],
+            };
+            let map = DynamicMap::new(vec![ModeMap::general(c, 1)]).expect("finite");
+            let file = MapFile::new(MapForm::Paper10(map), &Value::Null).expect("valid");
+            let back = MapFile::parse(&file.to_json()).expect("round trip");
+            let MapForm::Paper10(read) = back.form();
+            let got = read.mode_maps()[0].coefficients;
+            for (a, b) in [(got.k_0, c.k_0), (got.k_j, c.k_j), (got.k_g, c.k_g), (got.k_p, c.k_p),
+                           (got.c_0, c.c_0), (got.c_1, c.c_1), (got.c_2, c.c_2),
+                           (got.c_tau, c.c_tau)] {
+                proptest::prop_assert_eq!(a.to_bits(), b.to_bits());
+            }
+        }
+    }
 }
