@@ -4,9 +4,9 @@ VENV := .venv
 PY := $(VENV)/bin/python
 export VIRTUAL_ENV := $(CURDIR)/$(VENV)
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
-RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml pyproject.toml
+RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml -o -name '*.json') Cargo.toml pyproject.toml
 
-.PHONY: demo test build lint fmt bench rust-test ffi-test pytest clean
+.PHONY: demo test build lint fmt bench rust-test ffi-test cpp-example pytest wheel clean
 
 demo: build
 	$(PY) -m tvist.cli demo
@@ -29,14 +29,31 @@ rust-test:
 	cargo fmt --all --check
 	cargo clippy --workspace --all-targets -q -- -D warnings
 
-# C API: release library, the C example compiled against include/tvist.h and libtvist.a, run.
+# C API: release library; the C example linked statically and, with the README's line as
+# printed, dynamically; the C++ example (header-only tvist.hpp) on a map file. All are run.
 FFI_LIBS := -lgcc_s -lutil -lrt -lpthread -lm -ldl
-ffi-test:
-	cargo build -p tvist-ffi --release -q
+CXX ?= c++
+ffi-test: build cpp-example
 	@mkdir -p target/c
 	cc -std=c11 -Wall -Wextra -Werror -Iinclude examples/c/shape_move.c \
 		target/release/libtvist.a $(FFI_LIBS) -o target/c/shape_move
 	./target/c/shape_move
+	grep -m1 -e '-ltvist -lm -Wl,-rpath' README.md > target/c/readme_dynamic_link.sh
+	bash -e target/c/readme_dynamic_link.sh
+	./target/c/shape_move_shared
+	$(PY) -c "import tvist; tvist.DynamicMap.paper_ur5e().save('target/cpp/paper_ur5e.json')"
+	./target/cpp/shape_with_map ur5e 5.0 0 0 0.05 target/cpp/paper_ur5e.json 0.002 zv
+
+# The C++ example against libtvist.a (the pytest parity test uses it too).
+cpp-example:
+	cargo build -p tvist-ffi --release -q
+	@mkdir -p target/cpp
+	$(CXX) -std=c++17 -Wall -Wextra -Werror -Iinclude examples/cpp/shape_with_map.cpp \
+		target/release/libtvist.a $(FFI_LIBS) -o target/cpp/shape_with_map
+
+# Release wheel (abi3, Python >= 3.10) into dist/: installs without a Rust toolchain.
+wheel: $(PY)
+	$(VENV)/bin/maturin build --release --out dist
 
 lint: $(PY)
 	$(VENV)/bin/ruff check python tests benches examples
@@ -56,4 +73,4 @@ bench: build
 	$(PY) benches/bench_sim.py
 
 clean:
-	rm -rf $(VENV) target out
+	rm -rf $(VENV) target out dist

@@ -39,10 +39,18 @@ typedef enum TvistError {
     TVIST_ERR_INVALID_MODE = -4,
     /* An array length that does not match the shaper (n_dof of tvist_shaper_reset). */
     TVIST_ERR_DIMENSION_MISMATCH = -5,
-    /* A robot without a dynamic map: the paper's map is identified for "ur5e" only. */
+    /* A robot name not in the robot data ("ur3e", "ur5e", "ur10e", "ur16e", "ur20"), or not
+     * "ur5e" for tvist_shaper_new_ur_map (the paper's map). */
     TVIST_ERR_UNKNOWN_ROBOT = -6,
     /* An internal error was caught at the boundary (a bug). Only free the handle after it. */
-    TVIST_ERR_INTERNAL = -7
+    TVIST_ERR_INTERNAL = -7,
+    /* A map file that cannot be read or is not a valid map (the message names the field). */
+    TVIST_ERR_MAP_FILE = -8,
+    /* A map identified on another robot than the one named (the message names both). */
+    TVIST_ERR_ROBOT_MISMATCH = -9,
+    /* A request beyond a setup limit (TVIST_MAX_DOF channels, TVIST_MAX_DELAY_LINE_BYTES of
+     * delay lines): refused before anything is allocated. */
+    TVIST_ERR_TOO_LARGE = -10
 } TvistError;
 
 /* Status bits of one cycle (tvist_shaper_step >= 0); 0 is a clean cycle. */
@@ -58,11 +66,36 @@ typedef enum TvistError {
 #define TVIST_STATUS_BAD_LENGTH 16
 /* A damping ratio beyond the shaper's published range; designed at that limit. */
 #define TVIST_STATUS_ZETA_CLAMPED 32
+/* A mode at or above the Nyquist frequency (wn_rad_s >= pi / dt_s): it cannot be cancelled at
+ * this rate. Shaped as given (impulses within one sample, a sub-sample smoothing). */
+#define TVIST_STATUS_MODE_ABOVE_NYQUIST 64
+/* Number of status flags: flag k is bit (1 << k) (tvist_shaper_status_counts). */
+#define TVIST_N_STATUS_FLAGS 7
 
 /* Largest number of joint channels of a handle. */
 #define TVIST_MAX_DOF 4096
 /* Largest number of modes of tvist_shaper_new_constant. */
 #define TVIST_MAX_MODES 64
+/* Largest total size of a handle's delay lines in bytes (256 MiB): a larger request (many
+ * channels, a very slow mode, a very short dt_s) returns TVIST_ERR_TOO_LARGE. */
+#define TVIST_MAX_DELAY_LINE_BYTES 268435456
+
+/* TvistShaperOptions.interpolation: fractional delays by Lagrange order 1 or 3. */
+#define TVIST_INTERP_LINEAR 0
+#define TVIST_INTERP_CUBIC 1
+
+/* Options of the _ex constructors. A zero-initialized struct ({0}) holds the defaults. */
+typedef struct TvistShaperOptions {
+    /* TVIST_INTERP_LINEAR (default) or TVIST_INTERP_CUBIC. */
+    int32_t interpolation;
+    /* Vibration tolerance of the "ei" shaper (fraction, e.g. 0.05); 0: the default 5 %.
+     * A nonzero value with another shaper is TVIST_ERR_INVALID_PARAMETER. */
+    double ei_tolerance;
+    /* Delay-line length over the longest expected shaper (>= 1); 0: the default 1.5. */
+    double safety_factor;
+    /* Nonzero: accept a map identified on another robot (research use). */
+    int32_t allow_other_robot;
+} TvistShaperOptions;
 
 /* Opaque shaper handle. */
 typedef struct TvistShaper TvistShaper;
@@ -77,6 +110,11 @@ int32_t tvist_shaper_new_constant(const double *wn_rad_s, const double *zeta, si
                                   double dt_s, size_t n_dof, const char *shaper_name,
                                   TvistShaper **out);
 
+/* tvist_shaper_new_constant with options (NULL: the defaults). */
+int32_t tvist_shaper_new_constant_ex(const double *wn_rad_s, const double *zeta, size_t n_modes,
+                                     double dt_s, size_t n_dof, const char *shaper_name,
+                                     const TvistShaperOptions *options, TvistShaper **out);
+
 /*
  * Shaper driven by the paper's UR5e dynamic map (base and shoulder modes, re-evaluated every
  * cycle at the previous shaped output) with the UR5e rigid-body model and a point payload of
@@ -86,6 +124,25 @@ int32_t tvist_shaper_new_constant(const double *wn_rad_s, const double *zeta, si
 int32_t tvist_shaper_new_ur_map(const char *robot_name, double payload_kg,
                                 const double payload_com_m[3], double dt_s,
                                 const char *shaper_name, TvistShaper **out);
+
+/*
+ * Shaper driven by the dynamic map in file map_json_path (any map file tvist writes:
+ * `tvist fit-map`, DynamicMap.save) for UR e-Series robot `robot` ("ur3e", "ur5e", "ur10e",
+ * "ur16e", "ur20") with a point payload of payload_kg at payload_com_m (flange frame, m);
+ * shapes the robot's 6 joints sampled every dt_s seconds. The map must have been identified
+ * on that robot (TVIST_ERR_ROBOT_MISMATCH otherwise; see allow_other_robot of the _ex form).
+ * TVIST_ERR_MAP_FILE for a file that cannot be read or is not a valid map (the message names
+ * the file and the field). Setup reads the file and samples the workspace (milliseconds).
+ */
+int32_t tvist_shaper_new_map(const char *robot, double payload_kg, const double payload_com_m[3],
+                             const char *map_json_path, double dt_s, const char *shaper,
+                             TvistShaper **out);
+
+/* tvist_shaper_new_map with options (NULL: the defaults). */
+int32_t tvist_shaper_new_map_ex(const char *robot, double payload_kg,
+                                const double payload_com_m[3], const char *map_json_path,
+                                double dt_s, const char *shaper,
+                                const TvistShaperOptions *options, TvistShaper **out);
 
 /*
  * One control cycle: shapes q_in into q_out (n_dof doubles each; they may be the same array).
@@ -106,6 +163,13 @@ double tvist_shaper_delay_s(const TvistShaper *shaper);
 
 /* Number of joint channels (0 for NULL). */
 size_t tvist_shaper_n_dof(const TvistShaper *shaper);
+
+/*
+ * Per-flag status counts since construction: counts[k] is the number of tvist_shaper_step
+ * calls whose status had bit (1 << k) set. Writes min(len, TVIST_N_STATUS_FLAGS) entries and
+ * returns TVIST_N_STATUS_FLAGS (0 for NULL). Allocation-free.
+ */
+size_t tvist_shaper_status_counts(const TvistShaper *shaper, uint64_t *counts, size_t len);
 
 /* Frees a handle; NULL is ignored. */
 void tvist_shaper_free(TvistShaper *shaper);

@@ -156,3 +156,88 @@ def test_wrong_shapes_at_run_time() -> None:
         shaper.reset(np.zeros(3))
     with pytest.raises(ValueError, match="finite"):
         shaper.reset(np.array([0.0, np.nan]))
+
+
+# ---- setup limits: no request can abort the interpreter ----
+
+TWO_MODES = tvist.ConstantModes([(50.0, 0.1), (40.0, 0.2)])
+
+
+@pytest.mark.parametrize("n_dof", [tvist.MAX_DOF + 1, 10**9, 2**62, 2**63 + 5])
+@pytest.mark.parametrize("provider", ["constant", "callable"])
+def test_huge_n_dof_is_a_value_error_not_an_abort(n_dof: int, provider: str) -> None:
+    # 10**9 channels used to abort the interpreter (a 400 GB allocation), 2**62 raised a
+    # PanicException (a BaseException). Both come from the core's shared limit now.
+    dynamics = TWO_MODES if provider == "constant" else good_provider
+    kwargs = {"max_delay_s": 0.1} if provider == "callable" else {}
+    with pytest.raises((ValueError, OverflowError), match="n_dof|too large|int"):
+        tvist.TvShaper(dynamics, dt_s=0.002, n_dof=n_dof, **kwargs)
+
+
+def test_the_dof_limit_itself_is_accepted() -> None:
+    shaper = tvist.TvShaper(TWO_MODES, dt_s=0.002, n_dof=tvist.MAX_DOF)
+    assert shaper.n_dof == tvist.MAX_DOF == 4096
+
+
+@pytest.mark.parametrize("provider", ["constant", "callable"])
+def test_delay_lines_beyond_the_memory_limit_are_refused(provider: str) -> None:
+    # 0.1 rad/s undamped at 100 kHz over 4096 channels: ~154 GB of delay line (the C reproducer).
+    if provider == "constant":
+        dynamics, kwargs = tvist.ConstantModes([(0.1, 0.0)]), {}
+    else:
+        dynamics, kwargs = (lambda q: [(0.1, 0.0)]), {"max_delay_s": 47.0}
+    with pytest.raises(ValueError, match="256 MiB"):
+        tvist.TvShaper(dynamics, dt_s=1e-5, n_dof=4096, **kwargs)
+    # The bound is on the total: the same line for one channel (~38 MB) is fine.
+    tvist.TvShaper(dynamics, dt_s=1e-5, n_dof=1, **kwargs)
+    assert tvist.MAX_DELAY_LINE_BYTES == 256 * 2**20
+
+
+# ---- silently wrong inputs ----
+
+
+@pytest.mark.parametrize("com", [(1e200, 0.0, 0.0), (0.0, -1e160, 0.0)])
+def test_a_huge_finite_payload_com_is_refused(com: tuple) -> None:
+    # It used to give all-NaN inertias (5 kg x (1e200 m)^2 overflows).
+    with pytest.raises(ValueError, match="non-finite joint inertias"):
+        tvist.robots.ur5e(5.0, com)
+
+
+def test_a_mode_above_nyquist_is_reported() -> None:
+    # 1e4 rad/s at 2 ms is above pi/dt = 1571 rad/s: it used to run with status 0.
+    shaper = tvist.TvShaper(tvist.ConstantModes([(1e4, 0.0)]), dt_s=0.002, n_dof=1)
+    shaper.step(np.zeros(1))
+    assert shaper.last_status & tvist.Status.MODE_ABOVE_NYQUIST
+    assert shaper.status_counts["mode_above_nyquist"] == 1
+    # Just below Nyquist is not flagged.
+    below = tvist.TvShaper(tvist.ConstantModes([(1500.0, 0.0)]), dt_s=0.002, n_dof=1)
+    below.step(np.zeros(1))
+    assert below.last_status == 0
+
+
+def test_status_flags_are_the_cores() -> None:
+    flags = {f.name: f.value for f in tvist.Status if f.value}
+    assert flags == tvist._core.STATUS_FLAGS
+    assert list(flags.values()) == [1 << k for k in range(len(flags))]
+
+
+# ---- reset accepts what step accepts ----
+
+
+def test_reset_accepts_non_contiguous_and_integer_arrays() -> None:
+    shaper = tvist.TvShaper(MODES, dt_s=0.002, n_dof=3)
+    wide = np.arange(6.0)[::2]  # non-contiguous view [0, 2, 4]
+    assert not wide.flags.c_contiguous
+    # At rest the output is the input times the amplitude sum 1: equal up to rounding.
+    shaper.reset(wide)
+    np.testing.assert_allclose(shaper.step(wide), [0.0, 2.0, 4.0], rtol=1e-15)
+    integers = np.array([1, 2, 3])
+    shaper.reset(integers)  # used to raise TypeError: type mismatch int64 -> float64
+    np.testing.assert_allclose(shaper.step(integers), [1.0, 2.0, 3.0], rtol=1e-15)
+    shaper.reset([1, 2, 3])
+    np.testing.assert_allclose(shaper.step([1, 2, 3]), [1.0, 2.0, 3.0], rtol=1e-15)
+    shaper.reset(np.ones(3, dtype=np.int32))
+    out = shaper.shape(np.ones((4, 3), dtype=np.int32))
+    np.testing.assert_allclose(out, np.ones((4, 3)), rtol=1e-15)
+    with pytest.raises(ValueError, match="q0 has 2 values"):
+        shaper.reset(np.zeros(2, dtype=int))

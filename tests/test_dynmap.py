@@ -190,7 +190,7 @@ def test_save_and_load_round_trip(tmp_path):
         "inertia_kg_m2": None,
     }
     doc = json.loads(path.read_text())
-    assert doc["schema_version"] == 1 and doc["kind"] == "tvist.dynamic_map"
+    assert doc["schema_version"] == 1 and doc["kind"] == "paper10"
     j = [3.0, 4.0]
     assert loaded.modes_from_inertia(j) == original.modes_from_inertia(j)
 
@@ -217,8 +217,18 @@ def _with(change):
         ("{not json", "not valid JSON"),
         ([1, 2], "top level must be a JSON object"),
         (_with(lambda d: d.pop("schema_version")), "schema_version"),
-        (_with(lambda d: d.update(schema_version=2)), "schema_version: expected 1, got 2"),
-        (_with(lambda d: d.update(kind="other")), "kind"),
+        (_with(lambda d: d.update(schema_version=2)), "schema_version: must be the integer 1"),
+        (_with(lambda d: d.update(schema_version=1.0)), "schema_version: must be the integer 1"),
+        (_with(lambda d: d.update(schema_version=True)), "schema_version: must be the integer 1"),
+        (_with(lambda d: d.update(kind="other")), 'kind: unknown map kind "other"'),
+        (
+            _with(lambda d: d["modes"][0].update(damping_gain_exponent=-1e6)),
+            r"modes\[0\]\.damping_gain_exponent: -1000000 is outside \[-2, 2\]",
+        ),
+        (
+            _with(lambda d: d["modes"][1].update(frequency_gain_exponent=2.5)),
+            r"modes\[1\]\.frequency_gain_exponent: 2.5 is outside",
+        ),
         (_with(lambda d: d.pop("modes")), "modes: missing"),
         (_with(lambda d: d.update(modes=[])), "modes: must be a non-empty list"),
         (_with(lambda d: d["modes"][1].pop("k_p")), r"modes\[1\]\.k_p: missing"),
@@ -238,7 +248,7 @@ def _with(change):
         (_with(lambda d: d["metadata"].update(robot=5)), "metadata.robot"),
         (
             _with(lambda d: d["metadata"].update(payload={"mass_kg": -1})),
-            "metadata.payload: .*mass_kg",
+            r"metadata\.payload\.mass_kg: must be >= 0",
         ),
         (_with(lambda d: d["metadata"].update(fit_statistics=3)), "metadata.fit_statistics"),
     ],
@@ -249,9 +259,15 @@ def test_load_rejects_malformed_files_naming_the_field(tmp_path, doc, message):
 
 
 def test_non_finite_coefficients_are_rejected(tmp_path):
+    # Map files are strict JSON: a NaN token is not JSON at all.
     text = json.dumps(_good_doc()).replace('"c_0": 1.53', '"c_0": NaN')
-    with pytest.raises(ValueError, match=r"modes\[0\]\.c_0: must be finite"):
+    assert "NaN" in text
+    with pytest.raises(ValueError, match=r"bad\.json: \(document\): not valid JSON"):
         tvist.DynamicMap.load(_write(tmp_path, text))
+    # Built in Python, a NaN coefficient is refused naming the field.
+    mode = dict(tvist.DynamicMap.paper_ur5e().mode_maps[0], c_0=float("nan"))
+    with pytest.raises(ValueError, match=r"modes\[0\]\.c_0: must be finite"):
+        tvist.DynamicMap([mode])
 
 
 def test_mode_fields_are_the_cores():
@@ -398,15 +414,15 @@ def _with_range(mode: int, key: str, value):
     [
         (
             _with_range(0, "damping_inertia_range_kg_m2", [0.0, 2.0]),
-            r"modes\[0\]\.damping_inertia_range_kg_m2: min must be > 0",
+            r"modes\[0\]\.damping_inertia_range_kg_m2: .*min must be > 0",
         ),
         (
             _with_range(0, "damping_inertia_range_kg_m2", [-1.0, 2.0]),
-            r"modes\[0\]\.damping_inertia_range_kg_m2: min must be > 0",
+            r"modes\[0\]\.damping_inertia_range_kg_m2: .*min must be > 0",
         ),
         (
             _with_range(0, "frequency_inertia_range_kg_m2", [3.0, 3.0]),
-            r"modes\[0\]\.frequency_inertia_range_kg_m2: min must be < max",
+            r"modes\[0\]\.frequency_inertia_range_kg_m2: .*min must be < max",
         ),
         (
             _with_range(0, "frequency_inertia_range_kg_m2", [3.0, 1.0]),
@@ -422,7 +438,7 @@ def _with_range(mode: int, key: str, value):
         ),
         (
             _with_range(0, "frequency_inertia_range_kg_m2", [1.0, "big"]),
-            r"frequency_inertia_range_kg_m2\[1\] \(max\): must be a number",
+            r"frequency_inertia_range_kg_m2\[1\]: must be a number",
         ),
         (
             _with_range(1, "frequency_inertia_range_kg_m2", [1.0, 2.0]),
@@ -438,10 +454,11 @@ def test_load_rejects_bad_ranges(tmp_path, doc, message):
 def test_non_finite_range_is_rejected(tmp_path):
     doc = _with_range(0, "damping_inertia_range_kg_m2", [1.0, 2.0])
     text = json.dumps(doc).replace("[1.0, 2.0]", "[1.0, Infinity]")
-    with pytest.raises(
-        ValueError, match=r"damping_inertia_range_kg_m2\[1\] \(max\): must be finite"
-    ):
+    with pytest.raises(ValueError, match="not valid JSON"):
         tvist.DynamicMap.load(_write(tmp_path, text))
+    mode = dict(doc["modes"][0], damping_inertia_range_kg_m2=[1.0, float("inf")])
+    with pytest.raises(ValueError, match=r"damping_inertia_range_kg_m2\[1\]: must be finite"):
+        tvist.DynamicMap([mode])
     # The core checks too (for maps built without this module).
     mode = dict(tvist.DynamicMap.paper_ur5e().mode_maps[0], damping_inertia_range_kg_m2=[0.0, 1.0])
     with pytest.raises(ValueError, match="min must be > 0"):
@@ -488,3 +505,101 @@ def test_map_dynamics_rejects_a_map_invalid_inside_its_own_range():
         ValueError, match=r"no underdamped mode 0 .*inertia ranges J_f \[0\.2, 10\] kg m²"
     ):
         tvist.MapDynamics(ROBOT_5KG, _overdamped_at_small_j0((0.2, 10.0)))
+
+
+# ---- strict JSON, the map's robot, hostile files ----
+
+
+def _strict_json(text: str):
+    """``json.loads`` that refuses NaN/Infinity tokens (as other tools' parsers do)."""
+
+    def refuse(token: str):
+        raise ValueError(f"non-standard JSON token {token}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_map_files_are_strict_json_with_null_for_unavailable_statistics(tmp_path):
+    # Statistics that could not be computed (NaN, inf, numpy scalars) are written as null.
+    stats = {"rms": float("nan"), "worst": float("inf"), "n": np.int64(3), "r": np.float64(0.5)}
+    dynmap = tvist.DynamicMap(
+        tvist.DynamicMap.paper_ur5e().mode_maps,
+        metadata={"robot": "ur5e", "fit_statistics": stats, "note": [np.float32(2.0)]},
+    )
+    path = tmp_path / "map.json"
+    dynmap.save(path)
+    doc = _strict_json(path.read_text())
+    assert doc["kind"] == "paper10"
+    assert doc["metadata"]["fit_statistics"] == {"rms": None, "worst": None, "n": 3, "r": 0.5}
+    assert doc["metadata"]["note"] == [2.0]
+    assert tvist.DynamicMap.load(path).metadata == dynmap.metadata
+    # The paper's map and a map with ranges are strict too.
+    for m in (tvist.DynamicMap.paper_ur5e(), _ranged_paper()):
+        _strict_json(m.to_json())
+
+
+def test_a_map_file_written_by_fit_map_is_strict_json(tmp_path):
+    from tvist.cli import main
+
+    results = tmp_path / "r.jsonl"
+    paper = tvist.DynamicMap.paper_ur5e()
+    rng = np.random.default_rng(3)
+    with results.open("w") as fh:
+        for i in range(30):
+            inertia = [rng.uniform(0.3, 9.0), rng.uniform(0.9, 9.0), 0.5, 0.1, 0.1, 0.01]
+            modes = paper.modes_from_inertia(inertia)
+            record = {
+                "key": f"p{i}",
+                "inertia_kg_m2": inertia,
+                "modes": [
+                    {"joint": j, "wn_rad_s": w, "zeta": z, "low_confidence": False}
+                    for j, (w, z) in enumerate(modes)
+                ],
+            }
+            fh.write(json.dumps(record) + "\n")
+    out = tmp_path / "map.json"
+    assert main(["fit-map", str(results), "--out", str(out)]) == 0
+    doc = _strict_json(out.read_text())
+    assert doc["kind"] == "paper10" and doc["metadata"]["robot"] == "ur5e"
+
+
+def test_a_map_of_another_robot_is_refused_naming_both():
+    ur10e = tvist.robots.ur10e(5.0, (0, 0, 0.05))
+    paper = tvist.DynamicMap.paper_ur5e()
+    assert paper.robot == "ur5e" and ur10e.core.name == "ur10e"
+    # It used to run silently (zeta 0.49 / 0.67 on the UR10e).
+    with pytest.raises(ValueError, match="identified on ur5e, not on ur10e"):
+        tvist.MapDynamics(ur10e, paper)
+    provider = tvist.MapDynamics(ur10e, paper, allow_other_robot=True)
+    assert provider.n_modes == 2
+    # A map without a robot name, or of the same robot, is accepted.
+    anonymous = tvist.DynamicMap(paper.mode_maps)
+    assert anonymous.robot is None
+    tvist.MapDynamics(ur10e, anonymous)
+    tvist.MapDynamics(tvist.robots.ur5e(5.0, (0, 0, 0.05)), paper)
+
+
+def test_hostile_map_files_give_value_errors(tmp_path):
+    text = tvist.DynamicMap.paper_ur5e().to_json()
+    # "k_0": 1 followed by 400 zeros used to raise OverflowError; 100k nested "[" a
+    # RecursionError.
+    huge = text.replace('"k_0": 10000.0', '"k_0": 1' + "0" * 400, 1)
+    assert huge != text
+    with pytest.raises(ValueError, match="number out of range"):
+        tvist.DynamicMap.load(_write(tmp_path, huge))
+    with pytest.raises(ValueError, match="recursion limit"):
+        tvist.DynamicMap.load(_write(tmp_path, "[" * 100_000 + "]" * 100_000))
+    with pytest.raises(ValueError, match="not UTF-8"):
+        path = tmp_path / "latin1.json"
+        path.write_bytes(text.replace("Thomsen", "Th\xf6msen").encode("latin-1"))
+        tvist.DynamicMap.load(path)
+    # Deep nesting built in Python is refused too.
+    deep: list = []
+    for _ in range(200):
+        deep = [deep]
+    with pytest.raises(ValueError, match="nested deeper"):
+        tvist.DynamicMap(paper_modes(), metadata={"robot": "ur5e", "deep": deep})
+
+
+def paper_modes() -> list:
+    return tvist.DynamicMap.paper_ur5e().mode_maps

@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import dataclasses
 import json
-from importlib import resources
+import shutil
+import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -59,7 +61,7 @@ def _random_poses(n_dof: int, seed: int) -> np.ndarray:
 
 
 def test_data_file_has_every_robot_with_the_schema_fields():
-    doc = json.loads(resources.files("tvist.robots").joinpath("ur_e_series.json").read_text())
+    doc = json.loads(tvist._core.ROBOT_DATA_JSON)
     assert doc["schema_version"] == 1
     assert set(doc["robots"]) == {"ur3e", "ur5e", "ur10e", "ur16e", "ur20"}
     for entry in doc["robots"].values():
@@ -116,7 +118,7 @@ def test_robot_params_reject_bad_fields(change, message):
 
 
 def test_from_dict_names_a_missing_field():
-    doc = json.loads(resources.files("tvist.robots").joinpath("ur_e_series.json").read_text())
+    doc = json.loads(tvist._core.ROBOT_DATA_JSON)
     entry = dict(doc["robots"]["ur3e"])
     del entry["mass_kg"]
     with pytest.raises(ValueError, match="mass_kg"):
@@ -177,7 +179,34 @@ def test_robot_methods_reject_wrong_shapes():
 
 
 def _data_text() -> str:
-    return resources.files("tvist.robots").joinpath("ur_e_series.json").read_text()
+    """The robot data as the core embeds it (an independent parse for these checks)."""
+    return tvist._core.ROBOT_DATA_JSON
+
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA_FILE = ROOT / "crates" / "tvist-core" / "data" / "ur_e_series.json"
+
+
+def test_the_robot_data_lives_in_the_core_crate_and_packages_with_it():
+    # One file, inside the crate: the core embeds it, Python reads it from the core.
+    assert DATA_FILE.read_text(encoding="utf-8") == tvist._core.ROBOT_DATA_JSON
+    assert not list((ROOT / "python").rglob("ur_e_series.json"))
+    cargo = shutil.which("cargo")
+    assert cargo is not None, "cargo is needed (make test installs nothing without it)"
+    listing = subprocess.run(
+        [cargo, "package", "-p", "tvist-core", "--features", "json", "--list", "--allow-dirty"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.split()
+    assert "data/ur_e_series.json" in listing
+    # Every field of the Python record comes from the core's parse.
+    entry = json.loads(_data_text())["robots"]["ur10e"]
+    p = params("ur10e")
+    np.testing.assert_array_equal(p.d_m, entry["dh"]["d"])
+    np.testing.assert_array_equal(p.joint_limits_rad, entry["joint_limits_rad"])
+    assert (p.description, p.max_payload_kg) == (entry["description"], entry["max_payload_kg"])
 
 
 def test_cylinder_robots_are_ur3e_and_ur5e_and_their_source_says_so():

@@ -16,6 +16,8 @@ from tvist.dynmap import DynamicMap, MapDynamics
 from tvist.ztdis import ZeroDelayResult, zero_delay
 
 __all__ = [
+    "MAX_DELAY_LINE_BYTES",
+    "MAX_DOF",
     "SHAPERS",
     "ConstantModes",
     "DynamicMap",
@@ -46,8 +48,13 @@ def __getattr__(name: str):
 #: Names of the registry shapers, for :func:`shaper` and ``TvShaper(shaper=...)``.
 SHAPERS: tuple[str, ...] = tuple(_core.SHAPERS)
 
-#: Per-step status flags reported by ``TvShaper.last_status`` (values fixed by the core).
+#: Per-step status flags reported by ``TvShaper.last_status`` (defined once, in the core).
 Status = enum.IntFlag("Status", {"OK": 0, **_core.STATUS_FLAGS})
+
+#: Largest ``n_dof`` of a shaper, and largest total delay-line memory (bytes) it may request;
+#: larger requests raise ``ValueError`` (limits of the core, shared with the C API).
+MAX_DOF: int = _core.MAX_DOF
+MAX_DELAY_LINE_BYTES: int = _core.MAX_DELAY_LINE_BYTES
 
 
 def shaper(

@@ -28,9 +28,10 @@ them). A saturated evaluation is normal operation, not an error. A range needs
 Missing or ``null`` is unbounded (the paper's map, whose Table 3 values hold at any inertia).
 :func:`tvist.ident.fit_map` sets the ranges from its data.
 
-Map files are JSON::
+Map files are strict JSON, read, checked and written by the Rust core (one validation for
+Python, Rust and C; errors name the field path, e.g. ``modes[1].k_0``)::
 
-    {"schema_version": 1, "kind": "tvist.dynamic_map",
+    {"schema_version": 1, "kind": "paper10",
      "metadata": {"robot": "ur5e", "payload": {...} | null, "source": "...",
                   "fit_statistics": {...} | null},
      "modes": [{"k_0": ..., "k_j": ..., "k_g": ..., "k_p": ..., "c_0": ..., "c_1": ...,
@@ -39,13 +40,18 @@ Map files are JSON::
                 "frequency_inertia_range_kg_m2": [0.7, 9.1] | null,     # optional
                 "damping_inertia_range_kg_m2": [0.2, 9.3] | null}, ...]} # optional
 
+``schema_version`` is the integer 1. ``kind`` names the form of the map: ``"paper10"`` is the
+ten-coefficient map above; files written before (``"tvist.dynamic_map"`` or no ``kind``) read
+as ``"paper10"``. ``metadata.robot`` names the robot the map was identified on:
+:class:`MapDynamics` refuses the map for another robot unless ``allow_other_robot=True``.
+The gain exponents must lie within ±2 (the published forms use −½, 0, ½, 1). No ``NaN`` or
+``Infinity`` tokens are read or written: ``null`` means unbounded for a range and "not
+available" for metadata (a statistic that could not be computed is written as ``null``).
 The range fields are optional, so files written before they existed load unchanged.
 """
 
 from __future__ import annotations
 
-import json
-import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -55,92 +61,24 @@ import numpy as np
 from tvist import _core
 from tvist.robots import Payload, Robot
 
-SCHEMA_VERSION = 1
-KIND = "tvist.dynamic_map"
+SCHEMA_VERSION: int = _core.MAP_SCHEMA_VERSION
+#: ``kind`` of the ten-coefficient map written by this version.
+KIND: str = _core.MAP_KIND_PAPER10
 #: Fields of one mode, all required in a map file.
 MODE_FIELDS: tuple[str, ...] = tuple(_core.MODE_MAP_FIELDS)
 #: Optional fields of one mode: ``[J_min, J_max]`` (kg m²) of ``J_f`` and of ``J_d``.
 RANGE_FIELDS: tuple[str, ...] = tuple(_core.MODE_MAP_RANGE_FIELDS)
-_INTEGER_FIELDS = ("frequency_joint", "damping_joint")
-_METADATA_FIELDS = ("robot", "payload", "source", "fit_statistics")
 
 
-def _number(value: Any, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"{where}: must be a number, got {value!r}")
-    if not math.isfinite(float(value)):
-        raise ValueError(f"{where}: must be finite, got {value!r}")
-    return float(value)
-
-
-def _range(value: Any, where: str) -> list[float] | None:
-    """A validated ``[J_min, J_max]`` (kg m²), or ``None`` (unbounded)."""
-    if value is None:
-        return None
-    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 2:
-        raise ValueError(f"{where}: must be [min, max] in kg m² or null, got {value!r}")
-    lo, hi = _number(value[0], f"{where}[0] (min)"), _number(value[1], f"{where}[1] (max)")
-    if lo <= 0.0:
-        raise ValueError(f"{where}: min must be > 0 kg m², got [{lo}, {hi}]")
-    if lo >= hi:
-        raise ValueError(f"{where}: min must be < max, got [{lo}, {hi}]")
-    return [lo, hi]
-
-
-def _validate_mode(mode: Any, where: str) -> dict[str, Any]:
-    if not isinstance(mode, Mapping):
-        raise ValueError(f"{where}: must be an object with fields {', '.join(MODE_FIELDS)}")
-    unknown = sorted(set(mode) - set(MODE_FIELDS) - set(RANGE_FIELDS))
-    if unknown:
-        raise ValueError(f"{where}: unknown field(s) {', '.join(unknown)}")
-    out: dict[str, Any] = {}
-    for key in MODE_FIELDS:
-        if key not in mode:
-            raise ValueError(f"{where}.{key}: missing")
-        value = mode[key]
-        if key in _INTEGER_FIELDS:
-            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-                raise ValueError(f"{where}.{key}: must be a joint index >= 0, got {value!r}")
-            out[key] = value
-        else:
-            out[key] = _number(value, f"{where}.{key}")
-    for key in RANGE_FIELDS:
-        out[key] = _range(mode.get(key), f"{where}.{key}")
-    f_range, d_range = (out[key] for key in RANGE_FIELDS)
-    if out["frequency_joint"] == out["damping_joint"] and f_range != d_range:
-        raise ValueError(
-            f"{where}: frequency and damping both read joint {out['frequency_joint']}, so "
-            f"{RANGE_FIELDS[0]} and {RANGE_FIELDS[1]} must be equal (got {f_range} and "
-            f"{d_range})"
-        )
-    return out
-
-
-def _validate_metadata(metadata: Any) -> dict[str, Any]:
+def _plain_metadata(metadata: Mapping[str, Any] | None) -> dict[str, Any] | None:
+    """``metadata`` with a :class:`~tvist.robots.Payload` written as its dict."""
     if metadata is None:
-        return {key: None for key in _METADATA_FIELDS}
+        return None
     if not isinstance(metadata, Mapping):
         raise ValueError("metadata: must be an object")
     out = dict(metadata)
-    for key in _METADATA_FIELDS:
-        out.setdefault(key, None)
-    if out["robot"] is not None and not isinstance(out["robot"], str):
-        raise ValueError(f"metadata.robot: must be a string or null, got {out['robot']!r}")
-    if out["source"] is not None and not isinstance(out["source"], str):
-        raise ValueError(f"metadata.source: must be a string or null, got {out['source']!r}")
-    payload = out["payload"]
-    if isinstance(payload, Payload):
-        out["payload"] = payload.to_dict()
-    elif payload is not None:
-        if not isinstance(payload, Mapping):
-            raise ValueError("metadata.payload: must be an object or null")
-        try:
-            out["payload"] = Payload(**payload).to_dict()
-        except (TypeError, ValueError) as exc:
-            raise ValueError(f"metadata.payload: {exc}") from None
-    stats = out["fit_statistics"]
-    if stats is not None and not isinstance(stats, Mapping):
-        raise ValueError("metadata.fit_statistics: must be an object or null")
+    if isinstance(out.get("payload"), Payload):
+        out["payload"] = out["payload"].to_dict()
     return out
 
 
@@ -167,7 +105,8 @@ def general_mode(
         frequency_inertia_range_kg_m2=j_range,
         damping_inertia_range_kg_m2=j_range,
     )
-    return _validate_mode(mode, f"mode for joint {joint}")
+    _core.DynamicMap([mode])  # the core's validation (ValueError naming the field)
+    return mode
 
 
 class DynamicMap:
@@ -195,14 +134,24 @@ class DynamicMap:
     ) -> None:
         if isinstance(modes, (str, bytes)) or not isinstance(modes, Sequence) or not modes:
             raise ValueError("modes: must be a non-empty list of mode objects")
-        checked = [_validate_mode(m, f"modes[{i}]") for i, m in enumerate(modes)]
-        self._core = _core.DynamicMap(checked)
-        self.metadata: dict[str, Any] = _validate_metadata(metadata)
+        document = {
+            "schema_version": SCHEMA_VERSION,
+            "kind": KIND,
+            "metadata": _plain_metadata(metadata),
+            "modes": [dict(m) if isinstance(m, Mapping) else m for m in modes],
+        }
+        self._core, self.metadata = _core.map_from_document(document)
+
+    @classmethod
+    def _from_core(cls, core: _core.DynamicMap, metadata: dict[str, Any]) -> DynamicMap:
+        out = cls.__new__(cls)
+        out._core, out.metadata = core, metadata
+        return out
 
     @classmethod
     def paper_ur5e(cls) -> DynamicMap:
         """The paper's UR5e map: Table 1 (base, eqs. 47-48) and Table 2 (shoulder, eqs. 50-51)."""
-        modes = _core.DynamicMap.paper_ur5e().modes
+        modes = _core.DynamicMap.paper_ur5e().modes  # the core's Tables 1-2
         metadata = {
             "robot": "ur5e",
             "payload": None,
@@ -294,45 +243,40 @@ class DynamicMap:
         tau = robot.gravity_torque(q) if self.uses_gravity else None
         return self.modes_from_inertia(j, tau)
 
+    @property
+    def robot(self) -> str | None:
+        """The robot the map was identified on (``metadata["robot"]``), or ``None``."""
+        return self.metadata.get("robot")
+
     def to_dict(self) -> dict[str, Any]:
-        """The JSON document of this map."""
-        return {
-            "schema_version": SCHEMA_VERSION,
-            "kind": KIND,
-            "metadata": self.metadata,
-            "modes": self.mode_maps,
-        }
+        """The JSON document of this map (as the core writes it)."""
+        return _core.map_document(self._core, _plain_metadata(self.metadata))
+
+    def to_json(self) -> str:
+        """The map file's text: strict JSON (no NaN or Infinity; see the module docstring)."""
+        return _core.write_map(self._core, _plain_metadata(self.metadata))
 
     def save(self, path: str | Path) -> None:
-        """Write the map as JSON (see the module docstring for the format)."""
-        Path(path).write_text(json.dumps(self.to_dict(), indent=2) + "\n", encoding="utf-8")
+        """Write the map file (see the module docstring for the format)."""
+        Path(path).write_text(self.to_json(), encoding="utf-8")
 
     @classmethod
     def from_dict(cls, doc: Any) -> DynamicMap:
         """Validate and build from a parsed map document."""
-        if not isinstance(doc, Mapping):
-            raise ValueError("map file: top level must be a JSON object")
-        version = doc.get("schema_version")
-        if version != SCHEMA_VERSION:
-            raise ValueError(f"schema_version: expected {SCHEMA_VERSION}, got {version!r}")
-        if doc.get("kind", KIND) != KIND:
-            raise ValueError(f"kind: expected {KIND!r}, got {doc.get('kind')!r}")
-        if "modes" not in doc:
-            raise ValueError("modes: missing")
-        modes = doc["modes"]
-        if not isinstance(modes, list) or not modes:
-            raise ValueError("modes: must be a non-empty list of mode objects")
-        return cls(modes, doc.get("metadata"))
+        return cls._from_core(*_core.map_from_document(doc))
 
     @classmethod
     def load(cls, path: str | Path) -> DynamicMap:
-        """Read and validate a map file; malformed files raise ValueError naming the field."""
-        text = Path(path).read_text(encoding="utf-8")
+        """Read and validate a map file; malformed files raise ValueError naming the file and
+        the field (overflowing numbers, NaN tokens and deep nesting included)."""
         try:
-            doc = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{path}: not valid JSON ({exc})") from None
-        return cls.from_dict(doc)
+            text = Path(path).read_text(encoding="utf-8")
+        except UnicodeDecodeError as exc:
+            raise ValueError(f"{path}: not UTF-8 text ({exc})") from None
+        try:
+            return cls._from_core(*_core.parse_map(text))
+        except ValueError as exc:
+            raise ValueError(f"{path}: {exc}") from None
 
     def __repr__(self) -> str:
         return f"DynamicMap(n_modes={self.n_modes}, robot={self.metadata.get('robot')!r})"
@@ -352,17 +296,24 @@ class MapDynamics(_core.MapDynamics):
     robot
         The arm with its payload (:class:`tvist.robots.Robot`).
     dynmap
-        The map (:class:`DynamicMap`).
+        The map (:class:`DynamicMap`). A map identified on another robot (its
+        ``metadata["robot"]`` differs from the robot's name) raises ``ValueError`` naming both.
+    allow_other_robot
+        Accept such a map anyway (research use).
     """
 
-    def __new__(cls, robot: Robot, dynmap: DynamicMap) -> MapDynamics:
+    def __new__(
+        cls, robot: Robot, dynmap: DynamicMap, *, allow_other_robot: bool = False
+    ) -> MapDynamics:
         if not isinstance(robot, Robot):
             raise TypeError(f"robot must be a tvist.robots.Robot, got {type(robot).__name__}")
         if not isinstance(dynmap, DynamicMap):
             raise TypeError(f"dynmap must be a tvist.DynamicMap, got {type(dynmap).__name__}")
-        return super().__new__(cls, robot.core, dynmap.core)
+        return super().__new__(cls, robot.core, dynmap.core, bool(allow_other_robot))
 
-    def __init__(self, robot: Robot, dynmap: DynamicMap) -> None:
+    def __init__(
+        self, robot: Robot, dynmap: DynamicMap, *, allow_other_robot: bool = False
+    ) -> None:
         self.robot = robot
         self.dynmap = dynmap
 

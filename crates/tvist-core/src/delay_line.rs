@@ -59,14 +59,7 @@ impl DelayLine {
                 "maximum delay {max_delay_samples} samples must be finite and >= 0"
             )));
         }
-        if max_delay_samples > 1e7 {
-            return Err(Error::InvalidParameter(format!(
-                "maximum delay of {max_delay_samples:.0} samples is unreasonably long (> 1e7)"
-            )));
-        }
-        // ceil(max) + reach + 1 slots: the farthest stencil point of the longest delay is
-        // age floor(max) + reach <= capacity - 1.
-        let capacity = max_delay_samples.ceil() as usize + interp.reach() + 1;
+        let capacity = Self::capacity_for(max_delay_samples, interp)?;
         Ok(DelayLine {
             n_channels,
             capacity,
@@ -74,6 +67,18 @@ impl DelayLine {
             interp,
             buf: vec![0.0; capacity * n_channels],
         })
+    }
+
+    /// Slots of a line that reads delays up to `max_delay_samples` (finite, `>= 0`).
+    pub fn capacity_for(max_delay_samples: f64, interp: Interpolation) -> Result<usize, Error> {
+        if max_delay_samples > 1e7 {
+            return Err(Error::InvalidParameter(format!(
+                "maximum delay of {max_delay_samples:.0} samples is unreasonably long (> 1e7)"
+            )));
+        }
+        // ceil(max) + reach + 1 slots: the farthest stencil point of the longest delay is
+        // age floor(max) + reach <= capacity - 1.
+        Ok(max_delay_samples.ceil() as usize + interp.reach() + 1)
     }
 
     pub fn n_channels(&self) -> usize {

@@ -78,6 +78,13 @@ pub const RANGE_BLEND_WIDTH: f64 = 0.05;
 /// any published or fitted `k_g` (< 100 N m/rad per N m).
 pub const GRAVITY_TORQUE_SMOOTHING_NM: f64 = 1.0;
 
+/// Largest magnitude of a gain exponent `e_d`, `e_f`. The published forms use −½, 0, ½ and 1;
+/// an exponent of, say, −10⁶ would silently drive `ζ` to 0 (or to infinity) at every pose.
+pub const MAX_GAIN_EXPONENT: f64 = 2.0;
+
+/// Largest joint index a mode may read (one below [`crate::limits::MAX_DOF`]).
+pub const MAX_JOINT_INDEX: usize = crate::limits::MAX_DOF - 1;
+
 /// The ten coefficients of eqs. 42–43 (SI units: N m/rad, N m s, kg m²).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MapCoefficients {
@@ -377,15 +384,22 @@ fn power(x: f64, e: f64) -> f64 {
     }
 }
 
-/// A dynamic map: one [`ModeMap`] per mode, in cascade order.
+/// The robot the paper's map ([`DynamicMap::paper_ur5e`]) was identified on.
+pub const PAPER_MAP_ROBOT: &str = "ur5e";
+
+/// A dynamic map: one [`ModeMap`] per mode, in cascade order, and the robot it was
+/// identified on (if known).
 #[derive(Debug, Clone, PartialEq)]
 pub struct DynamicMap {
     modes: Vec<ModeMap>,
+    robot: Option<String>,
 }
 
 impl DynamicMap {
-    /// Validates (at least one mode, finite coefficients and exponents, and equal ranges for
-    /// a joint that drives both frequency and damping).
+    /// Validates (at least one mode, finite coefficients, exponents within
+    /// ±[`MAX_GAIN_EXPONENT`], joint indices up to [`MAX_JOINT_INDEX`], and equal ranges for a
+    /// joint that drives both frequency and damping). The robot is unknown until
+    /// [`Self::for_robot`].
     pub fn new(modes: Vec<ModeMap>) -> Result<DynamicMap, Error> {
         if modes.is_empty() {
             return Err(Error::InvalidParameter(
@@ -400,11 +414,27 @@ impl DynamicMap {
                     )));
                 }
             }
-            if !(mode.damping_gain_exponent.is_finite() && mode.frequency_gain_exponent.is_finite())
-            {
-                return Err(Error::InvalidParameter(format!(
-                    "dynamic map mode {m}: gain exponents must be finite"
-                )));
+            for (name, e) in [
+                ("damping_gain_exponent", mode.damping_gain_exponent),
+                ("frequency_gain_exponent", mode.frequency_gain_exponent),
+            ] {
+                if !(e.is_finite() && e.abs() <= MAX_GAIN_EXPONENT) {
+                    return Err(Error::InvalidParameter(format!(
+                        "dynamic map mode {m}: {name} = {e} must be finite and within \
+                         ±{MAX_GAIN_EXPONENT} (the published forms use -0.5, 0, 0.5 and 1)"
+                    )));
+                }
+            }
+            for (name, joint) in [
+                ("frequency_joint", mode.frequency_joint),
+                ("damping_joint", mode.damping_joint),
+            ] {
+                if joint > MAX_JOINT_INDEX {
+                    return Err(Error::InvalidParameter(format!(
+                        "dynamic map mode {m}: {name} = {joint} exceeds the largest joint \
+                         index {MAX_JOINT_INDEX}"
+                    )));
+                }
             }
             if mode.frequency_joint == mode.damping_joint
                 && mode.frequency_range != mode.damping_range
@@ -416,10 +446,21 @@ impl DynamicMap {
                 )));
             }
         }
-        Ok(DynamicMap { modes })
+        Ok(DynamicMap { modes, robot: None })
     }
 
-    /// The UR5e map of the paper: Table 1 for the base mode (eqs. 47–48, joint 0) and
+    /// The same map, marked as identified on robot `name` (for example `"ur5e"`).
+    pub fn for_robot(mut self, name: impl Into<String>) -> DynamicMap {
+        self.robot = Some(name.into());
+        self
+    }
+
+    /// The robot the map was identified on, if known.
+    pub fn robot(&self) -> Option<&str> {
+        self.robot.as_deref()
+    }
+
+    /// The UR5e map of the paper (identified on [`PAPER_MAP_ROBOT`]): Table 1 for the base mode (eqs. 47–48, joint 0) and
     /// Table 2 for the shoulder mode (eqs. 50–51, joint 1). It carries no inertia ranges (the
     /// paper publishes none), so Table 3 is reproduced exactly at any inertia.
     pub fn paper_ur5e() -> DynamicMap {
@@ -430,6 +471,7 @@ impl DynamicMap {
                 ModeMap::base_from_shoulder(base, 0, 1),
                 ModeMap::general(shoulder, 1),
             ],
+            robot: Some(PAPER_MAP_ROBOT.to_string()),
         }
     }
 

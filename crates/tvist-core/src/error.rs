@@ -30,6 +30,23 @@ pub enum Error {
     },
     /// The filter cannot size its delay line: the provider gives no delay bound and none was set.
     UnknownDelayBound,
+    /// A malformed document (map file, robot data): `path` names the field (for example
+    /// `modes[1].k_0`, or `(document)` for the text as a whole), `reason` says what is wrong.
+    Document { path: String, reason: String },
+    /// A dynamic map identified on one robot used with another.
+    RobotMismatch { map_robot: String, robot: String },
+    /// A setup request beyond a documented resource limit ([`crate::limits`]).
+    TooLarge(String),
+}
+
+impl Error {
+    /// A [`Error::Document`] error at field `path`.
+    pub fn document(path: impl Into<String>, reason: impl Into<String>) -> Error {
+        Error::Document {
+            path: path.into(),
+            reason: reason.into(),
+        }
+    }
 }
 
 impl fmt::Display for Error {
@@ -68,6 +85,14 @@ impl fmt::Display for Error {
                 f,
                 "the dynamics provider gives no bound on the shaper delay; set max_delay_s"
             ),
+            Error::Document { path, reason } => write!(f, "{path}: {reason}"),
+            Error::RobotMismatch { map_robot, robot } => write!(
+                f,
+                "the dynamic map was identified on {map_robot}, not on {robot}: identify a \
+                 map for {robot} (tvist campaign, tvist fit-map) or explicitly allow a map \
+                 of another robot"
+            ),
+            Error::TooLarge(msg) => write!(f, "setup request too large: {msg}"),
         }
     }
 }
@@ -97,6 +122,24 @@ impl Status {
     /// A mode's damping ratio exceeded the range of the shaper's published approximation
     /// ([`crate::shaper::ShaperKind::max_zeta`]); the shaper was designed at that limit.
     pub const ZETA_CLAMPED: Status = Status(32);
+    /// A mode's natural frequency is at or above the Nyquist frequency of the control rate
+    /// (`ω_n >= π/dt_s`): the mode cannot be represented at this rate, so shaping cannot
+    /// cancel it. The shaper is still designed for the mode as given (its impulses then lie
+    /// within one sample: a sub-sample smoothing that changes the reference by little); the
+    /// flag says that the mode is out of reach.
+    pub const MODE_ABOVE_NYQUIST: Status = Status(64);
+
+    /// Every flag with its name: the one list the bindings and `tvist.h` are checked against.
+    /// Flag `k` of this list is bit `1 << k`.
+    pub const FLAGS: [(&'static str, Status); N_STATUS_FLAGS] = [
+        ("INPUT_HELD", Status::INPUT_HELD),
+        ("MODES_HELD", Status::MODES_HELD),
+        ("DELAY_CLAMPED", Status::DELAY_CLAMPED),
+        ("UNSHAPED", Status::UNSHAPED),
+        ("BAD_LENGTH", Status::BAD_LENGTH),
+        ("ZETA_CLAMPED", Status::ZETA_CLAMPED),
+        ("MODE_ABOVE_NYQUIST", Status::MODE_ABOVE_NYQUIST),
+    ];
 
     /// True if every bit of `flag` is set.
     #[inline]
@@ -108,6 +151,52 @@ impl Status {
     #[inline]
     pub fn is_ok(self) -> bool {
         self.0 == 0
+    }
+}
+
+/// Number of status flags ([`Status::FLAGS`]).
+pub const N_STATUS_FLAGS: usize = 7;
+
+/// How many cycles reported each status flag: `counts()[k]` counts flag `Status::FLAGS[k]`.
+/// Allocation-free; counts saturate at `u64::MAX`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct StatusCounter {
+    counts: [u64; N_STATUS_FLAGS],
+}
+
+impl StatusCounter {
+    /// Counts every flag set in `status` once.
+    #[inline]
+    pub fn add(&mut self, status: Status) {
+        for (count, (_, flag)) in self.counts.iter_mut().zip(Status::FLAGS) {
+            *count = count.saturating_add(u64::from(status.contains(flag)));
+        }
+    }
+
+    /// The count of every flag, in the order of [`Status::FLAGS`].
+    pub fn counts(&self) -> &[u64; N_STATUS_FLAGS] {
+        &self.counts
+    }
+
+    /// The count of one flag (0 for a value that is not a single flag).
+    pub fn count(&self, flag: Status) -> u64 {
+        Status::FLAGS
+            .iter()
+            .position(|&(_, f)| f == flag)
+            .map_or(0, |k| self.counts[k])
+    }
+
+    /// `(flag name, count)` pairs in the order of [`Status::FLAGS`].
+    pub fn named(&self) -> impl Iterator<Item = (&'static str, u64)> + '_ {
+        Status::FLAGS
+            .iter()
+            .zip(&self.counts)
+            .map(|(&(name, _), &count)| (name, count))
+    }
+
+    /// Back to zero.
+    pub fn clear(&mut self) {
+        self.counts = [0; N_STATUS_FLAGS];
     }
 }
 
@@ -123,5 +212,29 @@ impl core::ops::BitOrAssign for Status {
     #[inline]
     fn bitor_assign(&mut self, rhs: Status) {
         self.0 |= rhs.0;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flags_are_the_distinct_bits_in_order() {
+        for (k, (_, flag)) in Status::FLAGS.iter().enumerate() {
+            assert_eq!(flag.0, 1 << k);
+        }
+    }
+
+    #[test]
+    fn the_counter_counts_each_flag_of_a_status() {
+        let mut c = StatusCounter::default();
+        c.add(Status::INPUT_HELD | Status::MODE_ABOVE_NYQUIST);
+        c.add(Status::INPUT_HELD);
+        c.add(Status::OK);
+        assert_eq!(c.count(Status::INPUT_HELD), 2);
+        assert_eq!(c.count(Status::MODE_ABOVE_NYQUIST), 1);
+        assert_eq!(c.count(Status::MODES_HELD), 0);
+        assert_eq!(c.counts().iter().sum::<u64>(), 3);
     }
 }

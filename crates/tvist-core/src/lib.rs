@@ -10,7 +10,10 @@
 //!   inertia (composite rigid body) and gravity torques, allocation-free per call.
 //! - [`dynmap`]: the dynamic map from joint-axis inertias to modes (eqs. 42–51).
 //! - [`map_dynamics`]: the provider that evaluates robot inertia and map every cycle.
-//! - `robot_data` (feature `json`): the UR e-series parameter file, embedded.
+//! - `robot_data` (feature `json`): the UR e-series parameter file (`data/`), embedded and
+//!   parsed once.
+//! - `map_file` (feature `json`): the map file format: parse, validate, write.
+//! - [`limits`]: setup limits shared by every binding (channels, delay-line memory).
 //! - [`ztdis`]: zero-time-delay shaping: time scales and the modified-ZTDIS compensator.
 //!
 //! Conventions: SI units with the unit in the name (`dt_s`, `wn_rad_s`); block data is
@@ -23,7 +26,10 @@ pub mod dynmap;
 pub mod ei;
 pub mod error;
 mod held_input;
+pub mod limits;
 pub mod map_dynamics;
+#[cfg(feature = "json")]
+pub mod map_file;
 pub mod multimode;
 pub mod prv;
 pub mod robot;
@@ -34,9 +40,9 @@ pub mod tvist;
 pub mod ztdis;
 
 pub use delay_line::{DelayLine, Interpolation};
-pub use dynamics::{ConstantModes, Dynamics};
+pub use dynamics::{ConstantModes, Dynamics, NoCallback, Provider};
 pub use dynmap::{DynamicMap, InertiaRange, MapCoefficients, ModeMap};
-pub use error::{Error, Status};
+pub use error::{Error, Status, StatusCounter};
 pub use map_dynamics::MapDynamics;
 pub use multimode::{TvShaper, TvShaperConfig};
 pub use prv::prv;

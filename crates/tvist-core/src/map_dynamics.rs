@@ -36,7 +36,25 @@ impl MapDynamics {
     /// ranges (see [`crate::dynmap`]): a fitted map that would be overdamped only by
     /// extrapolation is accepted, one that is invalid at inertias inside its own range that the
     /// robot reaches is rejected.
+    ///
+    /// A map identified on another robot than `robot` (both names known and different) is
+    /// refused with [`Error::RobotMismatch`]; [`Self::new_allowing_other_robot`] skips that
+    /// check.
     pub fn new(robot: Robot, map: DynamicMap) -> Result<MapDynamics, Error> {
+        if let (Some(map_robot), Some(name)) = (map.robot(), robot.name()) {
+            if map_robot != name {
+                return Err(Error::RobotMismatch {
+                    map_robot: map_robot.to_string(),
+                    robot: name.to_string(),
+                });
+            }
+        }
+        Self::new_allowing_other_robot(robot, map)
+    }
+
+    /// As [`Self::new`] without the robot-name check: for research, e.g. trying one robot's
+    /// map on another. Every other check applies.
+    pub fn new_allowing_other_robot(robot: Robot, map: DynamicMap) -> Result<MapDynamics, Error> {
         let n = robot.n_dof();
         if map.required_joints() > n {
             return Err(Error::DimensionMismatch {

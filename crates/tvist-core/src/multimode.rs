@@ -4,7 +4,7 @@
 //! of the cascade (it stands in for where the robot is), and filter `m` uses mode `m`. Chaining
 //! filters that each update from their own input would be wrong.
 
-use crate::delay_line::Interpolation;
+use crate::delay_line::{DelayLine, Interpolation};
 use crate::dynamics::Dynamics;
 use crate::error::{Error, Status};
 use crate::held_input::HeldInput;
@@ -77,6 +77,7 @@ impl<D: Dynamics> TvShaper<D> {
         if n_dof == 0 {
             return Err(Error::InvalidParameter("n_dof must be at least 1".into()));
         }
+        crate::limits::check_n_dof(n_dof)?;
         if let Some(expected) = dynamics.n_dof() {
             if expected != n_dof {
                 return Err(Error::DimensionMismatch {
@@ -97,7 +98,7 @@ impl<D: Dynamics> TvShaper<D> {
                 "the dynamics provider has no modes; at least one is required".into(),
             ));
         }
-        let mut filters = Vec::with_capacity(n_modes);
+        let mut max_delays_s = Vec::with_capacity(n_modes);
         for m in 0..n_modes {
             if let Some(slowest) = dynamics.slowest_mode(m) {
                 slowest.validate(m)?;
@@ -118,6 +119,25 @@ impl<D: Dynamics> TvShaper<D> {
                     safety_factor * shaper.design(slowest).duration_s()
                 }
             };
+            max_delays_s.push(max_delay);
+        }
+        // The memory of every delay line is bounded before any of it is allocated.
+        let mut bytes = Some(0usize);
+        for &max_delay in &max_delays_s {
+            if !(max_delay.is_finite() && max_delay >= 0.0) {
+                break; // refused with its own message by ModeFilter::new below
+            }
+            let slots = DelayLine::capacity_for(max_delay / dt_s, interp)?;
+            bytes = bytes
+                .zip(slots.checked_mul(n_dof))
+                .and_then(|(b, values)| b.checked_add(values.checked_mul(8)?));
+        }
+        crate::limits::check_delay_line_bytes(
+            bytes,
+            &format!("{n_modes} mode(s) × {n_dof} channel(s)"),
+        )?;
+        let mut filters = Vec::with_capacity(n_modes);
+        for max_delay in max_delays_s {
             filters.push(ModeFilter::new(shaper, n_dof, dt_s, max_delay, interp)?);
         }
         Ok(TvShaper {

@@ -174,6 +174,9 @@ pub struct Robot {
     /// `links` with the payload merged into the last one: what the dynamics use.
     bodies: Vec<RigidBody>,
     ws: Workspace,
+    /// The robot's name (for example `"ur5e"`), if it has one: dynamic maps are checked
+    /// against it.
+    name: Option<String>,
 }
 
 impl Robot {
@@ -216,9 +219,38 @@ impl Robot {
             links,
             payload,
             ws: Workspace::new(n),
+            name: None,
         };
         robot.merge_payload();
+        robot.check_bounds_finite()?;
         Ok(robot)
+    }
+
+    /// Refuses a model whose inertias or gravity torques can overflow (a finite but huge
+    /// mass or centre of mass, e.g. a payload 1e200 m from the flange): every quantity the
+    /// model computes is below these bounds, so finite bounds mean finite results.
+    fn check_bounds_finite(&self) -> Result<(), Error> {
+        let inertia = self.joint_inertia_upper_bound();
+        let torque = self.gravity_torque_upper_bound();
+        if inertia.iter().chain(&torque).all(|v| v.is_finite()) {
+            return Ok(());
+        }
+        Err(Error::InvalidParameter(format!(
+            "the masses and centres of mass give non-finite joint inertias or gravity torques \
+             (payload {} kg at com_m = {:?} m): use physical values",
+            self.payload.mass_kg, self.payload.com_m
+        )))
+    }
+
+    /// The same robot with a name (checked against a dynamic map's robot).
+    pub fn with_name(mut self, name: impl Into<String>) -> Robot {
+        self.name = Some(name.into());
+        self
+    }
+
+    /// The robot's name, if it has one.
+    pub fn name(&self) -> Option<&str> {
+        self.name.as_deref()
     }
 
     fn merge_payload(&mut self) {
@@ -230,8 +262,14 @@ impl Robot {
     /// Replaces the payload (setup-time call: validates).
     pub fn set_payload(&mut self, payload: RigidBody) -> Result<(), Error> {
         payload.validate("payload")?;
+        let previous = self.payload;
         self.payload = payload;
         self.merge_payload();
+        if let Err(e) = self.check_bounds_finite() {
+            self.payload = previous;
+            self.merge_payload();
+            return Err(e);
+        }
         Ok(())
     }
 

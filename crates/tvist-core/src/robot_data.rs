@@ -1,16 +1,18 @@
-//! Robot parameters read from the project's robot-data file (feature `json`).
+//! Robot parameters from the crate's robot-data file (feature `json`).
 //!
-//! The UR e-Series parameters live in exactly one place, `python/tvist/robots/ur_e_series.json`
-//! (schema in its `conventions` field); this module embeds that file and turns one of its
-//! `robots` entries into the joints and links of a [`Robot`]. Setup-time only: parsing
-//! allocates.
+//! The UR e-Series parameters live in exactly one place, `data/ur_e_series.json` in this crate
+//! (schema in its `conventions` field). This module embeds that file, parses it once, and
+//! turns one of its `robots` entries into a [`RobotEntry`] (every field) or into the joints
+//! and links of a [`Robot`]. The Python package reads the same parsed entries through its
+//! bindings. Setup-time only: parsing allocates.
 
 use crate::error::Error;
 use crate::robot::{DhJoint, RigidBody, Robot};
 use serde_json::Value;
+use std::sync::OnceLock;
 
 /// The UR e-Series parameter file, embedded at build time.
-pub const UR_E_SERIES_JSON: &str = include_str!("../../../python/tvist/robots/ur_e_series.json");
+pub const UR_E_SERIES_JSON: &str = include_str!("../data/ur_e_series.json");
 
 /// The `schema_version` this reader understands.
 pub const SCHEMA_VERSION: u64 = 1;
@@ -22,15 +24,139 @@ fn invalid(msg: String) -> Error {
 /// Parses a robot-data document and checks its schema version.
 fn document(json: &str) -> Result<Value, Error> {
     let doc: Value = serde_json::from_str(json).map_err(|e| invalid(format!("{e}")))?;
-    match doc.get("schema_version").and_then(Value::as_u64) {
-        Some(SCHEMA_VERSION) => Ok(doc),
+    match doc.get("schema_version") {
+        Some(Value::Number(n)) if n.as_u64() == Some(SCHEMA_VERSION) => Ok(doc),
         other => Err(invalid(format!(
             "schema_version {other:?}, expected {SCHEMA_VERSION}"
         ))),
     }
 }
 
-/// Names of the robots in a robot-data document (sorted).
+/// Every field of one robot entry (units in the names; per-joint lists have `n_dof` entries).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobotEntry {
+    pub name: String,
+    pub description: String,
+    pub source: String,
+    pub inertia_source: String,
+    pub joints: Vec<DhJoint>,
+    /// Link `i` in DH frame `i + 1` of the chain (mass, centre of mass, inertia about it).
+    pub links: Vec<RigidBody>,
+    /// `[lower, upper]` per joint, rad.
+    pub joint_limits_rad: Vec<[f64; 2]>,
+    pub max_velocity_rad_s: Vec<f64>,
+    pub max_payload_kg: f64,
+    /// The optional solid-cylinder model the inertias were derived from.
+    pub inertia_cylinders: Option<InertiaCylinders>,
+}
+
+/// The `inertia_cylinders` block of an entry: one cylinder per link.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InertiaCylinders {
+    pub radius_m: Vec<f64>,
+    pub length_m: Vec<f64>,
+    /// `"x"`, `"y"` or `"z"`: the axis of DH frame `i` the cylinder lies along.
+    pub axis: Vec<String>,
+}
+
+impl RobotEntry {
+    /// Number of joints.
+    pub fn n_dof(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// The rigid-body model of this arm with `payload` on the flange, named after the entry.
+    pub fn robot(&self, payload: RigidBody) -> Result<Robot, Error> {
+        Ok(Robot::new(self.joints.clone(), self.links.clone(), payload)?.with_name(&self.name))
+    }
+}
+
+/// The embedded file, parsed on first use (every entry read in full).
+pub fn ur_e_series_entries() -> Result<&'static [RobotEntry], Error> {
+    static PARSED: OnceLock<Result<Vec<RobotEntry>, Error>> = OnceLock::new();
+    PARSED
+        .get_or_init(|| {
+            robot_names(UR_E_SERIES_JSON)?
+                .iter()
+                .map(|name| robot_entry(UR_E_SERIES_JSON, name))
+                .collect()
+        })
+        .as_ref()
+        .map(Vec::as_slice)
+        .map_err(Clone::clone)
+}
+
+/// Entry `name` of the embedded file.
+pub fn ur_e_series_entry(name: &str) -> Result<&'static RobotEntry, Error> {
+    let entries = ur_e_series_entries()?;
+    entries.iter().find(|e| e.name == name).ok_or_else(|| {
+        let known: Vec<&str> = entries.iter().map(|e| e.name.as_str()).collect();
+        invalid(format!("unknown robot {name:?}; known: {known:?}"))
+    })
+}
+
+fn text(value: Option<&Value>, what: &str) -> Result<String, Error> {
+    value
+        .and_then(Value::as_str)
+        .map(str::to_string)
+        .ok_or_else(|| invalid(format!("{what} must be a string")))
+}
+
+/// Every field of robot `name` in robot-data document `json` (see [`robot_chain`] for the
+/// chain; the other fields are required too).
+pub fn robot_entry(json: &str, name: &str) -> Result<RobotEntry, Error> {
+    let (joints, links) = robot_chain(json, name)?;
+    let n = joints.len();
+    let doc = document(json)?;
+    let entry = &doc["robots"][name];
+    let field = |key: &str| entry.get(key);
+    let what = |key: &str| format!("{name}: {key}");
+    let max_payload_kg = field("max_payload_kg")
+        .and_then(Value::as_f64)
+        .ok_or_else(|| invalid(format!("{name}: max_payload_kg must be a number")))?;
+    let inertia_cylinders = match field("inertia_cylinders") {
+        None | Some(Value::Null) => None,
+        Some(block) => {
+            let axis = block
+                .get("axis")
+                .and_then(Value::as_array)
+                .filter(|a| a.len() == n)
+                .and_then(|a| a.iter().map(|v| v.as_str().map(str::to_string)).collect())
+                .ok_or_else(|| {
+                    invalid(format!(
+                        "{name}: inertia_cylinders.axis must hold {n} strings"
+                    ))
+                })?;
+            Some(InertiaCylinders {
+                radius_m: numbers(
+                    block.get("radius_m"),
+                    n,
+                    &what("inertia_cylinders.radius_m"),
+                )?,
+                length_m: numbers(
+                    block.get("length_m"),
+                    n,
+                    &what("inertia_cylinders.length_m"),
+                )?,
+                axis,
+            })
+        }
+    };
+    Ok(RobotEntry {
+        name: name.to_string(),
+        description: text(field("description"), &what("description"))?,
+        source: text(field("source"), &what("source"))?,
+        inertia_source: text(field("inertia_source"), &what("inertia_source"))?,
+        joints,
+        links,
+        joint_limits_rad: rows::<2>(field("joint_limits_rad"), n, &what("joint_limits_rad"))?,
+        max_velocity_rad_s: numbers(field("max_velocity_rad_s"), n, &what("max_velocity_rad_s"))?,
+        max_payload_kg,
+        inertia_cylinders,
+    })
+}
+
+/// Names of the robots in a robot-data document (in file order).
 pub fn robot_names(json: &str) -> Result<Vec<String>, Error> {
     let doc = document(json)?;
     let robots = doc
@@ -129,10 +255,9 @@ pub fn robot_chain(json: &str, name: &str) -> Result<(Vec<DhJoint>, Vec<RigidBod
 }
 
 /// UR e-Series robot `name` (`"ur3e"`, `"ur5e"`, …) from the embedded parameter file, with
-/// `payload` on the flange.
+/// `payload` on the flange; the robot carries its name.
 pub fn ur_e_series(name: &str, payload: RigidBody) -> Result<Robot, Error> {
-    let (joints, links) = robot_chain(UR_E_SERIES_JSON, name)?;
-    Robot::new(joints, links, payload)
+    ur_e_series_entry(name)?.robot(payload)
 }
 
 #[cfg(test)]
@@ -174,6 +299,24 @@ mod tests {
             let robot = ur_e_series(name, RigidBody::NONE)?;
             assert_eq!(robot.n_dof(), 6, "{name}");
         }
+        Ok(())
+    }
+
+    #[test]
+    fn every_entry_is_read_in_full_once() -> Result<(), Error> {
+        let entries = ur_e_series_entries()?;
+        let names: Vec<&str> = entries.iter().map(|e| e.name.as_str()).collect();
+        assert_eq!(names, ["ur3e", "ur5e", "ur10e", "ur16e", "ur20"]);
+        let ur5e = ur_e_series_entry("ur5e")?;
+        assert_eq!(ur5e.max_payload_kg, 5.0);
+        assert_eq!(ur5e.joint_limits_rad.len(), 6);
+        assert!(ur5e.inertia_cylinders.is_some());
+        assert!(
+            core::ptr::eq(ur5e, ur_e_series_entry("ur5e")?),
+            "parsed once"
+        );
+        let robot = ur_e_series("ur10e", RigidBody::NONE)?;
+        assert_eq!(robot.name(), Some("ur10e"));
         Ok(())
     }
 

@@ -22,6 +22,8 @@ pub struct ModeFilter {
     delays_samples: [f64; MAX_IMPULSES],
     /// True if `impulses` was designed with ζ limited to the shaper's range.
     zeta_clamped: bool,
+    /// True if the held mode's `ω_n` is at or above the Nyquist frequency `π/dt_s`.
+    above_nyquist: bool,
     /// Output of the latest cycle, one value per channel.
     output: Vec<f64>,
 }
@@ -53,6 +55,7 @@ impl ModeFilter {
             impulses: ImpulseArray::IDENTITY,
             delays_samples: [0.0; MAX_IMPULSES],
             zeta_clamped: false,
+            above_nyquist: false,
             output: vec![0.0; n_channels],
         })
     }
@@ -69,6 +72,7 @@ impl ModeFilter {
     pub fn forget_mode(&mut self) {
         self.held = None;
         self.zeta_clamped = false;
+        self.above_nyquist = false;
         self.set_impulses(ImpulseArray::IDENTITY);
     }
 
@@ -84,13 +88,16 @@ impl ModeFilter {
     /// and compute [`Self::output`]. Allocation-free.
     ///
     /// The sequence is redesigned only when the mode differs from the held one. A damping
-    /// ratio beyond [`ShaperKind::max_zeta`] is limited to it ([`Status::ZETA_CLAMPED`]).
+    /// ratio beyond [`ShaperKind::max_zeta`] is limited to it ([`Status::ZETA_CLAMPED`]); a
+    /// mode at or above the Nyquist frequency is shaped as given and reported
+    /// ([`Status::MODE_ABOVE_NYQUIST`]).
     pub fn step(&mut self, input: &[f64], mode: Mode) -> Status {
         let mut status = Status::OK;
         if mode.is_valid() {
             if self.held != Some(mode) {
                 let (design_mode, limited) = self.kind.within_range(mode);
                 self.zeta_clamped = limited;
+                self.above_nyquist = mode.wn_rad_s * self.dt_s >= core::f64::consts::PI;
                 self.set_impulses(self.kind.design(design_mode));
                 self.held = Some(mode);
             }
@@ -102,6 +109,9 @@ impl ModeFilter {
         }
         if self.zeta_clamped {
             status |= Status::ZETA_CLAMPED;
+        }
+        if self.above_nyquist {
+            status |= Status::MODE_ABOVE_NYQUIST;
         }
         self.line.push(input);
         self.output.fill(0.0);

@@ -26,9 +26,16 @@ pub const TVIST_ERR_UNKNOWN_ROBOT: i32 = -6;
 /// An internal error was caught at the boundary (a bug: please report it). The handle it
 /// happened on must not be used again except to free it.
 pub const TVIST_ERR_INTERNAL: i32 = -7;
+/// A map file that cannot be read or is not a valid map (the message names the field).
+pub const TVIST_ERR_MAP_FILE: i32 = -8;
+/// A map identified on another robot than the one named (the message names both).
+pub const TVIST_ERR_ROBOT_MISMATCH: i32 = -9;
+/// A request beyond a setup limit (`TVIST_MAX_DOF` channels, `TVIST_MAX_DELAY_LINE_BYTES` of
+/// delay lines): refused before anything is allocated.
+pub const TVIST_ERR_TOO_LARGE: i32 = -10;
 
 /// Every error code with its C name, for the header-consistency test and documentation.
-pub const ERROR_CODES: [(&str, i32); 8] = [
+pub const ERROR_CODES: [(&str, i32); 11] = [
     ("TVIST_OK", TVIST_OK),
     ("TVIST_ERR_NULL", TVIST_ERR_NULL),
     ("TVIST_ERR_UNKNOWN_SHAPER", TVIST_ERR_UNKNOWN_SHAPER),
@@ -37,6 +44,9 @@ pub const ERROR_CODES: [(&str, i32); 8] = [
     ("TVIST_ERR_DIMENSION_MISMATCH", TVIST_ERR_DIMENSION_MISMATCH),
     ("TVIST_ERR_UNKNOWN_ROBOT", TVIST_ERR_UNKNOWN_ROBOT),
     ("TVIST_ERR_INTERNAL", TVIST_ERR_INTERNAL),
+    ("TVIST_ERR_MAP_FILE", TVIST_ERR_MAP_FILE),
+    ("TVIST_ERR_ROBOT_MISMATCH", TVIST_ERR_ROBOT_MISMATCH),
+    ("TVIST_ERR_TOO_LARGE", TVIST_ERR_TOO_LARGE),
 ];
 
 /// The C code of a core setup error.
@@ -49,6 +59,9 @@ pub fn error_code(error: &Error) -> i32 {
         | Error::UnknownInterpolation(_)
         | Error::InvalidImpulses(_)
         | Error::UnknownDelayBound => TVIST_ERR_INVALID_PARAMETER,
+        Error::Document { .. } => TVIST_ERR_MAP_FILE,
+        Error::RobotMismatch { .. } => TVIST_ERR_ROBOT_MISMATCH,
+        Error::TooLarge(_) => TVIST_ERR_TOO_LARGE,
     }
 }
 
@@ -143,6 +156,15 @@ mod tests {
                 TVIST_ERR_INVALID_PARAMETER,
             ),
             (Error::UnknownDelayBound, TVIST_ERR_INVALID_PARAMETER),
+            (Error::document("modes", "missing"), TVIST_ERR_MAP_FILE),
+            (
+                Error::RobotMismatch {
+                    map_robot: "ur5e".into(),
+                    robot: "ur10e".into(),
+                },
+                TVIST_ERR_ROBOT_MISMATCH,
+            ),
+            (Error::TooLarge("x".into()), TVIST_ERR_TOO_LARGE),
         ];
         for (error, code) in cases {
             assert_eq!(error_code(&error), code, "{error}");

@@ -8,50 +8,67 @@
 
 use crate::codes::{
     fail, fail_with, guard, TVIST_ERR_DIMENSION_MISMATCH, TVIST_ERR_INTERNAL,
-    TVIST_ERR_INVALID_PARAMETER, TVIST_ERR_NULL, TVIST_ERR_UNKNOWN_ROBOT, TVIST_ERR_UNKNOWN_SHAPER,
-    TVIST_OK,
+    TVIST_ERR_INVALID_PARAMETER, TVIST_ERR_MAP_FILE, TVIST_ERR_NULL, TVIST_ERR_UNKNOWN_ROBOT,
+    TVIST_ERR_UNKNOWN_SHAPER, TVIST_OK,
 };
 use core::ffi::{c_char, CStr};
 use core::ptr;
-use tvist_core::robot_data::ur_e_series;
+use std::path::Path;
+use tvist_core::dynmap::PAPER_MAP_ROBOT;
+use tvist_core::error::N_STATUS_FLAGS;
+use tvist_core::map_file::{MapFile, MapForm};
+use tvist_core::robot_data::{ur_e_series_entries, RobotEntry};
 use tvist_core::{
-    ConstantModes, DynamicMap, Error, MapDynamics, Mode, RigidBody, ShaperKind, Status, TvShaper,
-    TvShaperConfig,
+    ConstantModes, DynamicMap, Interpolation, MapDynamics, Mode, Provider, RigidBody, ShaperKind,
+    Status, StatusCounter, TvShaper, TvShaperConfig,
 };
 
-/// Largest number of joint channels a handle accepts (guards against garbage sizes).
-pub const TVIST_MAX_DOF: usize = 4096;
+/// Largest number of joint channels a handle accepts (the core's limit).
+pub const TVIST_MAX_DOF: usize = tvist_core::limits::MAX_DOF;
 /// Largest number of modes of a constant-mode shaper (one cascaded filter each).
 pub const TVIST_MAX_MODES: usize = 64;
-/// The robot the paper's dynamic map ([`DynamicMap::paper_ur5e`]) was identified on.
-pub const PAPER_MAP_ROBOT: &str = "ur5e";
+/// Largest total size of a handle's delay lines, bytes (the core's limit).
+pub const TVIST_MAX_DELAY_LINE_BYTES: usize = tvist_core::limits::MAX_DELAY_LINE_BYTES;
+/// Number of status flags (`tvist_shaper_status_counts`).
+pub const TVIST_N_STATUS_FLAGS: usize = N_STATUS_FLAGS;
+/// `TvistShaperOptions::interpolation`: linear (Lagrange order 1) fractional delays.
+pub const TVIST_INTERP_LINEAR: i32 = 0;
+/// `TvistShaperOptions::interpolation`: cubic (Lagrange order 3) fractional delays.
+pub const TVIST_INTERP_CUBIC: i32 = 1;
 
-/// Where a shaper gets its modes from.
-#[derive(Debug)]
-enum Provider {
-    Constant(TvShaper<ConstantModes>),
-    Map(Box<TvShaper<MapDynamics>>),
+/// Setup options of the `_ex` constructors. A zero-initialized struct holds the defaults.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct TvistShaperOptions {
+    /// [`TVIST_INTERP_LINEAR`] (0, default) or [`TVIST_INTERP_CUBIC`].
+    pub interpolation: i32,
+    /// Vibration tolerance of the `"ei"` shaper (fraction, e.g. 0.05); 0 for the default 5 %.
+    /// Any other value with another shaper is an error.
+    pub ei_tolerance: f64,
+    /// Delay-line length over the longest expected shaper; 0 for the default 1.5.
+    pub safety_factor: f64,
+    /// Nonzero: accept a map identified on another robot (research use).
+    pub allow_other_robot: i32,
 }
 
-/// An opaque shaper handle for C: one multi-mode FD-TVIST filter and its staging buffer.
+/// An opaque shaper handle for C: one multi-mode FD-TVIST filter, its staging buffer and
+/// the per-flag status counts.
 ///
 /// A handle may move between threads but must not be used by two threads at once.
 #[derive(Debug)]
 pub struct TvistShaper {
-    provider: Provider,
+    shaper: TvShaper<Provider>,
     /// Copy of the caller's input (`n_dof` values), so input and output may share memory.
     staging: Vec<f64>,
+    counts: StatusCounter,
 }
 
 impl TvistShaper {
-    fn new(provider: Provider) -> TvistShaper {
-        let n_dof = match &provider {
-            Provider::Constant(s) => s.n_dof(),
-            Provider::Map(s) => s.n_dof(),
-        };
+    fn new(shaper: TvShaper<Provider>) -> TvistShaper {
         TvistShaper {
-            provider,
-            staging: vec![0.0; n_dof],
+            staging: vec![0.0; shaper.n_dof()],
+            shaper,
+            counts: StatusCounter::default(),
         }
     }
 
@@ -62,10 +79,12 @@ impl TvistShaper {
 
     /// Current total delay of the cascade, s.
     pub fn delay_s(&self) -> f64 {
-        match &self.provider {
-            Provider::Constant(s) => s.delay_s(),
-            Provider::Map(s) => s.delay_s(),
-        }
+        self.shaper.delay_s()
+    }
+
+    /// Steps per status flag since construction.
+    pub fn status_counts(&self) -> &StatusCounter {
+        &self.counts
     }
 
     /// One control cycle on raw arrays; allocation-free.
@@ -75,6 +94,7 @@ impl TvistShaper {
     /// doubles (they may be the same array). Otherwise nothing is accessed.
     unsafe fn step_raw(&mut self, q_in: *const f64, q_out: *mut f64, n_dof: usize) -> i32 {
         if n_dof != self.n_dof() {
+            self.counts.add(Status::BAD_LENGTH);
             return Status::BAD_LENGTH.0;
         }
         // SAFETY: `q_in` is readable for `n_dof` doubles (caller) and `staging` is our own
@@ -83,10 +103,8 @@ impl TvistShaper {
         // SAFETY: `q_out` is writable for `n_dof` doubles (caller); the input was copied
         // above, so this is the only live reference to that memory even if it is `q_in`.
         let q_out = unsafe { core::slice::from_raw_parts_mut(q_out, n_dof) };
-        let status = match &mut self.provider {
-            Provider::Constant(s) => s.step(&self.staging, q_out),
-            Provider::Map(s) => s.step(&self.staging, q_out),
-        };
+        let status = self.shaper.step(&self.staging, q_out);
+        self.counts.add(status);
         status.0
     }
 
@@ -100,10 +118,7 @@ impl TvistShaper {
         }
         // SAFETY: as in `step_raw`.
         unsafe { ptr::copy_nonoverlapping(q0, self.staging.as_mut_ptr(), n_dof) };
-        match &mut self.provider {
-            Provider::Constant(s) => s.reset(&self.staging),
-            Provider::Map(s) => s.reset(&self.staging),
-        }
+        self.shaper.reset(&self.staging);
         TVIST_OK
     }
 }
@@ -122,30 +137,58 @@ unsafe fn c_str<'a>(ptr: *const c_char) -> Option<&'a str> {
     unsafe { CStr::from_ptr(ptr) }.to_str().ok()
 }
 
-/// The registry shaper named by C string `name` (setup errors recorded).
+/// The options at `options`, or the defaults for a null pointer.
 ///
 /// # Safety
-/// As [`c_str`].
-unsafe fn shaper_kind(name: *const c_char) -> Result<ShaperKind, i32> {
-    // SAFETY: forwarded from the caller.
-    match unsafe { c_str(name) } {
-        Some(name) => ShaperKind::from_name(name, None).map_err(|e| fail_with(&e)),
-        None => Err(fail(
-            TVIST_ERR_UNKNOWN_SHAPER,
-            "the shaper name is not valid UTF-8",
-        )),
+/// `options` is null or readable (checked for alignment here).
+unsafe fn read_options(options: *const TvistShaperOptions) -> Result<TvistShaperOptions, i32> {
+    if options.is_null() {
+        return Ok(TvistShaperOptions::default());
     }
+    if !options.is_aligned() {
+        return Err(fail(TVIST_ERR_NULL, "options is misaligned"));
+    }
+    // SAFETY: non-null, aligned and readable (caller).
+    Ok(unsafe { options.read() })
 }
 
-/// Checks `n_dof` against [`TVIST_MAX_DOF`] (the core checks `n_dof >= 1`).
-fn check_n_dof(n_dof: usize) -> Result<(), i32> {
-    if n_dof > TVIST_MAX_DOF {
+/// The shaper configuration for `shaper_name` and `options` (setup errors recorded).
+///
+/// # Safety
+/// `shaper_name` is non-null and NUL-terminated.
+unsafe fn config(
+    shaper_name: *const c_char,
+    dt_s: f64,
+    n_dof: usize,
+    options: &TvistShaperOptions,
+) -> Result<TvShaperConfig, i32> {
+    // SAFETY: forwarded from the caller.
+    let Some(name) = (unsafe { c_str(shaper_name) }) else {
         return Err(fail(
-            TVIST_ERR_INVALID_PARAMETER,
-            format!("n_dof = {n_dof} exceeds the limit of {TVIST_MAX_DOF} channels"),
+            TVIST_ERR_UNKNOWN_SHAPER,
+            "the shaper name is not valid UTF-8",
         ));
+    };
+    let tolerance = (options.ei_tolerance != 0.0).then_some(options.ei_tolerance);
+    let kind = ShaperKind::from_name(name, tolerance).map_err(|e| fail_with(&e))?;
+    let mut config = TvShaperConfig::new(dt_s, n_dof, kind);
+    config.interp = match options.interpolation {
+        TVIST_INTERP_LINEAR => Interpolation::Linear,
+        TVIST_INTERP_CUBIC => Interpolation::Cubic,
+        other => {
+            return Err(fail(
+                TVIST_ERR_INVALID_PARAMETER,
+                format!(
+                    "interpolation = {other}: use TVIST_INTERP_LINEAR ({TVIST_INTERP_LINEAR}) \
+                     or TVIST_INTERP_CUBIC ({TVIST_INTERP_CUBIC})"
+                ),
+            ))
+        }
+    };
+    if options.safety_factor != 0.0 {
+        config.safety_factor = options.safety_factor;
     }
-    Ok(())
+    Ok(config)
 }
 
 /// Stores a built handle in `*out` (or leaves the null written at entry) and returns the code.
@@ -163,14 +206,50 @@ unsafe fn publish(out: *mut *mut TvistShaper, built: Result<TvistShaper, i32>) -
     }
 }
 
-/// A handle around a new [`TvShaper`] for `dynamics` (setup errors recorded).
-fn build<D: tvist_core::Dynamics>(
-    dynamics: D,
-    config: &TvShaperConfig,
-    wrap: fn(TvShaper<D>) -> Provider,
-) -> Result<TvistShaper, i32> {
-    let shaper = TvShaper::new(dynamics, config).map_err(|e: Error| fail_with(&e))?;
-    Ok(TvistShaper::new(wrap(shaper)))
+/// Runs a constructor body: checks and nulls `out`, builds, publishes; never unwinds.
+///
+/// # Safety
+/// `out` is null or writable when aligned.
+unsafe fn construct(
+    out: *mut *mut TvistShaper,
+    body: impl FnOnce() -> Result<TvistShaper, i32>,
+) -> i32 {
+    guard(TVIST_ERR_INTERNAL, || {
+        if !usable(out) {
+            return fail(TVIST_ERR_NULL, "out is null or misaligned");
+        }
+        // SAFETY: `out` is non-null and aligned; the caller guarantees it is writable.
+        unsafe { out.write(ptr::null_mut()) };
+        let built = body();
+        // SAFETY: `out` checked above.
+        unsafe { publish(out, built) }
+    })
+}
+
+/// A handle around a new [`TvShaper`] for `provider` (setup errors recorded).
+fn build(provider: Provider, config: &TvShaperConfig) -> Result<TvistShaper, i32> {
+    let shaper = TvShaper::new(provider, config).map_err(|e| fail_with(&e))?;
+    Ok(TvistShaper::new(shaper))
+}
+
+/// The UR e-Series entry named by C string `robot_name` (setup errors recorded).
+///
+/// # Safety
+/// `robot_name` is non-null and NUL-terminated.
+unsafe fn robot_entry(robot_name: *const c_char) -> Result<&'static RobotEntry, i32> {
+    let entries = ur_e_series_entries().map_err(|e| fail_with(&e))?;
+    // SAFETY: forwarded from the caller.
+    let name = unsafe { c_str(robot_name) };
+    entries
+        .iter()
+        .find(|e| Some(e.name.as_str()) == name)
+        .ok_or_else(|| {
+            let known: Vec<&str> = entries.iter().map(|e| e.name.as_str()).collect();
+            fail(
+                TVIST_ERR_UNKNOWN_ROBOT,
+                format!("unknown robot {name:?}; known: {}", known.join(", ")),
+            )
+        })
 }
 
 /// Creates a shaper for `n_modes` fixed modes (`wn_rad_s[m]`, `zeta[m]`), one cascaded filter
@@ -193,47 +272,66 @@ pub unsafe extern "C" fn tvist_shaper_new_constant(
     shaper_name: *const c_char,
     out: *mut *mut TvistShaper,
 ) -> i32 {
-    guard(TVIST_ERR_INTERNAL, || {
-        if !usable(out) {
-            return fail(TVIST_ERR_NULL, "out is null or misaligned");
-        }
-        // SAFETY: `out` is non-null and aligned; the caller guarantees it is writable.
-        unsafe { out.write(ptr::null_mut()) };
-        if !(usable(wn_rad_s) && usable(zeta) && !shaper_name.is_null()) {
-            return fail(
-                TVIST_ERR_NULL,
-                "wn_rad_s, zeta and shaper_name must be non-null (and aligned)",
-            );
-        }
-        if n_modes > TVIST_MAX_MODES {
-            return fail(
-                TVIST_ERR_INVALID_PARAMETER,
-                format!("n_modes = {n_modes} exceeds the limit of {TVIST_MAX_MODES}"),
-            );
-        }
-        let built = (|| {
-            check_n_dof(n_dof)?;
+    // SAFETY: forwarded from the caller; null options are the defaults.
+    unsafe {
+        tvist_shaper_new_constant_ex(
+            wn_rad_s,
+            zeta,
+            n_modes,
+            dt_s,
+            n_dof,
+            shaper_name,
+            ptr::null(),
+            out,
+        )
+    }
+}
+
+/// [`tvist_shaper_new_constant`] with `options` (null: the defaults).
+///
+/// # Safety
+/// As [`tvist_shaper_new_constant`]; `options` is null or readable.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn tvist_shaper_new_constant_ex(
+    wn_rad_s: *const f64,
+    zeta: *const f64,
+    n_modes: usize,
+    dt_s: f64,
+    n_dof: usize,
+    shaper_name: *const c_char,
+    options: *const TvistShaperOptions,
+    out: *mut *mut TvistShaper,
+) -> i32 {
+    // SAFETY: `out` forwarded from the caller.
+    unsafe {
+        construct(out, || {
+            if !(usable(wn_rad_s) && usable(zeta) && !shaper_name.is_null()) {
+                return Err(fail(
+                    TVIST_ERR_NULL,
+                    "wn_rad_s, zeta and shaper_name must be non-null (and aligned)",
+                ));
+            }
+            if n_modes > TVIST_MAX_MODES {
+                return Err(fail(
+                    TVIST_ERR_INVALID_PARAMETER,
+                    format!("n_modes = {n_modes} exceeds the limit of {TVIST_MAX_MODES}"),
+                ));
+            }
+            let options = read_options(options)?;
             // SAFETY: `shaper_name` is non-null and NUL-terminated (caller).
-            let kind = unsafe { shaper_kind(shaper_name) }?;
+            let config = config(shaper_name, dt_s, n_dof, &options)?;
             // SAFETY: both arrays are non-null, aligned and readable for `n_modes` doubles
             // (caller); `n_modes <= TVIST_MAX_MODES` keeps the byte size far below isize::MAX.
-            let (wn, z) = unsafe {
-                (
-                    core::slice::from_raw_parts(wn_rad_s, n_modes),
-                    core::slice::from_raw_parts(zeta, n_modes),
-                )
-            };
+            let (wn, z) = (
+                core::slice::from_raw_parts(wn_rad_s, n_modes),
+                core::slice::from_raw_parts(zeta, n_modes),
+            );
             let modes = wn.iter().zip(z).map(|(&w, &z)| Mode::new(w, z)).collect();
             let dynamics = ConstantModes::new(modes).map_err(|e| fail_with(&e))?;
-            build(
-                dynamics,
-                &TvShaperConfig::new(dt_s, n_dof, kind),
-                Provider::Constant,
-            )
-        })();
-        // SAFETY: `out` checked above.
-        unsafe { publish(out, built) }
-    })
+            build(Provider::Constant(dynamics), &config)
+        })
+    }
 }
 
 /// Creates a shaper driven by the paper's dynamic map of the UR5e
@@ -256,46 +354,138 @@ pub unsafe extern "C" fn tvist_shaper_new_ur_map(
     shaper_name: *const c_char,
     out: *mut *mut TvistShaper,
 ) -> i32 {
-    guard(TVIST_ERR_INTERNAL, || {
-        if !usable(out) {
-            return fail(TVIST_ERR_NULL, "out is null or misaligned");
-        }
-        // SAFETY: `out` is non-null and aligned; the caller guarantees it is writable.
-        unsafe { out.write(ptr::null_mut()) };
-        if robot_name.is_null() || shaper_name.is_null() || !usable(payload_com_m) {
-            return fail(
-                TVIST_ERR_NULL,
-                "robot_name, payload_com_m and shaper_name must be non-null (and aligned)",
-            );
-        }
-        let built = (|| {
-            // SAFETY: non-null and NUL-terminated (caller).
-            let robot_name = unsafe { c_str(robot_name) };
-            if robot_name != Some(PAPER_MAP_ROBOT) {
+    // SAFETY: `out` forwarded from the caller.
+    unsafe {
+        construct(out, || {
+            if robot_name.is_null() || shaper_name.is_null() || !usable(payload_com_m) {
                 return Err(fail(
-                    TVIST_ERR_UNKNOWN_ROBOT,
-                    format!(
-                        "robot {robot_name:?}: the paper's dynamic map is identified for \
-                         {PAPER_MAP_ROBOT:?} only"
-                    ),
+                    TVIST_ERR_NULL,
+                    "robot_name, payload_com_m and shaper_name must be non-null (and aligned)",
                 ));
             }
             // SAFETY: non-null and NUL-terminated (caller).
-            let kind = unsafe { shaper_kind(shaper_name) }?;
+            let name = c_str(robot_name);
+            if name != Some(PAPER_MAP_ROBOT) {
+                return Err(fail(
+                    TVIST_ERR_UNKNOWN_ROBOT,
+                    format!(
+                        "robot {name:?}: the paper's dynamic map is identified for \
+                         {PAPER_MAP_ROBOT:?} only; use tvist_shaper_new_map with a map file \
+                         for other robots"
+                    ),
+                ));
+            }
             // SAFETY: non-null, aligned and readable for 3 doubles (caller).
-            let com_m = unsafe { payload_com_m.cast::<[f64; 3]>().read() };
-            let payload = RigidBody::point(payload_kg, com_m);
-            let robot = ur_e_series(PAPER_MAP_ROBOT, payload).map_err(|e| fail_with(&e))?;
-            let n_dof = robot.n_dof();
+            let com_m = payload_com_m.cast::<[f64; 3]>().read();
+            let entry = robot_entry(robot_name)?;
+            let robot = entry
+                .robot(RigidBody::point(payload_kg, com_m))
+                .map_err(|e| fail_with(&e))?;
+            let config = config(
+                shaper_name,
+                dt_s,
+                robot.n_dof(),
+                &TvistShaperOptions::default(),
+            )?;
             let dynamics =
                 MapDynamics::new(robot, DynamicMap::paper_ur5e()).map_err(|e| fail_with(&e))?;
-            build(dynamics, &TvShaperConfig::new(dt_s, n_dof, kind), |s| {
-                Provider::Map(Box::new(s))
-            })
-        })();
-        // SAFETY: `out` checked above.
-        unsafe { publish(out, built) }
-    })
+            build(Provider::Map(Box::new(dynamics)), &config)
+        })
+    }
+}
+
+/// Creates a shaper driven by the dynamic map in file `map_json_path` (any map file tvist
+/// writes: `tvist fit-map`, `DynamicMap.save`) for UR e-Series robot `robot_name` (`"ur3e"`,
+/// `"ur5e"`, `"ur10e"`, `"ur16e"`, `"ur20"`) with a point payload of `payload_kg` at
+/// `payload_com_m` (flange frame, m), shaping its joints sampled every `dt_s` seconds.
+///
+/// Returns as [`tvist_shaper_new_constant`]; `TVIST_ERR_UNKNOWN_ROBOT` for an unknown robot,
+/// `TVIST_ERR_MAP_FILE` for a file that cannot be read or is not a valid map,
+/// `TVIST_ERR_ROBOT_MISMATCH` for a map identified on another robot.
+///
+/// # Safety
+/// `robot_name`, `map_json_path` and `shaper_name` are NUL-terminated strings;
+/// `payload_com_m` is readable for 3 doubles; `out` is writable.
+#[no_mangle]
+pub unsafe extern "C" fn tvist_shaper_new_map(
+    robot_name: *const c_char,
+    payload_kg: f64,
+    payload_com_m: *const f64,
+    map_json_path: *const c_char,
+    dt_s: f64,
+    shaper_name: *const c_char,
+    out: *mut *mut TvistShaper,
+) -> i32 {
+    // SAFETY: forwarded from the caller; null options are the defaults.
+    unsafe {
+        tvist_shaper_new_map_ex(
+            robot_name,
+            payload_kg,
+            payload_com_m,
+            map_json_path,
+            dt_s,
+            shaper_name,
+            ptr::null(),
+            out,
+        )
+    }
+}
+
+/// [`tvist_shaper_new_map`] with `options` (null: the defaults).
+///
+/// # Safety
+/// As [`tvist_shaper_new_map`]; `options` is null or readable.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn tvist_shaper_new_map_ex(
+    robot_name: *const c_char,
+    payload_kg: f64,
+    payload_com_m: *const f64,
+    map_json_path: *const c_char,
+    dt_s: f64,
+    shaper_name: *const c_char,
+    options: *const TvistShaperOptions,
+    out: *mut *mut TvistShaper,
+) -> i32 {
+    // SAFETY: `out` forwarded from the caller.
+    unsafe {
+        construct(out, || {
+            if robot_name.is_null()
+                || map_json_path.is_null()
+                || shaper_name.is_null()
+                || !usable(payload_com_m)
+            {
+                return Err(fail(
+                    TVIST_ERR_NULL,
+                    "robot_name, payload_com_m, map_json_path and shaper_name must be \
+                     non-null (and aligned)",
+                ));
+            }
+            let options = read_options(options)?;
+            // SAFETY: non-null and NUL-terminated (caller).
+            let entry = robot_entry(robot_name)?;
+            // SAFETY: non-null, aligned and readable for 3 doubles (caller).
+            let com_m = payload_com_m.cast::<[f64; 3]>().read();
+            let robot = entry
+                .robot(RigidBody::point(payload_kg, com_m))
+                .map_err(|e| fail_with(&e))?;
+            // SAFETY: non-null and NUL-terminated (caller).
+            let config = config(shaper_name, dt_s, robot.n_dof(), &options)?;
+            // SAFETY: non-null and NUL-terminated (caller).
+            let Some(path) = c_str(map_json_path) else {
+                return Err(fail(TVIST_ERR_MAP_FILE, "map_json_path is not valid UTF-8"));
+            };
+            let file = MapFile::load(Path::new(path)).map_err(|e| fail_with(&e))?;
+            let dynamics = match file.into_form() {
+                MapForm::Paper10(map) if options.allow_other_robot != 0 => {
+                    MapDynamics::new_allowing_other_robot(robot, map)
+                }
+                MapForm::Paper10(map) => MapDynamics::new(robot, map),
+            }
+            .map_err(|e| fail_with(&e))?;
+            build(Provider::Map(Box::new(dynamics)), &config)
+        })
+    }
 }
 
 /// One control cycle: shapes `q_in` into `q_out` (each `n_dof` doubles; they may be the same
@@ -379,6 +569,35 @@ pub unsafe extern "C" fn tvist_shaper_n_dof(shaper: *const TvistShaper) -> usize
         }
         // SAFETY: a live handle from a constructor (caller).
         unsafe { &*shaper }.n_dof()
+    })
+}
+
+/// Copies the per-flag status counts of `shaper` into `counts` (`len` entries): `counts[k]` is
+/// the number of `tvist_shaper_step` calls since construction whose status had bit `1 << k`
+/// set (`TVIST_STATUS_INPUT_HELD` is k = 0, ...). Writes `min(len, TVIST_N_STATUS_FLAGS)`
+/// entries and returns `TVIST_N_STATUS_FLAGS` (0 for a null handle). Allocation-free.
+///
+/// # Safety
+/// `shaper` is null or comes from a constructor and is not freed; `counts` is null (then
+/// `len` must be 0) or writable for `len` values.
+#[no_mangle]
+pub unsafe extern "C" fn tvist_shaper_status_counts(
+    shaper: *const TvistShaper,
+    counts: *mut u64,
+    len: usize,
+) -> usize {
+    guard(0, || {
+        if !usable(shaper) {
+            return 0;
+        }
+        // SAFETY: a live handle from a constructor (caller).
+        let all = unsafe { &*shaper }.status_counts().counts();
+        if usable(counts) {
+            let n = len.min(all.len());
+            // SAFETY: writable for `len >= n` values (caller); our counts are our own memory.
+            unsafe { ptr::copy_nonoverlapping(all.as_ptr(), counts, n) };
+        }
+        TVIST_N_STATUS_FLAGS
     })
 }
 

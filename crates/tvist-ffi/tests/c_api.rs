@@ -7,8 +7,8 @@ use tvist::{
     tvist_last_error_message, tvist_shaper_delay_s, tvist_shaper_free, tvist_shaper_n_dof,
     tvist_shaper_new_constant, tvist_shaper_new_ur_map, tvist_shaper_reset, tvist_shaper_step,
     TvistShaper, TVIST_ERR_DIMENSION_MISMATCH, TVIST_ERR_INVALID_MODE, TVIST_ERR_INVALID_PARAMETER,
-    TVIST_ERR_NULL, TVIST_ERR_UNKNOWN_ROBOT, TVIST_ERR_UNKNOWN_SHAPER, TVIST_MAX_DOF,
-    TVIST_MAX_MODES, TVIST_OK,
+    TVIST_ERR_NULL, TVIST_ERR_TOO_LARGE, TVIST_ERR_UNKNOWN_ROBOT, TVIST_ERR_UNKNOWN_SHAPER,
+    TVIST_MAX_DOF, TVIST_MAX_MODES, TVIST_OK,
 };
 use tvist_core::robot_data::ur_e_series;
 use tvist_core::{
@@ -221,12 +221,12 @@ fn wrong_lengths_are_rejected_without_touching_the_arrays() {
     let code = unsafe { tvist_shaper_reset(h.0, [0.0; 2].as_ptr(), 5) };
     assert_eq!(code, TVIST_ERR_DIMENSION_MISMATCH);
 
-    for (n_dof, what) in [
-        (0, "n_dof must be at least 1"),
-        (TVIST_MAX_DOF + 1, "exceeds"),
+    for (n_dof, code_expected, what) in [
+        (0, TVIST_ERR_INVALID_PARAMETER, "n_dof must be at least 1"),
+        (TVIST_MAX_DOF + 1, TVIST_ERR_TOO_LARGE, "exceeds"),
     ] {
         let (code, h) = new_constant(&[(20.0, 0.05)], DT_S, n_dof, "zv");
-        assert_eq!((code, h.0.is_null()), (TVIST_ERR_INVALID_PARAMETER, true));
+        assert_eq!((code, h.0.is_null()), (code_expected, true));
         assert!(last_error().contains(what), "{}", last_error());
     }
     let (code, _) = new_constant(&[], DT_S, 1, "zv");

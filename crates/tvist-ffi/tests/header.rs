@@ -2,7 +2,10 @@
 //! the core's `Status`), error codes, limits, and the set of exported functions.
 
 use std::collections::BTreeMap;
-use tvist::{ERROR_CODES, TVIST_MAX_DOF, TVIST_MAX_MODES};
+use tvist::{
+    ERROR_CODES, TVIST_INTERP_CUBIC, TVIST_INTERP_LINEAR, TVIST_MAX_DELAY_LINE_BYTES,
+    TVIST_MAX_DOF, TVIST_MAX_MODES,
+};
 use tvist_core::Status;
 
 const HEADER: &str = include_str!("../../../include/tvist.h");
@@ -79,20 +82,35 @@ fn exported_functions() -> Vec<String> {
 }
 
 #[test]
-fn status_defines_equal_the_core_status_bits() {
-    let core = [
-        ("TVIST_STATUS_INPUT_HELD", Status::INPUT_HELD),
-        ("TVIST_STATUS_MODES_HELD", Status::MODES_HELD),
-        ("TVIST_STATUS_DELAY_CLAMPED", Status::DELAY_CLAMPED),
-        ("TVIST_STATUS_UNSHAPED", Status::UNSHAPED),
-        ("TVIST_STATUS_BAD_LENGTH", Status::BAD_LENGTH),
-        ("TVIST_STATUS_ZETA_CLAMPED", Status::ZETA_CLAMPED),
-    ];
+fn status_defines_equal_the_core_status_flags() {
+    // The core's flag list is the one definition: every flag has its define and nothing else.
     let header = defines("TVIST_STATUS_");
-    let expected: BTreeMap<String, i64> = core
+    let expected: BTreeMap<String, i64> = Status::FLAGS
         .iter()
-        .map(|(name, status)| (name.to_string(), i64::from(status.0)))
+        .map(|(name, status)| (format!("TVIST_STATUS_{name}"), i64::from(status.0)))
         .collect();
+    assert_eq!(header, expected);
+    assert_eq!(
+        defines("TVIST_N_STATUS_FLAGS").get("TVIST_N_STATUS_FLAGS"),
+        Some(&(Status::FLAGS.len() as i64))
+    );
+}
+
+#[test]
+fn interpolation_defines_equal_the_library() {
+    let header = defines("TVIST_INTERP_");
+    let expected: BTreeMap<String, i64> = [
+        (
+            "TVIST_INTERP_LINEAR".to_string(),
+            i64::from(TVIST_INTERP_LINEAR),
+        ),
+        (
+            "TVIST_INTERP_CUBIC".to_string(),
+            i64::from(TVIST_INTERP_CUBIC),
+        ),
+    ]
+    .into_iter()
+    .collect();
     assert_eq!(header, expected);
 }
 
@@ -113,7 +131,11 @@ fn limits_equal_the_library_limits() {
         limits.get("TVIST_MAX_MODES"),
         Some(&(TVIST_MAX_MODES as i64))
     );
-    assert_eq!(limits.len(), 2);
+    assert_eq!(
+        limits.get("TVIST_MAX_DELAY_LINE_BYTES"),
+        Some(&(TVIST_MAX_DELAY_LINE_BYTES as i64))
+    );
+    assert_eq!(limits.len(), 3);
 }
 
 #[test]

@@ -1,4 +1,5 @@
-//! `tvist_shaper_step`, `_reset` and `_delay_s` never allocate, for both providers.
+//! `tvist_shaper_step`, `_reset`, `_delay_s` and `_status_counts` never allocate, for every
+//! constructor (constant modes, the paper's map, a map file).
 //!
 //! Its own test binary: the counting global allocator sees only this file's allocations, and
 //! a single `#[test]` keeps other test threads out of the measured windows.
@@ -10,9 +11,12 @@ use alloc_support::{allocations_in, the_counter_sees_this_thread_only};
 use std::ffi::CString;
 use std::ptr;
 use tvist::{
-    tvist_shaper_delay_s, tvist_shaper_free, tvist_shaper_new_constant, tvist_shaper_new_ur_map,
-    tvist_shaper_reset, tvist_shaper_step, TvistShaper, TVIST_OK,
+    tvist_shaper_delay_s, tvist_shaper_free, tvist_shaper_new_constant, tvist_shaper_new_map,
+    tvist_shaper_new_ur_map, tvist_shaper_reset, tvist_shaper_status_counts, tvist_shaper_step,
+    TvistShaper, TVIST_N_STATUS_FLAGS, TVIST_OK,
 };
+use tvist_core::map_file::{MapFile, MapForm};
+use tvist_core::DynamicMap;
 
 /// Runs 500 cycles of a moving 6-joint input, a reset and delay queries on `shaper`.
 fn cycle(shaper: *mut TvistShaper) -> usize {
@@ -33,6 +37,9 @@ fn cycle(shaper: *mut TvistShaper) -> usize {
                 }
                 assert!(tvist_shaper_step(shaper, x.as_ptr(), y.as_mut_ptr(), 6) >= 0);
                 delay_sum += tvist_shaper_delay_s(shaper);
+                let mut counts = [0u64; TVIST_N_STATUS_FLAGS];
+                let n = tvist_shaper_status_counts(shaper, counts.as_mut_ptr(), counts.len());
+                assert_eq!(n, TVIST_N_STATUS_FLAGS);
             }
         }
     });
@@ -48,7 +55,14 @@ fn per_cycle_calls_never_allocate() {
         CString::new("zv").expect("name"),
         CString::new("ur5e").expect("name"),
     );
-    let (mut constant, mut map) = (ptr::null_mut(), ptr::null_mut());
+    let (mut constant, mut map, mut from_file) =
+        (ptr::null_mut(), ptr::null_mut(), ptr::null_mut());
+    let path = std::env::temp_dir().join(format!("tvist-no-alloc-{}.json", std::process::id()));
+    let meta = serde_json::json!({"robot": "ur10e"});
+    let file = MapFile::new(MapForm::Paper10(DynamicMap::paper_ur5e()), &meta).expect("map");
+    std::fs::write(&path, file.to_json()).expect("write map");
+    let c_path = CString::new(path.to_str().expect("UTF-8 path")).expect("path");
+    let ur10e = CString::new("ur10e").expect("name");
     // SAFETY: arrays of the stated lengths, NUL-terminated names, writable outputs.
     unsafe {
         let (wn, zeta) = ([40.0, 110.0], [0.05, 0.1]);
@@ -72,12 +86,25 @@ fn per_cycle_calls_never_allocate() {
             &mut map,
         );
         assert_eq!(code, TVIST_OK);
+        let code = tvist_shaper_new_map(
+            ur10e.as_ptr(),
+            5.0,
+            com.as_ptr(),
+            c_path.as_ptr(),
+            0.002,
+            zv.as_ptr(),
+            &mut from_file,
+        );
+        assert_eq!(code, TVIST_OK);
     }
+    let _ = std::fs::remove_file(&path);
     assert_eq!(cycle(constant), 0, "constant-mode shaper allocated");
     assert_eq!(cycle(map), 0, "map-driven shaper allocated");
+    assert_eq!(cycle(from_file), 0, "map-file shaper allocated");
     // SAFETY: handles from the constructors, freed once.
     unsafe {
         tvist_shaper_free(constant);
         tvist_shaper_free(map);
+        tvist_shaper_free(from_file);
     }
 }

@@ -2,14 +2,16 @@
 //! No algorithm lives here.
 
 use numpy::{
-    IntoPyArray, PyArray1, PyArrayDyn, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+    AllowTypeChange, IntoPyArray, PyArray1, PyArrayDyn, PyArrayLike1, PyArrayLike2,
+    PyReadonlyArray1, PyUntypedArrayMethods,
 };
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use tvist_core as core;
-use tvist_core::{Dynamics, Mode, Status};
+use tvist_core::{Dynamics, Mode, Status, StatusCounter};
 
 mod convert;
+mod json;
 mod robot;
 mod ztdis;
 
@@ -200,63 +202,9 @@ impl Dynamics for CallableModes {
     }
 }
 
-/// Every provider the Python API accepts.
-enum Provider {
-    Constant(core::ConstantModes),
-    Callable(CallableModes),
-    Map(Box<core::MapDynamics>),
-}
-
-impl Dynamics for Provider {
-    fn n_modes(&self) -> usize {
-        match self {
-            Provider::Constant(p) => p.n_modes(),
-            Provider::Callable(p) => p.n_modes(),
-            Provider::Map(p) => p.n_modes(),
-        }
-    }
-    fn modes(&mut self, q: &[f64], out: &mut [Mode]) -> Status {
-        match self {
-            Provider::Constant(p) => p.modes(q, out),
-            Provider::Callable(p) => p.modes(q, out),
-            Provider::Map(p) => p.modes(q, out),
-        }
-    }
-    fn slowest_mode(&self, index: usize) -> Option<Mode> {
-        match self {
-            Provider::Constant(p) => p.slowest_mode(index),
-            Provider::Callable(p) => p.slowest_mode(index),
-            Provider::Map(p) => p.slowest_mode(index),
-        }
-    }
-    fn n_dof(&self) -> Option<usize> {
-        match self {
-            Provider::Constant(p) => p.n_dof(),
-            Provider::Callable(p) => p.n_dof(),
-            Provider::Map(p) => p.n_dof(),
-        }
-    }
-}
-
-/// Per-flag counters of the statuses seen since construction.
-#[derive(Default, Clone, Copy)]
-struct StatusCounts {
-    input_held: u64,
-    modes_held: u64,
-    delay_clamped: u64,
-    unshaped: u64,
-    zeta_clamped: u64,
-}
-
-impl StatusCounts {
-    fn add(&mut self, s: Status) {
-        self.input_held += u64::from(s.contains(Status::INPUT_HELD));
-        self.modes_held += u64::from(s.contains(Status::MODES_HELD));
-        self.delay_clamped += u64::from(s.contains(Status::DELAY_CLAMPED));
-        self.unshaped += u64::from(s.contains(Status::UNSHAPED));
-        self.zeta_clamped += u64::from(s.contains(Status::ZETA_CLAMPED));
-    }
-}
+/// Every provider the Python API accepts: the core's provider type with a Python callable
+/// as its callback.
+type Provider = core::Provider<CallableModes>;
 
 /// Rows per chunk of `TvShaper.shape` (48 kB of 6-DOF samples: cache-resident).
 const SHAPE_CHUNK_ROWS: usize = 1024;
@@ -266,12 +214,12 @@ const SHAPE_CHUNK_ROWS: usize = 1024;
 struct PyTvShaper {
     inner: core::TvShaper<Provider>,
     last_status: Status,
-    counts: StatusCounts,
+    counts: StatusCounter,
 }
 
 impl PyTvShaper {
     fn take_callable_error(&mut self) -> PyResult<()> {
-        if let Provider::Callable(p) = self.inner.dynamics_mut() {
+        if let Provider::Callback(p) = self.inner.dynamics_mut() {
             if let Some(e) = p.error.take() {
                 return Err(e);
             }
@@ -296,6 +244,11 @@ impl PyTvShaper {
         safety_factor: f64,
         tolerance: Option<f64>,
     ) -> PyResult<Self> {
+        // Limits first: nothing below may allocate per channel before they are checked.
+        if n_dof == 0 {
+            return Err(PyValueError::new_err("n_dof must be at least 1"));
+        }
+        core::limits::check_n_dof(n_dof).map_err(value_error)?;
         let provider = if let Ok(c) = dynamics.cast::<PyConstantModes>() {
             Provider::Constant(c.get().inner.clone())
         } else if let Ok(m) = dynamics.cast::<robot::PyMapDynamics>() {
@@ -318,7 +271,7 @@ impl PyTvShaper {
                     "the dynamics callable returned no modes",
                 ));
             }
-            Provider::Callable(CallableModes {
+            Provider::Callback(CallableModes {
                 func: dynamics.clone().unbind(),
                 n_modes: pairs.len(),
                 n_dof,
@@ -341,15 +294,16 @@ impl PyTvShaper {
         Ok(PyTvShaper {
             inner,
             last_status: Status::OK,
-            counts: StatusCounts::default(),
+            counts: StatusCounter::default(),
         })
     }
 
-    /// One control cycle: q (n_dof,) -> shaped q (n_dof,).
+    /// One control cycle: q (n_dof,) -> shaped q (n_dof,). Any 1-D array-like of numbers
+    /// (converted to float64, any memory layout).
     fn step<'py>(
         &mut self,
         py: Python<'py>,
-        q: PyReadonlyArray1<'py, f64>,
+        q: PyArrayLike1<'py, f64, AllowTypeChange>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let q: Vec<f64> = q.as_array().iter().copied().collect();
         if q.len() != self.inner.n_dof() {
@@ -371,7 +325,7 @@ impl PyTvShaper {
     fn shape<'py>(
         &mut self,
         py: Python<'py>,
-        q: PyReadonlyArray2<'py, f64>,
+        q: PyArrayLike2<'py, f64, AllowTypeChange>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let shape = q.shape();
         let (n, d) = (shape[0], shape[1]);
@@ -409,7 +363,7 @@ impl PyTvShaper {
                     last = inner.step(x, y);
                     counts.add(last);
                     // A raising callable ends the block: its exception is re-raised below.
-                    if let Provider::Callable(p) = inner.dynamics() {
+                    if let Provider::Callback(p) = inner.dynamics() {
                         if p.error.is_some() {
                             return true;
                         }
@@ -429,13 +383,14 @@ impl PyTvShaper {
     }
 
     /// Puts the filter at rest at q0, or (None) forgets history so the next sample starts it.
+    /// Accepts what `step` accepts (any 1-D array-like of numbers, any memory layout).
     #[pyo3(signature = (q0=None))]
-    fn reset(&mut self, q0: Option<PyReadonlyArray1<'_, f64>>) -> PyResult<()> {
+    fn reset(&mut self, q0: Option<PyArrayLike1<'_, f64, AllowTypeChange>>) -> PyResult<()> {
         match q0 {
             Some(q0) => {
-                let q0 = q0.as_slice()?;
-                convert::check_start_pose(q0, self.inner.n_dof())?;
-                self.inner.reset(q0);
+                let q0: Vec<f64> = q0.as_array().iter().copied().collect();
+                convert::check_start_pose(&q0, self.inner.n_dof())?;
+                self.inner.reset(&q0);
             }
             None => self.inner.clear(),
         }
@@ -466,17 +421,11 @@ impl PyTvShaper {
 
     /// How many steps reported each status flag since construction.
     #[getter]
-    fn status_counts(&self) -> std::collections::BTreeMap<&'static str, u64> {
-        let c = self.counts;
-        [
-            ("input_held", c.input_held),
-            ("modes_held", c.modes_held),
-            ("delay_clamped", c.delay_clamped),
-            ("unshaped", c.unshaped),
-            ("zeta_clamped", c.zeta_clamped),
-        ]
-        .into_iter()
-        .collect()
+    fn status_counts(&self) -> std::collections::BTreeMap<String, u64> {
+        self.counts
+            .named()
+            .map(|(name, count)| (name.to_ascii_lowercase(), count))
+            .collect()
     }
 
     /// Longest delay each mode filter can hold, s.
@@ -516,18 +465,12 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(prv_flat, m)?)?;
     ztdis::register(m)?;
     m.add("SHAPERS", core::SHAPER_NAMES.to_vec())?;
-    m.add(
-        "STATUS_FLAGS",
-        [
-            ("INPUT_HELD", Status::INPUT_HELD.0),
-            ("MODES_HELD", Status::MODES_HELD.0),
-            ("DELAY_CLAMPED", Status::DELAY_CLAMPED.0),
-            ("UNSHAPED", Status::UNSHAPED.0),
-            ("BAD_LENGTH", Status::BAD_LENGTH.0),
-            ("ZETA_CLAMPED", Status::ZETA_CLAMPED.0),
-        ]
-        .into_iter()
-        .collect::<std::collections::BTreeMap<_, _>>(),
-    )?;
+    let flags = pyo3::types::PyDict::new(m.py());
+    for (name, flag) in Status::FLAGS {
+        flags.set_item(name, flag.0)?;
+    }
+    m.add("STATUS_FLAGS", flags)?;
+    m.add("MAX_DOF", core::limits::MAX_DOF)?;
+    m.add("MAX_DELAY_LINE_BYTES", core::limits::MAX_DELAY_LINE_BYTES)?;
     Ok(())
 }

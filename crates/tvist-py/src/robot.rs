@@ -7,6 +7,10 @@ use tvist_core as core;
 use tvist_core::{Dynamics, Mode, Status};
 
 use crate::convert::{self, rows, value_error};
+use crate::json::{self, NonFinite};
+use pyo3::types::PyDict;
+use tvist_core::map_file::{self, MapFile, MapForm};
+use tvist_core::robot_data;
 
 fn check_len(what: &str, got: usize, expected: usize) -> PyResult<()> {
     if got == expected {
@@ -56,7 +60,7 @@ impl PyRobot {
     /// d, a, alpha: (n,); mass_kg: (n,); com_m: (n, 3) in DH frame i; inertia_kg_m2: (n, 6)
     /// [ixx, iyy, izz, ixy, ixz, iyz] about the COM; payload in the flange frame.
     #[new]
-    #[pyo3(signature = (d_m, a_m, alpha_rad, mass_kg, com_m, inertia_kg_m2, payload_mass_kg=0.0, payload_com_m=None, payload_inertia_kg_m2=None))]
+    #[pyo3(signature = (d_m, a_m, alpha_rad, mass_kg, com_m, inertia_kg_m2, payload_mass_kg=0.0, payload_com_m=None, payload_inertia_kg_m2=None, name=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         d_m: Vec<f64>,
@@ -68,6 +72,7 @@ impl PyRobot {
         payload_mass_kg: f64,
         payload_com_m: Option<Vec<f64>>,
         payload_inertia_kg_m2: Option<Vec<f64>>,
+        name: Option<String>,
     ) -> PyResult<Self> {
         let n = d_m.len();
         check_len("a_m", a_m.len(), n)?;
@@ -101,14 +106,24 @@ impl PyRobot {
             com_m: [pcom[0], pcom[1], pcom[2]],
             inertia_kg_m2: pinertia,
         };
+        let robot = core::Robot::new(joints, links, payload).map_err(value_error)?;
         Ok(PyRobot {
-            inner: core::Robot::new(joints, links, payload).map_err(value_error)?,
+            inner: match name {
+                Some(name) => robot.with_name(name),
+                None => robot,
+            },
         })
     }
 
     #[getter]
     fn n_dof(&self) -> usize {
         self.inner.n_dof()
+    }
+
+    /// The robot's name (maps identified on another robot are refused), or None.
+    #[getter]
+    fn name(&self) -> Option<String> {
+        self.inner.name().map(str::to_owned)
     }
 
     /// joint_inertia for every row of Q (n_samples, n_dof).
@@ -176,92 +191,144 @@ impl PyRobot {
     }
 }
 
-/// Fields of one mode map, in the order the constructor takes them.
-pub const MODE_MAP_FIELDS: [&str; 12] = [
-    "k_0",
-    "k_j",
-    "k_g",
-    "k_p",
-    "c_0",
-    "c_1",
-    "c_2",
-    "c_tau",
-    "frequency_joint",
-    "damping_joint",
-    "damping_gain_exponent",
-    "frequency_gain_exponent",
-];
-
-/// Optional fields of one mode map: the `[min, max]` inertias (kg m²) of the frequency and
-/// the damping joint the map was identified on; missing or `None` is unbounded.
-pub const MODE_MAP_RANGE_FIELDS: [&str; 2] = [
-    "frequency_inertia_range_kg_m2",
-    "damping_inertia_range_kg_m2",
-];
-
-fn range_from_dict(
-    d: &Bound<'_, pyo3::types::PyDict>,
-    index: usize,
-    key: &str,
-) -> PyResult<Option<core::InertiaRange>> {
-    let Some(item) = d.get_item(key)? else {
-        return Ok(None);
+/// A map document (Python object) checked by the core's map-file validation.
+fn map_file_from(doc: &Bound<'_, PyAny>) -> PyResult<MapFile> {
+    let value = match doc.cast::<PyDict>() {
+        // Metadata may hold statistics that could not be computed (NaN): written as null.
+        // Everything else must be finite, and the error names the field.
+        Ok(d) => {
+            let mut map = serde_json::Map::new();
+            for (k, v) in d.iter() {
+                let key: String = k
+                    .extract()
+                    .map_err(|_| PyValueError::new_err("map document: keys must be strings"))?;
+                let nf = if key == "metadata" {
+                    NonFinite::AsNull
+                } else {
+                    NonFinite::Refuse
+                };
+                let value = json::to_value(&v, &key, nf)?;
+                map.insert(key, value);
+            }
+            serde_json::Value::Object(map)
+        }
+        Err(_) => json::to_value(doc, "(document)", NonFinite::Refuse)?,
     };
-    if item.is_none() {
-        return Ok(None);
+    MapFile::from_value(&value).map_err(value_error)
+}
+
+fn paper10(file: MapFile) -> core::DynamicMap {
+    match file.into_form() {
+        MapForm::Paper10(map) => map,
     }
-    let bounds = item.extract::<Vec<f64>>().ok().filter(|b| b.len() == 2);
-    let Some(bounds) = bounds else {
-        return Err(PyValueError::new_err(format!(
-            "mode {index}: field {key:?} must be [min, max] in kg m² or None"
-        )));
-    };
-    core::InertiaRange::new(bounds[0], bounds[1])
-        .map(Some)
-        .map_err(|e| PyValueError::new_err(format!("mode {index}: field {key:?}: {e}")))
 }
 
-fn range_to_py(range: Option<core::InertiaRange>) -> Option<Vec<f64>> {
-    range.map(|r| vec![r.min_kg_m2(), r.max_kg_m2()])
-}
-
-fn mode_map_from_dict(d: &Bound<'_, pyo3::types::PyDict>, index: usize) -> PyResult<core::ModeMap> {
-    let get_f = |key: &str| -> PyResult<f64> {
-        let item = d
-            .get_item(key)?
-            .ok_or_else(|| PyValueError::new_err(format!("mode {index}: missing field {key:?}")))?;
-        item.extract::<f64>().map_err(|_| {
-            PyValueError::new_err(format!("mode {index}: field {key:?} must be a number"))
-        })
-    };
-    let get_u = |key: &str| -> PyResult<usize> {
-        let item = d
-            .get_item(key)?
-            .ok_or_else(|| PyValueError::new_err(format!("mode {index}: missing field {key:?}")))?;
-        item.extract::<usize>().map_err(|_| {
-            PyValueError::new_err(format!(
-                "mode {index}: field {key:?} must be a non-negative integer"
-            ))
-        })
-    };
-    Ok(core::ModeMap {
-        coefficients: core::MapCoefficients {
-            k_0: get_f("k_0")?,
-            k_j: get_f("k_j")?,
-            k_g: get_f("k_g")?,
-            k_p: get_f("k_p")?,
-            c_0: get_f("c_0")?,
-            c_1: get_f("c_1")?,
-            c_2: get_f("c_2")?,
-            c_tau: get_f("c_tau")?,
+/// A parsed map file as `(DynamicMap, metadata dict)`.
+fn map_parts(py: Python<'_>, file: MapFile) -> PyResult<(PyDynamicMap, Bound<'_, PyAny>)> {
+    let metadata = json::to_py(py, &serde_json::Value::Object(file.metadata().clone()))?;
+    Ok((
+        PyDynamicMap {
+            inner: paper10(file),
         },
-        frequency_joint: get_u("frequency_joint")?,
-        damping_joint: get_u("damping_joint")?,
-        damping_gain_exponent: get_f("damping_gain_exponent")?,
-        frequency_gain_exponent: get_f("frequency_gain_exponent")?,
-        frequency_range: range_from_dict(d, index, MODE_MAP_RANGE_FIELDS[0])?,
-        damping_range: range_from_dict(d, index, MODE_MAP_RANGE_FIELDS[1])?,
-    })
+        metadata,
+    ))
+}
+
+/// Validates a map document (a dict as read from JSON) with the core's map-file rules and
+/// returns `(DynamicMap, metadata)`; errors name the field.
+#[pyfunction]
+fn map_from_document<'py>(
+    py: Python<'py>,
+    doc: &Bound<'py, PyAny>,
+) -> PyResult<(PyDynamicMap, Bound<'py, PyAny>)> {
+    map_parts(py, map_file_from(doc)?)
+}
+
+/// Parses and validates map-file text (strict JSON): `(DynamicMap, metadata)`.
+#[pyfunction]
+fn parse_map<'py>(py: Python<'py>, text: &str) -> PyResult<(PyDynamicMap, Bound<'py, PyAny>)> {
+    map_parts(py, MapFile::parse(text).map_err(value_error)?)
+}
+
+/// The map file of `dynmap` with `metadata`, as strict JSON text (non-finite metadata
+/// numbers written as null).
+#[pyfunction]
+fn write_map(dynmap: PyRef<'_, PyDynamicMap>, metadata: &Bound<'_, PyAny>) -> PyResult<String> {
+    let meta = json::to_value(metadata, "metadata", NonFinite::AsNull)?;
+    let file = MapFile::new(MapForm::Paper10(dynmap.inner.clone()), &meta).map_err(value_error)?;
+    Ok(file.to_json())
+}
+
+/// The map document of `dynmap` with `metadata` as a dict (what `write_map` writes).
+#[pyfunction]
+fn map_document<'py>(
+    py: Python<'py>,
+    dynmap: PyRef<'_, PyDynamicMap>,
+    metadata: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let meta = json::to_value(metadata, "metadata", NonFinite::AsNull)?;
+    let file = MapFile::new(MapForm::Paper10(dynmap.inner.clone()), &meta).map_err(value_error)?;
+    json::to_py(py, &file.to_value())
+}
+
+/// Names of the robots in the robot data, in file order.
+#[pyfunction]
+fn robot_names() -> PyResult<Vec<String>> {
+    let entries = robot_data::ur_e_series_entries().map_err(value_error)?;
+    Ok(entries.iter().map(|e| e.name.clone()).collect())
+}
+
+/// Every parameter of robot `name` from the core's robot data, as a dict.
+#[pyfunction]
+fn robot_params<'py>(py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyDict>> {
+    let e = robot_data::ur_e_series_entry(name).map_err(value_error)?;
+    let d = PyDict::new(py);
+    d.set_item("name", &e.name)?;
+    d.set_item("description", &e.description)?;
+    d.set_item("source", &e.source)?;
+    d.set_item("inertia_source", &e.inertia_source)?;
+    d.set_item("d_m", e.joints.iter().map(|j| j.d_m).collect::<Vec<_>>())?;
+    d.set_item("a_m", e.joints.iter().map(|j| j.a_m).collect::<Vec<_>>())?;
+    d.set_item(
+        "alpha_rad",
+        e.joints.iter().map(|j| j.alpha_rad).collect::<Vec<_>>(),
+    )?;
+    d.set_item(
+        "mass_kg",
+        e.links.iter().map(|l| l.mass_kg).collect::<Vec<_>>(),
+    )?;
+    d.set_item(
+        "com_m",
+        e.links.iter().map(|l| l.com_m.to_vec()).collect::<Vec<_>>(),
+    )?;
+    d.set_item(
+        "inertia_kg_m2",
+        e.links
+            .iter()
+            .map(|l| l.inertia_kg_m2.to_vec())
+            .collect::<Vec<_>>(),
+    )?;
+    d.set_item(
+        "joint_limits_rad",
+        e.joint_limits_rad
+            .iter()
+            .map(|r| r.to_vec())
+            .collect::<Vec<_>>(),
+    )?;
+    d.set_item("max_velocity_rad_s", e.max_velocity_rad_s.clone())?;
+    d.set_item("max_payload_kg", e.max_payload_kg)?;
+    let cylinders = match &e.inertia_cylinders {
+        Some(c) => {
+            let block = PyDict::new(py);
+            block.set_item("radius_m", c.radius_m.clone())?;
+            block.set_item("length_m", c.length_m.clone())?;
+            block.set_item("axis", c.axis.clone())?;
+            Some(block)
+        }
+        None => None,
+    };
+    d.set_item("inertia_cylinders", cylinders)?;
+    Ok(d)
 }
 
 /// Dynamic map (eqs. 42-51): one dict of coefficients per mode, in cascade order. Optional
@@ -274,16 +341,27 @@ pub struct PyDynamicMap {
 
 #[pymethods]
 impl PyDynamicMap {
+    /// Modes as dicts (MODE_MAP_FIELDS, optional MODE_MAP_RANGE_FIELDS), validated as in a
+    /// map file; `robot` names the robot the map was identified on.
     #[new]
-    fn new(modes: Vec<Bound<'_, pyo3::types::PyDict>>) -> PyResult<Self> {
-        let maps = modes
-            .iter()
-            .enumerate()
-            .map(|(i, d)| mode_map_from_dict(d, i))
-            .collect::<PyResult<Vec<_>>>()?;
+    #[pyo3(signature = (modes, robot=None))]
+    fn new(py: Python<'_>, modes: &Bound<'_, PyAny>, robot: Option<String>) -> PyResult<Self> {
+        let doc = PyDict::new(py);
+        doc.set_item("schema_version", map_file::SCHEMA_VERSION)?;
+        doc.set_item("kind", map_file::KIND_PAPER10)?;
+        let meta = PyDict::new(py);
+        meta.set_item("robot", robot)?;
+        doc.set_item("metadata", meta)?;
+        doc.set_item("modes", modes)?;
         Ok(PyDynamicMap {
-            inner: core::DynamicMap::new(maps).map_err(value_error)?,
+            inner: paper10(map_file_from(doc.as_any())?),
         })
+    }
+
+    /// The robot the map was identified on, or None.
+    #[getter]
+    fn robot(&self) -> Option<String> {
+        self.inner.robot().map(str::to_owned)
     }
 
     /// The UR5e map of the paper (Tables 1-2, eqs. 47-48 and 50-51).
@@ -373,33 +451,11 @@ impl PyDynamicMap {
     /// The coefficients of every mode as dicts (see the constructor), ranges as [min, max]
     /// or None.
     #[getter]
-    fn modes<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, pyo3::types::PyDict>>> {
+    fn modes<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyAny>>> {
         self.inner
             .mode_maps()
             .iter()
-            .map(|m| {
-                let d = pyo3::types::PyDict::new(py);
-                let c = &m.coefficients;
-                for (k, v) in [
-                    ("k_0", c.k_0),
-                    ("k_j", c.k_j),
-                    ("k_g", c.k_g),
-                    ("k_p", c.k_p),
-                    ("c_0", c.c_0),
-                    ("c_1", c.c_1),
-                    ("c_2", c.c_2),
-                    ("c_tau", c.c_tau),
-                ] {
-                    d.set_item(k, v)?;
-                }
-                d.set_item("frequency_joint", m.frequency_joint)?;
-                d.set_item("damping_joint", m.damping_joint)?;
-                d.set_item("damping_gain_exponent", m.damping_gain_exponent)?;
-                d.set_item("frequency_gain_exponent", m.frequency_gain_exponent)?;
-                d.set_item(MODE_MAP_RANGE_FIELDS[0], range_to_py(m.frequency_range))?;
-                d.set_item(MODE_MAP_RANGE_FIELDS[1], range_to_py(m.damping_range))?;
-                Ok(d)
-            })
+            .map(|m| json::to_py(py, &map_file::mode_to_value(m)))
             .collect()
     }
 
@@ -428,10 +484,21 @@ pub struct PyMapDynamics {
 
 #[pymethods]
 impl PyMapDynamics {
+    /// `allow_other_robot`: accept a map identified on another robot (research use).
     #[new]
-    fn new(robot: PyRef<'_, PyRobot>, dynmap: PyRef<'_, PyDynamicMap>) -> PyResult<Self> {
-        let inner = core::MapDynamics::new(robot.inner.clone(), dynmap.inner.clone())
-            .map_err(value_error)?;
+    #[pyo3(signature = (robot, dynmap, allow_other_robot=false))]
+    fn new(
+        robot: PyRef<'_, PyRobot>,
+        dynmap: PyRef<'_, PyDynamicMap>,
+        allow_other_robot: bool,
+    ) -> PyResult<Self> {
+        let (robot, map) = (robot.inner.clone(), dynmap.inner.clone());
+        let inner = if allow_other_robot {
+            core::MapDynamics::new_allowing_other_robot(robot, map)
+        } else {
+            core::MapDynamics::new(robot, map)
+        }
+        .map_err(value_error)?;
         Ok(PyMapDynamics { inner })
     }
 
@@ -476,7 +543,17 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyRobot>()?;
     m.add_class::<PyDynamicMap>()?;
     m.add_class::<PyMapDynamics>()?;
-    m.add("MODE_MAP_FIELDS", MODE_MAP_FIELDS.to_vec())?;
-    m.add("MODE_MAP_RANGE_FIELDS", MODE_MAP_RANGE_FIELDS.to_vec())?;
+    m.add("MODE_MAP_FIELDS", map_file::MODE_FIELDS.to_vec())?;
+    m.add("MODE_MAP_RANGE_FIELDS", map_file::RANGE_FIELDS.to_vec())?;
+    m.add("MAP_METADATA_FIELDS", map_file::METADATA_FIELDS.to_vec())?;
+    m.add("MAP_SCHEMA_VERSION", map_file::SCHEMA_VERSION)?;
+    m.add("MAP_KIND_PAPER10", map_file::KIND_PAPER10)?;
+    m.add("ROBOT_DATA_JSON", robot_data::UR_E_SERIES_JSON)?;
+    m.add_function(wrap_pyfunction!(map_from_document, m)?)?;
+    m.add_function(wrap_pyfunction!(parse_map, m)?)?;
+    m.add_function(wrap_pyfunction!(write_map, m)?)?;
+    m.add_function(wrap_pyfunction!(map_document, m)?)?;
+    m.add_function(wrap_pyfunction!(robot_names, m)?)?;
+    m.add_function(wrap_pyfunction!(robot_params, m)?)?;
     Ok(())
 }

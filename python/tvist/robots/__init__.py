@@ -1,8 +1,8 @@
 """Robot models: UR e-Series parameter data, payloads and the rigid-body inertia model.
 
-The numbers live in one file, ``ur_e_series.json`` next to this module; :func:`params` loads
-them. :class:`Robot` evaluates the joint-space inertia, kinematics and gravity torques in the
-Rust core.
+The numbers live in one file, ``crates/tvist-core/data/ur_e_series.json``, embedded in the
+Rust core; :func:`params` reads them from there. :class:`Robot` evaluates the joint-space
+inertia, kinematics and gravity torques in the Rust core.
 
 Examples
 --------

@@ -1,6 +1,7 @@
 """Solid-cylinder link inertias for robots whose maker publishes no inertia tensors.
 
-A robot entry in ``ur_e_series.json`` may carry an ``inertia_cylinders`` block::
+A robot entry in the robot data (``crates/tvist-core/data/ur_e_series.json``) may carry an
+``inertia_cylinders`` block::
 
     "inertia_cylinders": {
         "radius_m": [r_1, ..., r_n],
@@ -20,7 +21,9 @@ changing a block or a mass with::
 
     python -m tvist.robots._cylinders --write
 
-``python -m tvist.robots._cylinders`` alone only reports whether the file is up to date.
+``python -m tvist.robots._cylinders`` alone only reports whether the file is up to date. This
+is a maintenance tool for a source checkout: it edits the data file's text (and parses it to
+find the blocks); the package itself reads robot data only through the core.
 """
 
 from __future__ import annotations
@@ -33,7 +36,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-DATA_PATH = Path(__file__).with_name("ur_e_series.json")
+#: The robot-data file in a source checkout (the core embeds it when it is built).
+DATA_PATH = Path(__file__).resolve().parents[3] / "crates/tvist-core/data/ur_e_series.json"
 SIGNIFICANT_DIGITS = 10
 AXES = ("x", "y", "z")
 
@@ -113,6 +117,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", action="store_true", help="rewrite the data file in place")
     args = parser.parse_args(argv)
+    if not DATA_PATH.is_file():
+        print(f"{DATA_PATH}: not found (this tool needs a source checkout)", file=sys.stderr)
+        return 2
     text = DATA_PATH.read_text(encoding="utf-8")
     new = regenerate(text)
     if args.write:

@@ -1,4 +1,7 @@
-"""Robot parameter records loaded from ``ur_e_series.json`` (the one source of robot data).
+"""Robot parameter records from the core's robot data (the one source of robot data).
+
+The numbers live in ``crates/tvist-core/data/ur_e_series.json``, embedded in and parsed once
+by the Rust core; :func:`params` reads them through the bindings (no second parser).
 
 Conventions (also stated in the JSON file):
 
@@ -14,17 +17,14 @@ Conventions (also stated in the JSON file):
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
-from functools import cache, lru_cache
-from importlib import resources
+from functools import cache
 from typing import Any
 
 import numpy as np
 
-DATA_FILE = "ur_e_series.json"
-SCHEMA_VERSION = 1
+from tvist import _core
 
 
 def _frozen_array(value: Any, shape: tuple[int, ...], what: str) -> np.ndarray:
@@ -190,27 +190,16 @@ class Payload:
         }
 
 
-@lru_cache(maxsize=1)
-def _load_document() -> dict[str, Any]:
-    text = resources.files("tvist.robots").joinpath(DATA_FILE).read_text(encoding="utf-8")
-    doc = json.loads(text)
-    version = doc.get("schema_version")
-    if version != SCHEMA_VERSION:
-        raise ValueError(f"{DATA_FILE}: schema_version {version!r}, expected {SCHEMA_VERSION}")
-    if not isinstance(doc.get("robots"), dict) or not doc["robots"]:
-        raise ValueError(f"{DATA_FILE}: 'robots' must be a non-empty object")
-    return doc
-
-
 def names() -> tuple[str, ...]:
-    """Names of the robots in the parameter file, e.g. ``("ur3e", "ur5e", ...)``."""
-    return tuple(_load_document()["robots"])
+    """Names of the robots in the robot data, e.g. ``("ur3e", "ur5e", ...)``."""
+    return tuple(_core.robot_names())
 
 
 @cache
 def params(name: str) -> RobotParams:
     """Parameters of robot ``name`` (one of :func:`names`)."""
-    robots = _load_document()["robots"]
-    if name not in robots:
-        raise ValueError(f"unknown robot {name!r}; known: {', '.join(robots)}")
-    return RobotParams.from_dict(name, robots[name])
+    if name not in names():
+        raise ValueError(f"unknown robot {name!r}; known: {', '.join(names())}")
+    entry = _core.robot_params(name)
+    del entry["inertia_cylinders"]  # the source of inertia_kg_m2, see tvist.robots._cylinders
+    return RobotParams(**entry)

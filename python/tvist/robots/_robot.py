@@ -63,6 +63,7 @@ class Robot:
             payload.mass_kg,
             np.asarray(payload.com_m),
             None if payload.inertia_kg_m2 is None else np.asarray(payload.inertia_kg_m2),
+            params.name,
         )
 
     @classmethod

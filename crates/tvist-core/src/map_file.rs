@@ -1,0 +1,697 @@
+//! The map file (feature `json`): parsing, validation and writing of dynamic maps, for every
+//! binding (Rust, Python, C).
+//!
+//! ```text
+//! {"schema_version": 1,
+//!  "kind": "paper10",
+//!  "metadata": {"robot": "ur5e" | null, "payload": {...} | null, "source": "..." | null,
+//!               "fit_statistics": {...} | null, ...other keys kept as given},
+//!  "modes": [{"k_0": ..., "k_j": ..., "k_g": ..., "k_p": ..., "c_0": ..., "c_1": ...,
+//!             "c_2": ..., "c_tau": ..., "frequency_joint": 1, "damping_joint": 0,
+//!             "damping_gain_exponent": 1.0, "frequency_gain_exponent": -0.5,
+//!             "frequency_inertia_range_kg_m2": [0.7, 9.1] | null,     (optional)
+//!             "damping_inertia_range_kg_m2": [0.2, 9.3] | null}, ...]} (optional)
+//! ```
+//!
+//! - `schema_version` is the integer 1 (not `1.0`, not `true`).
+//! - `kind` names the form of the map. `"paper10"`: the ten-coefficient physical map of
+//!   [`crate::dynmap`] ([`MapForm::Paper10`]). Files written before `kind` named the form carry
+//!   `"tvist.dynamic_map"` or no `kind`; both are read as `"paper10"` (and written back as it).
+//!   Another form is one more [`MapForm`] variant and one more arm in [`MapForm::parse`] and
+//!   [`MapForm::to_value`]; the file layout around it stays.
+//! - `metadata.robot` names the robot the map was identified on; a map is refused for
+//!   another robot ([`crate::MapDynamics::new`]). `metadata.payload` is `{"mass_kg",
+//!   "com_m", "inertia_kg_m2"}` (inertia `null` for a point mass).
+//! - Strict JSON: no `NaN` or `Infinity` tokens are read or written. `null` means "none" for a
+//!   range (unbounded) and "not available" for metadata; a statistic that could not be
+//!   computed (NaN) is written as `null`. Numbers that overflow a double and documents nested
+//!   deeper than 128 levels are refused with an error naming the problem.
+//!
+//! Every error is an [`Error::Document`] whose path names the field (`modes[1].k_0`,
+//! `metadata.payload.com_m`, `schema_version`) and whose reason says what is wrong.
+
+use crate::dynmap::{DynamicMap, InertiaRange, MapCoefficients, ModeMap, MAX_JOINT_INDEX};
+use crate::error::Error;
+use serde_json::{Map, Number, Value};
+use std::path::Path;
+
+/// The `schema_version` of the files this module reads and writes.
+pub const SCHEMA_VERSION: u64 = 1;
+
+/// `kind` of the ten-coefficient physical map ([`MapForm::Paper10`]).
+pub const KIND_PAPER10: &str = "paper10";
+
+/// `kind` of files written before `kind` named the map form; read as [`KIND_PAPER10`].
+pub const LEGACY_KIND: &str = "tvist.dynamic_map";
+
+/// Required fields of one `paper10` mode, in the order they are written.
+pub const MODE_FIELDS: [&str; 12] = [
+    "k_0",
+    "k_j",
+    "k_g",
+    "k_p",
+    "c_0",
+    "c_1",
+    "c_2",
+    "c_tau",
+    "frequency_joint",
+    "damping_joint",
+    "damping_gain_exponent",
+    "frequency_gain_exponent",
+];
+
+/// Optional fields of one `paper10` mode: `[min, max]` (kg m²) of the frequency joint's and
+/// the damping joint's inertia the map was identified on; missing or `null` is unbounded.
+pub const RANGE_FIELDS: [&str; 2] = [
+    "frequency_inertia_range_kg_m2",
+    "damping_inertia_range_kg_m2",
+];
+
+/// Metadata fields every map has (`null` when not available), in the order they are written.
+pub const METADATA_FIELDS: [&str; 4] = ["robot", "payload", "source", "fit_statistics"];
+
+const TOP_LEVEL_FIELDS: [&str; 4] = ["schema_version", "kind", "metadata", "modes"];
+
+/// The form of a map: how its modes follow from the robot's state.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MapForm {
+    /// The ten-coefficient physical map from joint inertias (paper eqs. 42–51).
+    Paper10(DynamicMap),
+}
+
+impl MapForm {
+    /// The `kind` written for this form.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            MapForm::Paper10(_) => KIND_PAPER10,
+        }
+    }
+
+    /// The form named `kind`, built from the document's `modes`.
+    fn parse(kind: &str, doc: &Map<String, Value>) -> Result<MapForm, Error> {
+        match kind {
+            KIND_PAPER10 | LEGACY_KIND => Ok(MapForm::Paper10(paper10_from(doc)?)),
+            other => Err(Error::document(
+                "kind",
+                format!("unknown map kind {other:?}; this version reads {KIND_PAPER10:?}"),
+            )),
+        }
+    }
+
+    /// The form's own fields of the document (`modes`).
+    fn to_value(&self) -> Vec<(&'static str, Value)> {
+        match self {
+            MapForm::Paper10(map) => vec![(
+                "modes",
+                Value::Array(map.mode_maps().iter().map(mode_to_value).collect()),
+            )],
+        }
+    }
+
+    fn set_robot(self, robot: Option<&str>) -> MapForm {
+        match (self, robot) {
+            (MapForm::Paper10(map), Some(name)) => MapForm::Paper10(map.for_robot(name)),
+            (form, _) => form,
+        }
+    }
+}
+
+/// A validated map file: the map and its metadata.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MapFile {
+    form: MapForm,
+    metadata: Map<String, Value>,
+}
+
+impl MapFile {
+    /// A map with `metadata` (`null` or an object; checked as in a file). The map is marked
+    /// as identified on `metadata.robot`.
+    pub fn new(form: MapForm, metadata: &Value) -> Result<MapFile, Error> {
+        let metadata = checked_metadata(metadata)?;
+        let form = form.set_robot(metadata.get("robot").and_then(Value::as_str));
+        Ok(MapFile { form, metadata })
+    }
+
+    /// Parses and validates a map document (strict JSON text).
+    pub fn parse(text: &str) -> Result<MapFile, Error> {
+        let doc: Value = serde_json::from_str(text)
+            .map_err(|e| Error::document("(document)", format!("not valid JSON: {e}")))?;
+        Self::from_value(&doc)
+    }
+
+    /// Reads and validates the map file at `path`; errors start with the path.
+    pub fn load(path: &Path) -> Result<MapFile, Error> {
+        let in_file = |path_in_doc: &str| format!("{}: {path_in_doc}", path.display());
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            Error::document(path.display().to_string(), format!("cannot read: {e}"))
+        })?;
+        Self::parse(&text).map_err(|e| match e {
+            Error::Document { path, reason } => Error::Document {
+                path: in_file(&path),
+                reason,
+            },
+            other => other,
+        })
+    }
+
+    /// Validates a parsed document.
+    pub fn from_value(doc: &Value) -> Result<MapFile, Error> {
+        let doc = doc
+            .as_object()
+            .ok_or_else(|| Error::document("(document)", "top level must be a JSON object"))?;
+        let unknown: Vec<&str> = doc
+            .keys()
+            .map(String::as_str)
+            .filter(|k| !TOP_LEVEL_FIELDS.contains(k))
+            .collect();
+        if !unknown.is_empty() {
+            return Err(Error::document(
+                "(document)",
+                format!("unknown field(s) {}", unknown.join(", ")),
+            ));
+        }
+        match doc.get("schema_version") {
+            Some(Value::Number(n)) if n.as_u64() == Some(SCHEMA_VERSION) => {}
+            Some(other) => {
+                return Err(Error::document(
+                    "schema_version",
+                    format!("must be the integer {SCHEMA_VERSION}, got {other}"),
+                ))
+            }
+            None => return Err(Error::document("schema_version", "missing")),
+        }
+        let kind = match doc.get("kind") {
+            None | Some(Value::Null) => LEGACY_KIND,
+            Some(Value::String(kind)) => kind.as_str(),
+            Some(other) => {
+                return Err(Error::document(
+                    "kind",
+                    format!("must be a string, got {other}"),
+                ))
+            }
+        };
+        let form = MapForm::parse(kind, doc)?;
+        Self::new(form, doc.get("metadata").unwrap_or(&Value::Null))
+    }
+
+    /// The document: `schema_version`, `kind`, `metadata`, then the form's fields.
+    pub fn to_value(&self) -> Value {
+        let mut doc = Map::new();
+        doc.insert("schema_version".into(), Value::from(SCHEMA_VERSION));
+        doc.insert("kind".into(), Value::from(self.form.kind()));
+        doc.insert("metadata".into(), Value::Object(self.metadata.clone()));
+        for (key, value) in self.form.to_value() {
+            doc.insert(key.into(), value);
+        }
+        Value::Object(doc)
+    }
+
+    /// The document as strict JSON text, indented, with a final newline.
+    pub fn to_json(&self) -> String {
+        // A `Value` holds no NaN or infinity, so the text is strict JSON; serializing a
+        // `Value` to a `String` cannot fail.
+        let mut text = serde_json::to_string_pretty(&self.to_value()).unwrap_or_default();
+        text.push('\n');
+        text
+    }
+
+    /// Writes [`Self::to_json`] to `path`.
+    pub fn save(&self, path: &Path) -> Result<(), Error> {
+        std::fs::write(path, self.to_json())
+            .map_err(|e| Error::document(path.display().to_string(), format!("cannot write: {e}")))
+    }
+
+    pub fn form(&self) -> &MapForm {
+        &self.form
+    }
+
+    pub fn into_form(self) -> MapForm {
+        self.form
+    }
+
+    /// The `kind` of the map's form.
+    pub fn kind(&self) -> &'static str {
+        self.form.kind()
+    }
+
+    /// The robot the map was identified on (`metadata.robot`), if named.
+    pub fn robot(&self) -> Option<&str> {
+        self.metadata.get("robot").and_then(Value::as_str)
+    }
+
+    /// The checked metadata: [`METADATA_FIELDS`] first (`null` when not given), then any
+    /// other keys as given.
+    pub fn metadata(&self) -> &Map<String, Value> {
+        &self.metadata
+    }
+}
+
+fn paper10_from(doc: &Map<String, Value>) -> Result<DynamicMap, Error> {
+    let modes = match doc.get("modes") {
+        None => return Err(Error::document("modes", "missing")),
+        Some(Value::Array(modes)) if !modes.is_empty() => modes,
+        Some(_) => {
+            return Err(Error::document(
+                "modes",
+                "must be a non-empty list of mode objects",
+            ))
+        }
+    };
+    let maps = modes
+        .iter()
+        .enumerate()
+        .map(|(i, m)| mode_from(m, &format!("modes[{i}]")))
+        .collect::<Result<Vec<_>, _>>()?;
+    DynamicMap::new(maps).map_err(|e| Error::document("modes", reason(e)))
+}
+
+/// The text of a core error without its kind prefix ("invalid parameter: ").
+fn reason(e: Error) -> String {
+    match e {
+        Error::InvalidParameter(msg) => msg,
+        other => other.to_string(),
+    }
+}
+
+fn number(value: Option<&Value>, path: &str) -> Result<f64, Error> {
+    match value {
+        None => Err(Error::document(path, "missing")),
+        Some(Value::Number(n)) => match n.as_f64() {
+            Some(x) if x.is_finite() => Ok(x),
+            _ => Err(Error::document(path, format!("must be finite, got {n}"))),
+        },
+        Some(other) => Err(Error::document(
+            path,
+            format!("must be a number, got {other}"),
+        )),
+    }
+}
+
+fn joint_index(value: Option<&Value>, path: &str) -> Result<usize, Error> {
+    let bad = |v: &dyn std::fmt::Display| {
+        Error::document(
+            path,
+            format!("must be a joint index 0..={MAX_JOINT_INDEX}, got {v}"),
+        )
+    };
+    match value {
+        None => Err(Error::document(path, "missing")),
+        Some(Value::Number(n)) => match n.as_u64() {
+            Some(j) if j <= MAX_JOINT_INDEX as u64 => Ok(j as usize),
+            _ => Err(bad(n)),
+        },
+        Some(other) => Err(bad(other)),
+    }
+}
+
+fn range(value: Option<&Value>, path: &str) -> Result<Option<InertiaRange>, Error> {
+    match value {
+        None | Some(Value::Null) => Ok(None),
+        Some(Value::Array(bounds)) if bounds.len() == 2 => {
+            let lo = number(bounds.first(), &format!("{path}[0]"))?;
+            let hi = number(bounds.get(1), &format!("{path}[1]"))?;
+            InertiaRange::new(lo, hi)
+                .map(Some)
+                .map_err(|e| Error::document(path, reason(e)))
+        }
+        Some(other) => Err(Error::document(
+            path,
+            format!("must be [min, max] in kg m² or null, got {other}"),
+        )),
+    }
+}
+
+fn mode_from(value: &Value, path: &str) -> Result<ModeMap, Error> {
+    let mode = value.as_object().ok_or_else(|| {
+        Error::document(
+            path,
+            format!("must be an object with fields {}", MODE_FIELDS.join(", ")),
+        )
+    })?;
+    let unknown: Vec<&str> = mode
+        .keys()
+        .map(String::as_str)
+        .filter(|k| !MODE_FIELDS.contains(k) && !RANGE_FIELDS.contains(k))
+        .collect();
+    if !unknown.is_empty() {
+        return Err(Error::document(
+            path,
+            format!("unknown field(s) {}", unknown.join(", ")),
+        ));
+    }
+    let f = |key: &str| number(mode.get(key), &format!("{path}.{key}"));
+    let coefficients = MapCoefficients {
+        k_0: f("k_0")?,
+        k_j: f("k_j")?,
+        k_g: f("k_g")?,
+        k_p: f("k_p")?,
+        c_0: f("c_0")?,
+        c_1: f("c_1")?,
+        c_2: f("c_2")?,
+        c_tau: f("c_tau")?,
+    };
+    let frequency_joint = joint_index(
+        mode.get("frequency_joint"),
+        &format!("{path}.frequency_joint"),
+    )?;
+    let damping_joint = joint_index(mode.get("damping_joint"), &format!("{path}.damping_joint"))?;
+    let mut exponents = [0.0; 2];
+    for (e, key) in exponents
+        .iter_mut()
+        .zip(["damping_gain_exponent", "frequency_gain_exponent"])
+    {
+        *e = f(key)?;
+        let bound = crate::dynmap::MAX_GAIN_EXPONENT;
+        if e.abs() > bound {
+            return Err(Error::document(
+                format!("{path}.{key}"),
+                format!(
+                    "{e} is outside [-{bound}, {bound}] (the published forms use -0.5, 0, \
+                     0.5 and 1)"
+                ),
+            ));
+        }
+    }
+    let [frequency_range, damping_range] = [0, 1].map(|k| {
+        range(
+            mode.get(RANGE_FIELDS[k]),
+            &format!("{path}.{}", RANGE_FIELDS[k]),
+        )
+    });
+    let (frequency_range, damping_range) = (frequency_range?, damping_range?);
+    if frequency_joint == damping_joint && frequency_range != damping_range {
+        return Err(Error::document(
+            path,
+            format!(
+                "frequency and damping both read joint {frequency_joint}, so {} and {} must \
+                 be equal",
+                RANGE_FIELDS[0], RANGE_FIELDS[1]
+            ),
+        ));
+    }
+    Ok(ModeMap {
+        coefficients,
+        frequency_joint,
+        damping_joint,
+        damping_gain_exponent: exponents[0],
+        frequency_gain_exponent: exponents[1],
+        frequency_range,
+        damping_range,
+    })
+}
+
+fn float(x: f64) -> Value {
+    Number::from_f64(x).map_or(Value::Null, Value::Number)
+}
+
+fn range_to_value(range: Option<InertiaRange>) -> Value {
+    range.map_or(Value::Null, |r| {
+        Value::Array(vec![float(r.min_kg_m2()), float(r.max_kg_m2())])
+    })
+}
+
+/// One `paper10` mode as written in a map file.
+pub fn mode_to_value(m: &ModeMap) -> Value {
+    let c = &m.coefficients;
+    let mut out = Map::new();
+    for (key, x) in [
+        ("k_0", c.k_0),
+        ("k_j", c.k_j),
+        ("k_g", c.k_g),
+        ("k_p", c.k_p),
+        ("c_0", c.c_0),
+        ("c_1", c.c_1),
+        ("c_2", c.c_2),
+        ("c_tau", c.c_tau),
+    ] {
+        out.insert(key.into(), float(x));
+    }
+    out.insert("frequency_joint".into(), Value::from(m.frequency_joint));
+    out.insert("damping_joint".into(), Value::from(m.damping_joint));
+    out.insert(
+        "damping_gain_exponent".into(),
+        float(m.damping_gain_exponent),
+    );
+    out.insert(
+        "frequency_gain_exponent".into(),
+        float(m.frequency_gain_exponent),
+    );
+    out.insert(RANGE_FIELDS[0].into(), range_to_value(m.frequency_range));
+    out.insert(RANGE_FIELDS[1].into(), range_to_value(m.damping_range));
+    Value::Object(out)
+}
+
+/// `metadata` checked and normalized: [`METADATA_FIELDS`] first, then the other keys.
+fn checked_metadata(metadata: &Value) -> Result<Map<String, Value>, Error> {
+    let given = match metadata {
+        Value::Null => Map::new(),
+        Value::Object(m) => m.clone(),
+        other => {
+            return Err(Error::document(
+                "metadata",
+                format!("must be an object or null, got {other}"),
+            ))
+        }
+    };
+    let mut out = Map::new();
+    for key in METADATA_FIELDS {
+        out.insert(key.into(), given.get(key).cloned().unwrap_or(Value::Null));
+    }
+    for (key, value) in &given {
+        if !METADATA_FIELDS.contains(&key.as_str()) {
+            out.insert(key.clone(), value.clone());
+        }
+    }
+    for key in ["robot", "source"] {
+        match &out[key] {
+            Value::Null => {}
+            Value::String(s) if !s.is_empty() || key == "source" => {}
+            other => {
+                return Err(Error::document(
+                    format!("metadata.{key}"),
+                    format!("must be a non-empty string or null, got {other}"),
+                ))
+            }
+        }
+    }
+    if !matches!(out["fit_statistics"], Value::Null | Value::Object(_)) {
+        return Err(Error::document(
+            "metadata.fit_statistics",
+            "must be an object or null",
+        ));
+    }
+    let payload = checked_payload(&out["payload"])?;
+    out.insert("payload".into(), payload);
+    Ok(out)
+}
+
+/// A payload `{"mass_kg", "com_m", "inertia_kg_m2"}` (defaults 0, `[0, 0, 0]`, `null`).
+fn checked_payload(payload: &Value) -> Result<Value, Error> {
+    let path = "metadata.payload";
+    let given = match payload {
+        Value::Null => return Ok(Value::Null),
+        Value::Object(m) => m,
+        other => {
+            return Err(Error::document(
+                path,
+                format!("must be an object or null, got {other}"),
+            ))
+        }
+    };
+    let fields = ["mass_kg", "com_m", "inertia_kg_m2"];
+    if let Some(key) = given.keys().find(|k| !fields.contains(&k.as_str())) {
+        return Err(Error::document(path, format!("unknown field {key}")));
+    }
+    let mass = match given.get("mass_kg") {
+        None => 0.0,
+        v => number(v, &format!("{path}.mass_kg"))?,
+    };
+    if mass < 0.0 {
+        return Err(Error::document(
+            format!("{path}.mass_kg"),
+            format!("must be >= 0, got {mass}"),
+        ));
+    }
+    let list = |key: &str, len: usize| -> Result<Option<Vec<f64>>, Error> {
+        let p = format!("{path}.{key}");
+        match given.get(key) {
+            None | Some(Value::Null) => Ok(None),
+            Some(Value::Array(v)) if v.len() == len => v
+                .iter()
+                .enumerate()
+                .map(|(i, x)| number(Some(x), &format!("{p}[{i}]")))
+                .collect::<Result<Vec<_>, _>>()
+                .map(Some),
+            Some(other) => Err(Error::document(
+                p,
+                format!("must be a list of {len} numbers, got {other}"),
+            )),
+        }
+    };
+    let com = list("com_m", 3)?.unwrap_or_else(|| vec![0.0; 3]);
+    let inertia = list("inertia_kg_m2", 6)?;
+    let to_list = |v: Vec<f64>| Value::Array(v.into_iter().map(float).collect());
+    let mut out = Map::new();
+    out.insert("mass_kg".into(), float(mass));
+    out.insert("com_m".into(), to_list(com));
+    out.insert("inertia_kg_m2".into(), inertia.map_or(Value::Null, to_list));
+    Ok(Value::Object(out))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn paper_file() -> MapFile {
+        let meta = serde_json::json!({"robot": "ur5e", "source": "paper"});
+        MapFile::new(MapForm::Paper10(DynamicMap::paper_ur5e()), &meta).expect("valid")
+    }
+
+    fn reason_of(text: &str) -> String {
+        match MapFile::parse(text) {
+            Ok(_) => "accepted".into(),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn a_written_map_reads_back_identically() {
+        let file = paper_file();
+        let text = file.to_json();
+        let back = MapFile::parse(&text).expect("round trip");
+        assert_eq!(back, file);
+        assert_eq!(back.kind(), KIND_PAPER10);
+        assert_eq!(back.robot(), Some("ur5e"));
+        let MapForm::Paper10(map) = back.form();
+        assert_eq!(map.robot(), Some("ur5e"));
+        assert_eq!(map.mode_maps(), DynamicMap::paper_ur5e().mode_maps());
+    }
+
+    #[test]
+    fn files_of_the_legacy_kind_or_without_kind_read_as_paper10() {
+        let text = paper_file().to_json();
+        for replacement in [r#""kind": "tvist.dynamic_map","#, ""] {
+            let old = text.replace(r#""kind": "paper10","#, replacement);
+            assert_ne!(old, text);
+            let file = MapFile::parse(&old).expect("legacy file");
+            assert_eq!(file.kind(), KIND_PAPER10);
+        }
+    }
+
+    #[test]
+    fn errors_name_the_field_and_the_reason() {
+        let text = paper_file().to_json();
+        let cases = [
+            (
+                text.replace(r#""schema_version": 1"#, r#""schema_version": 1.0"#),
+                "schema_version: must be the integer 1",
+            ),
+            (
+                text.replace(r#""schema_version": 1"#, r#""schema_version": true"#),
+                "schema_version: must be the integer 1",
+            ),
+            (
+                text.replace(r#""kind": "paper10""#, r#""kind": "modal9""#),
+                "kind: unknown map kind \"modal9\"",
+            ),
+            (
+                text.replacen(r#""k_0": 10000.0"#, r#""k_0": "x""#, 1),
+                "modes[0].k_0: must be a number",
+            ),
+            (
+                text.replacen(
+                    r#""damping_gain_exponent": 1.0"#,
+                    r#""damping_gain_exponent": -1000000.0"#,
+                    1,
+                ),
+                "modes[0].damping_gain_exponent: -1000000 is outside",
+            ),
+            (
+                text.replacen(r#""frequency_joint": 1"#, r#""frequency_joint": 1.5"#, 1),
+                "modes[0].frequency_joint: must be a joint index",
+            ),
+            (
+                text.replacen(
+                    r#""k_0": 10000.0"#,
+                    &format!(r#""k_0": 1{}"#, "0".repeat(400)),
+                    1,
+                ),
+                "(document): not valid JSON: number out of range",
+            ),
+            (
+                text.replacen(r#""k_0": 10000.0"#, r#""k_0": NaN"#, 1),
+                "(document): not valid JSON",
+            ),
+            (
+                format!("{}1{}", "[".repeat(100_000), "]".repeat(100_000)),
+                "recursion limit",
+            ),
+            (
+                text.replace(r#""robot": "ur5e""#, r#""robot": 5"#),
+                "metadata.robot: must be a non-empty string or null",
+            ),
+            (
+                text.replace(r#""payload": null"#, r#""payload": {"com_m": [1, 2]}"#),
+                "metadata.payload.com_m: must be a list of 3 numbers",
+            ),
+            (
+                text.replace(r#""metadata""#, r#""metdata""#),
+                "(document): unknown field(s) metdata",
+            ),
+        ];
+        for (doc, expected) in cases {
+            let msg = reason_of(&doc);
+            assert!(msg.contains(expected), "{msg:?} lacks {expected:?}");
+        }
+    }
+
+    #[test]
+    fn non_finite_metadata_is_written_as_null() {
+        let mut meta = Map::new();
+        meta.insert("robot".into(), Value::from("ur10e"));
+        // A Value cannot hold NaN: `from_f64` gives None, which the bindings write as null.
+        meta.insert("rms".into(), float(f64::NAN));
+        let file = MapFile::new(
+            MapForm::Paper10(DynamicMap::paper_ur5e()),
+            &Value::Object(meta),
+        )
+        .expect("valid");
+        let text = file.to_json();
+        assert!(text.contains(r#""rms": null"#), "{text}");
+        assert!(!text.contains("NaN"));
+        // The metadata's robot is the map's robot.
+        let MapForm::Paper10(map) = file.form();
+        assert_eq!(map.robot(), Some("ur10e"));
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::test_runner::Config::with_cases(500))]
+
+        /// Every finite coefficient reads back bit-identical (the serde_json parser is set to
+        /// round-trip floats exactly; its default is not correctly rounded).
+        #[test]
+        fn every_double_reads_back_bit_identical(
+            bits in proptest::collection::vec(proptest::prelude::any::<u64>(), 8),
+        ) {
+            let finite: Vec<f64> = bits
+                .iter()
+                .map(|&b| f64::from_bits(b))
+                .map(|x| if x.is_finite() { x } else { 1.0 })
+                .collect();
+            let c = MapCoefficients {
+                k_0: finite[0], k_j: finite[1], k_g: finite[2], k_p: finite[3],
+                c_0: finite[4], c_1: finite[5], c_2: finite[6], c_tau: finite[7],
+            };
+            let map = DynamicMap::new(vec![ModeMap::general(c, 1)]).expect("finite");
+            let file = MapFile::new(MapForm::Paper10(map), &Value::Null).expect("valid");
+            let back = MapFile::parse(&file.to_json()).expect("round trip");
+            let MapForm::Paper10(read) = back.form();
+            let got = read.mode_maps()[0].coefficients;
+            for (a, b) in [(got.k_0, c.k_0), (got.k_j, c.k_j), (got.k_g, c.k_g), (got.k_p, c.k_p),
+                           (got.c_0, c.c_0), (got.c_1, c.c_1), (got.c_2, c.c_2),
+                           (got.c_tau, c.c_tau)] {
+                proptest::prop_assert_eq!(a.to_bits(), b.to_bits());
+            }
+        }
+    }
+}

@@ -1,0 +1,380 @@
+//! Map files from C (`tvist_shaper_new_map[_ex]`), setup options, the memory limit and the
+//! per-flag status counts, called as C would and compared with the Rust core.
+
+use std::ffi::{c_char, CStr, CString};
+use std::path::PathBuf;
+use std::ptr;
+use tvist::{
+    tvist_last_error_message, tvist_shaper_free, tvist_shaper_new_constant,
+    tvist_shaper_new_constant_ex, tvist_shaper_new_map, tvist_shaper_new_map_ex,
+    tvist_shaper_reset, tvist_shaper_status_counts, tvist_shaper_step, TvistShaper,
+    TvistShaperOptions, TVIST_ERR_INVALID_PARAMETER, TVIST_ERR_MAP_FILE, TVIST_ERR_ROBOT_MISMATCH,
+    TVIST_ERR_TOO_LARGE, TVIST_ERR_UNKNOWN_ROBOT, TVIST_INTERP_CUBIC, TVIST_N_STATUS_FLAGS,
+    TVIST_OK,
+};
+use tvist_core::map_file::{MapFile, MapForm};
+use tvist_core::robot_data::ur_e_series;
+use tvist_core::{
+    ConstantModes, DynamicMap, Interpolation, MapDynamics, Mode, RigidBody, ShaperKind, Status,
+    TvShaper, TvShaperConfig,
+};
+
+const PI: f64 = std::f64::consts::PI;
+const Q1: [f64; 6] = [0.0, -PI, 0.0, -PI / 2.0, 0.0, 0.0];
+const PAYLOAD_KG: f64 = 5.0;
+const PAYLOAD_COM_M: [f64; 3] = [0.0, 0.0, 0.05];
+const DT_S: f64 = 0.002;
+
+fn c(text: &str) -> CString {
+    CString::new(text).expect("no interior NUL")
+}
+
+fn last_error() -> String {
+    let mut buf = [0 as c_char; 1024];
+    // SAFETY: `buf` is writable for its length.
+    unsafe { tvist_last_error_message(buf.as_mut_ptr(), buf.len()) };
+    // SAFETY: NUL-terminated by the function.
+    unsafe { CStr::from_ptr(buf.as_ptr()) }
+        .to_string_lossy()
+        .into_owned()
+}
+
+struct Handle(*mut TvistShaper);
+
+impl Drop for Handle {
+    fn drop(&mut self) {
+        // SAFETY: from a constructor (or null), freed once.
+        unsafe { tvist_shaper_free(self.0) };
+    }
+}
+
+impl Handle {
+    fn step(&mut self, q_in: &[f64], q_out: &mut [f64]) -> i32 {
+        // SAFETY: live handle; both arrays hold `q_in.len()` doubles.
+        unsafe { tvist_shaper_step(self.0, q_in.as_ptr(), q_out.as_mut_ptr(), q_in.len()) }
+    }
+
+    fn counts(&self) -> Vec<u64> {
+        let mut counts = vec![u64::MAX; TVIST_N_STATUS_FLAGS + 2];
+        // SAFETY: live handle; `counts` is writable for its length.
+        let n = unsafe { tvist_shaper_status_counts(self.0, counts.as_mut_ptr(), counts.len()) };
+        assert_eq!(n, TVIST_N_STATUS_FLAGS);
+        assert_eq!(
+            &counts[n..],
+            &[u64::MAX; 2],
+            "nothing written past the flags"
+        );
+        counts.truncate(n);
+        counts
+    }
+}
+
+/// A map file in the temporary directory, removed on drop.
+struct TempMap(PathBuf);
+
+impl TempMap {
+    fn new(tag: &str, text: &str) -> TempMap {
+        let path =
+            std::env::temp_dir().join(format!("tvist-ffi-{}-{tag}.json", std::process::id()));
+        std::fs::write(&path, text).expect("write map file");
+        TempMap(path)
+    }
+
+    fn of_robot(tag: &str, robot: &str) -> TempMap {
+        let meta = serde_json::json!({"robot": robot, "source": "test"});
+        let file = MapFile::new(MapForm::Paper10(DynamicMap::paper_ur5e()), &meta).expect("map");
+        TempMap::new(tag, &file.to_json())
+    }
+
+    fn c_path(&self) -> CString {
+        c(self.0.to_str().expect("UTF-8 temp path"))
+    }
+}
+
+impl Drop for TempMap {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+fn new_map(
+    robot: &str,
+    map: &TempMap,
+    shaper: &str,
+    options: Option<&TvistShaperOptions>,
+) -> (i32, Handle) {
+    let (robot, shaper, path) = (c(robot), c(shaper), map.c_path());
+    let mut out = ptr::dangling_mut::<TvistShaper>();
+    let options = options.map_or(ptr::null(), |o| o as *const TvistShaperOptions);
+    // SAFETY: NUL-terminated strings, a 3-double CoM, readable options, a writable `out`.
+    let code = unsafe {
+        tvist_shaper_new_map_ex(
+            robot.as_ptr(),
+            PAYLOAD_KG,
+            PAYLOAD_COM_M.as_ptr(),
+            path.as_ptr(),
+            DT_S,
+            shaper.as_ptr(),
+            options,
+            &mut out,
+        )
+    };
+    (code, Handle(out))
+}
+
+/// A smooth 0.6 s move of joints 0–2 from Q1, then rest: `n` samples of 6 joints.
+fn a_move(n: usize) -> Vec<[f64; 6]> {
+    (0..n)
+        .map(|k| {
+            let s = (k as f64 * DT_S / 0.6).min(1.0);
+            let blend = s * s * s * (10.0 - 15.0 * s + 6.0 * s * s);
+            let mut q = Q1;
+            q[0] += 0.8 * blend;
+            q[1] += 0.5 * blend;
+            q[2] -= 0.4 * blend;
+            q
+        })
+        .collect()
+}
+
+/// Runs `h` and `core` on the same move; both must give bit-identical outputs.
+fn assert_same_as_core<D: tvist_core::Dynamics>(h: &mut Handle, core: &mut TvShaper<D>) {
+    let (mut from_c, mut from_core) = ([0.0; 6], [0.0; 6]);
+    // SAFETY: live handle, 6 doubles.
+    assert_eq!(unsafe { tvist_shaper_reset(h.0, Q1.as_ptr(), 6) }, TVIST_OK);
+    core.reset(&Q1);
+    for q in a_move(600) {
+        let status = h.step(&q, &mut from_c);
+        assert_eq!(status, core.step(&q, &mut from_core).0);
+        assert_eq!(from_c, from_core);
+    }
+}
+
+#[test]
+fn a_map_file_from_c_shapes_exactly_as_the_core() {
+    for robot in ["ur5e", "ur10e"] {
+        let map = TempMap::of_robot(robot, robot);
+        let (code, mut h) = new_map(robot, &map, "zv", None);
+        assert_eq!(code, TVIST_OK, "{}", last_error());
+        let ur = ur_e_series(robot, RigidBody::point(PAYLOAD_KG, PAYLOAD_COM_M)).expect("robot");
+        let file = MapFile::load(&map.0).expect("map");
+        let MapForm::Paper10(dynmap) = file.into_form();
+        let dynamics = MapDynamics::new(ur, dynmap).expect("provider");
+        let config = TvShaperConfig::new(DT_S, 6, ShaperKind::Zv);
+        let mut core = TvShaper::new(dynamics, &config).expect("shaper");
+        assert_same_as_core(&mut h, &mut core);
+    }
+}
+
+#[test]
+fn the_plain_constructor_equals_the_ex_form_with_default_options() {
+    let map = TempMap::of_robot("plain", "ur5e");
+    let (robot, shaper, path) = (c("ur5e"), c("zvd"), map.c_path());
+    let mut out = ptr::null_mut();
+    // SAFETY: NUL-terminated strings, a 3-double CoM, a writable `out`.
+    let code = unsafe {
+        tvist_shaper_new_map(
+            robot.as_ptr(),
+            PAYLOAD_KG,
+            PAYLOAD_COM_M.as_ptr(),
+            path.as_ptr(),
+            DT_S,
+            shaper.as_ptr(),
+            &mut out,
+        )
+    };
+    assert_eq!(code, TVIST_OK, "{}", last_error());
+    let mut plain = Handle(out);
+    let (_, mut ex) = new_map("ur5e", &map, "zvd", Some(&TvistShaperOptions::default()));
+    let (mut a, mut b) = ([0.0; 6], [0.0; 6]);
+    for q in a_move(300) {
+        assert_eq!(plain.step(&q, &mut a), ex.step(&q, &mut b));
+        assert_eq!(a, b);
+    }
+}
+
+#[test]
+fn a_map_of_another_robot_is_refused_naming_both_unless_allowed() {
+    let map = TempMap::of_robot("mismatch", "ur5e");
+    let (code, h) = new_map("ur10e", &map, "zv", None);
+    assert_eq!((code, h.0.is_null()), (TVIST_ERR_ROBOT_MISMATCH, true));
+    let msg = last_error();
+    assert!(msg.contains("ur10e") && msg.contains("ur5e"), "{msg}");
+
+    let allow = TvistShaperOptions {
+        allow_other_robot: 1,
+        ..TvistShaperOptions::default()
+    };
+    let (code, h) = new_map("ur10e", &map, "zv", Some(&allow));
+    assert_eq!((code, h.0.is_null()), (TVIST_OK, false), "{}", last_error());
+}
+
+#[test]
+fn bad_robots_and_bad_files_have_their_codes_and_name_the_problem() {
+    let map = TempMap::of_robot("bad", "ur5e");
+    let (code, _) = new_map("ur99", &map, "zv", None);
+    assert_eq!(code, TVIST_ERR_UNKNOWN_ROBOT);
+    assert!(
+        last_error().contains("ur3e, ur5e, ur10e, ur16e, ur20"),
+        "{}",
+        last_error()
+    );
+
+    let missing = TempMap(std::env::temp_dir().join("tvist-ffi-no-such-map.json"));
+    let (code, _) = new_map("ur5e", &missing, "zv", None);
+    assert_eq!(code, TVIST_ERR_MAP_FILE);
+    assert!(
+        last_error().contains("no-such-map.json: cannot read"),
+        "{}",
+        last_error()
+    );
+
+    let text = std::fs::read_to_string(&map.0).expect("map text");
+    for (tag, bad, field) in [
+        (
+            "k0",
+            text.replacen("\"k_0\": 10000.0", "\"k_0\": \"x\"", 1),
+            "modes[0].k_0",
+        ),
+        (
+            "nan",
+            text.replacen("\"k_0\": 10000.0", "\"k_0\": NaN", 1),
+            "not valid JSON",
+        ),
+        (
+            "version",
+            text.replace("\"schema_version\": 1", "\"schema_version\": 2"),
+            "schema_version",
+        ),
+    ] {
+        let file = TempMap::new(tag, &bad);
+        let (code, h) = new_map("ur5e", &file, "zv", None);
+        assert_eq!((code, h.0.is_null()), (TVIST_ERR_MAP_FILE, true), "{tag}");
+        let msg = last_error();
+        assert!(msg.contains(field) && msg.contains(".json"), "{tag}: {msg}");
+    }
+}
+
+#[test]
+fn options_choose_interpolation_and_ei_tolerance_as_in_the_core() {
+    let map = TempMap::of_robot("options", "ur5e");
+    let options = TvistShaperOptions {
+        interpolation: TVIST_INTERP_CUBIC,
+        ei_tolerance: 0.1,
+        ..TvistShaperOptions::default()
+    };
+    let (code, mut h) = new_map("ur5e", &map, "ei", Some(&options));
+    assert_eq!(code, TVIST_OK, "{}", last_error());
+    let ur = ur_e_series("ur5e", RigidBody::point(PAYLOAD_KG, PAYLOAD_COM_M)).expect("robot");
+    let mut config =
+        TvShaperConfig::new(DT_S, 6, ShaperKind::from_name("ei", Some(0.1)).expect("ei"));
+    config.interp = Interpolation::Cubic;
+    let dynamics = MapDynamics::new(ur, DynamicMap::paper_ur5e()).expect("provider");
+    let mut core = TvShaper::new(dynamics, &config).expect("shaper");
+    assert_same_as_core(&mut h, &mut core);
+
+    // The default tolerance differs, so the test above can tell the option was used.
+    let (_, mut default) = new_map("ur5e", &map, "ei", None);
+    let (mut a, mut b) = ([0.0; 6], [0.0; 6]);
+    let mut differs = false;
+    for q in a_move(300) {
+        h.step(&q, &mut a);
+        default.step(&q, &mut b);
+        differs |= a != b;
+    }
+    assert!(differs);
+
+    for (options, what) in [
+        (
+            TvistShaperOptions {
+                interpolation: 7,
+                ..TvistShaperOptions::default()
+            },
+            "interpolation = 7",
+        ),
+        (
+            TvistShaperOptions {
+                ei_tolerance: 0.1,
+                ..TvistShaperOptions::default()
+            },
+            "applies to \"ei\" only",
+        ),
+    ] {
+        let (code, _) = new_map("ur5e", &map, "zv", Some(&options));
+        assert_eq!(code, TVIST_ERR_INVALID_PARAMETER);
+        assert!(last_error().contains(what), "{}", last_error());
+    }
+}
+
+#[test]
+fn a_request_beyond_the_memory_limit_is_refused_not_aborted() {
+    // 0.1 rad/s undamped at 100 kHz over 4096 channels: a ZV delay line of 4.7e6 samples per
+    // channel, ~154 GB. Every value is within its own documented range.
+    let name = c("zv");
+    let mut out = ptr::dangling_mut::<TvistShaper>();
+    // SAFETY: one-mode arrays, a NUL-terminated name, a writable `out`.
+    let code = unsafe {
+        tvist_shaper_new_constant(
+            [0.1].as_ptr(),
+            [0.0].as_ptr(),
+            1,
+            1e-5,
+            4096,
+            name.as_ptr(),
+            &mut out,
+        )
+    };
+    assert_eq!((code, out.is_null()), (TVIST_ERR_TOO_LARGE, true));
+    assert!(last_error().contains("256 MiB"), "{}", last_error());
+}
+
+#[test]
+fn status_counts_count_each_flag_of_each_step() {
+    // Mode 0 above the Nyquist frequency (pi/dt = 1571 rad/s at 2 ms), mode 1 ordinary.
+    let name = c("zv");
+    let mut out = ptr::null_mut();
+    // SAFETY: two-mode arrays, a NUL-terminated name, a writable `out`.
+    let code = unsafe {
+        tvist_shaper_new_constant_ex(
+            [1e4, 40.0].as_ptr(),
+            [0.0, 0.05].as_ptr(),
+            2,
+            DT_S,
+            2,
+            name.as_ptr(),
+            ptr::null(),
+            &mut out,
+        )
+    };
+    assert_eq!(code, TVIST_OK, "{}", last_error());
+    let mut h = Handle(out);
+    assert_eq!(h.counts(), vec![0; TVIST_N_STATUS_FLAGS]);
+    let mut y = [0.0; 2];
+    for k in 0..10 {
+        let x = if k == 3 { [f64::NAN, 0.0] } else { [0.1, 0.2] };
+        let status = Status(h.step(&x, &mut y));
+        assert!(status.contains(Status::MODE_ABOVE_NYQUIST));
+    }
+    assert_eq!(h.step(&[0.0; 3], &mut [0.0; 3]), Status::BAD_LENGTH.0);
+    let counts = h.counts();
+    for (k, &(name, flag)) in Status::FLAGS.iter().enumerate() {
+        let expected = match flag {
+            Status::MODE_ABOVE_NYQUIST => 10,
+            Status::INPUT_HELD | Status::BAD_LENGTH => 1,
+            _ => 0,
+        };
+        assert_eq!(counts[k], expected, "{name}");
+    }
+    // SAFETY: a null handle returns 0 and writes nothing.
+    assert_eq!(
+        unsafe { tvist_shaper_status_counts(ptr::null(), ptr::null_mut(), 0) },
+        0
+    );
+    // The same cascade in the core flags the same.
+    let modes = ConstantModes::new(vec![Mode::new(1e4, 0.0), Mode::new(40.0, 0.05)]).expect("m");
+    let mut core =
+        TvShaper::new(modes, &TvShaperConfig::new(DT_S, 2, ShaperKind::Zv)).expect("shaper");
+    assert!(core
+        .step(&[0.1, 0.2], &mut y)
+        .contains(Status::MODE_ABOVE_NYQUIST));
+}

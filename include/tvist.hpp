@@ -1,0 +1,151 @@
+/*
+ * tvist.hpp - header-only C++17 wrapper of the C API (tvist.h): an RAII, move-only shaper
+ * handle. Setup errors throw tvist::Error (with the library's code and message); the
+ * per-cycle calls are noexcept, allocation-free and return the status bits.
+ *
+ *   tvist::Shaper s = tvist::Shaper::from_map("ur10e", 5.0, {0, 0, 0.05}, "map.json", 0.002);
+ *   s.reset(q0);
+ *   int32_t status = s.step(q_planned, q_cmd);   // every cycle; q arrays of s.n_dof() doubles
+ *
+ * Link as for the C API (libtvist.a or libtvist.so).
+ */
+#ifndef TVIST_HPP
+#define TVIST_HPP
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "tvist.h"
+
+namespace tvist {
+
+/* A setup error: code() is the TvistError, what() the library's message. */
+class Error : public std::runtime_error {
+public:
+    Error(int32_t code, const std::string &message) : std::runtime_error(message), code_(code) {}
+    int32_t code() const noexcept { return code_; }
+
+private:
+    int32_t code_;
+};
+
+/* Setup options (the defaults are those of the plain C constructors). */
+struct Options {
+    bool cubic_interpolation = false;  /* Lagrange order 3 instead of linear */
+    double ei_tolerance = 0.0;         /* "ei" only; 0: the default 5 % */
+    double safety_factor = 0.0;        /* delay-line margin; 0: the default 1.5 */
+    bool allow_other_robot = false;    /* accept a map identified on another robot */
+
+    TvistShaperOptions to_c() const noexcept {
+        TvistShaperOptions o{};
+        o.interpolation = cubic_interpolation ? TVIST_INTERP_CUBIC : TVIST_INTERP_LINEAR;
+        o.ei_tolerance = ei_tolerance;
+        o.safety_factor = safety_factor;
+        o.allow_other_robot = allow_other_robot ? 1 : 0;
+        return o;
+    }
+};
+
+/* Per-flag counts of tvist_shaper_status_counts (index k counts bit 1 << k). */
+using StatusCounts = std::array<uint64_t, TVIST_N_STATUS_FLAGS>;
+
+/* One multi-mode FD-TVIST shaper. Move-only; the handle is freed by the destructor. */
+class Shaper {
+public:
+    /* Fixed modes (wn_rad_s[m], zeta[m]) over n_dof channels. */
+    static Shaper constant(const std::vector<double> &wn_rad_s, const std::vector<double> &zeta,
+                           double dt_s, std::size_t n_dof, const std::string &shaper = "zv",
+                           const Options &options = Options()) {
+        if (wn_rad_s.size() != zeta.size()) {
+            throw Error(TVIST_ERR_DIMENSION_MISMATCH, "wn_rad_s and zeta differ in length");
+        }
+        const TvistShaperOptions o = options.to_c();
+        TvistShaper *out = nullptr;
+        check(tvist_shaper_new_constant_ex(wn_rad_s.data(), zeta.data(), wn_rad_s.size(), dt_s,
+                                           n_dof, shaper.c_str(), &o, &out));
+        return Shaper(out);
+    }
+
+    /* The dynamic map in map_json_path for UR e-Series robot `robot` with a point payload. */
+    static Shaper from_map(const std::string &robot, double payload_kg,
+                           const std::array<double, 3> &payload_com_m,
+                           const std::string &map_json_path, double dt_s,
+                           const std::string &shaper = "zv", const Options &options = Options()) {
+        const TvistShaperOptions o = options.to_c();
+        TvistShaper *out = nullptr;
+        check(tvist_shaper_new_map_ex(robot.c_str(), payload_kg, payload_com_m.data(),
+                                      map_json_path.c_str(), dt_s, shaper.c_str(), &o, &out));
+        return Shaper(out);
+    }
+
+    /* The paper's UR5e map ("ur5e" only). */
+    static Shaper ur_map(const std::string &robot, double payload_kg,
+                         const std::array<double, 3> &payload_com_m, double dt_s,
+                         const std::string &shaper = "zv") {
+        TvistShaper *out = nullptr;
+        check(tvist_shaper_new_ur_map(robot.c_str(), payload_kg, payload_com_m.data(), dt_s,
+                                      shaper.c_str(), &out));
+        return Shaper(out);
+    }
+
+    Shaper(const Shaper &) = delete;
+    Shaper &operator=(const Shaper &) = delete;
+    Shaper(Shaper &&other) noexcept : handle_(std::exchange(other.handle_, nullptr)) {}
+    Shaper &operator=(Shaper &&other) noexcept {
+        if (this != &other) {
+            tvist_shaper_free(handle_);
+            handle_ = std::exchange(other.handle_, nullptr);
+        }
+        return *this;
+    }
+    ~Shaper() { tvist_shaper_free(handle_); }
+
+    /* One cycle: q_in -> q_out, n_dof() doubles each (may be the same array). Returns the
+     * TVIST_STATUS_* bits, or TVIST_ERR_NULL on a moved-from shaper. */
+    int32_t step(const double *q_in, double *q_out) noexcept {
+        return tvist_shaper_step(handle_, q_in, q_out, n_dof());
+    }
+
+    /* At rest at q0 (n_dof() doubles). */
+    int32_t reset(const double *q0) noexcept { return tvist_shaper_reset(handle_, q0, n_dof()); }
+
+    double delay_s() const noexcept { return tvist_shaper_delay_s(handle_); }
+    std::size_t n_dof() const noexcept { return tvist_shaper_n_dof(handle_); }
+    explicit operator bool() const noexcept { return handle_ != nullptr; }
+
+    StatusCounts status_counts() const noexcept {
+        StatusCounts counts{};
+        tvist_shaper_status_counts(handle_, counts.data(), counts.size());
+        return counts;
+    }
+
+    /* The C handle, for calls this wrapper does not cover (still owned by this object). */
+    TvistShaper *get() const noexcept { return handle_; }
+
+private:
+    explicit Shaper(TvistShaper *handle) noexcept : handle_(handle) {}
+
+    static std::string last_error() {
+        std::string text(tvist_last_error_message(nullptr, 0) + 1, '\0');
+        tvist_last_error_message(&text[0], text.size());
+        text.pop_back();
+        return text;
+    }
+
+    static void check(int32_t code) {
+        if (code != TVIST_OK) {
+            throw Error(code, last_error());
+        }
+    }
+
+    TvistShaper *handle_ = nullptr;
+};
+
+}  // namespace tvist
+
+#endif /* TVIST_HPP */

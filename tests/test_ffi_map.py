@@ -1,0 +1,145 @@
+"""Maps cross the language boundary: C++ (tvist.hpp over the C API) shapes exactly as Python.
+
+A map written by ``tvist fit-map`` and one written by ``DynamicMap.save`` are loaded in C++
+through ``tvist_shaper_new_map`` (``examples/cpp/shape_with_map.cpp``) and in Python through
+``DynamicMap.load``; both shape the same samples of a move. The two run the same core code
+on the same parsed map, so they must agree to rounding: 1e-12 rad (the C++ program writes 17
+significant digits, which reproduce a double exactly; any larger gap is a different map or a
+different filter).
+
+The fit-map input is synthetic: the modes of a known map at the inertias of random poses of
+the robot, written in the campaign-record format.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import tvist
+from tvist.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+PROGRAM = ROOT / "target" / "cpp" / "shape_with_map"
+PAYLOAD_KG, COM_M, DT_S = 5.0, (0.0, 0.0, 0.05), 0.002
+TOLERANCE_RAD = 1e-12
+
+
+@pytest.fixture(scope="module")
+def program() -> Path:
+    """The C++ example, built by the Makefile target ``cpp-example`` (up to date in make test)."""
+    if shutil.which("make") is None:
+        pytest.fail("make is needed to build the C++ example")
+    subprocess.run(["make", "-s", "cpp-example"], cwd=ROOT, check=True)
+    return PROGRAM
+
+
+def _campaign_records(path: Path, robot_name: str, truth: tvist.DynamicMap) -> None:
+    """Campaign-style records of ``truth``'s modes at the inertias of random robot poses."""
+    robot = tvist.robots.Robot(tvist.robots.params(robot_name), tvist.robots.Payload(*_payload()))
+    rng = np.random.default_rng(7)
+    limits = tvist.robots.params(robot_name).joint_limits_rad
+    with path.open("w") as fh:
+        for i in range(40):
+            q = rng.uniform(limits[:, 0], limits[:, 1])
+            inertia = robot.joint_inertia(q)
+            modes = truth.modes_from_inertia(inertia)
+            record = {
+                "key": f"p{i}",
+                "inertia_kg_m2": [float(v) for v in inertia],
+                "modes": [
+                    {"joint": j, "wn_rad_s": w, "zeta": z, "low_confidence": False}
+                    for j, (w, z) in enumerate(modes)
+                ],
+            }
+            fh.write(json.dumps(record) + "\n")
+
+
+def _payload() -> tuple:
+    return (PAYLOAD_KG, COM_M)
+
+
+def _move(robot_name: str) -> np.ndarray:
+    """A 0.8 s move of the first three joints from a mid-range pose, then 0.4 s of rest."""
+    t = np.arange(0.0, 1.2, DT_S)
+    s = np.clip(t / 0.8, 0.0, 1.0)
+    blend = s**3 * (10 - 15 * s + 6 * s**2)
+    q0 = np.array([0.0, -1.6, 1.2, -1.2, 0.3, 0.0])
+    dq = np.array([0.9, 0.5, -0.6, 0.0, 0.0, 0.0])
+    return q0 + blend[:, None] * dq
+
+
+def _python_shaped(robot_name: str, map_path: Path, q: np.ndarray) -> np.ndarray:
+    robot = tvist.robots.Robot(tvist.robots.params(robot_name), tvist.robots.Payload(*_payload()))
+    shaper = tvist.TvShaper(
+        tvist.MapDynamics(robot, tvist.DynamicMap.load(map_path)), DT_S, 6, shaper="zv"
+    )
+    shaper.reset(q[0])
+    return shaper.shape(q)
+
+
+def _cpp_shaped(program: Path, robot_name: str, map_path: Path, q: np.ndarray, tmp: Path):
+    samples, shaped = tmp / f"{robot_name}_in.txt", tmp / f"{robot_name}_out.txt"
+    np.savetxt(samples, q, fmt="%.17g")
+    args = [robot_name, str(PAYLOAD_KG), *map(str, COM_M), str(map_path), str(DT_S), "zv"]
+    subprocess.run([str(program), *args, str(samples), str(shaped)], check=True)
+    return np.loadtxt(shaped)
+
+
+def _maps(robot_name: str, tmp: Path) -> dict[str, Path]:
+    """A fit-map output and a DynamicMap.save output, both for ``robot_name``."""
+    truth = tvist.DynamicMap(tvist.DynamicMap.paper_ur5e().mode_maps, {"robot": robot_name})
+    results = tmp / f"{robot_name}.jsonl"
+    _campaign_records(results, robot_name, truth)
+    fitted = tmp / f"{robot_name}_fit.json"
+    assert main(["fit-map", str(results), "--out", str(fitted), "--robot", robot_name]) == 0
+    saved = tmp / f"{robot_name}_saved.json"
+    truth.save(saved)
+    return {"fit-map": fitted, "save": saved}
+
+
+@pytest.mark.parametrize("robot_name", ["ur5e", "ur10e"])
+def test_cpp_shapes_a_map_file_exactly_as_python(program, tmp_path, robot_name):
+    q = _move(robot_name)
+    for source, path in _maps(robot_name, tmp_path).items():
+        assert tvist.DynamicMap.load(path).robot == robot_name
+        expected = _python_shaped(robot_name, path, q)
+        got = _cpp_shaped(program, robot_name, path, q, tmp_path)
+        assert got.shape == expected.shape
+        # The test would pass trivially on an identity filter: the move must be shaped.
+        assert np.max(np.abs(expected - q)) > 1e-3, source
+        np.testing.assert_allclose(got, expected, rtol=0, atol=TOLERANCE_RAD, err_msg=source)
+
+
+def test_cpp_refuses_a_map_of_another_robot(program, tmp_path):
+    path = tmp_path / "ur5e.json"
+    tvist.DynamicMap.paper_ur5e().save(path)
+    args = ["ur10e", "5", "0", "0", "0.05", str(path), "0.002", "zv"]
+    q = tmp_path / "q.txt"
+    np.savetxt(q, _move("ur10e")[:5])
+    run = subprocess.run(
+        [str(program), *args, str(q), str(tmp_path / "out.txt")], capture_output=True, text=True
+    )
+    assert run.returncode == 1
+    assert "identified on ur5e, not on ur10e" in run.stderr, run.stderr
+
+
+def test_the_readme_dynamic_link_line_works_as_printed(program, tmp_path):
+    # The line is run verbatim from the repository root (what `make ffi-test` does too).
+    lines = [
+        line
+        for line in (ROOT / "README.md").read_text().splitlines()
+        if "-ltvist -lm -Wl,-rpath" in line
+    ]
+    assert len(lines) == 1, lines
+    (ROOT / "target" / "c").mkdir(parents=True, exist_ok=True)
+    subprocess.run(["bash", "-ec", lines[0]], cwd=ROOT, check=True)
+    binary = ROOT / "target" / "c" / "shape_move_shared"
+    run = subprocess.run([str(binary)], capture_output=True, text=True, env={"PATH": "/usr/bin"})
+    assert run.returncode == 0, run.stderr
+    assert "ok: the shaped move ends where the commanded one does" in run.stdout
