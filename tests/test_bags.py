@@ -116,18 +116,21 @@ def test_bag_round_trip(tmp_path, plugin, capsys):
         assert ref.added_delay_s > sum(tvist.shaper("zv", w, z).duration_s for w, z in MODES)
 
 
-def test_bag_errors_name_the_problem(tmp_path):
+def test_bag_errors_name_the_problem(tmp_path, capsys):
     src = tmp_path / "in"
     write_bag(src, StoragePlugin.SQLITE3)
     base = ["shape", "--bag", str(src), "--modes", MODES_ARG]
-    with pytest.raises(ValueError, match="no topic '/nope'"):
-        main([*base, "--topic", "/nope", "--out", str(tmp_path / "o1")])
-    with pytest.raises(ValueError, match="carries std_msgs/msg/String"):
-        main([*base, "--topic", "/note", "--out", str(tmp_path / "o2")])
-    with pytest.raises(ValueError, match="exists"):
-        main([*base, "--topic", "/joint_trajectory", "--out", str(src)])
-    with pytest.raises(ValueError, match="--topic"):
-        main([*base, "--out", str(tmp_path / "o3")])
+    cases = [
+        (["--topic", "/nope", "--out", str(tmp_path / "o1")], "no topic '/nope'"),
+        (["--topic", "/note", "--out", str(tmp_path / "o2")], "carries std_msgs/msg/String"),
+        (["--topic", "/joint_trajectory", "--out", str(src)], "exists"),
+        (["--out", str(tmp_path / "o3")], "--topic"),
+    ]
+    for extra, message in cases:
+        assert main([*base, *extra]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("tvist shape: error: "), err
+        assert message in err[0]
 
 
 def test_zero_delay_method_in_a_bag_ends_at_the_last_waypoint(tmp_path):
