@@ -152,15 +152,15 @@ def test_twin_campaign_subset(tmp_path):
 def test_twin_pose_record_does_not_depend_on_what_ran_before():
     """The twin's sensor noise is seeded per excitation, so a pose's record is the same
     whichever poses a (worker's) robot ran before it: parallel campaigns are reproducible."""
-    from tvist.ident.campaign import _Settings, identify_pose
+    from tvist.ident.campaign import _Settings, run_pose
 
     poses = {p.key: p for p in campaign_poses(payloads_kg=(0.0,), radii_m=PAPER_RADII_M[:2])}
     target, other = poses["m0kg-V0-R1"], poses["m0kg-V1-R0"]
     settings = _Settings(robot_name="ur5e", accel_noise_std=0.05, noise_seed=0, duration_s=2.0)
-    alone = identify_pose(TwinRobot(), target, settings)
+    alone = run_pose(TwinRobot(), target, settings)
     busy = TwinRobot()
-    identify_pose(busy, other, settings)
-    after_other = identify_pose(busy, target, settings)
+    run_pose(busy, other, settings)
+    after_other = run_pose(busy, target, settings)
     assert json.dumps(alone) == json.dumps(after_other)
 
 

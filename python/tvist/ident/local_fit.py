@@ -578,6 +578,7 @@ def identify_local(
     accel_limit_m_s2: float | None = None,
     min_standstill_samples: int = MIN_STANDSTILL_SAMPLES,
     two_modes: bool = False,
+    base_mode: bool = True,
 ) -> LocalFit:
     """Identify ``(ω_n, ζ)`` of the mode excited through ``joint`` from one log.
 
@@ -603,6 +604,10 @@ def identify_local(
     two_modes
         Also fit two modes (:func:`tvist.ident.two_mode.fit_two_modes`) and attach the result
         as ``two_mode``.
+    base_mode
+        For the base joint (0): return the base mode, separated from a shoulder mode that
+        rings in the same log (:func:`tvist.ident.base_mode.separate_base_mode`), flagged
+        where the two cannot be told apart. ``False`` returns the paper's single-mode fit.
 
     Raises
     ------
@@ -648,7 +653,8 @@ def identify_local(
         joint=joint,
         extra_reasons=reasons,
     )
-    if two_modes:
+    separate = base_mode and joint == 0
+    if two_modes or separate:
         from tvist.ident.two_mode import fit_two_modes
 
         split = fit_two_modes(
@@ -661,4 +667,19 @@ def identify_local(
             f_max_hz=opts.f_max_hz,
         )
         fit = replace(fit, two_mode=split)
+    if separate and not fit.no_ringing:
+        from tvist.ident.base_mode import separate_base_mode
+
+        jac = robot.jacobian_many(np.ascontiguousarray(record.actual_q))[:, :3, :2]
+        assert tangential.accel_base is not None
+        fit = separate_base_mode(
+            fit,
+            u,
+            tangential.accel_base,
+            jac[:, :, 0],
+            jac[:, :, 1],
+            dt,
+            ~saturated,
+            max_wn_rel_se=opts.max_wn_rel_se,
+        )
     return fit

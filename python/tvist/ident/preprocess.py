@@ -81,6 +81,8 @@ class TangentialAcceleration:
         Number of quiet samples used for the gravity estimate (anywhere in the log).
     sensor_bias
         Constant sensor bias estimated with gravity, flange frame, m/s², shape (3,).
+    accel_base
+        Gravity-free flange acceleration in the base frame, m/s², shape (n_samples, 3).
     """
 
     t_s: np.ndarray
@@ -91,6 +93,7 @@ class TangentialAcceleration:
     gravity_base: np.ndarray
     standstill_samples: int
     sensor_bias: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    accel_base: np.ndarray | None = None
 
     @property
     def dt_s(self) -> float:
@@ -229,4 +232,5 @@ def tangential_acceleration(
         gravity_base=gravity,
         standstill_samples=n_still,
         sensor_bias=bias,
+        accel_base=psi_base,
     )
