@@ -266,3 +266,38 @@ def random_case(folder: Path, seed: int, dt_s: float = 0.002) -> GeneratedLog:
         dt_s=dt_s,
         sensor_lag_s=rng.uniform(-0.001, 0.003),
     )
+
+
+def mode_signals(
+    seed: int,
+    wn_rad_s: float,
+    zeta: float,
+    *,
+    dt_s: float = 0.002,
+    duration_s: float = 8.0,
+    snr_db: float | None = 20.0,
+    radius_m: float = 0.6,
+    sensor_lag_s: float = 0.0,
+    max_moves: int | None = None,
+    point_samples: bool = False,
+    tail_s: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """Fit input and output without the kinematics: the interval-mean acceleration of the
+    off-grid profile (``point_samples``: its value at each sample instant instead), and
+    ``radius_m θ̈`` of the exactly integrated mode (plus white noise ``snr_db`` below it;
+    ``None`` for none). ``max_moves`` limits the number of moves; ``tail_s`` adds standstill
+    at the end."""
+    rng = np.random.default_rng([91, seed])
+    profile = random_profile(rng, 0.0, 0.5 + rng.uniform(0.0, dt_s), duration_s)
+    if max_moves is not None:
+        keep = 1 + 4 * max_moves  # each move: accelerate, coast, decelerate, wait
+        profile = Profile(profile.times[:keep], profile.accel[: keep - 1], 0.0)
+    n = int(math.ceil((profile.times[-1] + tail_s) / dt_s)) + 1
+    t = dt_s * np.arange(n)
+    _, qd, qdd = profile.sample(t)
+    u = qdd if point_samples else np.append(np.diff(qd) / dt_s, 0.0)
+    e, e_dot = integrate_mode(profile, wn_rad_s, zeta, t - sensor_lag_s)
+    y = radius_m * (-2.0 * zeta * wn_rad_s * e_dot - wn_rad_s**2 * e)
+    if snr_db is not None:
+        y = y + rng.normal(0.0, float(np.sqrt(np.mean(y**2))) * 10.0 ** (-snr_db / 20.0), n)
+    return u, y, dt_s

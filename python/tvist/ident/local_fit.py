@@ -102,8 +102,8 @@ class FitOptions:
         More saturated samples than this fraction is an error; fewer are excluded from the
         fit and flagged.
     min_ringing_snr_db
-        The residual energy the mode removes beyond a rigid arm's response, relative to the
-        energy left (dB); below it the result is flagged :data:`NO_RINGING`.
+        The residual energy the mode removes beyond a response without a mode, relative to
+        the energy left (dB); below it the result is flagged :data:`NO_RINGING`.
     """
 
     f_min_hz: float = 1.0
@@ -116,7 +116,7 @@ class FitOptions:
     max_wn_rel_se: float = 0.01
     max_zeta_rel_se: float = 0.1
     max_saturated_fraction: float = 0.05
-    min_ringing_snr_db: float = 0.0
+    min_ringing_snr_db: float = -10.0
 
 
 @dataclass(frozen=True)
@@ -261,9 +261,12 @@ class _Problem:
         return self.y_used - phi @ np.array([k_b, k_a, offset])
 
     def rigid_residual(self, delay_s: float) -> np.ndarray:
-        """Residual of the best rigid response ``y = g u(t - delay) + offset`` (no mode)."""
-        d = int(round(delay_s / self.dt_s))
-        phi = np.column_stack([shifted(self.u, d)[self.mask], np.ones(self.y_used.size)])
+        """Residual of the best response without a mode: ``y`` a combination of the three
+        held input samples around the delay (a mode much faster than the sampling, with any
+        sub-sample timing) plus an offset."""
+        d = int(math.floor(delay_s / self.dt_s))
+        taps = [shifted(self.u, d + k)[self.mask] for k in (0, 1, 2)]
+        phi = np.column_stack([*taps, np.ones(self.y_used.size)])
         beta, *_ = np.linalg.lstsq(phi, self.y_used, rcond=None)
         return self.y_used - phi @ beta
 
@@ -458,7 +461,9 @@ def fit_local(
             f"search band {opts.f_min_hz}-{opts.f_max_hz} Hz is empty at {1 / dt_s:.0f} Hz sampling"
         )
     wn_grid = np.geomspace(wn_lo, wn_hi, opts.n_grid_freq)
-    delay_bounds = (-opts.max_delay_s, opts.max_delay_s)
+    if not (math.isfinite(opts.max_delay_s) and opts.max_delay_s >= 0):
+        raise ValueError(f"max_delay_s must be finite and >= 0, got {opts.max_delay_s}")
+    delay_bounds = (-opts.max_delay_s, opts.max_delay_s) if opts.max_delay_s > 0 else None
 
     # 1. Multi-start over frequency at zero delay.
     problem = _Problem(u, y, mask, dt_s)
@@ -467,33 +472,44 @@ def fit_local(
     _, wn_b, z_b, _ = min(results)
     # 2. The timing offset, both directions: a half-sample grid at the best mode so far, then
     # joint refinement of (ω_n, ζ, delay) from the two best separated delays.
-    n_half = int(math.floor(opts.max_delay_s / (dt_s / 2)))
-    delays = (dt_s / 2) * np.arange(-n_half, n_half + 1)
-    ranked = sorted(delays, key=lambda d: problem.cost(wn_b, z_b, float(d)))
-    chosen = [float(ranked[0])]
-    for d in ranked[1:]:
-        if abs(d - chosen[0]) > dt_s:
-            chosen.append(float(d))
-            break
-    for d in chosen:
-        results.append(_refine(problem, (wn_b, z_b, d), (wn_lo, wn_hi), delay_bounds))
+    if delay_bounds is not None:
+        n_half = int(math.floor(opts.max_delay_s / (dt_s / 2)))
+        delays = (dt_s / 2) * np.arange(-n_half, n_half + 1)
+        ranked = sorted(delays, key=lambda d: problem.cost(wn_b, z_b, float(d)))
+        chosen = [float(ranked[0])]
+        for d in ranked[1:]:
+            if abs(d - chosen[0]) > dt_s:
+                chosen.append(float(d))
+                break
+        for d in chosen:
+            results.append(_refine(problem, (wn_b, z_b, d), (wn_lo, wn_hi), delay_bounds))
     _, wn_b, z_b, delay_b = min(results)
 
-    # 3. Final pass over all parameters for the Jacobian (and any last improvement).
+    # 3. Final pass over all parameters for the Jacobian (and any last improvement); the
+    # delay is left out when it is fixed.
     _, beta, _ = problem.projected(wn_b, z_b, delay_b)
-    p0 = np.array([wn_b, z_b, delay_b, beta[1], beta[0], beta[2]])
-    lo = [wn_lo, 1e-4, delay_bounds[0], -np.inf, -np.inf, -np.inf]
-    hi = [wn_hi, 2.0, delay_bounds[1], np.inf, np.inf, np.inf]
+    free = np.ones(6, dtype=bool)
+    free[2] = delay_bounds is not None
+    full = np.array([wn_b, z_b, delay_b, beta[1], beta[0], beta[2]])
+    lo = np.array([wn_lo, 1e-4, -opts.max_delay_s, -np.inf, -np.inf, -np.inf])[free]
+    hi = np.array([wn_hi, 2.0, opts.max_delay_s, np.inf, np.inf, np.inf])[free]
+
+    def residual_of(p: np.ndarray) -> np.ndarray:
+        x = full.copy()
+        x[free] = p
+        return problem.full_residual(x)
+
     final = optimize.least_squares(
-        problem.full_residual,
-        np.clip(p0, lo, hi),
+        residual_of,
+        np.clip(full[free], lo, hi),
         bounds=(lo, hi),
         x_scale="jac",
         diff_step=1e-7,
         xtol=1e-12,
         ftol=1e-12,
     )
-    wn, zeta, delay, k_a, k_b, offset = (float(v) for v in final.x)
+    full[free] = final.x
+    wn, zeta, delay, k_a, k_b, offset = (float(v) for v in full)
     residual = final.fun
     # Residual correlation reaches over about two periods of the mode.
     max_lag = int(min(max(2.0 * 2.0 * math.pi / (wn * dt_s), 10.0), 400.0))
@@ -503,13 +519,13 @@ def fit_local(
     rigid = problem.rigid_residual(delay)
     ringing_energy = max(float(rigid @ rigid) - float(residual @ residual), 0.0)
     noise_energy = max(float(residual @ residual), 1e-300)
-    ringing_snr_db = 10.0 * math.log10(max(ringing_energy / noise_energy, 1e-30))
+    ringing_snr_db = 10.0 * math.log10(max(ringing_energy / noise_energy, 1e-10))
 
     reasons = list(extra_reasons)
     if ringing_snr_db < opts.min_ringing_snr_db:
         reasons.append(
-            f"{NO_RINGING}: the mode explains {ringing_snr_db:.1f} dB relative to the "
-            f"residual noise (needs {opts.min_ringing_snr_db:.0f} dB)"
+            f"{NO_RINGING}: the mode's ringing is {-ringing_snr_db:.1f} dB below the "
+            f"residual noise (needs at least {opts.min_ringing_snr_db:.0f} dB)"
         )
     if fit < opts.min_fit_percent:
         reasons.append(f"poor fit: {fit:.1f} % < {opts.min_fit_percent:.0f} %")
