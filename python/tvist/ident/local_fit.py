@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import MISSING, asdict, dataclass, field, fields, replace
+from dataclasses import MISSING, dataclass, field, fields, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -200,9 +200,11 @@ class LocalFit:
         return any(r.startswith(NO_RINGING) for r in self.reasons)
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain-Python form (JSON-serialisable); :meth:`from_dict` reads it back."""
-        out = asdict(self)
+        """Plain-Python form (JSON types only); :meth:`from_dict` reads it back."""
+        out = {f.name: getattr(self, f.name) for f in fields(self)}
         out["reasons"] = list(self.reasons)
+        out["two_mode"] = None if self.two_mode is None else self.two_mode.to_dict()
+        out["apparent"] = None if self.apparent is None else dict(self.apparent)
         return out
 
     @classmethod

@@ -20,7 +20,6 @@ plus whatever the producer adds (the campaign: ``angle_rad``, ``radius_m``, ``wr
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -35,7 +34,7 @@ __all__ = ["IDENTIFIED_JOINTS", "PoseRecord", "identify_pose", "pose_of"]
 
 #: Joints identified at every pose (base, shoulder).
 IDENTIFIED_JOINTS = (0, 1)
-#: Two logs are of the same pose if their non-excited joints agree to this, rad.
+#: Two logs are of the same pose if their starting poses agree to this, rad.
 SAME_POSE_TOL_RAD = 0.02
 _CORE_KEYS = (
     "key",
@@ -137,21 +136,23 @@ class PoseRecord:
 
 
 def pose_of(record: Record) -> np.ndarray:
-    """The pose a log was taken at: median measured joint angles over its quiet samples."""
+    """The pose a log was taken at: the median measured joint angles over its first quiet
+    stretch (an excitation starts standing at its pose and returns around it)."""
     quiet = quiet_samples(record)
-    rows = record.actual_q[quiet] if np.any(quiet) else record.actual_q
-    return np.median(rows, axis=0)
+    if not np.any(quiet):
+        return np.median(record.actual_q, axis=0)
+    start = int(np.argmax(quiet))
+    stop = start + int(np.argmin(quiet[start:])) if not quiet[start:].all() else quiet.size
+    return np.median(record.actual_q[start:stop], axis=0)
 
 
 def _check_same_pose(base_q: np.ndarray, shoulder_q: np.ndarray) -> None:
     # Each log moves its own joint by up to ±10°; the others must agree.
-    others = [j for j in range(base_q.size) if j not in IDENTIFIED_JOINTS]
-    worst = float(np.max(np.abs(base_q[others] - shoulder_q[others])))
-    near = abs(base_q[1] - shoulder_q[1]) <= math.radians(12.0)
-    if worst > SAME_POSE_TOL_RAD or not near:
+    worst = float(np.max(np.abs(base_q - shoulder_q)))
+    if worst > SAME_POSE_TOL_RAD:
         raise ValueError(
-            f"the base and shoulder logs are not of the same pose (joints differ by up to "
-            f"{max(worst, abs(base_q[1] - shoulder_q[1])):.3f} rad)"
+            f"the base and shoulder logs are not of the same pose: their starting poses "
+            f"differ by up to {worst:.3f} rad"
         )
 
 

@@ -80,8 +80,12 @@ class TwoModeFit:
     significant: bool
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain-Python form (JSON-serialisable); :meth:`from_dict` reads it back."""
-        return asdict(self)
+        """Plain-Python form (JSON types only); :meth:`from_dict` reads it back."""
+        return {
+            "modes": [asdict(m) for m in self.modes],
+            "rss_ratio": self.rss_ratio,
+            "significant": self.significant,
+        }
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> TwoModeFit:
