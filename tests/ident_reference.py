@@ -164,8 +164,11 @@ RECORDED = (
 )
 
 
-def write_ur_rtde_csv(path: Path, t_s: np.ndarray, columns: dict[str, np.ndarray]) -> Path:
-    """ur_rtde ``startFileRecording`` layout: header of RTDE names, 6 decimals, commas."""
+def write_ur_rtde_csv(
+    path: Path, t_s: np.ndarray, columns: dict[str, np.ndarray], sep: str = ","
+) -> Path:
+    """ur_rtde ``startFileRecording`` layout: header of RTDE names, 6 decimals, commas
+    (``sep=" "``: UR's own ``record.py`` client, space-separated)."""
     header = ["timestamp"]
     blocks = [t_s[:, None]]
     for name, width in RECORDED:
@@ -173,9 +176,9 @@ def write_ur_rtde_csv(path: Path, t_s: np.ndarray, columns: dict[str, np.ndarray
         blocks.append(columns[name])
     table = np.hstack(blocks)
     with path.open("w", encoding="utf-8") as fh:
-        fh.write(",".join(header) + "\n")
+        fh.write(sep.join(header) + "\n")
         for row in table:
-            fh.write(",".join(f"{v:.6f}" for v in row) + "\n")
+            fh.write(sep.join(f"{v:.6f}" for v in row) + "\n")
     return path
 
 
@@ -192,8 +195,15 @@ def generate_log(
     sensor_lag_s: float = 0.0,
     duration_s: float = 8.0,
     robot_name: str = "ur5e",
+    hover_rad_s: float = 0.0,
+    skip_fraction: float = 0.0,
+    sep: str = ",",
 ) -> GeneratedLog:
-    """Write one excitation log of ``joint`` at pose ``q0`` (see the module docstring)."""
+    """Write one excitation log of ``joint`` at pose ``q0`` (see the module docstring).
+
+    ``hover_rad_s`` adds the slow hovering of a real controller's target velocities (every
+    joint, amplitude in rad/s); ``skip_fraction`` drops that fraction of the rows at random
+    (skipped samples); ``sep=" "`` writes UR's ``record.py`` format."""
     rng = np.random.default_rng(seed)
     t0 = rng.uniform(1000.0, 2000.0)  # controller clock at the first sample
     first_move = t0 + 0.5 + rng.uniform(0.0, dt_s)  # standstill, then an off-grid start
@@ -225,16 +235,26 @@ def generate_log(
     target_qd = np.zeros((n, 6))
     target_qdd = np.zeros((n, 6))
     target_q[:, joint], target_qd[:, joint], target_qdd[:, joint] = q_ref, qd_ref, qdd_ref
+    actual_q = target_q.copy()  # motor encoders: the reference, not the deflected link
+    if hover_rad_s:
+        phase = rng.uniform(0.0, 2 * math.pi, 6)
+        slow = np.sin(2 * math.pi * 0.7 * (t_log - t0)[:, None] + phase)
+        target_qd = target_qd + hover_rad_s * slow
+        target_qdd = target_qdd + hover_rad_s * rng.normal(0.0, 1.0, target_qdd.shape)
+    keep = np.ones(n, dtype=bool)
+    if skip_fraction:
+        keep[1:-1] = rng.uniform(size=n - 2) >= skip_fraction
     write_ur_rtde_csv(
         path,
-        t_log,
+        t_log[keep],
         {
-            "target_q": target_q,
-            "target_qd": target_qd,
-            "target_qdd": target_qdd,
-            "actual_q": target_q,  # motor encoders: the reference, not the deflected link
-            "actual_tool_accelerometer": reading,
+            "target_q": target_q[keep],
+            "target_qd": target_qd[keep],
+            "target_qdd": target_qdd[keep],
+            "actual_q": actual_q[keep],
+            "actual_tool_accelerometer": reading[keep],
         },
+        sep=sep,
     )
     return GeneratedLog(path, joint, np.asarray(q0, float), wn_rad_s, zeta, sensor_lag_s, dt_s)
 

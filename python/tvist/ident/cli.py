@@ -220,7 +220,7 @@ def _identify_one(args: argparse.Namespace, path: Path) -> int:
         return 0
     print(f"{path}: joint {joint}, {record.n_samples} samples at {record.dt_s * 1e3:.3f} ms")
     if fit.no_ringing:
-        print(f"  no ringing above noise: {fit.reason}")
+        print(f"  NO RINGING ABOVE NOISE (flagged, no mode reported): {fit.reason}")
         return 0
     print(
         f"  f_n = {fit.fn_hz:.3f} Hz ± {fit.wn_se_rad_s / (2 * math.pi):.3f}   "
