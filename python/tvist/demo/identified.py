@@ -56,6 +56,7 @@ _FINGERPRINT_SOURCES = (
     "ident/pose.py",
     "ident/pose_plan.py",
     "ident/campaign_robots.py",
+    "ident/results_store.py",
     "robots",
 )
 

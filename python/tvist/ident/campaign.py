@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -32,7 +32,7 @@ from tvist.ident.pose_plan import (
     plane_coordinates,
     solve_plane_ik,
 )
-from tvist.ident.results_store import append_record, load_results, repair_tail
+from tvist.ident.results_store import ResultsStore, fingerprint, load_results
 from tvist.robots import Payload as _Payload
 from tvist.robots import Robot, params
 
@@ -146,6 +146,7 @@ def run_campaign(
     options: FitOptions | None = None,
     separate_modes: bool = True,
     progress: bool = True,
+    overwrite: bool = False,
 ) -> list[dict]:
     """Run (or resume) a campaign and return every pose record in ``results_path``.
 
@@ -154,8 +155,8 @@ def run_campaign(
     poses
         From :func:`campaign_poses` (or a subset).
     results_path
-        JSON-lines file; poses already in it are skipped, new ones are appended as they
-        finish.
+        JSON-lines file (:mod:`tvist.ident.results_store`); poses already in it with the
+        same settings are skipped, new ones are appended as they finish.
     robot
         A :class:`CampaignRobot` (e.g. :class:`URRobot`), run in this process. ``None`` runs
         the MuJoCo twin, with ``workers`` processes.
@@ -175,12 +176,15 @@ def run_campaign(
         records the paper's single-mode fit only.
     progress
         Show a rich progress bar.
+    overwrite
+        Empty ``results_path`` first. Without it, a file written with other settings is
+        refused (:class:`~tvist.ident.results_store.SettingsMismatch`).
+
+    Raises
+    ------
+    ValueError
+        The file holds records made with other settings, or another campaign is writing it.
     """
-    path = Path(results_path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    repair_tail(path)
-    done = {r["key"] for r in load_results(path)}
-    todo = [p for p in poses if p.key not in done]
     settings = _Settings(
         robot_name=robot_name if robot is None else robot.robot_name,
         accel_noise_std=accel_noise_std,
@@ -189,26 +193,64 @@ def run_campaign(
         options=options or FitOptions(),
         separate_modes=separate_modes,
     )
-    bar = _Progress(len(todo), len(done)) if progress and todo else None
-    try:
-        if robot is not None or workers <= 1:
-            runner = robot or TwinRobot(robot_name, accel_noise_std, seed=noise_seed)
-            # Payload by payload keeps manual payload changes on a real robot to a minimum.
-            for pose in sorted(todo, key=lambda p: p.payload_kg):
-                append_record(path, run_pose(runner, pose, settings))
-                if bar is not None:
-                    bar.advance(pose.key)
-        else:
-            with ProcessPoolExecutor(max_workers=workers) as pool:
-                futures = {pool.submit(_twin_worker, p, settings): p for p in todo}
-                for future in as_completed(futures):
-                    append_record(path, future.result())
+    poses = list(poses)
+    coms = sorted({tuple(p.payload_com_m) for p in poses})
+    key = fingerprint(
+        {
+            "robot": settings.robot_name,
+            "real_robot": robot is not None and not isinstance(robot, TwinRobot),
+            "payload_com_m": coms,
+            "noise_seed": noise_seed,
+            "accel_noise_std": accel_noise_std,
+            "duration_s": duration_s,
+            "options": asdict(settings.options),
+            "separate_modes": separate_modes,
+        }
+    )
+    with ResultsStore(results_path, key, overwrite=overwrite) as store:
+        todo = [p for p in poses if p.key not in store.done]
+        bar = _Progress(len(todo), len(store.done)) if progress and todo else None
+        try:
+            if robot is not None or workers <= 1:
+                runner = robot or TwinRobot(robot_name, accel_noise_std, seed=noise_seed)
+                # Payload by payload keeps manual payload changes on a real robot to a minimum.
+                for pose in sorted(todo, key=lambda p: p.payload_kg):
+                    store.append(run_pose(runner, pose, settings))
                     if bar is not None:
-                        bar.advance(futures[future].key)
-    finally:
-        if bar is not None:
-            bar.close()
-    return load_results(path)
+                        bar.advance(pose.key)
+            else:
+                pool = ProcessPoolExecutor(max_workers=workers, initializer=_worker_init)
+                try:
+                    futures = {pool.submit(_twin_worker, p, settings): p for p in todo}
+                    for future in as_completed(futures):
+                        store.append(future.result())
+                        if bar is not None:
+                            bar.advance(futures[future].key)
+                except BaseException:
+                    # Ctrl-C or an error: stop the workers now; finished poses are saved.
+                    for process in list(getattr(pool, "_processes", {}).values()):
+                        process.terminate()
+                    pool.shutdown(wait=False, cancel_futures=True)
+                    raise
+                pool.shutdown()
+        finally:
+            if bar is not None:
+                bar.close()
+        return list(store.records)
+
+
+def _worker_init() -> None:
+    """In each worker: leave Ctrl-C to the parent, and die with it (Linux)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        import ctypes
+
+        pr_set_pdeathsig = 1
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(pr_set_pdeathsig, signal.SIGTERM)
+    except (OSError, AttributeError):  # not Linux: workers end when their queue closes
+        pass
 
 
 class _Progress:

@@ -20,6 +20,12 @@ __all__ = [
 ]
 
 
+def _error(command: str, message: str) -> int:
+    """A user error: one line on stderr, exit code 2."""
+    print(f"tvist {command}: error: {message}", file=sys.stderr)
+    return 2
+
+
 def _add_payload_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
     p.add_argument("--payload-kg", type=float, default=0.0, help="payload mass (kg)")
@@ -46,17 +52,32 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     robot = None
     if args.robot_ip:
         robot = URRobot(args.robot_ip, args.robot, log_dir=Path(args.out).parent / "logs")
-    results = run_campaign(
-        poses,
-        args.out,
-        robot=robot,
-        robot_name=args.robot,
-        workers=args.workers,
-        accel_noise_std=args.accel_noise,
-        noise_seed=args.seed,
-        duration_s=args.duration,
-        separate_modes=not args.single_mode,
-    )
+    try:
+        results = run_campaign(
+            poses,
+            args.out,
+            robot=robot,
+            robot_name=args.robot,
+            workers=args.workers,
+            accel_noise_std=args.accel_noise,
+            noise_seed=args.seed,
+            duration_s=args.duration,
+            separate_modes=not args.single_mode,
+            overwrite=args.overwrite,
+        )
+    except KeyboardInterrupt:
+        from tvist.ident.results_store import load_results
+
+        saved = len(load_results(args.out)) if Path(args.out).exists() else 0
+        print(
+            f"tvist campaign: interrupted; {saved} pose record(s) saved in {args.out}, rerun "
+            "the same command to resume",
+            file=sys.stderr,
+        )
+        return 130
+    except ValueError as exc:
+        msg = str(exc).replace("overwrite it", "pass --overwrite")
+        return _error("campaign", msg)
     wanted = {p.key for p in poses}
     done = [r for r in results if r["key"] in wanted]
     confident = [
@@ -123,16 +144,16 @@ def add_campaign_command(sub: argparse._SubParsersAction) -> None:
         help="record the paper's single-mode base fit only (no base/shoulder separation)",
     )
     p.add_argument("--map", help="also fit a dynamic map and write it here (JSON)")
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="start --out afresh (default: resume it; a file made with other settings is "
+        "refused)",
+    )
     p.set_defaults(func=_cmd_campaign)
 
 
 # --------------------------------------------------------------------------- identify
-
-
-def _error(command: str, message: str) -> int:
-    """A user error: one line on stderr, exit code 2."""
-    print(f"tvist {command}: error: {message}", file=sys.stderr)
-    return 2
 
 
 def _cmd_identify(args: argparse.Namespace) -> int:
