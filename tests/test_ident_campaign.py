@@ -7,8 +7,8 @@ import math
 
 import numpy as np
 import pytest
-from scipy import signal
 
+from ident_reference import Profile, integrate_mode
 from tvist.ident.campaign import (
     PAPER_ANGLES_RAD,
     PAPER_RADII_M,
@@ -68,8 +68,10 @@ class ModeRobot:
         wn, zeta = self.modes[j]
         tangent = self._robot.jacobian(excitation.q0)[:3, j]
         r = np.linalg.norm(tangent)
-        mode = signal.lti([r * 2 * zeta * wn, r * wn**2], [1, 2 * zeta * wn, wn**2])
-        _, psi, _ = signal.lsim(mode, excitation.qdd[:, j], excitation.t_s, interp=False)
+        # exact integration by the independent generator, not the estimator's held model
+        profile = Profile(excitation.t_s, excitation.qdd[:-1, j], 0.0)
+        e, e_dot = integrate_mode(profile, wn, zeta, excitation.t_s)
+        psi = r * (-2 * zeta * wn * e_dot - wn**2 * e)
         rot = self._robot.flange_pose_many(excitation.q)[:, :3, :3]
         a_base = psi[:, None] * tangent / r + G_UP
         rng = np.random.default_rng(self.calls)

@@ -185,7 +185,7 @@ def test_flange_on_the_joint_axis_is_an_error():
 def flexible_record(joint: int, q0: np.ndarray, wn: float, zeta: float, seed: int, noise=0.1):
     """Like :func:`rigid_record`, but the tangential acceleration rings through a mode
     ``r (2ζω s + ω²)/(s² + 2ζω s + ω²)`` (eq. 16), plus 20 dB sensor noise on every axis."""
-    from scipy import signal
+    from ident_reference import Profile, integrate_mode
 
     ex = random_excitation(q0, joint, seed=seed)
     n = ex.t_s.size
@@ -202,9 +202,11 @@ def flexible_record(joint: int, q0: np.ndarray, wn: float, zeta: float, seed: in
         tangent[k] = r_vec / radius[k]
         normal[k] = ex.qd[k, joint] ** 2 * np.cross(z, r_vec)
         rot[k] = frames[-1][:3, :3]
-    r0 = radius[0]
-    mode = signal.lti([r0 * 2 * zeta * wn, r0 * wn**2], [1, 2 * zeta * wn, wn**2])
-    _, psi, _ = signal.lsim(mode, ex.qdd[:, joint], ex.t_s, interp=False)
+    # The mode integrated exactly by the independent generator (ident_reference), from the
+    # excitation's piecewise-constant acceleration: ψ = r θ̈ of the deflected link.
+    profile = Profile(ex.t_s, ex.qdd[:-1, joint], float(ex.q[0, joint]))
+    e, e_dot = integrate_mode(profile, wn, zeta, ex.t_s)
+    psi = radius[0] * (-2 * zeta * wn * e_dot - wn**2 * e)
     a_base = psi[:, None] * tangent + normal
     accel = np.einsum("nji,nj->ni", rot, a_base + G_UP)
     accel += rng.normal(0.0, noise * np.sqrt(np.mean(psi**2)), accel.shape)

@@ -182,7 +182,11 @@ def _as_base_mode(
         k_c=2.0 * mode.zeta * mode.wn_rad_s,
         k_d=mode.wn_rad_s**2,
         method="two-mode",
-        apparent={"wn_rad_s": fit.wn_rad_s, "zeta": fit.zeta},
+        apparent={
+            "wn_rad_s": fit.wn_rad_s,
+            "zeta": fit.zeta,
+            "low_confidence": float(fit.low_confidence),
+        },
         reasons=tuple(reasons),
         low_confidence=bool(reasons),
     )

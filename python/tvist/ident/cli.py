@@ -147,8 +147,7 @@ def add_campaign_command(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--overwrite",
         action="store_true",
-        help="start --out afresh (default: resume it; a file made with other settings is "
-        "refused)",
+        help="start --out afresh (default: resume it; a file made with other settings is refused)",
     )
     p.set_defaults(func=_cmd_campaign)
 

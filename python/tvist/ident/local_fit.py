@@ -152,8 +152,8 @@ class LocalFit:
         mode that rings in the same log; ``k_a``, ``k_b``, ``offset`` are then those of the
         separated mode in the two-mode fit).
     apparent
-        When ``method`` is ``"two-mode"``: the single-mode ``{"wn_rad_s", "zeta"}`` it
-        replaced.
+        When ``method`` is ``"two-mode"``: the single-mode fit it replaced,
+        ``{"wn_rad_s", "zeta", "low_confidence"}`` (1.0 if that fit was flagged).
     """
 
     wn_rad_s: float
