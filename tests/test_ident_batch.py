@@ -117,9 +117,10 @@ def test_pairing_and_joint_detection(campaign_logs):
             assert truth[pair.base.path.name][0] == truth[pair.shoulder.path.name][0]
 
 
-def test_identify_cli_errors_are_one_line(tmp_path, capsys):
-    assert main(["identify", str(tmp_path / "missing.csv")]) == 2
+def test_identify_usage_errors_are_one_line(campaign_logs, tmp_path, capsys):
+    folder, _ = campaign_logs
+    assert main(["identify", str(folder)]) == 2  # many logs need --out
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f"tvist identify: error: {tmp_path / 'missing.csv'}: no such file"]
-    assert main(["fit-map", str(tmp_path / "none.jsonl")]) == 2
-    assert "tvist fit-map: error:" in capsys.readouterr().err
+    assert err == [f"tvist identify: error: {2 * len(KEYS)} logs: name the results file with --out"]
+    with pytest.raises(FileNotFoundError):  # reported on one line by tvist.cli.main
+        main(["fit-map", str(tmp_path / "none.jsonl")])

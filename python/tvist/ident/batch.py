@@ -13,6 +13,7 @@ Both passes run in parallel worker processes.
 
 from __future__ import annotations
 
+import errno
 import glob
 import math
 import os
@@ -54,10 +55,10 @@ def expand_logs(items: Iterable[str]) -> list[Path]:
             found = sorted(Path(p) for p in glob.glob(item))
         else:
             if not path.exists():
-                raise ValueError(f"{item}: no such file")
+                raise FileNotFoundError(errno.ENOENT, "No such file or directory", item)
             found = [path]
         if not found:
-            raise ValueError(f"{item}: no CSV logs found")
+            raise ValueError(f"{item}: no CSV logs found (give files, globs or folders)")
         out += [p for p in found if p not in out]
     return out
 

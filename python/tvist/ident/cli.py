@@ -1,12 +1,14 @@
 """``tvist`` subcommands of the identification toolbox: campaign, identify, fit-map, sensitivity.
 
 Each ``add_*_command(sub)`` registers one subparser and sets ``func``; heavy imports happen
-inside the command.
+inside the command. Library errors (``ValueError``, ``OSError``) propagate to ``tvist.cli.main``,
+which reports them on one line; usage problems found here are reported by :func:`_error`.
 """
 
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import math
 import sys
@@ -44,6 +46,7 @@ def _add_payload_args(p: argparse.ArgumentParser) -> None:
 
 def _cmd_campaign(args: argparse.Namespace) -> int:
     from tvist.ident.campaign import URRobot, campaign_poses, run_campaign
+    from tvist.ident.results_store import SettingsMismatch
 
     poses = campaign_poses(
         args.robot, payloads_kg=args.payloads, payload_com_m=args.payload_com, seed=args.seed
@@ -75,9 +78,8 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 130
-    except ValueError as exc:
-        msg = str(exc).replace("overwrite it", "pass --overwrite")
-        return _error("campaign", msg)
+    except SettingsMismatch as exc:
+        raise SettingsMismatch(str(exc).replace("overwrite it", "pass --overwrite")) from None
     wanted = {p.key for p in poses}
     done = [r for r in results if r["key"] in wanted]
     confident = [
@@ -158,18 +160,12 @@ def add_campaign_command(sub: argparse._SubParsersAction) -> None:
 def _cmd_identify(args: argparse.Namespace) -> int:
     from tvist.ident.batch import expand_logs
 
-    try:
-        paths = expand_logs(args.logs)
-    except ValueError as exc:
-        return _error("identify", str(exc))
+    paths = expand_logs(args.logs)
     if args.out or len(paths) > 1:
         if not args.out:
             return _error("identify", f"{len(paths)} logs: name the results file with --out")
         return _identify_batch(args, paths)
-    try:
-        return _identify_one(args, paths[0])
-    except ValueError as exc:
-        return _error("identify", f"{paths[0]}: {exc}")
+    return _identify_one(args, paths[0])
 
 
 def _identify_batch(args: argparse.Namespace, paths: list[Path]) -> int:
@@ -335,22 +331,16 @@ def _cmd_fit_map(args: argparse.Namespace) -> int:
     from tvist.ident.results_store import load_results
 
     if not Path(args.results).is_file():
-        return _error("fit-map", f"{args.results}: no such file")
-    try:
-        results = load_results(args.results)
-    except ValueError as exc:
-        return _error("fit-map", str(exc))
+        raise FileNotFoundError(errno.ENOENT, "No such file or directory", args.results)
+    results = load_results(args.results)
     if not results:
         return _error("fit-map", f"{args.results}: no pose records")
-    try:
-        dynmap = fit_map(
-            results,
-            k_0=args.k0,
-            include_low_confidence=args.include_low_confidence,
-            metadata={"robot": args.robot, "source": f"tvist fit-map {args.results}"},
-        )
-    except ValueError as exc:
-        return _error("fit-map", f"{args.results}: {exc}")
+    dynmap = fit_map(
+        results,
+        k_0=args.k0,
+        include_low_confidence=args.include_low_confidence,
+        metadata={"robot": args.robot, "source": f"tvist fit-map {args.results}"},
+    )
     dynmap.save(args.out)
     for stats in dynmap.metadata["fit_statistics"]["modes"]:
         name = "base" if stats["joint"] == 0 else "shoulder"
