@@ -671,7 +671,7 @@ def identify_local(
         joint=joint,
         extra_reasons=reasons,
     )
-    separate = base_mode and joint == 0
+    separate = base_mode and joint == 0 and not fit.no_ringing
     if two_modes or separate:
         from tvist.ident.two_mode import fit_two_modes
 
@@ -685,7 +685,7 @@ def identify_local(
             f_max_hz=opts.f_max_hz,
         )
         fit = replace(fit, two_mode=split)
-    if separate and not fit.no_ringing:
+    if separate:
         from tvist.ident.base_mode import separate_base_mode
 
         jac = robot.jacobian_many(np.ascontiguousarray(record.actual_q))[:, :3, :2]
