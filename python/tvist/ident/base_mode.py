@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tvist.ident.two_mode import ModeEstimate
-from tvist.ident.zoh import shifted, zoh_responses
+from tvist.ident.zoh import least_squares_fit, shifted, zoh_responses
 
 if TYPE_CHECKING:
     from tvist.ident.local_fit import FitOptions, LocalFit
@@ -75,7 +75,7 @@ def direction_shares(
     out = np.zeros((len(modes), len(directions)))
     for j, d in enumerate(directions):
         y = np.einsum("ni,ni->n", accel_base, d)[mask]
-        beta, *_ = np.linalg.lstsq(phi, y, rcond=None)
+        beta = least_squares_fit(phi, y)
         for i, block in enumerate(blocks):
             part = block @ beta[2 * i : 2 * i + 2]
             out[i, j] = float(part @ part)

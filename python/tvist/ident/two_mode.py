@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from scipy import optimize
 
-from tvist.ident.zoh import shifted, zoh_responses
+from tvist.ident.zoh import least_squares_fit, shifted, zoh_responses
 
 if TYPE_CHECKING:
     from tvist.ident.local_fit import LocalFit
@@ -119,7 +119,7 @@ def _energy_shares(
     ]
     fed = shifted(u, int(round(delay_s / dt_s)))[mask]
     phi = np.column_stack([*blocks, fed, np.ones(int(mask.sum()))])
-    beta, *_ = np.linalg.lstsq(phi, y_used, rcond=None)
+    beta = least_squares_fit(phi, y_used)
     parts = [blocks[0] @ beta[0:2], blocks[1] @ beta[2:4]]
     energy = [float(p @ p) for p in parts]
     total = sum(energy) or 1.0
@@ -169,7 +169,7 @@ def fit_two_modes(
                 np.ones(int(mask.sum())),
             ]
         )
-        beta, *_ = np.linalg.lstsq(phi, y_used, rcond=None)
+        beta = least_squares_fit(phi, y_used)
         return y_used - phi @ beta
 
     w1 = min(max(single.wn_rad_s, wn_lo * 1.001), wn_hi / 1.001)

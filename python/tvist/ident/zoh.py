@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import linalg, signal
 
-__all__ = ["expm_and_gamma", "shifted", "zoh_matrices", "zoh_responses"]
+__all__ = ["expm_and_gamma", "least_squares_fit", "shifted", "zoh_matrices", "zoh_responses"]
 
 
 def expm_and_gamma(wn: float, zeta: float, h_s: float) -> tuple[np.ndarray, np.ndarray]:
@@ -104,3 +104,23 @@ def zoh_responses(
         _, gamma_eps = expm_and_gamma(wn, zeta, eps)
         out += _filter(full_ad, ad @ gamma_eps, shifted(u, d + 1))
     return out
+
+
+def least_squares_fit(phi: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Linear least-squares coefficients of ``y ≈ phi @ beta`` (a few columns, many rows).
+
+    Normal equations on unit-norm columns: a small dense solve, far cheaper than an SVD of
+    the tall matrix in the inner loop of the nonlinear searches; falls back to ``lstsq`` when
+    the columns are (numerically) dependent.
+    """
+    scale = np.linalg.norm(phi, axis=0)
+    scale[scale == 0.0] = 1.0
+    phi_n = phi / scale
+    gram = phi_n.T @ phi_n
+    try:
+        if np.linalg.cond(gram) > 1e12:
+            raise np.linalg.LinAlgError
+        return np.linalg.solve(gram, phi_n.T @ y) / scale
+    except np.linalg.LinAlgError:
+        beta, *_ = np.linalg.lstsq(phi, y, rcond=None)
+        return beta
