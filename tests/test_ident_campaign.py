@@ -7,8 +7,8 @@ import math
 
 import numpy as np
 import pytest
-from scipy import signal
 
+from ident_reference import Profile, integrate_mode
 from tvist.ident.campaign import (
     PAPER_ANGLES_RAD,
     PAPER_RADII_M,
@@ -68,8 +68,10 @@ class ModeRobot:
         wn, zeta = self.modes[j]
         tangent = self._robot.jacobian(excitation.q0)[:3, j]
         r = np.linalg.norm(tangent)
-        mode = signal.lti([r * 2 * zeta * wn, r * wn**2], [1, 2 * zeta * wn, wn**2])
-        _, psi, _ = signal.lsim(mode, excitation.qdd[:, j], excitation.t_s, interp=False)
+        # exact integration by the independent generator, not the estimator's held model
+        profile = Profile(excitation.t_s, excitation.qdd[:-1, j], 0.0)
+        e, e_dot = integrate_mode(profile, wn, zeta, excitation.t_s)
+        psi = r * (-2 * zeta * wn * e_dot - wn**2 * e)
         rot = self._robot.flange_pose_many(excitation.q)[:, :3, :3]
         a_base = psi[:, None] * tangent / r + G_UP
         rng = np.random.default_rng(self.calls)
@@ -96,7 +98,8 @@ def test_runner_appends_per_pose_and_resumes(tmp_path):
     # An interrupted write leaves a torn last line; that pose is simply run again.
     with results.open("a") as fh:
         fh.write('{"key": "' + poses[5].key + '", "modes": [')
-    all_results = run_campaign(poses, results, robot=robot, progress=False, duration_s=3.0)
+    with pytest.warns(UserWarning, match="1 line.*quarantine"):
+        all_results = run_campaign(poses, results, robot=robot, progress=False, duration_s=3.0)
     assert robot.calls == 10 + 2 * (len(poses) - 5)  # finished poses were skipped
     assert sorted(r["key"] for r in all_results) == sorted(p.key for p in poses)
     for line in results.read_text().splitlines():
@@ -152,15 +155,15 @@ def test_twin_campaign_subset(tmp_path):
 def test_twin_pose_record_does_not_depend_on_what_ran_before():
     """The twin's sensor noise is seeded per excitation, so a pose's record is the same
     whichever poses a (worker's) robot ran before it: parallel campaigns are reproducible."""
-    from tvist.ident.campaign import _Settings, identify_pose
+    from tvist.ident.campaign import _Settings, run_pose
 
     poses = {p.key: p for p in campaign_poses(payloads_kg=(0.0,), radii_m=PAPER_RADII_M[:2])}
     target, other = poses["m0kg-V0-R1"], poses["m0kg-V1-R0"]
     settings = _Settings(robot_name="ur5e", accel_noise_std=0.05, noise_seed=0, duration_s=2.0)
-    alone = identify_pose(TwinRobot(), target, settings)
+    alone = run_pose(TwinRobot(), target, settings)
     busy = TwinRobot()
-    identify_pose(busy, other, settings)
-    after_other = identify_pose(busy, target, settings)
+    run_pose(busy, other, settings)
+    after_other = run_pose(busy, target, settings)
     assert json.dumps(alone) == json.dumps(after_other)
 
 
@@ -174,3 +177,74 @@ def test_load_results_rejects_corruption_inside_the_file(tmp_path):
     path.write_text('{"key": "a"}\nnot json\n{"key": "b"}\n')
     with pytest.raises(ValueError, match="line 2"):
         load_results(path)
+
+
+def test_a_file_made_with_other_settings_is_refused_not_reused(tmp_path):
+    poses = campaign_poses(payloads_kg=(1.0,), radii_m=PAPER_RADII_M[:1])[:2]
+    results = tmp_path / "c.jsonl"
+    robot = ModeRobot()
+    run_campaign(poses, results, robot=robot, progress=False, duration_s=2.0)
+    assert robot.calls == 4
+    with pytest.raises(ValueError, match="other settings.*choose another results file"):
+        run_campaign(poses, results, robot=robot, progress=False, duration_s=2.5)
+    assert robot.calls == 4 and len(load_results(results)) == 2  # nothing reused or added
+    again = run_campaign(
+        poses, results, robot=robot, progress=False, duration_s=2.5, overwrite=True
+    )
+    assert robot.calls == 8 and len(again) == 2
+
+
+def test_invalid_lines_are_quarantined_and_their_poses_rerun(tmp_path):
+    poses = campaign_poses(payloads_kg=(1.0,), radii_m=PAPER_RADII_M[:1])[:3]
+    results = tmp_path / "c.jsonl"
+    robot = ModeRobot()
+    run_campaign(poses[:2], results, robot=robot, progress=False, duration_s=2.0)
+    lines = results.read_text().splitlines()
+    torn = lines[1][: len(lines[1]) // 2]
+    results.write_text(f"{lines[0]}\n{torn}\nnull\n" + '{"no_key": 1}\n')
+    with pytest.warns(UserWarning, match="3 line"):
+        records = run_campaign(poses, results, robot=robot, progress=False, duration_s=2.0)
+    assert sorted(r["key"] for r in records) == sorted(p.key for p in poses)
+    assert robot.calls == 4 + 4  # the torn pose and the new one
+    quarantine = (tmp_path / "c.jsonl.quarantine").read_text().splitlines()
+    assert quarantine == [torn, "null", '{"no_key": 1}']
+    assert [json.loads(x)["key"] for x in results.read_text().splitlines()] == [
+        r["key"] for r in records
+    ]
+
+
+def test_two_writers_are_refused(tmp_path):
+    from tvist.ident.results_store import FileLocked, ResultsStore
+
+    path = tmp_path / "c.jsonl"
+    with ResultsStore(path, "abc"):
+        with pytest.raises(FileLocked, match="another campaign"):
+            with ResultsStore(path, "abc"):
+                pass
+    with ResultsStore(path, "abc"):  # released on exit
+        pass
+
+
+def test_ctrl_c_is_one_line_and_the_file_resumes(tmp_path, capsys, monkeypatch):
+    from tvist.cli import main
+    from tvist.ident import campaign
+
+    calls = {"n": 0}
+    real = campaign.run_pose
+
+    def interrupted(robot, pose, settings):
+        calls["n"] += 1
+        if calls["n"] == 2:
+            raise KeyboardInterrupt
+        return real(robot, pose, settings)
+
+    monkeypatch.setattr(campaign, "run_pose", interrupted)
+    out = tmp_path / "c.jsonl"
+    args = ["campaign", "--sim", "--out", str(out), "--payloads", "0", "--every", "26"]
+    assert main([*args, "--duration", "2"]) == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        f"tvist campaign: interrupted; 1 pose record(s) saved in {out}, rerun the same "
+        "command to resume"
+    ]
+    assert len(load_results(out)) == 1

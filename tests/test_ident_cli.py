@@ -99,5 +99,6 @@ def test_fit_map_and_sensitivity(tmp_path, capsys):
 def test_fit_map_on_an_empty_file_fails_cleanly(tmp_path, capsys):
     empty = tmp_path / "empty.jsonl"
     empty.write_text("")
-    assert main(["fit-map", str(empty), "--out", str(tmp_path / "m.json")]) == 1
-    assert "no pose records" in capsys.readouterr().err
+    assert main(["fit-map", str(empty), "--out", str(tmp_path / "m.json")]) == 2
+    err = capsys.readouterr().err
+    assert err == f"tvist fit-map: error: {empty}: no pose records\n"

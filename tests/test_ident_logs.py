@@ -134,7 +134,7 @@ def test_nan_row_is_named_or_dropped(tmp_path):
     with pytest.raises(ValueError, match=r"row\(s\) 7 "):
         read_rtde_csv(path)
     with pytest.warns(LogWarning) as caught:
-        back = read_rtde_csv(path, drop_nan=True)
+        back = read_rtde_csv(path, drop_nan=True, resample=False)
     messages = [str(w.message) for w in caught]
     assert any("dropped 1 row(s) with non-finite values: 7" in m for m in messages)
     # The dropped row leaves a one-sample hole, reported like any skipped sample.
@@ -167,7 +167,7 @@ def test_backwards_timestamp_is_an_error_naming_the_row(tmp_path):
         read_rtde_csv(path)
 
 
-def test_skipped_samples_are_reported_and_optionally_resampled(tmp_path):
+def test_skipped_samples_are_resampled_by_default_or_reported(tmp_path):
     n = 40
     t = DT_S * np.arange(n)
     ramp = np.outer(t, np.arange(1, 7))  # linear in time: interpolation must be exact
@@ -184,14 +184,30 @@ def test_skipped_samples_are_reported_and_optionally_resampled(tmp_path):
     assert list(find_gaps(gappy.t_s)) == [10]
     path = gappy.to_csv(tmp_path / "gap.csv", fmt="ur_client")
     with pytest.warns(LogWarning, match=r"about 3 skipped sample\(s\) before data row\(s\) 10"):
-        kept = read_rtde_csv(path)
+        kept = read_rtde_csv(path, resample=False)
     assert kept.n_samples == n - 3
-    with pytest.warns(LogWarning, match="resampled"):
-        fixed = read_rtde_csv(path, resample=True)
+    # Resampled by default, saying how much was filled.
+    with pytest.warns(LogWarning, match=r"3 of 40 samples \(7.5 %\) filled"):
+        fixed = read_rtde_csv(path)
     assert fixed.n_samples == n
     np.testing.assert_allclose(fixed.t_s, t, atol=1e-12)
     np.testing.assert_allclose(fixed.actual_q, rec.actual_q, atol=1e-12)
     np.testing.assert_allclose(fixed.tool_accel, rec.tool_accel, atol=1e-12)
+
+
+def test_a_time_jump_is_refused_not_filled(tmp_path):
+    rec = make_record(n=40)
+    jumped = Record(
+        t_s=np.r_[rec.t_s[:20], rec.t_s[20:] + 1e6],
+        target_q=rec.target_q,
+        target_qd=rec.target_qd,
+        target_qdd=rec.target_qdd,
+        actual_q=rec.actual_q,
+        tool_accel=rec.tool_accel,
+    )
+    path = jumped.to_csv(tmp_path / "jump.csv", fmt="ur_client")
+    with pytest.raises(ValueError, match="split the log at its time jump"):
+        read_rtde_csv(path)
 
 
 def test_clean_log_reads_without_warnings(tmp_path):

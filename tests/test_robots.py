@@ -63,7 +63,7 @@ def _random_poses(n_dof: int, seed: int) -> np.ndarray:
 def test_data_file_has_every_robot_with_the_schema_fields():
     doc = json.loads(tvist._core.ROBOT_DATA_JSON)
     assert doc["schema_version"] == 1
-    assert set(doc["robots"]) == {"ur3e", "ur5e", "ur10e", "ur16e", "ur20"}
+    assert set(doc["robots"]) == {"ur3e", "ur5e", "ur10e", "ur16e", "ur20", "ur3", "ur5", "ur10"}
     for entry in doc["robots"].values():
         for key in ("description", "source", "inertia_source", "max_payload_kg"):
             assert key in entry
@@ -83,7 +83,7 @@ def test_ur5e_numbers_are_those_of_the_spec():
 
 def test_loader_returns_frozen_read_only_params():
     p = params("ur10e")
-    assert names() == ("ur3e", "ur5e", "ur10e", "ur16e", "ur20")
+    assert names() == ("ur3e", "ur5e", "ur10e", "ur16e", "ur20", "ur3", "ur5", "ur10")
     assert p.n_dof == 6 and p.inertia_tensors_kg_m2.shape == (6, 3, 3)
     with pytest.raises(ValueError):
         p.mass_kg[0] = 1.0
@@ -175,7 +175,7 @@ def test_robot_methods_reject_wrong_shapes():
         robot.jacobian_many(bad)
 
 
-# ---- cylinder-approximated link inertias (UR3e, UR5e) ----
+# ---- cylinder-approximated link inertias (UR3e, UR5e and the CB-series) ----
 
 
 def _data_text() -> str:
@@ -209,10 +209,11 @@ def test_the_robot_data_lives_in_the_core_crate_and_packages_with_it():
     assert (p.description, p.max_payload_kg) == (entry["description"], entry["max_payload_kg"])
 
 
-def test_cylinder_robots_are_ur3e_and_ur5e_and_their_source_says_so():
+def test_cylinder_robots_are_ur3e_ur5e_and_the_cb_series_and_their_source_says_so():
     robots = json.loads(_data_text())["robots"]
-    assert {n for n, e in robots.items() if "inertia_cylinders" in e} == {"ur3e", "ur5e"}
-    for name in ("ur3e", "ur5e"):
+    cylinders = {"ur3e", "ur5e", "ur3", "ur5", "ur10"}
+    assert {n for n, e in robots.items() if "inertia_cylinders" in e} == cylinders
+    for name in sorted(cylinders):
         entry, source = robots[name], robots[name]["inertia_source"]
         assert "publishes no inertia tensors" in source
         assert "I_axis = m r^2/2, I_perpendicular = m (3 r^2 + l^2)/12" in source
@@ -293,7 +294,7 @@ def test_cylinder_block_needs_one_entry_per_link():
 # ---- the model against pinocchio ----
 
 
-@pytest.mark.parametrize("name", ["ur3e", "ur5e", "ur10e", "ur16e", "ur20"])
+@pytest.mark.parametrize("name", ["ur3e", "ur5e", "ur10e", "ur16e", "ur20", "ur3", "ur5", "ur10"])
 @pytest.mark.parametrize("payload_index", range(len(PAYLOADS)))
 def test_model_matches_pinocchio(name, payload_index):
     payload = PAYLOADS[payload_index]

@@ -51,6 +51,12 @@ _FINGERPRINT_SOURCES = (
     "ident/logs.py",
     "ident/preprocess.py",
     "ident/two_mode.py",
+    "ident/zoh.py",
+    "ident/base_mode.py",
+    "ident/pose.py",
+    "ident/pose_plan.py",
+    "ident/campaign_robots.py",
+    "ident/results_store.py",
     "robots",
 )
 

@@ -5,8 +5,10 @@ Offline flow: RTDE log (real robot or twin) → :func:`tangential_acceleration` 
 Algorithm 1, with :func:`random_excitation`, Algorithm 2) → :func:`fit_map` → map file →
 shaper; :func:`evaluate_map` judges the map against the shaper's 10 % PRV band.
 
-Modules: ``logs``, ``excitation``, ``preprocess``, ``local_fit``, ``two_mode``, ``map_fit``,
-``campaign``, ``robustness``, ``plots`` (matplotlib, imported lazily) and ``cli``.
+Modules: ``logs``, ``excitation``, ``preprocess``, ``zoh``, ``local_fit``, ``two_mode``,
+``base_mode``, ``pose`` (:func:`identify_pose`), ``batch`` (many logs → pose records),
+``map_fit``, campaign (``pose_plan``, ``campaign_robots``, ``campaign`` runner,
+``results_store``), ``robustness``, ``plots`` (matplotlib, imported lazily) and ``cli``.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from tvist.ident.excitation import BangCoastBangMove, Excitation, random_excitat
 from tvist.ident.local_fit import FitOptions, LocalFit, fit_local, identify_local
 from tvist.ident.logs import LogWarning, Record, find_gaps, read_rtde_csv
 from tvist.ident.map_fit import ModeSpec, fit_map
+from tvist.ident.pose import PoseRecord, identify_pose
 from tvist.ident.preprocess import TangentialAcceleration, tangential_acceleration
 from tvist.ident.robustness import evaluate_map, prv_band, summarize, two_mode_shaper
 from tvist.ident.two_mode import TwoModeFit, fit_two_modes
@@ -35,6 +38,7 @@ __all__ = [
     "LocalFit",
     "LogWarning",
     "ModeSpec",
+    "PoseRecord",
     "Record",
     "TangentialAcceleration",
     "TwinRobot",
@@ -47,6 +51,7 @@ __all__ = [
     "fit_map",
     "fit_two_modes",
     "identify_local",
+    "identify_pose",
     "load_results",
     "prv_band",
     "random_excitation",

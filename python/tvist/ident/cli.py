@@ -1,12 +1,14 @@
 """``tvist`` subcommands of the identification toolbox: campaign, identify, fit-map, sensitivity.
 
 Each ``add_*_command(sub)`` registers one subparser and sets ``func``; heavy imports happen
-inside the command.
+inside the command. Library errors (``ValueError``, ``OSError``) propagate to ``tvist.cli.main``,
+which reports them on one line; usage problems found here are reported by :func:`_error`.
 """
 
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import math
 import sys
@@ -18,6 +20,12 @@ __all__ = [
     "add_identify_command",
     "add_sensitivity_command",
 ]
+
+
+def _error(command: str, message: str) -> int:
+    """A user error: one line on stderr, exit code 2."""
+    print(f"tvist {command}: error: {message}", file=sys.stderr)
+    return 2
 
 
 def _add_payload_args(p: argparse.ArgumentParser) -> None:
@@ -38,6 +46,7 @@ def _add_payload_args(p: argparse.ArgumentParser) -> None:
 
 def _cmd_campaign(args: argparse.Namespace) -> int:
     from tvist.ident.campaign import URRobot, campaign_poses, run_campaign
+    from tvist.ident.results_store import SettingsMismatch
 
     poses = campaign_poses(
         args.robot, payloads_kg=args.payloads, payload_com_m=args.payload_com, seed=args.seed
@@ -46,17 +55,31 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     robot = None
     if args.robot_ip:
         robot = URRobot(args.robot_ip, args.robot, log_dir=Path(args.out).parent / "logs")
-    results = run_campaign(
-        poses,
-        args.out,
-        robot=robot,
-        robot_name=args.robot,
-        workers=args.workers,
-        accel_noise_std=args.accel_noise,
-        noise_seed=args.seed,
-        duration_s=args.duration,
-        separate_modes=not args.single_mode,
-    )
+    try:
+        results = run_campaign(
+            poses,
+            args.out,
+            robot=robot,
+            robot_name=args.robot,
+            workers=args.workers,
+            accel_noise_std=args.accel_noise,
+            noise_seed=args.seed,
+            duration_s=args.duration,
+            separate_modes=not args.single_mode,
+            overwrite=args.overwrite,
+        )
+    except KeyboardInterrupt:
+        from tvist.ident.results_store import load_results
+
+        saved = len(load_results(args.out)) if Path(args.out).exists() else 0
+        print(
+            f"tvist campaign: interrupted; {saved} pose record(s) saved in {args.out}, rerun "
+            "the same command to resume",
+            file=sys.stderr,
+        )
+        return 130
+    except SettingsMismatch as exc:
+        raise SettingsMismatch(str(exc).replace("overwrite it", "pass --overwrite")) from None
     wanted = {p.key for p in poses}
     done = [r for r in results if r["key"] in wanted]
     confident = [
@@ -123,6 +146,11 @@ def add_campaign_command(sub: argparse._SubParsersAction) -> None:
         help="record the paper's single-mode base fit only (no base/shoulder separation)",
     )
     p.add_argument("--map", help="also fit a dynamic map and write it here (JSON)")
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="start --out afresh (default: resume it; a file made with other settings is refused)",
+    )
     p.set_defaults(func=_cmd_campaign)
 
 
@@ -130,26 +158,94 @@ def add_campaign_command(sub: argparse._SubParsersAction) -> None:
 
 
 def _cmd_identify(args: argparse.Namespace) -> int:
+    from tvist.ident.batch import expand_logs
+
+    paths = expand_logs(args.logs)
+    if args.out or len(paths) > 1:
+        if not args.out:
+            return _error("identify", f"{len(paths)} logs: name the results file with --out")
+        return _identify_batch(args, paths)
+    return _identify_one(args, paths[0])
+
+
+def _identify_batch(args: argparse.Namespace, paths: list[Path]) -> int:
+    from tvist.ident.batch import identify_logs
+
+    def message(text: str) -> None:
+        print(f"tvist identify: warning: {text}", file=sys.stderr)
+
+    records = identify_logs(
+        paths,
+        robot_name=args.robot,
+        payload_kg=args.payload_kg,
+        payload_com_m=args.payload_com,
+        accel_frame=args.accel_frame,
+        separate_modes=not args.single_mode,
+        drop_nan=args.drop_nan,
+        resample=not args.no_resample,
+        workers=args.workers,
+        on_message=message,
+        progress=sys.stderr.isatty(),
+    )
+    if not records:
+        return _error("identify", "no base or shoulder log could be read")
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with out.open("w", encoding="utf-8") as fh:
+        for record in records:
+            fh.write(json.dumps(record) + "\n")
+    confident = sum(
+        1
+        for r in records
+        for m in r["modes"]
+        if "wn_rad_s" in m and not m.get("low_confidence", True)
+    )
+    n_modes = sum(len(r["modes"]) for r in records)
+    print(
+        f"{len(paths)} logs -> {len(records)} poses in {out}; {confident}/{n_modes} modes "
+        "identified with confidence"
+    )
+    return 0
+
+
+def _identify_one(args: argparse.Namespace, path: Path) -> int:
+    import warnings
+
+    from tvist.ident.batch import excited_joint
     from tvist.ident.local_fit import identify_local
-    from tvist.ident.logs import read_rtde_csv
+    from tvist.ident.logs import LogWarning, read_rtde_csv
     from tvist.robots import Payload, Robot, params
 
-    record = read_rtde_csv(args.log, drop_nan=args.drop_nan, resample=args.resample)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LogWarning)
+        record = read_rtde_csv(path, drop_nan=args.drop_nan, resample=not args.no_resample)
+    for w in caught:
+        print(f"tvist identify: warning: {w.message}", file=sys.stderr)
+    joint = excited_joint(record) if args.joint is None else args.joint
     robot = Robot(params(args.robot), Payload(args.payload_kg, tuple(args.payload_com)))
     fit = identify_local(
-        record, args.joint, robot, accel_frame=args.accel_frame, two_modes=args.two_modes
+        record,
+        joint,
+        robot,
+        accel_frame=args.accel_frame,
+        two_modes=args.two_modes,
+        base_mode=not args.single_mode,
     )
     if args.json:
         print(json.dumps(fit.to_dict(), indent=2))
         return 0
-    print(
-        f"{args.log}: joint {args.joint}, {record.n_samples} samples at {record.dt_s * 1e3:.3f} ms"
-    )
+    print(f"{path}: joint {joint}, {record.n_samples} samples at {record.dt_s * 1e3:.3f} ms")
+    if fit.no_ringing:
+        print(f"  NO RINGING ABOVE NOISE (flagged, no mode reported): {fit.reason}")
+        return 0
     print(
         f"  f_n = {fit.fn_hz:.3f} Hz ± {fit.wn_se_rad_s / (2 * math.pi):.3f}   "
         f"ω_n = {fit.wn_rad_s:.2f} rad/s   ζ = {fit.zeta:.4f} ± {fit.zeta_se:.4f}"
     )
-    print(f"  fit {fit.fit_percent:.1f} %   input delay {fit.delay_s * 1e3:.0f} ms")
+    print(
+        f"  fit {fit.fit_percent:.1f} %   timing offset {fit.delay_s * 1e3:+.2f} ms   "
+        f"({fit.method})"
+    )
     if fit.two_mode is not None:
         modes = ", ".join(
             f"{m.fn_hz:.2f} Hz / ζ {m.zeta:.3f} ({100 * m.energy_share:.0f} %)"
@@ -163,15 +259,23 @@ def _cmd_identify(args: argparse.Namespace) -> int:
 
 
 def add_identify_command(sub: argparse._SubParsersAction) -> None:
-    """``tvist identify LOG.csv``: local fit (eq. 17) of one RTDE log."""
+    """``tvist identify LOG...``: local fits of RTDE logs, one log or a whole campaign."""
     p = sub.add_parser(
         "identify",
-        help="identify one mode from an RTDE log of an excitation",
-        description="Read a UR RTDE log (ur_rtde or UR's record.py), compute the tangential "
-        "acceleration (eqs. 12-13) and fit G(s) (eq. 17).",
+        help="identify modes from RTDE logs of excitations (one log, or many into --out)",
+        description="Read UR RTDE logs (ur_rtde or UR's record.py), compute the tangential "
+        "acceleration (eqs. 12-13) and fit G(s) (eq. 17). One log: print the fit. Many logs "
+        "(files, globs or directories) with --out: find each log's excited joint, pair the "
+        "base and shoulder logs of each pose by their starting actual_q, identify every pose "
+        "in parallel and write one pose record per line, the input of 'tvist fit-map'.",
     )
-    p.add_argument("log", help="RTDE CSV file")
-    p.add_argument("--joint", type=int, default=0, help="excited joint (0 base, 1 shoulder)")
+    p.add_argument("logs", nargs="+", metavar="LOG", help="RTDE CSV files, globs or directories")
+    p.add_argument(
+        "--joint",
+        type=int,
+        default=None,
+        help="excited joint of a single log (0 base, 1 shoulder; default: detected)",
+    )
     _add_payload_args(p)
     p.add_argument(
         "--accel-frame",
@@ -179,26 +283,61 @@ def add_identify_command(sub: argparse._SubParsersAction) -> None:
         default="flange",
         help="frame of actual_tool_accelerometer (default flange)",
     )
-    p.add_argument("--two-modes", action="store_true", help="also fit two modes")
+    p.add_argument("--two-modes", action="store_true", help="also show the two-mode fit")
+    p.add_argument(
+        "--single-mode",
+        action="store_true",
+        help="report the paper's single-mode base fit (no base/shoulder separation)",
+    )
     p.add_argument("--drop-nan", action="store_true", help="drop rows with NaN (with a warning)")
-    p.add_argument("--resample", action="store_true", help="fill skipped samples by interpolation")
-    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.add_argument(
+        "--no-resample",
+        action="store_true",
+        help="do not fill skipped samples by interpolation (default: fill, with a warning)",
+    )
+    p.add_argument("--resample", action="store_true", help=argparse.SUPPRESS)  # the default
+    p.add_argument("--json", action="store_true", help="print a single log's fit as JSON")
+    p.add_argument("--out", help="write one pose record per line here (JSON lines)")
+    p.add_argument(
+        "--workers", type=int, default=None, help="processes for --out (default: all CPUs)"
+    )
     p.set_defaults(func=_cmd_identify)
 
 
 # --------------------------------------------------------------------------- fit-map
 
+RECORD_FORMAT = """\
+input: JSON lines, one pose per line, as written by 'tvist identify --out' and
+'tvist campaign':
+  key                string      name of the pose
+  q                  [6] rad     joint angles of the pose
+  payload_kg         kg          payload mass; payload_com_m [3] m: its centre of mass
+                                 in the flange frame
+  inertia_kg_m2      [6] kg m^2  joint-axis inertias at q (required)
+  gravity_torque_nm  [6] N m     gravity torques at q (optional; needed for k_g)
+  modes              list        per identified joint:
+    joint            0 base, 1 shoulder
+    wn_rad_s, zeta   natural frequency (rad/s) and damping ratio
+    wn_se_rad_s, zeta_se  standard errors
+    low_confidence   true: not used unless --include-low-confidence; reasons: why
+    method           single-mode or two-mode (base separated from the shoulder mode)
+    error            instead of the above if the joint could not be identified
+  error              why the pose has no result (e.g. unreachable)
+"""
+
 
 def _cmd_fit_map(args: argparse.Namespace) -> int:
-    from tvist.ident.campaign import load_results
     from tvist.ident.map_fit import fit_map
+    from tvist.ident.results_store import load_results
 
+    if not Path(args.results).is_file():
+        raise FileNotFoundError(errno.ENOENT, "No such file or directory", args.results)
     results = load_results(args.results)
     if not results:
-        print(f"{args.results}: no pose records", file=sys.stderr)
-        return 1
+        return _error("fit-map", f"{args.results}: no pose records")
     dynmap = fit_map(
         results,
+        k_0=args.k0,
         include_low_confidence=args.include_low_confidence,
         metadata={"robot": args.robot, "source": f"tvist fit-map {args.results}"},
     )
@@ -229,16 +368,25 @@ def _cmd_fit_map(args: argparse.Namespace) -> int:
 
 
 def add_fit_map_command(sub: argparse._SubParsersAction) -> None:
-    """``tvist fit-map RESULTS.jsonl``: fit the dynamic map to a campaign."""
+    """``tvist fit-map RESULTS.jsonl``: fit the dynamic map to identified poses."""
     p = sub.add_parser(
         "fit-map",
-        help="fit the dynamic map's coefficients to campaign results",
+        help="fit the dynamic map's coefficients to identified poses",
         description="Nonlinear least squares of the map coefficients (frequency, then "
         "damping), dropping negligible terms; writes a tvist map file.",
+        epilog=RECORD_FORMAT,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("results", help="campaign results (JSON lines)")
+    p.add_argument("results", help="pose records (JSON lines, see below)")
     p.add_argument("--out", default="out/map.json", help="map file to write")
     p.add_argument("--robot", default="ur5e", help="robot model name stored in the map")
+    p.add_argument(
+        "--k0",
+        type=float,
+        default=10000.0,
+        help="stiffness at zero inertia, N m/rad (fixes the scale of the stiffness terms; "
+        "default 10000)",
+    )
     p.add_argument(
         "--include-low-confidence", action="store_true", help="also use flagged identifications"
     )
@@ -251,7 +399,7 @@ def add_fit_map_command(sub: argparse._SubParsersAction) -> None:
 def _cmd_sensitivity(args: argparse.Namespace) -> int:
     import tvist
     from tvist.ident import plots
-    from tvist.ident.campaign import load_results
+    from tvist.ident.results_store import load_results
     from tvist.ident.robustness import evaluate_map, summarize
 
     dynmap = tvist.DynamicMap.load(args.map) if args.map else tvist.DynamicMap.paper_ur5e()

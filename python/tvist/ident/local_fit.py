@@ -1,57 +1,77 @@
 """Local second-order fit (eq. 17) from target joint acceleration to tangential acceleration.
 
 The model is ``G(s) = (k_a s + k_b)/(s² + k_c s + k_d)`` with ``ω_n = √k_d`` and
-``ζ = k_c/(2√k_d)`` (eq. 19), plus a constant output offset and a whole-sample input delay.
-It is fitted by output-error (prediction-error) minimisation: the model is simulated from the
-target acceleration and the sum of squared differences to the measured tangential acceleration
-is minimised.
+``ζ = k_c/(2√k_d)`` (eq. 19), plus a constant output offset and an input timing offset
+(``delay_s``, any real value of either sign). It is fitted by output-error (prediction-error)
+minimisation: the model is simulated from the target acceleration and the sum of squared
+differences to the measured tangential acceleration is minimised.
 
-The input is held constant over each sample (zero-order hold), so the model is simulated
-exactly by its ZOH discretisation. Given ``(ω_n, ζ)``, the output is linear in
-``(k_a, k_b, offset)``; those are eliminated by linear least squares (variable projection), so
-the nonlinear search runs over two parameters only:
+The input is the *interval-mean* target acceleration ``(qd[k+1] - qd[k]) / dt_s`` held over
+``[t_k, t_{k+1})``, which integrates exactly to the logged target velocities wherever the
+profile switches between samples (a real controller's ``movej`` switches between ticks; point
+samples of ``target_qdd`` would then be up to one sample off at every switch and bias ζ high).
+The mode is simulated exactly for that input and any sub-sample delay
+(:mod:`tvist.ident.zoh`). Given ``(ω_n, ζ, delay)``, the output is linear in
+``(k_a, k_b, offset)``; those are eliminated by linear least squares (variable projection):
 
-1. a coarse grid over ``ω_n`` (log-spaced over the whole searchable band) and ``ζ``;
-2. local refinement with ``scipy.optimize.least_squares`` from the best few, well separated
-   grid frequencies (multi-start), for every input delay up to ``max_delay_s``;
-3. a final least-squares pass over all five parameters, whose Jacobian gives the standard
-   errors (``σ² (JᵀJ)⁻¹`` with ``σ²`` the residual variance; the residuals of a real arm are
-   not white, so these are lower bounds).
+1. a coarse grid over ``ω_n`` (log-spaced over the whole searchable band) and ``ζ``, and local
+   refinement from the best few, well separated grid frequencies (multi-start), at zero delay;
+2. a half-sample grid over the delay in ``±max_delay_s``, then joint refinement of
+   ``(ω_n, ζ, delay)`` from the two best separated delays;
+3. a final least-squares pass over all six parameters, whose Jacobian gives the standard
+   errors: the larger of the white-residual estimate and a Newey-West estimate that accounts
+   for the correlated residuals a real arm leaves (:func:`_standard_errors`).
 
 Bad data raise ``ValueError`` (too short, no excitation, mostly saturated); doubtful results are
-returned with ``low_confidence=True`` and the reasons.
+returned with ``low_confidence=True`` and the reasons. A log whose response is explained as
+well by a rigid arm (``y = g u + offset``) as by a mode is flagged :data:`NO_RINGING`.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field, replace
-from typing import TYPE_CHECKING
+import warnings
+from dataclasses import MISSING, dataclass, field, fields, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy import linalg, optimize, signal
+from scipy import optimize
 
-from tvist.ident.logs import Record
+from tvist.ident.logs import LogWarning, Record, is_uniform, resample_uniform
 from tvist.ident.preprocess import (
     MIN_STANDSTILL_SAMPLES,
     KinematicModel,
     TangentialAcceleration,
     tangential_acceleration,
 )
+from tvist.ident.zoh import shifted, zoh_responses
 
 if TYPE_CHECKING:
     from tvist.ident.two_mode import TwoModeFit
 
 __all__ = [
+    "NO_RINGING",
     "FitOptions",
     "LocalFit",
     "fit_local",
     "identify_local",
+    "interval_mean_acceleration",
     "saturated_samples",
 ]
 
-#: Fewest samples a local fit accepts (1 s at 500 Hz; the paper logs about 8 s).
+#: Fewest samples a local fit accepts at 500 Hz (1 s; the paper logs about 8 s).
 MIN_SAMPLES = 500
+#: Shortest log a local fit accepts, s (at any rate: 125 samples at 125 Hz).
+MIN_DURATION_S = 1.0
+#: The searched band ends at this fraction of the sampling rate (0.8 of Nyquist).
+NYQUIST_FRACTION = 0.4
+#: Reason (prefix) of a log whose response shows no mode above the noise.
+NO_RINGING = "no ringing above noise"
+
+
+def min_samples_for(dt_s: float) -> int:
+    """Fewest samples a local fit accepts at sampling period ``dt_s``."""
+    return max(int(math.ceil(MIN_DURATION_S / dt_s - 1e-9)), 100)
 
 
 @dataclass(frozen=True)
@@ -64,7 +84,8 @@ class FitOptions:
         Band searched for the natural frequency. ``f_max_hz`` is also capped at 0.4 times the
         sampling rate.
     max_delay_s
-        Largest input delay (target to measured acceleration) tried, s; whole samples.
+        Largest timing offset between the target and the measured acceleration, s; searched
+        in both directions (``±max_delay_s``) to a fraction of a sample.
     n_grid_freq
         Points of the coarse log-spaced frequency grid.
     grid_zeta
@@ -80,6 +101,9 @@ class FitOptions:
     max_saturated_fraction
         More saturated samples than this fraction is an error; fewer are excluded from the
         fit and flagged.
+    min_ringing_snr_db
+        The residual energy the mode removes beyond a response without a mode, relative to
+        the energy left (dB); below it the result is flagged :data:`NO_RINGING`.
     """
 
     f_min_hz: float = 1.0
@@ -92,6 +116,7 @@ class FitOptions:
     max_wn_rel_se: float = 0.01
     max_zeta_rel_se: float = 0.1
     max_saturated_fraction: float = 0.05
+    min_ringing_snr_db: float = -10.0
 
 
 @dataclass(frozen=True)
@@ -107,7 +132,7 @@ class LocalFit:
     offset
         Constant output offset, m/s² (residual gravity after the standstill estimate).
     delay_s
-        Input delay chosen, s.
+        Timing offset of the input, s (positive: the response lags the logged target).
     fit_percent
         NRMSE fit ``100 (1 - |y - ŷ| / |y - mean(y)|)`` over the samples used, %.
     wn_se_rad_s, zeta_se
@@ -119,7 +144,16 @@ class LocalFit:
     joint
         Excited joint, if known.
     two_mode
-        The two-mode fit of the same data, if requested (:mod:`tvist.ident.two_mode`).
+        The two-mode fit of the same data, if made (:mod:`tvist.ident.two_mode`).
+    ringing_snr_db
+        Energy the mode explains beyond a rigid arm's response over the residual energy, dB.
+    method
+        ``"single-mode"`` (eq. 17) or ``"two-mode"`` (the base mode separated from a second
+        mode that rings in the same log; ``k_a``, ``k_b``, ``offset`` are then those of the
+        separated mode in the two-mode fit).
+    apparent
+        When ``method`` is ``"two-mode"``: the single-mode fit it replaced,
+        ``{"wn_rad_s", "zeta", "low_confidence"}`` (1.0 if that fit was flagged).
     """
 
     wn_rad_s: float
@@ -139,6 +173,9 @@ class LocalFit:
     reasons: tuple[str, ...] = field(default_factory=tuple)
     joint: int | None = None
     two_mode: TwoModeFit | None = None
+    ringing_snr_db: float = float("nan")
+    method: str = "single-mode"
+    apparent: dict[str, float] | None = None
 
     @property
     def fn_hz(self) -> float:
@@ -157,90 +194,108 @@ class LocalFit:
         """The reasons joined into one line ("" when confident)."""
         return "; ".join(self.reasons)
 
-    def to_dict(self) -> dict:
-        """Plain-Python form (JSON-serialisable)."""
-        out = asdict(self)
+    @property
+    def no_ringing(self) -> bool:
+        """True when the log shows no mode above the noise (flagged :data:`NO_RINGING`)."""
+        return any(r.startswith(NO_RINGING) for r in self.reasons)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-Python form (JSON types only); :meth:`from_dict` reads it back."""
+        out = {f.name: getattr(self, f.name) for f in fields(self)}
         out["reasons"] = list(self.reasons)
+        out["two_mode"] = None if self.two_mode is None else self.two_mode.to_dict()
+        out["apparent"] = None if self.apparent is None else dict(self.apparent)
         return out
 
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> LocalFit:
+        """The fit from :meth:`to_dict`'s form (unknown keys, e.g. a record's, are ignored)."""
+        from tvist.ident.two_mode import TwoModeFit
 
-def _zoh_matrices(wn: float, zeta: float, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """``(A_d, B_d)`` of ``ÿ + 2ζω ẏ + ω² y = u`` held over ``dt_s``, state ``[y, ẏ]``.
-
-    Sylvester's formula with the eigenvalues ``λ_1,2 = -ζω ± ω√(ζ²-1)`` (complex for ζ < 1),
-    ``e^{At} = c_0 I + c_1 A`` with ``c_0 = (λ_1 e^{λ_2 t} - λ_2 e^{λ_1 t})/(λ_1 - λ_2)`` and
-    ``c_1 = (e^{λ_1 t} - e^{λ_2 t})/(λ_1 - λ_2)``, and ``B_d = A⁻¹ (A_d - I) B``. Near
-    critical damping the eigenvalues merge and the augmented matrix exponential is used.
-    """
-    a = np.array([[0.0, 1.0], [-(wn**2), -2.0 * zeta * wn]])
-    root = wn * np.sqrt(complex(zeta * zeta - 1.0))
-    if abs(root) < 1e-4 * wn:
-        m = np.zeros((3, 3))
-        m[:2, :2] = a
-        m[1, 2] = 1.0
-        e = linalg.expm(m * dt_s)
-        return e[:2, :2], e[:2, 2]
-    l1, l2 = -zeta * wn + root, -zeta * wn - root
-    e1, e2 = np.exp(l1 * dt_s), np.exp(l2 * dt_s)
-    c0 = ((l1 * e2 - l2 * e1) / (l1 - l2)).real
-    c1 = ((e1 - e2) / (l1 - l2)).real
-    ad = c0 * np.eye(2) + c1 * a
-    # A⁻¹ (A_d - I) [0, 1]ᵀ with A⁻¹ = [[-2ζ/ω, -1/ω²], [1, 0]]
-    d = ad - np.eye(2)
-    col = d[:, 1]
-    bd = np.array([-2.0 * zeta / wn * col[0] - col[1] / wn**2, col[0]])
-    return ad, bd
-
-
-def _zoh_responses(wn: float, zeta: float, u: np.ndarray, dt_s: float) -> np.ndarray:
-    """Exact ZOH responses of ``1/den`` and ``s/den`` to ``u``, shape (n_samples, 2).
-
-    State ``x = [y, ẏ]`` of ``ÿ + 2ζω ẏ + ω² y = u``: ``1/den`` is ``x_0`` and ``s/den`` is
-    ``x_1``. The recursion ``x[k+1] = A_d x[k] + B_d u[k]`` is run by ``lfilter`` on the
-    equivalent transfer functions.
-    """
-    ad, bd = _zoh_matrices(wn, zeta, dt_s)
-    # Denominator: characteristic polynomial of A_d. Numerators: C adj(zI - A_d) B_d with
-    # C = [1, 0] or [0, 1] (strictly proper: x[k] depends on u up to k-1).
-    a1 = -(ad[0, 0] + ad[1, 1])
-    a2 = ad[0, 0] * ad[1, 1] - ad[0, 1] * ad[1, 0]
-    den = np.array([1.0, a1, a2])
-    num0 = np.array([0.0, bd[0], ad[0, 1] * bd[1] - ad[1, 1] * bd[0]])
-    num1 = np.array([0.0, bd[1], ad[1, 0] * bd[0] - ad[0, 0] * bd[1]])
-    return np.column_stack([signal.lfilter(num0, den, u), signal.lfilter(num1, den, u)])
-
-
-def _delayed(u: np.ndarray, delay_samples: int) -> np.ndarray:
-    if delay_samples == 0:
-        return u
-    return np.concatenate([np.zeros(delay_samples), u[:-delay_samples]])
+        known = {f.name for f in fields(cls)}
+        kwargs = {k: v for k, v in data.items() if k in known}
+        missing = {
+            f.name
+            for f in fields(cls)
+            if f.default is MISSING and f.default_factory is MISSING and f.name not in kwargs
+        }
+        if missing:
+            raise ValueError(f"local fit record lacks {', '.join(sorted(missing))}")
+        kwargs["reasons"] = tuple(kwargs.get("reasons", ()))
+        for name in ("k_a", "k_b", "offset"):
+            if kwargs.get(name) is None:
+                kwargs[name] = float("nan")
+        if kwargs.get("two_mode") is not None:
+            kwargs["two_mode"] = TwoModeFit.from_dict(kwargs["two_mode"])
+        return cls(**kwargs)
 
 
 class _Problem:
-    """Output-error problem on the used samples; ``u`` already delayed."""
+    """Output-error problem on the used samples: held input ``u``, output ``y``."""
 
     def __init__(self, u: np.ndarray, y: np.ndarray, mask: np.ndarray, dt_s: float) -> None:
         self.u, self.y, self.mask, self.dt_s = u, y, mask, dt_s
         self.y_used = y[mask]
 
-    def regressors(self, wn: float, zeta: float) -> np.ndarray:
-        resp = _zoh_responses(wn, zeta, self.u, self.dt_s)[self.mask]
+    def regressors(self, wn: float, zeta: float, delay_s: float) -> np.ndarray:
+        resp = zoh_responses(wn, zeta, self.u, self.dt_s, delay_s)[self.mask]
         return np.column_stack([resp, np.ones(resp.shape[0])])
 
-    def projected(self, wn: float, zeta: float) -> tuple[np.ndarray, np.ndarray]:
-        """Residual and linear coefficients ``[k_b, k_a, offset]`` for ``(ω_n, ζ)``."""
-        phi = self.regressors(wn, zeta)
+    def projected(
+        self, wn: float, zeta: float, delay_s: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Residual, linear coefficients ``[k_b, k_a, offset]`` and the regressors."""
+        phi = self.regressors(wn, zeta, delay_s)
         # Normal equations on unit-norm columns: a 3x3 solve (cheaper than an SVD per call).
         scale = np.linalg.norm(phi, axis=0)
         scale[scale == 0.0] = 1.0
         phi_n = phi / scale
         beta = np.linalg.solve(phi_n.T @ phi_n, phi_n.T @ self.y_used) / scale
-        return self.y_used - phi @ beta, beta
+        return self.y_used - phi @ beta, beta, phi
+
+    def cost(self, wn: float, zeta: float, delay_s: float) -> float:
+        r = self.projected(wn, zeta, delay_s)[0]
+        return float(r @ r)
 
     def full_residual(self, p: np.ndarray) -> np.ndarray:
-        wn, zeta, k_a, k_b, offset = p
-        phi = self.regressors(wn, zeta)
+        wn, zeta, delay_s, k_a, k_b, offset = p
+        phi = self.regressors(wn, zeta, delay_s)
         return self.y_used - phi @ np.array([k_b, k_a, offset])
+
+    def rigid_residual(self, delay_s: float) -> np.ndarray:
+        """Residual of the best response without a mode: ``y`` a combination of the three
+        held input samples around the delay (a mode much faster than the sampling, with any
+        sub-sample timing) plus an offset."""
+        d = int(math.floor(delay_s / self.dt_s))
+        taps = [shifted(self.u, d + k)[self.mask] for k in (0, 1, 2)]
+        phi = np.column_stack([*taps, np.ones(self.y_used.size)])
+        beta, *_ = np.linalg.lstsq(phi, self.y_used, rcond=None)
+        return self.y_used - phi @ beta
+
+
+def _standard_errors(jac: np.ndarray, residual: np.ndarray, max_lag: int) -> np.ndarray:
+    """Standard errors of least-squares parameters that stay honest for coloured residuals.
+
+    The larger of the white-residual estimate ``σ² (JᵀJ)⁻¹`` and the Newey-West
+    (heteroscedasticity- and autocorrelation-consistent) sandwich
+    ``(JᵀJ)⁻¹ S (JᵀJ)⁻¹``, ``S = Σ_{|l|<=L} (1 - |l|/(L+1)) Σ_k g_k g_{k-l}ᵀ`` with
+    ``g_k = J_k r_k``. Model mismatch leaves residuals correlated over about a period of the
+    mode; the white estimate then understates the uncertainty several-fold.
+    """
+    n, p = jac.shape
+    dof = max(n - p, 1)
+    try:
+        inv = np.linalg.inv(jac.T @ jac)
+    except np.linalg.LinAlgError:
+        return np.full(p, np.inf)
+    white = np.diag(inv) * float(residual @ residual) / dof
+    g = jac * residual[:, None]
+    s = g.T @ g
+    for lag in range(1, min(max_lag, n - 1) + 1):
+        c = g[lag:].T @ g[:-lag]
+        s += (1.0 - lag / (max_lag + 1.0)) * (c + c.T)
+    hac = np.diag(inv @ s @ inv) * n / dof
+    return np.sqrt(np.clip(np.maximum(white, hac), 0.0, None))
 
 
 def saturated_samples(
@@ -283,9 +338,7 @@ def _nrmse_fit(y: np.ndarray, residual: np.ndarray) -> float:
 
 def _grid_starts(problem: _Problem, wn_grid: np.ndarray, zetas: tuple[float, ...], n: int):
     """Best ``(ω_n, ζ)`` grid points at ``n`` well separated frequencies (local minima first)."""
-    cost = np.array(
-        [[float(np.sum(problem.projected(wn, z)[0] ** 2)) for z in zetas] for wn in wn_grid]
-    )
+    cost = np.array([[problem.cost(wn, z, 0.0) for z in zetas] for wn in wn_grid])
     best_z = np.argmin(cost, axis=1)
     best = cost[np.arange(len(wn_grid)), best_z]
     # Local minima along frequency, best first; fall back to the global order.
@@ -300,23 +353,42 @@ def _grid_starts(problem: _Problem, wn_grid: np.ndarray, zetas: tuple[float, ...
     return [(float(wn_grid[i]), float(zetas[best_z[i]])) for i in chosen]
 
 
-def _refine(problem: _Problem, wn0: float, zeta0: float, wn_lo: float, wn_hi: float):
-    """Variable-projection refinement over ``(log ω_n, ζ)``; returns (cost, ω_n, ζ)."""
+def _refine(
+    problem: _Problem,
+    start: tuple[float, float, float],
+    wn_bounds: tuple[float, float],
+    delay_bounds: tuple[float, float] | None,
+) -> tuple[float, float, float, float]:
+    """Variable-projection refinement over ``(log ω_n, ζ[, delay])``; (cost, ω_n, ζ, delay).
+
+    With ``delay_bounds = None`` the delay stays at ``start[2]``.
+    """
+    wn_lo, wn_hi = wn_bounds
+    wn0, zeta0, delay0 = start
+    x0 = [math.log(min(max(wn0, wn_lo * 1.001), wn_hi / 1.001)), zeta0]
+    lower, upper = [math.log(wn_lo), 1e-4], [math.log(wn_hi), 2.0]
+    scale = [0.05, 0.02]
+    if delay_bounds is not None:
+        x0.append(min(max(delay0, delay_bounds[0]), delay_bounds[1]))
+        lower.append(delay_bounds[0])
+        upper.append(delay_bounds[1])
+        scale.append(problem.dt_s / 4)
 
     def residual(x: np.ndarray) -> np.ndarray:
-        return problem.projected(math.exp(x[0]), x[1])[0]
+        delay = x[2] if delay_bounds is not None else delay0
+        return problem.projected(math.exp(x[0]), x[1], delay)[0]
 
-    x0 = np.array([math.log(min(max(wn0, wn_lo * 1.001), wn_hi / 1.001)), zeta0])
     res = optimize.least_squares(
         residual,
-        x0,
-        bounds=([math.log(wn_lo), 1e-4], [math.log(wn_hi), 2.0]),
-        x_scale=[0.05, 0.02],
+        np.array(x0),
+        bounds=(lower, upper),
+        x_scale=scale,
         diff_step=1e-6,
         xtol=1e-9,
         ftol=1e-10,
     )
-    return float(2.0 * res.cost), math.exp(res.x[0]), float(res.x[1])
+    delay = float(res.x[2]) if delay_bounds is not None else delay0
+    return float(2.0 * res.cost), math.exp(res.x[0]), float(res.x[1]), delay
 
 
 def fit_local(
@@ -334,8 +406,9 @@ def fit_local(
     Parameters
     ----------
     u
-        Target acceleration of the excited joint, rad/s², held over each sample,
-        shape (n_samples,).
+        Target acceleration of the excited joint, rad/s², shape (n_samples,); sample ``k``
+        holds over ``[t_k, t_{k+1})`` (the interval mean ``(qd[k+1] - qd[k]) / dt_s``,
+        :func:`interval_mean_acceleration`).
     y
         Measured tangential acceleration, m/s², shape (n_samples,).
     dt_s
@@ -371,67 +444,91 @@ def fit_local(
         raise ValueError(f"dt_s must be finite and > 0, got {dt_s}")
     mask = np.ones(u.size, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
     n_used = int(np.count_nonzero(mask))
-    if u.size < MIN_SAMPLES or n_used < MIN_SAMPLES:
+    min_samples = min_samples_for(dt_s)
+    if u.size < min_samples or n_used < min_samples:
         raise ValueError(
             f"log too short for a local fit: {n_used} usable of {u.size} samples, need at "
-            f"least {MIN_SAMPLES} ({MIN_SAMPLES * dt_s:.2f} s at this rate)"
+            f"least {min_samples} ({min_samples * dt_s:.2f} s at this rate)"
         )
-    n_steps = int(np.count_nonzero(np.abs(np.diff(u)) > 1e-9))
+    n_steps = _acceleration_changes(u)
     if np.max(np.abs(u)) == 0.0 or n_steps == 0:
         raise ValueError("no excitation: the target joint acceleration never changes")
     if np.std(y[mask]) == 0.0:
         raise ValueError("no response: the tangential acceleration is constant")
 
     wn_lo = 2.0 * math.pi * opts.f_min_hz
-    wn_hi = 2.0 * math.pi * min(opts.f_max_hz, 0.4 / dt_s)
+    wn_hi = 2.0 * math.pi * min(opts.f_max_hz, NYQUIST_FRACTION / dt_s)
     if not wn_lo < wn_hi:
         raise ValueError(
             f"search band {opts.f_min_hz}-{opts.f_max_hz} Hz is empty at {1 / dt_s:.0f} Hz sampling"
         )
     wn_grid = np.geomspace(wn_lo, wn_hi, opts.n_grid_freq)
+    if not (math.isfinite(opts.max_delay_s) and opts.max_delay_s >= 0):
+        raise ValueError(f"max_delay_s must be finite and >= 0, got {opts.max_delay_s}")
+    delay_bounds = (-opts.max_delay_s, opts.max_delay_s) if opts.max_delay_s > 0 else None
 
-    # Multi-start over frequency at zero delay, then the delay search from the best start.
-    problem0 = _Problem(u, y, mask, dt_s)
-    starts = _grid_starts(problem0, wn_grid, opts.grid_zeta, opts.n_starts)
-    results = [_refine(problem0, wn, z, wn_lo, wn_hi) + (0,) for wn, z in starts]
-    max_delay = int(round(opts.max_delay_s / dt_s))
+    # 1. Multi-start over frequency at zero delay.
+    problem = _Problem(u, y, mask, dt_s)
+    starts = _grid_starts(problem, wn_grid, opts.grid_zeta, opts.n_starts)
+    results = [_refine(problem, (wn, z, 0.0), (wn_lo, wn_hi), None) for wn, z in starts]
     _, wn_b, z_b, _ = min(results)
-    # Rank the delays by the cost at the best mode so far; refine the three most promising.
-    problems = {d: _Problem(_delayed(u, d), y, mask, dt_s) for d in range(1, max_delay + 1)}
-    ranked = sorted(problems, key=lambda d: float(np.sum(problems[d].projected(wn_b, z_b)[0] ** 2)))
-    for d in ranked[:3]:
-        results.append(_refine(problems[d], wn_b, z_b, wn_lo, wn_hi) + (d,))
-    _, wn_b, z_b, delay = min(results)
+    # 2. The timing offset, both directions: a half-sample grid at the best mode so far, then
+    # joint refinement of (ω_n, ζ, delay) from the two best separated delays.
+    if delay_bounds is not None:
+        n_half = int(math.floor(opts.max_delay_s / (dt_s / 2)))
+        delays = (dt_s / 2) * np.arange(-n_half, n_half + 1)
+        ranked = sorted(delays, key=lambda d: problem.cost(wn_b, z_b, float(d)))
+        chosen = [float(ranked[0])]
+        for d in ranked[1:]:
+            if abs(d - chosen[0]) > dt_s:
+                chosen.append(float(d))
+                break
+        for d in chosen:
+            results.append(_refine(problem, (wn_b, z_b, d), (wn_lo, wn_hi), delay_bounds))
+    _, wn_b, z_b, delay_b = min(results)
 
-    # Final pass over all parameters for the Jacobian (and any last improvement).
-    problem = _Problem(_delayed(u, delay), y, mask, dt_s)
-    _, beta = problem.projected(wn_b, z_b)
-    p0 = np.array([wn_b, z_b, beta[1], beta[0], beta[2]])
-    lo = [wn_lo, 1e-4, -np.inf, -np.inf, -np.inf]
-    hi = [wn_hi, 2.0, np.inf, np.inf, np.inf]
+    # 3. Final pass over all parameters for the Jacobian (and any last improvement); the
+    # delay is left out when it is fixed.
+    _, beta, _ = problem.projected(wn_b, z_b, delay_b)
+    free = np.ones(6, dtype=bool)
+    free[2] = delay_bounds is not None
+    full = np.array([wn_b, z_b, delay_b, beta[1], beta[0], beta[2]])
+    lo = np.array([wn_lo, 1e-4, -opts.max_delay_s, -np.inf, -np.inf, -np.inf])[free]
+    hi = np.array([wn_hi, 2.0, opts.max_delay_s, np.inf, np.inf, np.inf])[free]
+
+    def residual_of(p: np.ndarray) -> np.ndarray:
+        x = full.copy()
+        x[free] = p
+        return problem.full_residual(x)
+
     final = optimize.least_squares(
-        problem.full_residual,
-        np.clip(p0, lo, hi),
+        residual_of,
+        np.clip(full[free], lo, hi),
         bounds=(lo, hi),
         x_scale="jac",
         diff_step=1e-7,
         xtol=1e-12,
         ftol=1e-12,
     )
-    wn, zeta, k_a, k_b, offset = (float(v) for v in final.x)
+    full[free] = final.x
+    wn, zeta, delay, k_a, k_b, offset = (float(v) for v in full)
     residual = final.fun
-    dof = max(n_used - 5, 1)
-    sigma2 = float(residual @ residual) / dof
-    jtj = final.jac.T @ final.jac
-    try:
-        cov = np.linalg.inv(jtj) * sigma2
-        se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-        wn_se, zeta_se = float(se[0]), float(se[1])
-    except np.linalg.LinAlgError:
-        wn_se = zeta_se = float("inf")
+    # Residual correlation reaches over about two periods of the mode.
+    max_lag = int(min(max(2.0 * 2.0 * math.pi / (wn * dt_s), 10.0), 400.0))
+    se = _standard_errors(final.jac, residual, max_lag)
+    wn_se, zeta_se = float(se[0]), float(se[1])
     fit = _nrmse_fit(problem.y_used, residual)
+    rigid = problem.rigid_residual(delay)
+    ringing_energy = max(float(rigid @ rigid) - float(residual @ residual), 0.0)
+    noise_energy = max(float(residual @ residual), 1e-300)
+    ringing_snr_db = 10.0 * math.log10(max(ringing_energy / noise_energy, 1e-10))
 
     reasons = list(extra_reasons)
+    if ringing_snr_db < opts.min_ringing_snr_db:
+        reasons.append(
+            f"{NO_RINGING}: the mode's ringing is {-ringing_snr_db:.1f} dB below the "
+            f"residual noise (needs at least {opts.min_ringing_snr_db:.0f} dB)"
+        )
     if fit < opts.min_fit_percent:
         reasons.append(f"poor fit: {fit:.1f} % < {opts.min_fit_percent:.0f} %")
     if not wn_se <= opts.max_wn_rel_se * wn:
@@ -457,7 +554,7 @@ def fit_local(
         k_c=2.0 * zeta * wn,
         k_d=wn**2,
         offset=offset,
-        delay_s=delay * dt_s,
+        delay_s=delay,
         fit_percent=fit,
         wn_se_rad_s=wn_se,
         zeta_se=zeta_se,
@@ -466,7 +563,27 @@ def fit_local(
         low_confidence=bool(reasons),
         reasons=tuple(reasons),
         joint=joint,
+        ringing_snr_db=ringing_snr_db,
     )
+
+
+def _acceleration_changes(u: np.ndarray) -> int:
+    """Number of distinct changes of the acceleration (a switch between samples spreads over
+    the interval mean and counts once)."""
+    changing = np.abs(np.diff(u)) > 1e-6 * max(float(np.max(np.abs(u))), 1e-300)
+    return int(np.count_nonzero(changing[1:] & ~changing[:-1]) + bool(changing[0]))
+
+
+def interval_mean_acceleration(target_qd: np.ndarray, dt_s: float) -> np.ndarray:
+    """Mean acceleration over each sample interval, ``(qd[k+1] - qd[k]) / dt_s``, rad/s².
+
+    Sample ``k`` holds on ``[t_k, t_{k+1})``; the last sample repeats the one before. Unlike
+    point samples of the target acceleration, this is exact for a profile whose acceleration
+    switches anywhere between samples: it integrates to the logged velocities.
+    """
+    qd = np.asarray(target_qd, dtype=float)
+    mean = np.diff(qd) / dt_s
+    return np.append(mean, mean[-1] if mean.size else 0.0)
 
 
 def identify_local(
@@ -479,6 +596,7 @@ def identify_local(
     accel_limit_m_s2: float | None = None,
     min_standstill_samples: int = MIN_STANDSTILL_SAMPLES,
     two_modes: bool = False,
+    base_mode: bool = True,
 ) -> LocalFit:
     """Identify ``(ω_n, ζ)`` of the mode excited through ``joint`` from one log.
 
@@ -504,21 +622,27 @@ def identify_local(
     two_modes
         Also fit two modes (:func:`tvist.ident.two_mode.fit_two_modes`) and attach the result
         as ``two_mode``.
+    base_mode
+        For the base joint (0): return the base mode, separated from a shoulder mode that
+        rings in the same log (:func:`tvist.ident.base_mode.separate_base_mode`), flagged
+        where the two cannot be told apart. ``False`` returns the paper's single-mode fit.
 
     Raises
     ------
     ValueError
-        Non-uniform sampling, no standstill, too short, no excitation or mostly saturated
-        accelerometer.
+        Too little standstill, too short, no excitation or mostly saturated accelerometer.
+        (A log with skipped samples is resampled, with a :class:`LogWarning`.)
     """
     opts = options or FitOptions()
-    step = np.diff(record.t_s)
-    dt = record.dt_s
-    if np.any(np.abs(step - dt) > 0.25 * dt):
-        raise ValueError(
-            "the log is not uniformly sampled (skipped samples?); read it with "
-            "read_rtde_csv(..., resample=True)"
+    if not is_uniform(record.t_s):
+        record, filled = resample_uniform(record)
+        warnings.warn(
+            f"the log is not uniformly sampled: resampled onto a uniform grid, {filled} of "
+            f"{record.n_samples} samples filled by linear interpolation",
+            LogWarning,
+            stacklevel=2,
         )
+    dt = record.dt_s
     tangential: TangentialAcceleration = tangential_acceleration(
         record,
         joint,
@@ -537,8 +661,9 @@ def identify_local(
                 f"({100 * fraction:.1f} %); lower the excitation's acceleration"
             )
         reasons = (f"accelerometer saturated on {n_sat} samples (excluded from the fit)",)
+    u = interval_mean_acceleration(record.target_qd[:, joint], dt)
     fit = fit_local(
-        tangential.target_qdd,
+        u,
         tangential.psi,
         dt,
         mask=~saturated,
@@ -546,11 +671,12 @@ def identify_local(
         joint=joint,
         extra_reasons=reasons,
     )
-    if two_modes:
+    separate = base_mode and joint == 0 and not fit.no_ringing
+    if two_modes or separate:
         from tvist.ident.two_mode import fit_two_modes
 
         split = fit_two_modes(
-            tangential.target_qdd,
+            u,
             tangential.psi,
             dt,
             fit,
@@ -559,4 +685,19 @@ def identify_local(
             f_max_hz=opts.f_max_hz,
         )
         fit = replace(fit, two_mode=split)
+    if separate:
+        from tvist.ident.base_mode import separate_base_mode
+
+        jac = robot.jacobian_many(np.ascontiguousarray(record.actual_q))[:, :3, :2]
+        assert tangential.accel_base is not None
+        fit = separate_base_mode(
+            fit,
+            u,
+            tangential.accel_base,
+            jac[:, :, 0],
+            jac[:, :, 1],
+            dt,
+            ~saturated,
+            max_wn_rel_se=opts.max_wn_rel_se,
+        )
     return fit

@@ -18,12 +18,15 @@ rows, i.e. not counting the header):
 - a repeated timestamp (the recorder wrote the same sample twice) is dropped with a
   :class:`LogWarning`;
 - a timestamp that goes backwards is a ``ValueError``;
-- skipped samples (a step longer than 1.5 sampling periods) are reported with a
-  :class:`LogWarning`; ``resample=True`` interpolates the record onto a uniform grid.
+- skipped samples (a step longer than 1.5 sampling periods) are filled by linear
+  interpolation onto a uniform grid, with a :class:`LogWarning` that says how many samples
+  were filled (``resample=False`` only reports them); a log that would be more than half
+  filled is refused.
 """
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass, fields
 from pathlib import Path
@@ -35,7 +38,9 @@ __all__ = [
     "LogWarning",
     "Record",
     "find_gaps",
+    "is_uniform",
     "read_rtde_csv",
+    "resample_uniform",
 ]
 
 LogFormat = Literal["ur_rtde", "ur_client"]
@@ -53,6 +58,8 @@ _OPTIONAL = {"actual_TCP_pose"}
 
 #: A step longer than this many median sampling periods counts as skipped samples.
 GAP_FACTOR = 1.5
+#: Resampling refuses to fill more than this fraction of the resampled log.
+MAX_FILLED_FRACTION = 0.5
 
 
 class LogWarning(UserWarning):
@@ -198,12 +205,34 @@ def _detect_separator(header_line: str) -> str:
     )
 
 
-def _resample_uniform(record: Record) -> Record:
-    """Linear interpolation of every channel onto a uniform grid at the median period."""
+def resample_uniform(record: Record) -> tuple[Record, int]:
+    """Linear interpolation of every channel onto a uniform grid at the median period.
+
+    Returns the resampled record and the number of grid samples that had no recorded sample
+    within half a period (filled by interpolation).
+
+    Raises
+    ------
+    ValueError
+        If more than :data:`MAX_FILLED_FRACTION` of the grid would be filled (a time jump,
+        not skipped samples).
+    """
     t = record.t_s
     dt = record.dt_s
-    n = int(np.floor((t[-1] - t[0]) / dt + 1e-9)) + 1
+    if not (math.isfinite(dt) and dt > 0):
+        raise ValueError("cannot resample: the timestamps do not advance")
+    span = (t[-1] - t[0]) / dt
+    if not math.isfinite(span) or span + 1 > record.n_samples / (1.0 - MAX_FILLED_FRACTION):
+        raise ValueError(
+            f"the log spans {t[-1] - t[0]:.6g} s but holds only {record.n_samples} samples at "
+            f"{dt * 1e3:.3f} ms: more than {100 * MAX_FILLED_FRACTION:.0f} % would be "
+            "interpolated; split the log at its time jump"
+        )
+    n = int(np.floor(span + 1e-9)) + 1
     grid = t[0] + dt * np.arange(n)
+    nearest = np.clip(np.searchsorted(t, grid), 1, t.size - 1)
+    distance = np.minimum(np.abs(t[nearest] - grid), np.abs(t[nearest - 1] - grid))
+    filled = int(np.count_nonzero(distance > 0.5 * dt))
     kwargs: dict[str, np.ndarray | None] = {"t_s": grid}
     for name in _FIELDS:
         value = getattr(record, name)
@@ -211,10 +240,19 @@ def _resample_uniform(record: Record) -> Record:
             kwargs[name] = None
             continue
         kwargs[name] = np.column_stack([np.interp(grid, t, col) for col in value.T])
-    return Record(**kwargs)
+    return Record(**kwargs), filled
 
 
-def read_rtde_csv(path: str | Path, *, drop_nan: bool = False, resample: bool = False) -> Record:
+def is_uniform(t_s: np.ndarray, tolerance: float = 0.25) -> bool:
+    """True if every step is within ``tolerance`` median periods of the median period."""
+    step = np.diff(np.asarray(t_s, dtype=float))
+    if step.size == 0:
+        return True
+    dt = float(np.median(step))
+    return bool(np.all(np.abs(step - dt) <= tolerance * dt))
+
+
+def read_rtde_csv(path: str | Path, *, drop_nan: bool = False, resample: bool = True) -> Record:
     """Read a UR RTDE log written by ur_rtde or by UR's ``record.py`` (format auto-detected).
 
     Parameters
@@ -225,8 +263,8 @@ def read_rtde_csv(path: str | Path, *, drop_nan: bool = False, resample: bool = 
         Drop rows containing NaN/inf (with a :class:`LogWarning`) instead of raising.
     resample
         If samples were skipped, interpolate all channels linearly onto a uniform grid at the
-        median sampling period (with a :class:`LogWarning`). Without it, gaps are only
-        reported.
+        median sampling period (default; with a :class:`LogWarning` that says how many
+        samples were filled). ``False`` only reports the gaps.
 
     Returns
     -------
@@ -282,7 +320,7 @@ def read_rtde_csv(path: str | Path, *, drop_nan: bool = False, resample: bool = 
         if not drop_nan:
             raise ValueError(
                 f"{path}: non-finite values in data row(s) {_rows_text(bad)} "
-                "(pass drop_nan=True to drop them)"
+                "(drop them with --drop-nan, or drop_nan=True in Python)"
             )
         warnings.warn(
             f"{path}: dropped {bad.size} row(s) with non-finite values: {_rows_text(bad)}",
@@ -330,15 +368,23 @@ def read_rtde_csv(path: str | Path, *, drop_nan: bool = False, resample: bool = 
     if gaps.size:
         dt = record.dt_s
         missing_n = int(np.sum(np.round(np.diff(record.t_s)[gaps - 1] / dt) - 1))
-        action = "resampled onto a uniform grid" if resample else "left as is"
+        where = f"before data row(s) {_rows_text(rows[gaps])} (period {dt * 1e3:.3f} ms)"
+        if resample:
+            try:
+                record, filled = resample_uniform(record)
+            except ValueError as exc:
+                raise ValueError(f"{path}: {exc}") from None
+            action = (
+                f"resampled onto a uniform grid: {filled} of {record.n_samples} samples "
+                f"({100 * filled / record.n_samples:.1f} %) filled by linear interpolation"
+            )
+        else:
+            action = "left as is"
         warnings.warn(
-            f"{path}: about {missing_n} skipped sample(s) before data row(s) "
-            f"{_rows_text(rows[gaps])} (period {dt * 1e3:.3f} ms); {action}",
+            f"{path}: about {missing_n} skipped sample(s) {where}; {action}",
             LogWarning,
             stacklevel=2,
         )
-        if resample:
-            record = _resample_uniform(record)
     return record
 
 

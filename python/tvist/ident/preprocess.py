@@ -2,11 +2,16 @@
 
 For an excitation of joint ``j``:
 
-1. rotate the raw flange accelerometer reading into the base frame with forward kinematics
-   of the measured joint angles, ``ψ_U = R_flange(q) ψ_A``;
-2. subtract gravity, estimated as the mean of ``ψ_U`` over the initial standstill (so a
-   constant sensor offset and a tilted base are removed too);
-3. project onto the tangential direction of joint ``j``, the linear part of Jacobian column
+1. find the quiet samples (:func:`quiet_samples`): every stretch of the log, anywhere, where
+   the target stands still *relative to the log's own motion* (a real controller's targets
+   hover at 1e-3-1e-2 rad/s between moves);
+2. estimate, from all quiet samples by least squares, the reaction to gravity ``g`` (base
+   frame) and a constant sensor bias ``b`` (flange frame) of ``ψ_A = R(q)ᵀ g + b``; ``b`` is
+   separable from ``g`` only where the quiet samples see different orientations, so it is
+   ridge-regularised towards zero (a single orientation gives the mean in the base frame);
+3. rotate the raw flange reading into the base frame with forward kinematics of the measured
+   joint angles and remove both, ``ψ_U = R(q) (ψ_A - b) - g``;
+4. project onto the tangential direction of joint ``j``, the linear part of Jacobian column
    ``j`` at the flange centre (``∂P_A/∂q_j``), normalised: ``ψ_j = ψ_U · ∂P_A/∂q_j / |∂P_A/∂q_j|``.
 
 The accelerometer sits inside the flange, so its position is taken as the flange centre.
@@ -14,7 +19,8 @@ The accelerometer sits inside the flange, so its position is taken as the flange
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 from typing import Literal, Protocol
 
 import numpy as np
@@ -24,6 +30,7 @@ from tvist.ident.logs import Record
 __all__ = [
     "KinematicModel",
     "TangentialAcceleration",
+    "quiet_samples",
     "standstill_length",
     "tangential_acceleration",
 ]
@@ -32,6 +39,13 @@ __all__ = [
 MIN_STANDSTILL_SAMPLES = 10
 #: A reference velocity/acceleration below this counts as standing still (rad/s, rad/s²).
 STANDSTILL_TOL = 1e-6
+#: A target speed (acceleration) below this fraction of the log's peak target speed
+#: (acceleration) is quiet: 2 % of a 0.5 rad/s move is 1e-2 rad/s.
+QUIET_FRACTION = 0.02
+#: Shortest run of quiet samples that counts (shorter ones are passes through zero).
+MIN_QUIET_RUN = 5
+#: Ridge weight of the sensor bias against gravity (relative to the number of samples).
+BIAS_RIDGE = 1e-6
 #: The tangential direction is undefined when the flange is this close to joint j's axis, m.
 MIN_RADIUS_M = 0.02
 
@@ -62,9 +76,13 @@ class TangentialAcceleration:
         ``|∂P_A/∂q_j|``, the distance of the flange centre from joint j's axis, m,
         shape (n_samples,).
     gravity_base
-        Gravity reaction estimated over the standstill, base frame, m/s², shape (3,).
+        Gravity reaction estimated over the quiet samples, base frame, m/s², shape (3,).
     standstill_samples
-        Number of leading samples used for the gravity estimate.
+        Number of quiet samples used for the gravity estimate (anywhere in the log).
+    sensor_bias
+        Constant sensor bias estimated with gravity, flange frame, m/s², shape (3,).
+    accel_base
+        Gravity-free flange acceleration in the base frame, m/s², shape (n_samples, 3).
     """
 
     t_s: np.ndarray
@@ -74,6 +92,8 @@ class TangentialAcceleration:
     radius_m: np.ndarray
     gravity_base: np.ndarray
     standstill_samples: int
+    sensor_bias: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    accel_base: np.ndarray | None = None
 
     @property
     def dt_s(self) -> float:
@@ -89,6 +109,54 @@ def standstill_length(record: Record, tol: float = STANDSTILL_TOL) -> int:
     return int(first[0]) if first.size else record.n_samples
 
 
+def _runs_at_least(mask: np.ndarray, n: int) -> np.ndarray:
+    """``mask`` with its runs of True shorter than ``n`` samples cleared."""
+    out = np.zeros_like(mask)
+    edges = np.flatnonzero(np.diff(np.r_[0, mask.astype(np.int8), 0]))
+    for start, stop in zip(edges[::2], edges[1::2], strict=True):
+        if stop - start >= n:
+            out[start:stop] = True
+    return out
+
+
+def quiet_samples(record: Record, *, fraction: float = QUIET_FRACTION) -> np.ndarray:
+    """Boolean mask of the samples in which the target stands still, anywhere in the log.
+
+    A sample is quiet when every joint's target speed is below ``fraction`` of the log's peak
+    target speed, and its target acceleration below ``fraction`` of the peak acceleration
+    (each at least :data:`STANDSTILL_TOL`), in a run of at least :data:`MIN_QUIET_RUN`
+    samples. The thresholds follow the log's own motion, so the slow drift of a real
+    controller's targets between moves (1e-3-1e-2 rad/s) counts as standing still.
+    """
+    speed = np.max(np.abs(record.target_qd), axis=1)
+    accel = np.max(np.abs(record.target_qdd), axis=1)
+    v_tol = max(STANDSTILL_TOL, fraction * float(np.max(speed)))
+    a_tol = max(STANDSTILL_TOL, fraction * float(np.max(accel)))
+    return _runs_at_least((speed <= v_tol) & (accel <= a_tol), MIN_QUIET_RUN)
+
+
+def gravity_and_bias(rot: np.ndarray, reading: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares ``(g, b)`` of ``reading_k = rot_kᵀ g + b`` (ridge on ``b``).
+
+    Parameters
+    ----------
+    rot
+        Flange orientations in the base frame at the quiet samples, shape (n, 3, 3).
+    reading
+        Accelerometer readings in the flange frame there, m/s², shape (n, 3).
+    """
+    n = reading.shape[0]
+    a = np.zeros((n, 3, 6))
+    a[:, :, :3] = np.transpose(rot, (0, 2, 1))
+    a[:, :, 3:] = np.eye(3)
+    ridge = np.zeros((3, 6))
+    ridge[:, 3:] = math.sqrt(BIAS_RIDGE * n) * np.eye(3)
+    x, *_ = np.linalg.lstsq(
+        np.vstack([a.reshape(3 * n, 6), ridge]), np.r_[reading.reshape(3 * n), np.zeros(3)]
+    )
+    return x[:3], x[3:]
+
+
 def tangential_acceleration(
     record: Record,
     joint: int,
@@ -102,7 +170,7 @@ def tangential_acceleration(
     Parameters
     ----------
     record
-        The log of one excitation of ``joint`` that starts with a standstill.
+        The log of one excitation of ``joint``, with standstills (anywhere) between moves.
     joint
         Excited joint (0 = base, 1 = shoulder, …).
     robot
@@ -120,28 +188,31 @@ def tangential_acceleration(
     Raises
     ------
     ValueError
-        No (or too short a) standstill at the start, a bad joint index, or a flange on the
-        axis of ``joint`` (tangential direction undefined).
+        Too few quiet samples, a bad joint index, or a flange on the axis of ``joint``
+        (tangential direction undefined).
     """
     if int(joint) != joint or not 0 <= joint < record.actual_q.shape[1]:
         raise ValueError(f"joint must be an integer 0-{record.actual_q.shape[1] - 1}, got {joint}")
     joint = int(joint)
     if accel_frame not in ("flange", "base"):
         raise ValueError(f"accel_frame must be 'flange' or 'base', got {accel_frame!r}")
-    n_still = standstill_length(record)
+    quiet = quiet_samples(record)
+    n_still = int(np.count_nonzero(quiet))
     if n_still < min_standstill_samples:
         raise ValueError(
-            f"the log must start with a standstill of at least {min_standstill_samples} samples "
-            f"(zero target velocity and acceleration) to estimate gravity; found {n_still}"
+            f"the log needs at least {min_standstill_samples} samples of standstill (target "
+            f"speed and acceleration below {100 * QUIET_FRACTION:g} % of their peaks) to "
+            f"estimate gravity; found {n_still}"
         )
     q = np.ascontiguousarray(record.actual_q)
     if accel_frame == "flange":
         rot = robot.flange_pose_many(q)[:, :3, :3]
-        psi_base = np.einsum("nij,nj->ni", rot, record.tool_accel)
+        gravity, bias = gravity_and_bias(rot[quiet], record.tool_accel[quiet])
+        psi_base = np.einsum("nij,nj->ni", rot, record.tool_accel - bias) - gravity
     else:
-        psi_base = record.tool_accel.copy()
-    gravity = psi_base[:n_still].mean(axis=0)
-    psi_base = psi_base - gravity
+        bias = np.zeros(3)
+        gravity = record.tool_accel[quiet].mean(axis=0)
+        psi_base = record.tool_accel - gravity
 
     tangent = robot.jacobian_many(q)[:, :3, joint]
     radius = np.linalg.norm(tangent, axis=1)
@@ -160,4 +231,6 @@ def tangential_acceleration(
         radius_m=radius,
         gravity_base=gravity,
         standstill_samples=n_still,
+        sensor_bias=bias,
+        accel_base=psi_base,
     )

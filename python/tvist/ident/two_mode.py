@@ -22,12 +22,16 @@ both are determined to within :data:`MAX_WN_REL_SE`.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy import optimize
 
-from tvist.ident.local_fit import LocalFit, _delayed, _zoh_responses
+from tvist.ident.zoh import least_squares_fit, shifted, zoh_responses
+
+if TYPE_CHECKING:
+    from tvist.ident.local_fit import LocalFit
 
 __all__ = ["ModeEstimate", "TwoModeFit", "fit_two_modes"]
 
@@ -41,14 +45,16 @@ MAX_WN_REL_SE = 0.05
 
 @dataclass(frozen=True)
 class ModeEstimate:
-    """One mode of a multi-mode fit, with standard errors (white-residual assumption) and the
-    fraction of the fitted response energy it carries."""
+    """One mode of a multi-mode fit, with standard errors (white-residual assumption), the
+    fraction of the fitted response energy it carries and its numerator ``k_a s + k_b``."""
 
     wn_rad_s: float
     zeta: float
     wn_se_rad_s: float
     zeta_se: float
     energy_share: float = float("nan")
+    k_a: float = float("nan")
+    k_b: float = float("nan")
 
     @property
     def fn_hz(self) -> float:
@@ -73,25 +79,51 @@ class TwoModeFit:
     rss_ratio: float
     significant: bool
 
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-Python form (JSON types only); :meth:`from_dict` reads it back."""
+        return {
+            "modes": [asdict(m) for m in self.modes],
+            "rss_ratio": self.rss_ratio,
+            "significant": self.significant,
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> TwoModeFit:
+        modes = tuple(ModeEstimate(**m) for m in data["modes"])
+        if len(modes) != 2:
+            raise ValueError(f"a two-mode fit has 2 modes, got {len(modes)}")
+        return cls(
+            modes=(modes[0], modes[1]),
+            rss_ratio=float(data["rss_ratio"]),
+            significant=bool(data["significant"]),
+        )
+
     def away_from(self, wn_rad_s: float) -> ModeEstimate:
         """The mode farther (in log-frequency) from ``wn_rad_s``, e.g. the shoulder mode."""
         return max(self.modes, key=lambda m: abs(math.log(m.wn_rad_s / wn_rad_s)))
 
 
 def _energy_shares(
-    x: np.ndarray, u: np.ndarray, y_used: np.ndarray, mask: np.ndarray, dt_s: float
-) -> tuple[float, float]:
-    """Fraction of the fitted response energy carried by each of the two modes."""
+    x: np.ndarray,
+    u: np.ndarray,
+    y_used: np.ndarray,
+    mask: np.ndarray,
+    dt_s: float,
+    delay_s: float,
+) -> tuple[tuple[float, float], np.ndarray]:
+    """Fraction of the fitted response energy carried by each of the two modes, and the
+    linear coefficients ``[k_b1, k_a1, k_b2, k_a2, d, offset]``."""
     blocks = [
-        _zoh_responses(math.exp(x[0]), x[1], u, dt_s)[mask],
-        _zoh_responses(math.exp(x[2]), x[3], u, dt_s)[mask],
+        zoh_responses(math.exp(x[0]), x[1], u, dt_s, delay_s)[mask],
+        zoh_responses(math.exp(x[2]), x[3], u, dt_s, delay_s)[mask],
     ]
-    phi = np.column_stack([*blocks, u[mask], np.ones(int(mask.sum()))])
-    beta, *_ = np.linalg.lstsq(phi, y_used, rcond=None)
+    fed = shifted(u, int(round(delay_s / dt_s)))[mask]
+    phi = np.column_stack([*blocks, fed, np.ones(int(mask.sum()))])
+    beta = least_squares_fit(phi, y_used)
     parts = [blocks[0] @ beta[0:2], blocks[1] @ beta[2:4]]
     energy = [float(p @ p) for p in parts]
     total = sum(energy) or 1.0
-    return energy[0] / total, energy[1] / total
+    return (energy[0] / total, energy[1] / total), beta
 
 
 def fit_two_modes(
@@ -118,7 +150,9 @@ def fit_two_modes(
     n_grid
         Grid points for the second mode's starting frequency.
     """
-    u = _delayed(np.asarray(u, dtype=float), int(round(single.delay_s / dt_s)))
+    u = np.asarray(u, dtype=float)
+    delay_s = single.delay_s
+    fed = shifted(u, int(round(delay_s / dt_s)))
     y = np.asarray(y, dtype=float)
     mask = np.ones(u.size, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
     y_used = y[mask]
@@ -129,13 +163,13 @@ def fit_two_modes(
         w1, z1, w2, z2 = math.exp(x[0]), x[1], math.exp(x[2]), x[3]
         phi = np.column_stack(
             [
-                _zoh_responses(w1, z1, u, dt_s)[mask],
-                _zoh_responses(w2, z2, u, dt_s)[mask],
-                u[mask],  # feedthrough: the quasi-static response of the faster modes
+                zoh_responses(w1, z1, u, dt_s, delay_s)[mask],
+                zoh_responses(w2, z2, u, dt_s, delay_s)[mask],
+                fed[mask],  # feedthrough: the quasi-static response of the faster modes
                 np.ones(int(mask.sum())),
             ]
         )
-        beta, *_ = np.linalg.lstsq(phi, y_used, rcond=None)
+        beta = least_squares_fit(phi, y_used)
         return y_used - phi @ beta
 
     w1 = min(max(single.wn_rad_s, wn_lo * 1.001), wn_hi / 1.001)
@@ -160,7 +194,7 @@ def fit_two_modes(
         diff_step=1e-6,
     )
     rss2 = float(np.sum(res.fun**2))
-    shares = _energy_shares(res.x, u, y_used, mask, dt_s)
+    shares, beta = _energy_shares(res.x, u, y_used, mask, dt_s, delay_s)
     # fit % = 100 (1 - |r| / |y - ȳ|), so the single-mode residual energy is:
     rss1 = (1.0 - single.fit_percent / 100.0) ** 2 * float(np.sum((y_used - y_used.mean()) ** 2))
     dof = max(y_used.size - 10, 1)  # 4 nonlinear + 6 linear parameters
@@ -179,6 +213,8 @@ def fit_two_modes(
                 wn_se_rad_s=float(wn * se[i]),  # d(exp x) = exp(x) dx
                 zeta_se=float(se[i + 1]),
                 energy_share=shares[k],
+                k_a=float(beta[2 * k + 1]),
+                k_b=float(beta[2 * k]),
             )
         )
     modes.sort(key=lambda m: m.wn_rad_s)

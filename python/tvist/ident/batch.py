@@ -1,0 +1,268 @@
+"""Batch identification: many excitation logs → one pose record per pose (JSON lines).
+
+1. Every log is read (:func:`~tvist.ident.logs.read_rtde_csv`, skipped samples resampled),
+   its excited joint found (:func:`excited_joint`: the joint whose target moves most) and its
+   pose taken from ``actual_q`` (:func:`~tvist.ident.pose.pose_of`).
+2. Base and shoulder logs of the same pose are paired (:func:`pair_logs`): their starting
+   poses (the measured joint angles before the first move) agree.
+3. Each pair (or a lone log) is identified (:func:`~tvist.ident.pose.identify_pose`) into the
+   record :func:`~tvist.ident.map_fit.fit_map` reads.
+
+Both passes run in parallel worker processes.
+"""
+
+from __future__ import annotations
+
+import errno
+import glob
+import math
+import os
+import warnings
+from collections.abc import Callable, Iterable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tvist.ident.local_fit import FitOptions
+from tvist.ident.logs import Record, read_rtde_csv
+from tvist.ident.pose import IDENTIFIED_JOINTS, PoseRecord, identify_pose, pose_of
+
+__all__ = [
+    "LoadedLog",
+    "PosePair",
+    "expand_logs",
+    "excited_joint",
+    "identify_logs",
+    "load_log",
+    "pair_logs",
+]
+
+#: The starting poses of a base and a shoulder log of one pose agree to this, rad.
+PAIR_TOL_RAD = 0.02
+
+
+def expand_logs(items: Iterable[str]) -> list[Path]:
+    """Files named by ``items``: paths, glob patterns, or directories (their ``*.csv``)."""
+    out: list[Path] = []
+    for item in items:
+        path = Path(item)
+        if path.is_dir():
+            found = sorted(path.glob("*.csv"))
+        elif any(c in item for c in "*?["):
+            found = sorted(Path(p) for p in glob.glob(item))
+        else:
+            if not path.exists():
+                raise FileNotFoundError(errno.ENOENT, "No such file or directory", item)
+            found = [path]
+        if not found:
+            raise ValueError(f"{item}: no CSV logs found (give files, globs or folders)")
+        out += [p for p in found if p not in out]
+    return out
+
+
+def excited_joint(record: Record) -> int:
+    """The joint the log excites: the one whose target position spans the widest range."""
+    span = np.ptp(record.target_q, axis=0)
+    return int(np.argmax(span))
+
+
+@dataclass(frozen=True)
+class LoadedLog:
+    """A log read for batch identification."""
+
+    path: Path
+    record: Record
+    joint: int
+    pose: np.ndarray
+    warnings: tuple[str, ...] = ()
+
+
+def load_log(path: Path, drop_nan: bool = False, resample: bool = True) -> LoadedLog:
+    """Read ``path`` and find its excited joint and pose (warnings are kept, not shown)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        record = read_rtde_csv(path, drop_nan=drop_nan, resample=resample)
+    return LoadedLog(
+        path=Path(path),
+        record=record,
+        joint=excited_joint(record),
+        pose=pose_of(record),
+        warnings=tuple(str(w.message) for w in caught),
+    )
+
+
+@dataclass(frozen=True)
+class PosePair:
+    """Logs of one pose: base and/or shoulder (``None`` if missing)."""
+
+    base: LoadedLog | None
+    shoulder: LoadedLog | None
+
+    @property
+    def key(self) -> str:
+        names = [log.path.stem for log in (self.base, self.shoulder) if log is not None]
+        return "+".join(names)
+
+
+def _same_pose(base: LoadedLog, shoulder: LoadedLog) -> float:
+    """Largest difference of the two logs' starting poses (rad); ``inf`` beyond
+    :data:`PAIR_TOL_RAD`."""
+    worst = float(np.max(np.abs(base.pose - shoulder.pose)))
+    return worst if worst <= PAIR_TOL_RAD else math.inf
+
+
+def pair_logs(logs: Sequence[LoadedLog]) -> tuple[list[PosePair], list[LoadedLog]]:
+    """Pair base and shoulder logs of the same pose (closest poses first).
+
+    Returns the pairs (including lone base or shoulder logs as half pairs) and the logs that
+    excite neither the base nor the shoulder.
+    """
+    bases = [log for log in logs if log.joint == 0]
+    shoulders = [log for log in logs if log.joint == 1]
+    others = [log for log in logs if log.joint not in IDENTIFIED_JOINTS]
+    candidates = sorted(
+        (_same_pose(b, s), i, k)
+        for i, b in enumerate(bases)
+        for k, s in enumerate(shoulders)
+        if math.isfinite(_same_pose(b, s))
+    )
+    used_b: set[int] = set()
+    used_s: set[int] = set()
+    pairs = []
+    for _, i, k in candidates:
+        if i in used_b or k in used_s:
+            continue
+        used_b.add(i)
+        used_s.add(k)
+        pairs.append(PosePair(bases[i], shoulders[k]))
+    pairs += [PosePair(b, None) for i, b in enumerate(bases) if i not in used_b]
+    pairs += [PosePair(None, s) for k, s in enumerate(shoulders) if k not in used_s]
+    return pairs, others
+
+
+@dataclass(frozen=True)
+class _Job:
+    robot_name: str
+    payload_kg: float
+    payload_com_m: tuple[float, float, float]
+    accel_frame: str
+    options: FitOptions
+    separate_modes: bool
+
+
+def _identify_pair(pair: PosePair, job: _Job) -> dict[str, Any]:
+    from tvist.robots import Payload, Robot, params
+
+    robot = Robot(params(job.robot_name), Payload(job.payload_kg, job.payload_com_m))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # reported when the logs were read
+        result: PoseRecord = identify_pose(
+            None if pair.base is None else pair.base.record,
+            None if pair.shoulder is None else pair.shoulder.record,
+            robot,
+            key=pair.key,
+            options=job.options,
+            separate_modes=job.separate_modes,
+            accel_frame=job.accel_frame,
+        )
+    record = result.to_dict()
+    record["logs"] = {
+        str(j): str(log.path) for j, log in ((0, pair.base), (1, pair.shoulder)) if log is not None
+    }
+    return record
+
+
+def _load_safely(path: Path, drop_nan: bool, resample: bool) -> LoadedLog | str:
+    try:
+        return load_log(path, drop_nan, resample)
+    except (ValueError, OSError) as exc:
+        return f"{path}: {exc}"
+
+
+def identify_logs(
+    paths: Sequence[Path],
+    *,
+    robot_name: str = "ur5e",
+    payload_kg: float = 0.0,
+    payload_com_m: Sequence[float] = (0.0, 0.0, 0.05),
+    accel_frame: str = "flange",
+    options: FitOptions | None = None,
+    separate_modes: bool = True,
+    drop_nan: bool = False,
+    resample: bool = True,
+    workers: int | None = None,
+    on_message: Callable[[str], None] = lambda _: None,
+    progress: bool = False,
+) -> list[dict[str, Any]]:
+    """Identify every pose in ``paths``; one record (:class:`PoseRecord` dict) per pose.
+
+    ``on_message`` receives the log warnings and the logs that were skipped (one line each).
+    ``workers`` processes (default: the number of CPUs) run the reading and the fits.
+    """
+    job = _Job(
+        robot_name=robot_name,
+        payload_kg=float(payload_kg),
+        payload_com_m=tuple(float(v) for v in payload_com_m),  # type: ignore[arg-type]
+        accel_frame=accel_frame,
+        options=options or FitOptions(),
+        separate_modes=separate_modes,
+    )
+    n_workers = max(1, int(workers or os.cpu_count() or 1))
+    bar = _Bar(len(paths), progress)
+    try:
+        with ProcessPoolExecutor(max_workers=n_workers) as pool:
+            loaded: list[LoadedLog] = []
+            futures = [pool.submit(_load_safely, p, drop_nan, resample) for p in paths]
+            for future in futures:
+                item = future.result()
+                bar.advance("read")
+                if isinstance(item, str):
+                    on_message(f"skipped {item}")
+                    continue
+                for text in item.warnings:
+                    on_message(text)
+                loaded.append(item)
+            pairs, others = pair_logs(loaded)
+            for log in others:
+                on_message(
+                    f"skipped {log.path}: it excites joint {log.joint}, not the base or shoulder"
+                )
+            bar.restart(len(pairs))
+            results = []
+            for future in [pool.submit(_identify_pair, pair, job) for pair in pairs]:
+                results.append(future.result())
+                bar.advance("identified")
+    finally:
+        bar.close()
+    return results
+
+
+class _Bar:
+    """A rich progress bar over reading and identifying (inert when disabled)."""
+
+    def __init__(self, total: int, enabled: bool) -> None:
+        self._progress = None
+        if not enabled:
+            return
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+
+        self._progress = Progress(
+            TextColumn("identify {task.fields[stage]}"), BarColumn(), MofNCompleteColumn()
+        )
+        self._task = self._progress.add_task("logs", total=total, stage="reading")
+        self._progress.start()
+
+    def advance(self, stage: str) -> None:
+        if self._progress is not None:
+            self._progress.update(self._task, advance=1)
+
+    def restart(self, total: int) -> None:
+        if self._progress is not None:
+            self._progress.reset(self._task, total=total, stage="poses")
+
+    def close(self) -> None:
+        if self._progress is not None:
+            self._progress.stop()

@@ -1,0 +1,185 @@
+"""Robots a mapping campaign runs on: the MuJoCo twin and a real UR through ur_rtde.
+
+A :class:`CampaignRobot` mounts the payload, records one excitation and, on a simulator,
+knows the true modes.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+from tvist.ident.excitation import Excitation, to_urscript
+from tvist.ident.logs import Record, read_rtde_csv
+
+__all__ = ["RECORDED_FIELDS", "CampaignRobot", "TwinRobot", "URRobot"]
+
+#: RTDE fields recorded on a real robot (what :func:`read_rtde_csv` needs, plus the pose).
+RECORDED_FIELDS = (
+    "timestamp",
+    "target_q",
+    "target_qd",
+    "target_qdd",
+    "actual_q",
+    "actual_TCP_pose",
+    "actual_tool_accelerometer",
+)
+
+
+class CampaignRobot(Protocol):
+    """What the campaign runner needs from a robot (simulated or real)."""
+
+    robot_name: str
+
+    def set_payload(self, payload_kg: float, payload_com_m: Sequence[float]) -> None:
+        """Mount (or declare) the payload for the following excitations."""
+
+    def record_excitation(self, excitation: Excitation) -> Record:
+        """Move to ``excitation.q0``, run the excitation while logging, return the log."""
+
+    def true_modes(self, q: np.ndarray) -> list[tuple[float, float]] | None:
+        """Ground-truth ``[(wn_rad_s, zeta) base, shoulder]`` if known (simulation), else None."""
+
+
+class TwinRobot:
+    """The MuJoCo twin (:class:`tvist.sim.Twin`) as a campaign robot.
+
+    Parameters
+    ----------
+    robot_name
+        Robot of the parameter file.
+    accel_noise_std
+        White noise on each accelerometer axis, m/s² (the real sensor is noisy).
+    seed
+        Seed of the accelerometer noise; combined with each excitation's seed (if it has
+        one), so each excitation's noise is reproducible on its own.
+    """
+
+    def __init__(self, robot_name: str = "ur5e", accel_noise_std: float = 0.05, seed: int = 0):
+        self.robot_name = robot_name
+        self.accel_noise_std = float(accel_noise_std)
+        self.seed = int(seed)
+        self._twin = None
+        self._payload: tuple[float, tuple[float, ...]] | None = None
+
+    def set_payload(self, payload_kg: float, payload_com_m: Sequence[float]) -> None:
+        key = (float(payload_kg), tuple(float(v) for v in payload_com_m))
+        if key == self._payload:
+            return
+        from tvist.sim import Twin
+
+        self._twin = Twin(
+            self.robot_name,
+            payload_kg=key[0],
+            payload_com_m=key[1],
+            accel_noise_std=self.accel_noise_std,
+            seed=self.seed,
+        )
+        self._payload = key
+
+    def _require_twin(self):
+        if self._twin is None:
+            raise RuntimeError("call set_payload() before running excitations")
+        return self._twin
+
+    def record_excitation(self, excitation: Excitation) -> Record:
+        # The noise of a seeded excitation depends only on (seed, excitation seed), not on
+        # which excitations this robot ran before: a pose's result must not depend on the
+        # order in which parallel workers happen to pick the poses up.
+        noise_seed = None if excitation.seed is None else [self.seed, excitation.seed]
+        sim = self._require_twin().run(excitation.q, dt_s=excitation.dt_s, noise_seed=noise_seed)
+        return Record.from_rtde_fields(sim)
+
+    def true_modes(self, q: np.ndarray) -> list[tuple[float, float]] | None:
+        return self._require_twin().modes(q)
+
+
+class URRobot:
+    """A real UR e-Series arm through ur_rtde (``pip install ur-rtde``), imported lazily.
+
+    Each excitation: ``moveJ`` to the start pose, start RTDE file recording at 500 Hz, stand
+    still, run every bang-coast-bang move as ``moveJ(q, speed, acceleration)`` followed by the
+    wait, stop recording and read the log back with :func:`read_rtde_csv`.
+
+    Make sure the workspace is clear: the campaign moves the arm through the whole workspace
+    and jerks the base and shoulder. Payload changes are manual: :meth:`set_payload` declares
+    the payload to the controller and, if ``confirm`` is given, calls it to let the operator
+    mount it first.
+
+    Parameters
+    ----------
+    ip
+        Robot address.
+    robot_name
+        Parameter-file name of the model (for the kinematics used in identification).
+    log_dir
+        Folder for the RTDE logs (kept for inspection); default a temporary folder.
+    frequency_hz
+        RTDE recording frequency (e-Series: 500 Hz).
+    confirm
+        Called with a message before each payload change (e.g. ``input``); None to skip.
+    """
+
+    def __init__(
+        self,
+        ip: str,
+        robot_name: str = "ur5e",
+        *,
+        log_dir: str | Path | None = None,
+        frequency_hz: float = 500.0,
+        confirm: Callable[[str], Any] | None = input,
+    ) -> None:
+        try:
+            import rtde_control
+            import rtde_receive
+        except ImportError as exc:  # pragma: no cover - needs the optional dependency
+            raise ImportError(
+                "a real robot needs ur_rtde: pip install 'tvist[robot]' (or ur-rtde)"
+            ) from exc
+        self.robot_name = robot_name
+        self._control = rtde_control.RTDEControlInterface(ip)
+        self._receive = rtde_receive.RTDEReceiveInterface(ip, frequency_hz)
+        self._log_dir = Path(log_dir or tempfile.mkdtemp(prefix="tvist-campaign-"))
+        self._log_dir.mkdir(parents=True, exist_ok=True)
+        self._confirm = confirm
+        self._count = 0
+
+    def set_payload(self, payload_kg: float, payload_com_m: Sequence[float]) -> None:
+        if self._confirm is not None:
+            self._confirm(
+                f"Mount a {payload_kg:g} kg payload (centre of mass {list(payload_com_m)} m in "
+                "the flange frame), then press Enter"
+            )
+        self._control.setPayload(float(payload_kg), [float(v) for v in payload_com_m])
+
+    def record_excitation(self, excitation: Excitation) -> Record:
+        c = self._control
+        c.moveJ(list(excitation.q0), 0.5, 0.5)
+        # The receive connection may still be a few packages behind the control connection
+        # that reported the move done: let it catch up so the log starts at rest.
+        time.sleep(0.1)
+        path = self._log_dir / f"excitation_{self._count:04d}_joint{excitation.joint}.csv"
+        self._count += 1
+        self._receive.startFileRecording(str(path), list(RECORDED_FIELDS))
+        try:
+            time.sleep(excitation.standstill_s)
+            q = np.array(excitation.q0, dtype=float)
+            for move in excitation.moves:
+                q[excitation.joint] = move.q_to_rad
+                c.moveJ(list(q), move.speed_rad_s, move.accel_rad_s2)
+                time.sleep(move.wait_s)
+        finally:
+            self._receive.stopFileRecording()
+        return read_rtde_csv(path, resample=True)
+
+    def true_modes(self, q: np.ndarray) -> list[tuple[float, float]] | None:
+        return None
+
+    def urscript(self, excitation: Excitation) -> str:
+        """The same excitation as a URScript program (to run from the pendant instead)."""
+        return to_urscript(excitation)

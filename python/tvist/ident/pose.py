@@ -1,0 +1,271 @@
+"""One pose of a mapping campaign: base and shoulder logs → the per-pose record.
+
+:func:`identify_pose` turns the base and the shoulder excitation logged at one pose into the
+record the campaign writes and :func:`~tvist.ident.map_fit.fit_map` reads
+(:class:`PoseRecord`, one JSON line per pose)::
+
+    {"key": "...",                      # name of the pose
+     "q": [q_0, ..., q_5],              # pose, rad
+     "payload_kg": m, "payload_com_m": [x, y, z],
+     "inertia_kg_m2": [J_0, ..., J_5],  # joint-axis inertias at q (robot model + payload)
+     "gravity_torque_nm": [τ_0, ..., τ_5],
+     "modes": [{"joint": 0, "wn_rad_s": ..., "zeta": ..., "wn_se_rad_s": ..., "zeta_se": ...,
+                "low_confidence": false, "reasons": [], "method": "two-mode", ...},
+               {"joint": 1, ...}],       # or {"joint": j, "error": "..."} if it failed
+     "error": null}
+
+plus whatever the producer adds (the campaign: ``angle_rad``, ``radius_m``, ``wrist_joint``,
+``true_modes`` on the twin).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from tvist.ident.base_mode import separate_base_mode, separated_base_mode
+from tvist.ident.local_fit import FitOptions, LocalFit, identify_local
+from tvist.ident.logs import Record, is_uniform, resample_uniform
+from tvist.ident.preprocess import quiet_samples
+
+__all__ = ["IDENTIFIED_JOINTS", "PoseRecord", "identify_pose", "pose_of"]
+
+#: Joints identified at every pose (base, shoulder).
+IDENTIFIED_JOINTS = (0, 1)
+#: Two logs are of the same pose if their starting poses agree to this, rad.
+SAME_POSE_TOL_RAD = 0.02
+_CORE_KEYS = (
+    "key",
+    "q",
+    "payload_kg",
+    "payload_com_m",
+    "inertia_kg_m2",
+    "gravity_torque_nm",
+    "modes",
+    "error",
+)
+
+
+@dataclass(frozen=True)
+class PoseRecord:
+    """Identified modes of one pose, with what the map fit needs (see the module docstring).
+
+    Attributes
+    ----------
+    key
+        Name of the pose.
+    q
+        Joint angles, rad, shape (6,) (``None``: unreachable pose).
+    payload_kg, payload_com_m
+        Payload mass (kg) and centre of mass in the flange frame (m).
+    inertia_kg_m2, gravity_torque_nm
+        Joint-axis inertias (kg m²) and gravity torques (N m) of the model at ``q``.
+    modes
+        Per identified joint: the :class:`LocalFit` or the error message (str).
+    error
+        Why the pose has no result at all (e.g. ``"unreachable"``).
+    extra
+        Further fields kept as they are (the campaign's plan coordinates, a twin's true
+        modes).
+    """
+
+    key: str
+    q: tuple[float, ...] | None
+    payload_kg: float = 0.0
+    payload_com_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    inertia_kg_m2: tuple[float, ...] | None = None
+    gravity_torque_nm: tuple[float, ...] | None = None
+    modes: dict[int, LocalFit | str] = field(default_factory=dict)
+    error: str | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def mode(self, joint: int) -> LocalFit | None:
+        """The fit of ``joint``'s mode, or ``None`` if it failed or is missing."""
+        fit = self.modes.get(joint)
+        return fit if isinstance(fit, LocalFit) else None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON-lines record (see the module docstring)."""
+        out: dict[str, Any] = {
+            "key": self.key,
+            "q": None if self.q is None else [float(v) for v in self.q],
+            "payload_kg": float(self.payload_kg),
+            "payload_com_m": [float(v) for v in self.payload_com_m],
+        }
+        if self.inertia_kg_m2 is not None:
+            out["inertia_kg_m2"] = [float(v) for v in self.inertia_kg_m2]
+        if self.gravity_torque_nm is not None:
+            out["gravity_torque_nm"] = [float(v) for v in self.gravity_torque_nm]
+        modes = []
+        for joint in sorted(self.modes):
+            fit = self.modes[joint]
+            modes.append({"joint": joint, "error": fit} if isinstance(fit, str) else fit.to_dict())
+        out["modes"] = modes
+        out["error"] = self.error
+        out.update(self.extra)
+        return out
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> PoseRecord:
+        """A record from its dict form (what :meth:`to_dict` writes)."""
+        if not isinstance(data, dict) or "key" not in data:
+            raise ValueError("a pose record is a JSON object with a 'key'")
+        modes: dict[int, LocalFit | str] = {}
+        for entry in data.get("modes", []):
+            joint = int(entry["joint"])
+            modes[joint] = str(entry["error"]) if entry.get("error") else LocalFit.from_dict(entry)
+
+        def vector(name: str) -> tuple[float, ...] | None:
+            value = data.get(name)
+            return None if value is None else tuple(float(v) for v in value)
+
+        com = vector("payload_com_m") or (0.0, 0.0, 0.0)
+        return cls(
+            key=str(data["key"]),
+            q=vector("q"),
+            payload_kg=float(data.get("payload_kg", 0.0)),
+            payload_com_m=(com[0], com[1], com[2]),
+            inertia_kg_m2=vector("inertia_kg_m2"),
+            gravity_torque_nm=vector("gravity_torque_nm"),
+            modes=modes,
+            error=data.get("error"),
+            extra={k: v for k, v in data.items() if k not in _CORE_KEYS},
+        )
+
+
+def pose_of(record: Record) -> np.ndarray:
+    """The pose a log was taken at: the median measured joint angles over its first quiet
+    stretch (an excitation starts standing at its pose and returns around it)."""
+    quiet = quiet_samples(record)
+    if not np.any(quiet):
+        return np.median(record.actual_q, axis=0)
+    start = int(np.argmax(quiet))
+    stop = start + int(np.argmin(quiet[start:])) if not quiet[start:].all() else quiet.size
+    return np.median(record.actual_q[start:stop], axis=0)
+
+
+def _check_same_pose(base_q: np.ndarray, shoulder_q: np.ndarray) -> None:
+    # Each log moves its own joint by up to ±10°; the others must agree.
+    worst = float(np.max(np.abs(base_q - shoulder_q)))
+    if worst > SAME_POSE_TOL_RAD:
+        raise ValueError(
+            f"the base and shoulder logs are not of the same pose: their starting poses "
+            f"differ by up to {worst:.3f} rad"
+        )
+
+
+def identify_pose(
+    base_record: Record | None,
+    shoulder_record: Record | None,
+    robot: Any,
+    *,
+    key: str | None = None,
+    q: np.ndarray | None = None,
+    options: FitOptions | None = None,
+    separate_modes: bool = True,
+    accel_frame: str = "flange",
+) -> PoseRecord:
+    """Identify the base and shoulder modes of one pose from its two excitation logs.
+
+    Parameters
+    ----------
+    base_record, shoulder_record
+        Logs of the base (joint 0) and shoulder (joint 1) excitation at the same pose
+        (``None``: that excitation is missing; its mode is then an error entry).
+    robot
+        Model with the payload, e.g. ``tvist.robots.ur5e(payload_kg, payload_com_m)``: the
+        kinematics for preprocessing, the inertias and gravity torques for the map.
+    key
+        Name of the pose (default from the pose's joint angles).
+    q
+        The pose, rad (default: the median measured joint angles of the base log's quiet
+        samples, :func:`pose_of`).
+    options
+        Local-fit settings.
+    separate_modes
+        Separate the base mode from the shoulder mode where the base log rings both:
+        with the shoulder log's frequency (:func:`~tvist.ident.base_mode.separated_base_mode`),
+        or, if the shoulder fit is not usable, from the base log alone
+        (:func:`~tvist.ident.base_mode.separate_base_mode`). ``False``: the paper's
+        single-mode fits.
+    accel_frame
+        Frame of the accelerometer columns (``"flange"`` or ``"base"``).
+
+    Raises
+    ------
+    ValueError
+        Both logs missing, or logs of different poses.
+    """
+    opts = options or FitOptions()
+    logs = {0: base_record, 1: shoulder_record}
+    if base_record is None and shoulder_record is None:
+        raise ValueError("identify_pose needs at least one of the base and shoulder logs")
+    poses = {j: pose_of(r) for j, r in logs.items() if r is not None}
+    if len(poses) == 2:
+        _check_same_pose(poses[0], poses[1])
+    if q is None:
+        q = poses.get(0, poses.get(1))
+    q = np.asarray(q, dtype=float)
+    payload = getattr(robot, "payload", None)
+    fits: dict[int, LocalFit] = {}
+    modes: dict[int, LocalFit | str] = {}
+    for joint in IDENTIFIED_JOINTS:
+        log = logs[joint]
+        if log is None:
+            modes[joint] = "no log"
+            continue
+        try:
+            fits[joint] = identify_local(
+                log,
+                joint,
+                robot,
+                options=opts,
+                accel_frame=accel_frame,
+                two_modes=separate_modes and joint == 0,
+                base_mode=False,
+            )
+            modes[joint] = fits[joint]
+        except (ValueError, RuntimeError) as exc:
+            modes[joint] = str(exc)
+    if separate_modes and 0 in fits:
+        base = fits[0]
+        shoulder = fits.get(1)
+        if shoulder is not None and not shoulder.low_confidence:
+            modes[0] = LocalFit.from_dict(separated_base_mode(base, shoulder, opts))
+        elif base_record is not None and not base.no_ringing:
+            modes[0] = _separate_alone(base, base_record, robot, opts, accel_frame)
+    return PoseRecord(
+        key=key or "q[" + ",".join(f"{v:.3f}" for v in q) + "]",
+        q=tuple(float(v) for v in q),
+        payload_kg=float(getattr(payload, "mass_kg", 0.0)),
+        payload_com_m=tuple(float(v) for v in getattr(payload, "com_m", (0.0, 0.0, 0.0))),  # type: ignore[arg-type]
+        inertia_kg_m2=tuple(float(v) for v in robot.joint_inertia(q)),
+        gravity_torque_nm=tuple(float(v) for v in robot.gravity_torque(q)),
+        modes=modes,
+    )
+
+
+def _separate_alone(
+    base: LocalFit, record: Record, robot: Any, opts: FitOptions, accel_frame: str
+) -> LocalFit:
+    """The base-log-only separation (used when the shoulder fit is not usable)."""
+    from tvist.ident.local_fit import interval_mean_acceleration, saturated_samples
+    from tvist.ident.preprocess import tangential_acceleration
+
+    if not is_uniform(record.t_s):
+        record, _ = resample_uniform(record)  # as identify_local did (it warned)
+    tangential = tangential_acceleration(record, 0, robot, accel_frame=accel_frame)  # type: ignore[arg-type]
+    assert tangential.accel_base is not None
+    jac = robot.jacobian_many(np.ascontiguousarray(record.actual_q))[:, :3, :2]
+    return separate_base_mode(
+        base,
+        interval_mean_acceleration(record.target_qd[:, 0], record.dt_s),
+        tangential.accel_base,
+        jac[:, :, 0],
+        jac[:, :, 1],
+        record.dt_s,
+        ~saturated_samples(record.tool_accel),
+        max_wn_rel_se=opts.max_wn_rel_se,
+    )

@@ -1,0 +1,183 @@
+"""Poses of a mapping campaign (paper Algorithm 1).
+
+The flange centre is placed at angle ``V`` (seen from the shoulder axis, in the arm's vertical
+plane: 0 = horizontal outwards, π/2 = straight up) and distance ``R`` from the shoulder axis,
+for ``V ∈ {0, π/4, π/2, 3π/4}`` and 13 values ``R = 0.4 … 0.9`` m, for every payload. In each
+pose one wrist joint (3, 4 or 5), chosen at random, is turned to a random angle; the shoulder
+and elbow are then solved (elbow up) by numerical inverse kinematics with the robot model's
+flange position and Jacobian.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize
+
+from tvist.robots import Robot, params
+
+__all__ = [
+    "PAPER_ANGLES_RAD",
+    "PAPER_PAYLOADS_KG",
+    "PAPER_RADII_M",
+    "CampaignPose",
+    "campaign_poses",
+    "plane_coordinates",
+    "solve_plane_ik",
+]
+
+#: Algorithm 1's angles of the flange seen from the shoulder, rad.
+PAPER_ANGLES_RAD: tuple[float, ...] = (0.0, math.pi / 4, math.pi / 2, 3 * math.pi / 4)
+#: Algorithm 1's 13 radii from the shoulder axis to the flange centre, 0.4 + k/24 m.
+PAPER_RADII_M: tuple[float, ...] = tuple(0.4 + k / 24 for k in range(13))
+#: The paper's payloads, kg.
+PAPER_PAYLOADS_KG: tuple[float, ...] = (0.0, 1.0, 3.0, 5.0)
+#: Wrist joints of which one is turned at random in each pose (Algorithm 1).
+WRIST_JOINTS = (3, 4, 5)
+#: Wrist angles the random joint is turned away from, rad (the paper's test poses' wrist).
+NOMINAL_WRIST_RAD = (-math.pi / 2, 0.0, 0.0)
+#: The flange must land within this distance of the target, m.
+IK_TOLERANCE_M = 1e-6
+
+# --------------------------------------------------------------------------- poses
+
+
+def _plane_axes(robot: Robot, base_angle_rad: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """Outward horizontal unit vector of the arm plane, up vector, shoulder-axis height (m)."""
+    # With q = 0 the arm is stretched along -x of the base (UR convention, a_2 < 0).
+    reach = np.array([math.cos(base_angle_rad), math.sin(base_angle_rad), 0.0])
+    if robot.params.a_m[1] < 0:
+        reach = -reach
+    return reach, np.array([0.0, 0.0, 1.0]), float(robot.params.d_m[0])
+
+
+def plane_coordinates(robot: Robot, q: np.ndarray) -> tuple[float, float]:
+    """``(V, R)``: angle (rad) and distance (m) of the flange centre from the shoulder axis."""
+    reach, up, height = _plane_axes(robot, float(q[0]))
+    p = robot.flange_pose(q)[:3, 3]
+    x, z = float(p @ reach), float(p @ up - height)
+    return math.atan2(z, x), math.hypot(x, z)
+
+
+def solve_plane_ik(
+    robot: Robot, angle_rad: float, radius_m: float, q_fixed: np.ndarray
+) -> np.ndarray | None:
+    """Shoulder and elbow angles that put the flange centre at ``(V, R)``, elbow up.
+
+    ``q_fixed`` gives the base and wrist angles (its entries 1 and 2 are ignored). Returns
+    the full pose, or ``None`` if the point is out of reach with this wrist.
+    """
+    reach, up, height = _plane_axes(robot, float(q_fixed[0]))
+    target = np.array([radius_m * math.cos(angle_rad), radius_m * math.sin(angle_rad)])
+    q = np.array(q_fixed, dtype=float)
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        q[1:3] = x
+        p = robot.flange_pose(q)[:3, 3]
+        return np.array([p @ reach, p @ up - height]) - target
+
+    def jacobian(x: np.ndarray) -> np.ndarray:
+        q[1:3] = x
+        lin = robot.jacobian(q)[:3, 1:3]
+        return np.vstack([reach @ lin, up @ lin])
+
+    # Elbow up: shoulder in (-π, 0), elbow bent in (0, π) away from its straight singularity.
+    lower, upper = [-math.pi, 0.05], [0.0, math.pi - 0.05]
+    best = None
+    for start in ([-math.pi / 2, math.pi / 2], [-math.pi / 4, 1.0], [-3 * math.pi / 4, 2.0]):
+        res = optimize.least_squares(
+            residual, start, jac=jacobian, bounds=(lower, upper), xtol=1e-14, ftol=1e-14
+        )
+        if best is None or res.cost < best.cost:
+            best = res
+    assert best is not None
+    if np.max(np.abs(best.fun)) > IK_TOLERANCE_M:
+        return None
+    q[1:3] = best.x
+    return q.copy()
+
+
+@dataclass(frozen=True)
+class CampaignPose:
+    """One pose of the campaign.
+
+    Attributes
+    ----------
+    key
+        Unique, stable name (used to resume).
+    payload_kg, payload_com_m
+        Payload in this pose.
+    angle_rad, radius_m
+        Target ``(V, R)`` of the flange centre.
+    wrist_joint
+        The wrist joint that was turned at random.
+    q
+        Joint angles, rad, shape (6,); ``None`` if unreachable.
+    seed
+        Seed of this pose's random draws (wrist and excitations).
+    """
+
+    key: str
+    payload_kg: float
+    payload_com_m: tuple[float, float, float]
+    angle_rad: float
+    radius_m: float
+    wrist_joint: int
+    q: np.ndarray | None
+    seed: int
+
+
+def campaign_poses(
+    robot_name: str = "ur5e",
+    *,
+    payloads_kg: Sequence[float] = PAPER_PAYLOADS_KG,
+    payload_com_m: Sequence[float] = (0.0, 0.0, 0.05),
+    angles_rad: Sequence[float] = PAPER_ANGLES_RAD,
+    radii_m: Sequence[float] = PAPER_RADII_M,
+    base_angle_rad: float = 0.0,
+    seed: int = 0,
+    max_wrist_draws: int = 50,
+) -> list[CampaignPose]:
+    """The poses of Algorithm 1 (208 for the defaults), payload by payload.
+
+    For each pose a wrist joint and angle are drawn (from a generator seeded by ``seed`` and
+    the pose index, so one pose does not depend on the others); if the point is out of reach
+    with that wrist, another wrist is drawn, up to ``max_wrist_draws`` times, after which the
+    pose is kept with ``q = None``.
+    """
+    com = tuple(float(v) for v in payload_com_m)
+    if len(com) != 3:
+        raise ValueError(f"payload_com_m must have 3 values, got {payload_com_m!r}")
+    robot = Robot(params(robot_name))  # kinematics only: the payload does not matter here
+    poses = []
+    index = 0
+    for payload in payloads_kg:
+        for iv, angle in enumerate(angles_rad):
+            for ir, radius in enumerate(radii_m):
+                rng = np.random.default_rng([seed, index])
+                q = None
+                wrist = WRIST_JOINTS[0]
+                for _ in range(max_wrist_draws):
+                    wrist = int(rng.choice(WRIST_JOINTS))
+                    q_fixed = np.array([base_angle_rad, 0.0, 0.0, *NOMINAL_WRIST_RAD])
+                    q_fixed[wrist] = rng.uniform(-math.pi, math.pi)
+                    q = solve_plane_ik(robot, angle, radius, q_fixed)
+                    if q is not None:
+                        break
+                poses.append(
+                    CampaignPose(
+                        key=f"m{payload:g}kg-V{iv}-R{ir}",
+                        payload_kg=float(payload),
+                        payload_com_m=com,  # type: ignore[arg-type]
+                        angle_rad=float(angle),
+                        radius_m=float(radius),
+                        wrist_joint=wrist,
+                        q=q,
+                        seed=int(rng.integers(2**31)),
+                    )
+                )
+                index += 1
+    return poses
