@@ -306,7 +306,10 @@ mod tests {
     fn every_entry_is_read_in_full_once() -> Result<(), Error> {
         let entries = ur_e_series_entries()?;
         let names: Vec<&str> = entries.iter().map(|e| e.name.as_str()).collect();
-        assert_eq!(names, ["ur3e", "ur5e", "ur10e", "ur16e", "ur20"]);
+        assert_eq!(
+            names,
+            ["ur3e", "ur5e", "ur10e", "ur16e", "ur20", "ur3", "ur5", "ur10"]
+        );
         let ur5e = ur_e_series_entry("ur5e")?;
         assert_eq!(ur5e.max_payload_kg, 5.0);
         assert_eq!(ur5e.joint_limits_rad.len(), 6);

@@ -13,7 +13,9 @@ use tvist_core::{
     Robot, ShaperKind, Status, TvShaper, TvShaperConfig,
 };
 
-const ROBOTS: [&str; 5] = ["ur3e", "ur5e", "ur10e", "ur16e", "ur20"];
+const ROBOTS: [&str; 8] = [
+    "ur3e", "ur5e", "ur10e", "ur16e", "ur20", "ur3", "ur5", "ur10",
+];
 
 fn mass_matrix(robot: &mut Robot, q: &[f64]) -> Vec<f64> {
     let n = robot.n_dof();
