@@ -12,13 +12,13 @@ import pytest
 TESTS = Path(__file__).resolve().parent
 
 
-def run_pytest(folder: Path, ci: str | None) -> subprocess.CompletedProcess:
+def run_pytest(folder: Path, ci: str | None, *files: str) -> subprocess.CompletedProcess:
     env = {k: v for k, v in os.environ.items() if k != "CI"}
     if ci is not None:
         env["CI"] = ci
     env["PYTHONPATH"] = os.pathsep.join([str(TESTS), env.get("PYTHONPATH", "")])
     return subprocess.run(
-        [sys.executable, "-m", "pytest", "-q", "-rA", "-p", "no:cacheprovider", str(folder)],
+        [sys.executable, "-m", "pytest", "-q", "-rA", "-p", "no:cacheprovider", *files],
         cwd=folder,
         env=env,
         capture_output=True,
@@ -48,22 +48,24 @@ def suite(tmp_path: Path) -> Path:
 
 
 def test_missing_dependency_skips_outside_ci(suite: Path) -> None:
-    result = run_pytest(suite, ci=None)
+    result = run_pytest(suite, None, "test_needs_module.py", "test_other.py")
     assert result.returncode == 0, result.stdout + result.stderr
     assert "1 passed, 3 skipped" in result.stdout
 
 
 @pytest.mark.parametrize("ci", ["true", "1"])
 def test_missing_dependency_fails_in_ci(suite: Path, ci: str) -> None:
-    result = run_pytest(suite, ci=ci)
-    assert result.returncode == 1, result.stdout + result.stderr
-    # The module-level import is a collection error, the one inside a test a failure; the
-    # deliberate skip stays a skip.
-    assert "1 failed, 1 passed, 1 skipped, 1 error" in result.stdout, result.stdout
-    assert "tvist_module_that_does_not_exist" in result.stdout
-    assert "tvist_other_missing_module" in result.stdout
-    assert "test dependency is missing in CI" in result.stdout
+    # A module-level import is a collection error, which stops the run (exit code 2).
+    module = run_pytest(suite, ci, "test_needs_module.py", "test_other.py")
+    assert module.returncode == 2, module.stdout + module.stderr
+    assert "ERROR test_needs_module.py - a test dependency is missing in CI" in module.stdout
+    assert "tvist_module_that_does_not_exist" in module.stdout
+    # One inside a test fails that test; the deliberate skip stays a skip.
+    inside = run_pytest(suite, ci, "test_other.py")
+    assert inside.returncode == 1, inside.stdout + inside.stderr
+    assert "1 failed, 1 passed, 1 skipped" in inside.stdout, inside.stdout
+    assert "tvist_other_missing_module" in inside.stdout
 
 
 def test_ci_false_is_not_ci(suite: Path) -> None:
-    assert run_pytest(suite, ci="false").returncode == 0
+    assert run_pytest(suite, "false", "test_needs_module.py", "test_other.py").returncode == 0
