@@ -61,14 +61,14 @@ bench: build
 # sample size per Python module. Reports: target/mutants/mutants.out, target/mutants-python.
 TOOLS := $(CURDIR)/.tools
 CARGO_MUTANTS := $(TOOLS)/bin/cargo-mutants
-MUTANTS_SHARD ?= 0/1
+MUTANTS_SHARD ?= 0/10
 PY_MUTANTS ?= 25
 
 $(CARGO_MUTANTS):
 	cargo install cargo-mutants --locked --root $(TOOLS)
 
 mutants: build $(CARGO_MUTANTS)
-	-nice -n 15 $(CARGO_MUTANTS) mutants --jobs 1 --shard $(MUTANTS_SHARD) --output target
+	-nice -n 15 $(CARGO_MUTANTS) mutants --gitignore true --jobs 1 --shard $(MUTANTS_SHARD) --sharding round-robin --output target
 	nice -n 15 $(PY) tools/python_mutants.py --per-module $(PY_MUTANTS)
 
 clean:
