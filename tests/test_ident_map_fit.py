@@ -322,3 +322,14 @@ def test_data_from_another_law_do_not_fit():
     noisy = fit_map(synthetic_poses(0, noise=0.02, law="gain_outside_root"))
     for st in noisy.metadata["fit_statistics"]["modes"]:
         assert st["frequency"]["rms_relative_error"] > 1.5 * 0.02
+
+
+def test_the_damping_factorisation_switch_needs_a_non_zero_c0():
+    """Without c_1, (c_0 + c_2 J)(1 + c_τ J) = (c_0 + c_0 c_τ J)(1 + (c_2/c_0) J): the swap to
+    the paper's branch (c_2 <= c_0 c_τ) exists only for c_0 != 0 and c_2/c_0 >= 0."""
+    from tvist.ident.map_fit import _other_branch_is_canonical
+
+    assert _other_branch_is_canonical({"c_0": 0.5, "c_2": 2.0, "c_tau": 1.0})  # 2 > 0.5
+    assert not _other_branch_is_canonical({"c_0": 0.5, "c_2": 0.2, "c_tau": 1.0})  # canonical
+    assert not _other_branch_is_canonical({"c_0": -0.5, "c_2": 2.0, "c_tau": 1.0})  # c_2/c_0 < 0
+    assert not _other_branch_is_canonical({"c_0": 0.0, "c_2": 2.0, "c_tau": 1.0})  # no swap

@@ -191,10 +191,22 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=17)
     parser.add_argument("--timeout-factor", type=float, default=3.0)
     parser.add_argument("--module", action="append", help="only these modules (repeatable)")
+    parser.add_argument(
+        "--site",
+        action="append",
+        default=[],
+        help="MODULE:INDEX, run only these mutation sites (repeatable), e.g. to re-check "
+        "survivors after adding tests",
+    )
     parser.add_argument("--out", type=Path, default=ROOT / "target" / "mutants-python")
     args = parser.parse_args(argv)
 
-    modules = {m: t for m, t in MODULES.items() if not args.module or m in args.module}
+    only: dict[str, list[int]] = {}
+    for item in args.site:
+        module, index = item.rsplit(":", 1)
+        only.setdefault(module, []).append(int(index))
+    selected = args.module or list(only)
+    modules = {m: t for m, t in MODULES.items() if not selected or m in selected}
     args.out.mkdir(parents=True, exist_ok=True)
     results: dict[str, dict] = {}
     with tempfile.TemporaryDirectory(prefix="tvist-mutants-") as tmp:
@@ -211,6 +223,8 @@ def main(argv: list[str] | None = None) -> int:
             sites = candidates(ast.parse(original))
             rng = random.Random(f"{args.seed}:{module}")
             chosen = sorted(rng.sample(range(len(sites)), min(args.per_module, len(sites))))
+            if module in only:
+                chosen = sorted(only[module])
             outcome = {"sites": len(sites), "baseline_s": baseline_s, "mutants": []}
             for index in chosen:
                 mutated, site = mutate(original, index)
@@ -224,7 +238,7 @@ def main(argv: list[str] | None = None) -> int:
                 status = run_tests(copy_root, tests, args.timeout_factor * baseline_s + 30.0)
                 target.write_text(original)
                 outcome["mutants"].append({**asdict(site), "status": status})
-                print(f"{module}:{site.line} {site.change}: {status}", flush=True)
+                print(f"{module}:{site.line} [{index}] {site.change}: {status}", flush=True)
             results[module] = outcome
     summary = []
     total_caught = total = 0
@@ -233,7 +247,11 @@ def main(argv: list[str] | None = None) -> int:
         caught = sum(m["status"] != "passed" for m in viable)
         total_caught += caught
         total += len(viable)
-        survivors = [f"{m['line']}: {m['change']}" for m in viable if m["status"] == "passed"]
+        survivors = [
+            f"{m['line']} [site {m['index']}]: {m['change']}"
+            for m in viable
+            if m["status"] == "passed"
+        ]
         summary.append(f"{module}: {caught}/{len(viable)} caught (of {outcome['sites']} sites)")
         summary.extend(f"    survived line {s}" for s in survivors)
     (args.out / "results.json").write_text(json.dumps(results, indent=2))
