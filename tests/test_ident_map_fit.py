@@ -333,3 +333,19 @@ def test_the_damping_factorisation_switch_needs_a_non_zero_c0():
     assert not _other_branch_is_canonical({"c_0": 0.5, "c_2": 0.2, "c_tau": 1.0})  # canonical
     assert not _other_branch_is_canonical({"c_0": -0.5, "c_2": 2.0, "c_tau": 1.0})  # c_2/c_0 < 0
     assert not _other_branch_is_canonical({"c_0": 0.0, "c_2": 2.0, "c_tau": 1.0})  # no swap
+
+
+def test_poorly_determined_coefficients_are_those_with_large_standard_errors():
+    """A coefficient is reported poorly determined when its standard error exceeds half its
+    value. With 2 % noise the frequency coefficients and the base damping are known to 1-3 %
+    (seed 0), while the shoulder's c_0, c_2, c_τ trade off (86-89 %, see
+    test_two_percent_noise)."""
+    stats = noisy_fit(0).metadata["fit_statistics"]["modes"]
+    for mode in stats:
+        for step in ("frequency", "damping"):
+            coefficients = mode[step]["coefficients"]
+            large = sorted(k for k, c in coefficients.items() if c["se"] >= 0.5 * abs(c["value"]))
+            assert sorted(mode[step]["poorly_determined"]) == large
+    assert stats[0]["frequency"]["poorly_determined"] == []
+    assert stats[0]["damping"]["poorly_determined"] == []
+    assert set(stats[1]["damping"]["poorly_determined"]) == {"c_0", "c_2", "c_tau"}
