@@ -444,3 +444,14 @@ def test_sensitivity_grid():
         )
     with pytest.raises(ValueError, match="1-D"):
         sensitivity_grid(imp, [[1.0]], zetas)
+
+
+def test_peak_train_ends_at_the_first_wide_gap():
+    """Vibration peaks come every half period; a peak more than 2.5 typical spacings after
+    the previous one is a noise spike past the decay and ends the train."""
+    from tvist.analysis.residual import _regular_train
+
+    train = np.array([0, 10, 20, 31, 40])
+    np.testing.assert_array_equal(_regular_train(np.append(train, 40 + 26)), train)
+    np.testing.assert_array_equal(_regular_train(np.append(train, 40 + 24)), [*train, 64])
+    np.testing.assert_array_equal(_regular_train(np.array([3, 90])), [3, 90])  # too few to judge
