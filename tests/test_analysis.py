@@ -325,6 +325,13 @@ def test_residual_vibration_rejects_bad_input():
         residual_vibration(t, a, t[-3])
     with pytest.raises(ValueError, match="baseline"):
         residual_vibration(t, a, 0.5, baseline="mean")
+    # A relative peak height is a fraction of the largest magnitude, strictly inside (0, 1).
+    for height in (0.0, 1.0, 1.2):
+        with pytest.raises(ValueError, match="min_relative_height"):
+            residual_vibration(t, a, 0.5, min_relative_height=height)
+    for fraction in (0.0, 1.01):
+        with pytest.raises(ValueError, match="tail_fraction"):
+            residual_vibration(t, a, 0.5, tail_fraction=fraction)
 
 
 @pytest.mark.parametrize("n", [1000, 1001])
