@@ -39,7 +39,7 @@ MODULES: dict[str, tuple[str, ...]] = {
     "ident/local_fit.py": ("tests/test_ident_local_fit.py",),
     "ident/map_fit.py": ("tests/test_ident_map_fit.py",),
     "analysis/residual.py": ("tests/test_analysis.py",),
-    "ztdis.py": ("tests/test_zero_delay.py",),
+    "ztdis.py": ("tests/test_zero_delay.py", "tests/test_ztdis_inputs.py"),
 }
 
 _BINOP_SWAP = {
