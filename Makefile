@@ -55,14 +55,14 @@ bench: build
 	$(PY) benches/bench_shape.py
 	$(PY) benches/bench_sim.py
 
-# Mutation testing (not part of `make test`; about an hour on 2 cores): cargo-mutants on
+# Mutation testing (not part of `make test`; see docs/mutants.md for run times): cargo-mutants on
 # tvist-core's numerical modules (.cargo/mutants.toml), then tools/python_mutants.py on the
 # Python numerics. MUTANTS_SHARD=k/n runs one n-th of the Rust mutants; PY_MUTANTS sets the
 # sample size per Python module. Reports: target/mutants/mutants.out, target/mutants-python.
 TOOLS := $(CURDIR)/.tools
 CARGO_MUTANTS := $(TOOLS)/bin/cargo-mutants
-MUTANTS_SHARD ?= 0/10
-PY_MUTANTS ?= 25
+MUTANTS_SHARD ?= 0/20
+PY_MUTANTS ?= 12
 
 $(CARGO_MUTANTS):
 	cargo install cargo-mutants --locked --root $(TOOLS)
