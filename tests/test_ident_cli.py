@@ -88,6 +88,8 @@ def test_fit_map_and_sensitivity(tmp_path, capsys):
     for got, want in zip(fitted.mode_maps, PAPER_MODES, strict=True):
         for key in ("k_j", "k_p", "c_2"):
             assert got[key] == pytest.approx(want[key], rel=1e-4), key  # exact data
+    for mode in fitted.metadata["fit_statistics"]["modes"]:
+        assert mode["frequency"]["rms_relative_error"] < 1e-9  # data of the map's own law
     figs = tmp_path / "figs"
     args = ["sensitivity", "--map", str(map_path), "--results", str(results), "--out", str(figs)]
     assert main(args) == 0
@@ -103,13 +105,11 @@ def test_fit_map_reports_data_the_map_cannot_explain(tmp_path):
     errors of several percent (measured 3-4 %) where data of the map's own law fit to ~1e-15.
     (The two-mode ZV shaper tolerates ±6 % frequency error, so the sensitivity check alone would
     not reveal it.)"""
-    for law, low, high in (("paper", 0.0, 1e-9), ("gain_outside_root", 0.02, 1.0)):
-        results = write_synthetic_results(tmp_path / f"{law}.jsonl", law=law)
-        map_path = tmp_path / f"{law}.json"
-        assert main(["fit-map", str(results), "--out", str(map_path)]) == 0
-        stats = tvist.DynamicMap.load(map_path).metadata["fit_statistics"]["modes"]
-        for mode in stats:
-            assert low <= mode["frequency"]["rms_relative_error"] <= high, law
+    results = write_synthetic_results(tmp_path / "r.jsonl", law="gain_outside_root")
+    map_path = tmp_path / "map.json"
+    assert main(["fit-map", str(results), "--out", str(map_path)]) == 0
+    for mode in tvist.DynamicMap.load(map_path).metadata["fit_statistics"]["modes"]:
+        assert mode["frequency"]["rms_relative_error"] > 0.02
 
 
 def test_fit_map_on_an_empty_file_fails_cleanly(tmp_path, capsys):
