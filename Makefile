@@ -6,7 +6,7 @@ export VIRTUAL_ENV := $(CURDIR)/$(VENV)
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml -o -name '*.json') Cargo.toml pyproject.toml
 
-.PHONY: demo test build lint fmt bench rust-test ffi-test cpp-example pytest wheel clean
+.PHONY: demo test build lint fmt bench rust-test ffi-test cpp-example pytest wheel clean mutants
 
 demo: build
 	$(PY) -m tvist.cli demo
@@ -71,6 +71,22 @@ bench: build
 	cargo bench -p tvist-core --bench step --bench map_step
 	$(PY) benches/bench_shape.py
 	$(PY) benches/bench_sim.py
+
+# Mutation testing (not part of `make test`; see docs/mutants.md for run times): cargo-mutants on
+# tvist-core's numerical modules (.cargo/mutants.toml), then tools/python_mutants.py on the
+# Python numerics. MUTANTS_SHARD=k/n runs one n-th of the Rust mutants; PY_MUTANTS sets the
+# sample size per Python module. Reports: target/mutants/mutants.out, target/mutants-python.
+TOOLS := $(CURDIR)/.tools
+CARGO_MUTANTS := $(TOOLS)/bin/cargo-mutants
+MUTANTS_SHARD ?= 0/20
+PY_MUTANTS ?= 12
+
+$(CARGO_MUTANTS):
+	cargo install cargo-mutants --locked --root $(TOOLS)
+
+mutants: build $(CARGO_MUTANTS)
+	-nice -n 15 $(CARGO_MUTANTS) mutants --gitignore true --jobs 1 --shard $(MUTANTS_SHARD) --sharding round-robin --output target
+	nice -n 15 $(PY) tools/python_mutants.py --per-module $(PY_MUTANTS)
 
 clean:
 	rm -rf $(VENV) target out dist

@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import math
+
+import numpy as np
 import pytest
 
+import tvist
 from tvist.cli import _demo_row_method, build_parser
 from tvist.demo import default_methods
 
@@ -41,3 +45,89 @@ def test_subpackages_load_on_first_access_without_heavy_imports():
         import tvist
 
         _ = tvist.not_a_subpackage
+
+
+# ---- the commands' outputs are those of the library calls they wrap ----
+
+DT_S = 0.002
+
+
+def test_zero_delay_command_prints_the_benchmark_of_the_library(tmp_path, capsys):
+    """``tvist zero-delay``: the printed table is ``format_table(run_benchmark(...))`` and the
+    plot is written; the benchmark's own numbers are checked against closed forms."""
+    from tvist.cli import main
+    from tvist.ztdis_benchmark import format_table, run_benchmark
+
+    out = tmp_path / "zero_delay.png"
+    assert main(["zero-delay", "--reference", "min_jerk", "--plot", str(out)]) == 0
+    printed = capsys.readouterr().out
+    bench = run_benchmark("min_jerk")
+    assert format_table(bench) in printed
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # ZVD of the 2.55 Hz, ζ 0.04 payload: one damped period, 1 / (2.55 √(1 − 0.04²)) s.
+    assert bench.delay_s == pytest.approx(1.0 / (2.55 * math.sqrt(1.0 - 0.04**2)), rel=1e-12)
+
+
+@pytest.fixture
+def move_file(tmp_path):
+    """A Q1 -> Q3 double-S move with 5 kg, written with a header at full precision."""
+    from tvist.trajectory import PAPER_POSES, double_s
+
+    move = double_s(PAPER_POSES["Q1"], PAPER_POSES["Q3"], dt_s=DT_S, t_pre_s=0.02, t_post_s=0.02)
+    path = tmp_path / "move.csv"
+    header = ",".join(f"q{j}" for j in range(6))
+    np.savetxt(path, move.q, delimiter=",", header=header, comments="", fmt="%.12f")
+    return path, np.loadtxt(path, delimiter=",", skiprows=1)
+
+
+@pytest.mark.parametrize("method", ["mztdis", "ztdis"])
+def test_shape_with_the_paper_map_and_zero_delay_equals_zero_delay(move_file, tmp_path, method):
+    """``tvist shape --paper-map --method (m)ztdis`` = ``zero_delay()`` with the modes of the
+    end pose, and those modes are the paper map's equations (independent transcription) at
+    the end pose's inertias."""
+    from map_reference import PAPER_MODES, modes_reference
+    from tvist.cli import main
+    from tvist.shape_command import read_joint_csv
+
+    path, q = move_file
+    out = tmp_path / "zd.csv"
+    args = ["shape", str(path), "--out", str(out), "--paper-map", "--payload-kg", "5"]
+    assert main([*args, "--payload-com", "0,0,0.05", "--method", method]) == 0
+    shaped, header = read_joint_csv(out)
+    assert header == [f"q{j}" for j in range(6)]
+    robot = tvist.robots.ur5e(5.0, (0.0, 0.0, 0.05))
+    end_modes = modes_reference(PAPER_MODES, [robot.joint_inertia(q[-1])])[0]
+    expected = tvist.zero_delay(
+        q, DT_S, end_modes, shaper="zv", method="modified" if method == "mztdis" else "ztdis"
+    )
+    # 9 decimals in the file; the map evaluations agree to ~1e-15.
+    np.testing.assert_allclose(shaped, expected.Q, rtol=0, atol=5e-10)
+    assert shaped.shape == q.shape
+    np.testing.assert_allclose(shaped[-1], q[-1], atol=1e-6)
+
+
+def test_shape_with_a_map_file_equals_the_map_driven_shaper(move_file, tmp_path, capsys):
+    """``tvist shape --map FILE`` = ``TvShaper(MapDynamics(robot, map))`` on the input padded
+    with its last sample for the end pose's ZV delay."""
+    from tvist.cli import main
+    from tvist.shape_command import read_joint_csv
+
+    path, q = move_file
+    map_path = tmp_path / "map.json"
+    tvist.DynamicMap.paper_ur5e().save(map_path)
+    out = tmp_path / "fd.csv"
+    args = ["shape", str(path), "--out", str(out), "--map", str(map_path), "--payload-kg", "5"]
+    assert main([*args, "--payload-com", "0,0,0.05"]) == 0
+    shaped, _ = read_joint_csv(out)
+    robot = tvist.robots.ur5e(5.0, (0.0, 0.0, 0.05))
+    shaper = tvist.TvShaper(
+        tvist.MapDynamics(robot, tvist.DynamicMap.paper_ur5e()), DT_S, 6, shaper="zv"
+    )
+    padded = np.vstack([q, np.repeat(q[-1:], shaped.shape[0] - q.shape[0], axis=0)])
+    np.testing.assert_allclose(shaped, shaper.shape(padded), rtol=0, atol=5e-10)
+    # The padding is the end pose's two-mode ZV delay (π/ω_d per mode) rounded up, plus one.
+    end = tvist.DynamicMap.paper_ur5e().modes(robot, q[-1])
+    delay_s = sum(math.pi / (w * math.sqrt(1 - z * z)) for w, z in end)
+    assert shaped.shape[0] - q.shape[0] == math.ceil(delay_s / DT_S - 1e-9) + 1
+    np.testing.assert_allclose(shaped[-1], q[-1], atol=5e-10)
+    assert f"(+{(shaped.shape[0] - q.shape[0]) * DT_S * 1e3:.0f} ms)" in capsys.readouterr().out

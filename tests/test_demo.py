@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import tvist
+from map_reference import PAPER_MODES, modes_reference
 from tvist.cli import build_parser, main
 from tvist.demo import default_methods, fd_tvist_map, run_demo, run_experiment
 from tvist.demo.identified import QUICK_PLAN, _prepare_cache, identify_map
@@ -17,6 +18,7 @@ from tvist.demo.measure import stop_time_s, tool_acceleration
 from tvist.demo.motions import DT_S, MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
 from tvist.sim import GRAVITY_M_S2, Twin
 from tvist.trajectory import PAPER_POSES
+from twin_calibration import TWIN_CALIBRATION
 
 ROW_KEYS = ("delay_s", "residual_vibration_m_s2", "reduction_percent", "peak_jerk_rad_s3")
 
@@ -54,7 +56,36 @@ def test_quick_demo_writes_results_report_and_figures(quick_run):
     for key, row in motion["methods"].items():
         for field in ROW_KEYS:
             assert isinstance(row[field], float) and math.isfinite(row[field]), (key, field)
-    assert len(motion["end_pose_modes"]["true"]) == 2
+    # The values: the twin's true modes at Q2 (= Q1, the base angle changes nothing) are its
+    # pinned calibration, the paper map's are its equations at Q2's inertias (independent
+    # transcription), and each f_d is ω_n √(1 − ζ²).
+    end_modes = motion["end_pose_modes"]
+    for mode, (f_hz, zeta) in zip(end_modes["true"], TWIN_CALIBRATION["Q1"], strict=True):
+        assert mode["wn_rad_s"] / (2 * math.pi) == pytest.approx(f_hz, rel=0.01)
+        assert mode["zeta"] == pytest.approx(zeta, rel=0.01)
+    robot = tvist.robots.ur5e(PAYLOAD_KG, PAYLOAD_COM_M)
+    paper = modes_reference(PAPER_MODES, [robot.joint_inertia(PAPER_POSES["Q2"])])[0]
+    got = [(m["wn_rad_s"], m["zeta"]) for m in end_modes["FD-TVIST ZV, paper map"]]
+    np.testing.assert_allclose(got, paper, rtol=1e-9)
+    for modes in end_modes.values():
+        for m in modes:
+            f_d = m["wn_rad_s"] * math.sqrt(1 - m["zeta"] ** 2) / (2 * math.pi)
+            assert m["f_d_hz"] == pytest.approx(f_d, rel=1e-12)
+    # Reductions are relative to the unshaped residual vibration; the report's table prints
+    # the rows of results.json.
+    rows = motion["methods"]
+    baseline = rows["unshaped"]["residual_vibration_m_s2"]
+    for key, row in rows.items():
+        if key != "unshaped":
+            want = 100.0 * (1.0 - row["residual_vibration_m_s2"] / baseline)
+            assert row["reduction_percent"] == pytest.approx(want, rel=1e-12), key
+        cells = (
+            f"| {row['label']} | {1e3 * row['delay_s']:.0f} |",
+            f"| {row['residual_vibration_m_s2']:.4f} |",
+            f"| {row['peak_jerk_rad_s3']:.0f} |",
+        )
+        line = next(x for x in report.splitlines() if x.startswith(f"| {row['label']} |"))
+        assert all(cell in line for cell in cells), (line, cells)
     assert motion["analytic_zv_delay_s"] > 0.0
 
 
@@ -128,6 +159,22 @@ def test_cli_keeps_the_linear_plant_demo(tmp_path):
     assert main(["demo", "--linear", "--quick", "--out", str(tmp_path)]) == 0
     rows = json.loads((tmp_path / "results.json").read_text())
     assert [r["method"] for r in rows] == ["unshaped", "fd-tvist zv"]
+    unshaped, shaped = rows
+    # The plant's modes (8 Hz, ζ 0.26; 6.9 Hz, ζ 0.37) drive the two-mode ZV shaper: its
+    # delay is half a damped period of each, Σ π / (ω_n √(1 − ζ²)) = 142.7 ms.
+    delay = sum(1.0 / (2.0 * f * math.sqrt(1.0 - z * z)) for f, z in ((8.0, 0.26), (6.9, 0.37)))
+    assert shaped["delay_s"] == pytest.approx(delay, rel=1e-9)
+    # Shaped with the plant's exact modes, the ringing is gone up to the discretisation
+    # (measured 3e-5 of the unshaped residual vibration, 3.6 rad/s²).
+    assert unshaped["residual_vibration_m_s2"] > 1.0
+    assert shaped["residual_vibration_m_s2"] < 1e-3 * unshaped["residual_vibration_m_s2"]
+    ratio = shaped["residual_vibration_m_s2"] / unshaped["residual_vibration_m_s2"]
+    assert shaped["reduction_percent"] == pytest.approx(100.0 * (1.0 - ratio), rel=1e-12)
+    # The double-S move's jerk limit is a_max / jerk_time = 2 / 0.02 = 100 rad/s³; the ZV
+    # impulses are positive and sum to 1, so the shaped move's jerk is at most that.
+    assert unshaped["peak_jerk_rad_s3"] == pytest.approx(100.0, rel=1e-6)
+    assert 0.0 < shaped["peak_jerk_rad_s3"] <= unshaped["peak_jerk_rad_s3"]
+    assert (tmp_path / "linear_demo_acceleration.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_an_identified_map_becomes_a_row_and_a_failed_one_is_reported(tmp_path, monkeypatch):

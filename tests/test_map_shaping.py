@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import tvist
+from map_reference import PAPER_MODES, modes_reference
 from map_smoothing_reference import smooth_abs_torque, soft_clamp
 from tvist.analysis.metrics import peak_jerk
 from tvist.trajectory import PAPER_POSES, double_s
@@ -20,19 +21,10 @@ def _ur5e_5kg() -> tvist.robots.Robot:
 
 
 def _zv_delay_s(robot: tvist.robots.Robot, q: np.ndarray) -> float:
-    """Two-mode ZV delay pi/w_d0 + pi/w_d1 at q, from the robot's J and eqs. 47-48, 50-51."""
-    j0, j1 = robot.joint_inertia(q)[:2]
-    k_b, k_s = 10000.0 + 1060.0 * j1, 10000.0 + 763.0 * j1
-    wn0 = np.sqrt(1 + 2.54 / j1) * np.sqrt(k_b / j1)
-    z0 = (
-        (1 + 2.54 / j0)
-        * (1.53 + 0.39 * j0)
-        * (1 + 3.81 * j0)
-        / (2 * np.sqrt(k_b * j1) * np.sqrt(1 + 2.54 / j1))
-    )
-    wn1 = np.sqrt(1 + 1.73 / j1) * np.sqrt(k_s / j1)
-    z1 = np.sqrt(1 + 1.73 / j1) * (0.27 + 0.038 * j1) * (1 + 47.2 * j1) / (2 * np.sqrt(k_s * j1))
-    return np.pi / (wn0 * np.sqrt(1 - z0**2)) + np.pi / (wn1 * np.sqrt(1 - z1**2))
+    """Two-mode ZV delay pi/w_d0 + pi/w_d1 at q, from the robot's J and eqs. 47-48, 50-51
+    (the independent transcription in tests/map_reference.py)."""
+    modes = modes_reference(PAPER_MODES, [robot.joint_inertia(q)])[0]
+    return float(sum(np.pi / (wn * np.sqrt(1 - zeta**2)) for wn, zeta in modes))
 
 
 def _end_of_motion_s(q: np.ndarray, q_end: np.ndarray, tol_rad: float) -> float:
@@ -81,9 +73,10 @@ def test_map_dynamics_reports_modes_bounds_and_pose_count():
     assert provider.n_dof == 6 and provider.n_modes == 2
     assert tvist.MapDynamics.validation_poses >= 1000
     modes = provider.modes(Q1)
-    np.testing.assert_allclose(
-        modes, tvist.DynamicMap.paper_ur5e().modes(robot, Q1), rtol=0, atol=0
-    )
+    # The paper map's equations at Q1's inertias (independent transcription): same formulas,
+    # different operation order, ~1e-15 relative.
+    reference = modes_reference(PAPER_MODES, [robot.joint_inertia(Q1)])[0]
+    np.testing.assert_allclose(modes, reference, rtol=1e-12)
     for (wn_lo, zeta_hi), (wn, zeta) in zip(provider.slowest_modes, modes, strict=True):
         assert wn_lo <= wn and zeta_hi >= zeta
 
