@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import tvist
+from map_reference import PAPER_MODES, modes_reference
 from map_smoothing_reference import (
     RANGE_BLEND_WIDTH,
     smooth_abs_torque,
@@ -25,25 +26,9 @@ def _damped_hz(wn_rad_s: float, zeta: float) -> float:
 
 
 def _paper_modes_reference(j0: float, j1: float) -> list[tuple[float, float]]:
-    """Eqs. 47-48 (base, as printed: (1 + k_p/J_0) without a root) and eqs. 50-51 (shoulder)."""
-    b, s = BASE, SHOULDER
-    k_b = b["k_0"] + b["k_j"] * j1
-    wn0 = np.sqrt(1 + b["k_p"] / j1) * np.sqrt(k_b / j1)
-    z0 = (
-        (1 + b["k_p"] / j0)
-        * (b["c_0"] + b["c_2"] * j0)
-        * (1 + b["c_tau"] * j0)
-        / (2 * np.sqrt(k_b * j1) * np.sqrt(1 + b["k_p"] / j1))
-    )
-    k_s = s["k_0"] + s["k_j"] * j1
-    wn1 = np.sqrt(1 + s["k_p"] / j1) * np.sqrt(k_s / j1)
-    z1 = (
-        np.sqrt(1 + s["k_p"] / j1)
-        * (s["c_0"] + s["c_2"] * j1)
-        * (1 + s["c_tau"] * j1)
-        / (2 * np.sqrt(k_s * j1))
-    )
-    return [(wn0, z0), (wn1, z1)]
+    """Eqs. 47-48 (base, as printed) and 50-51 (shoulder) from the independent transcription."""
+    modes = modes_reference(PAPER_MODES, [[j0, j1]])[0]
+    return [(float(wn), float(zeta)) for wn, zeta in modes]
 
 
 @pytest.mark.parametrize(

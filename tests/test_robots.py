@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 import tvist
+from pinocchio_reference import pinocchio_model
 from tvist.robots import Payload, Robot, RobotParams, _cylinders, names, params
 from tvist.trajectory import PAPER_POSES
 
@@ -29,28 +30,6 @@ PAYLOADS = [
     Payload(2.3, (0.03, -0.02, 0.08), (0.010, 0.012, 0.008, 0.001, -0.0005, 0.0007)),
 ]
 Q1, Q2, Q3 = PAPER_POSES["Q1"], PAPER_POSES["Q2"], PAPER_POSES["Q3"]
-
-
-def _fixed_dh(d: float, a: float, alpha: float):
-    return pin.SE3(pin.utils.rotate("x", alpha), np.array([a, 0.0, d]))
-
-
-def _pinocchio_model(p: RobotParams, payload: Payload):
-    model = pin.Model()
-    parent, placement = 0, pin.SE3.Identity()
-    for i in range(p.n_dof):
-        joint = model.addJoint(parent, pin.JointModelRZ(), placement, f"joint_{i}")
-        to_link = _fixed_dh(p.d_m[i], p.a_m[i], p.alpha_rad[i])
-        link = pin.Inertia(p.mass_kg[i], p.com_m[i], p.inertia_tensors_kg_m2[i])
-        model.appendBodyToJoint(joint, to_link.act(link), pin.SE3.Identity())
-        parent, placement = joint, to_link
-    if payload.mass_kg > 0:
-        six = np.zeros(6) if payload.inertia_kg_m2 is None else payload.inertia_kg_m2
-        tensor = tvist.robots.inertia_tensor(six)
-        body = pin.Inertia(payload.mass_kg, np.asarray(payload.com_m), tensor)
-        model.appendBodyToJoint(parent, placement.act(body), pin.SE3.Identity())
-    flange = model.addFrame(pin.Frame("flange", parent, placement, pin.FrameType.OP_FRAME))
-    return model, flange
 
 
 def _random_poses(n_dof: int, seed: int) -> np.ndarray:
@@ -300,7 +279,7 @@ def test_model_matches_pinocchio(name, payload_index):
     payload = PAYLOADS[payload_index]
     p = params(name)
     robot = Robot(p, payload)
-    model, flange = _pinocchio_model(p, payload)
+    model, flange = pinocchio_model(p, payload)
     data = model.createData()
     qs = _random_poses(p.n_dof, seed=10 * names().index(name) + payload_index)
     mass = robot.mass_matrix_many(qs)
@@ -430,7 +409,7 @@ def test_a_seven_joint_arm_matches_pinocchio():
     )
     payload = Payload(1.5, (0.0, 0.02, 0.1))
     robot = Robot.from_params(p, payload)
-    model, flange = _pinocchio_model(p, payload)
+    model, flange = pinocchio_model(p, payload)
     data = model.createData()
     qs = rng.uniform(-np.pi, np.pi, (200, n))
     for q, m, g, j in zip(
