@@ -13,22 +13,75 @@ Modules: ``logs``, ``excitation``, ``preprocess``, ``zoh``, ``local_fit``, ``two
 
 from __future__ import annotations
 
-from tvist.ident.campaign import (
-    CampaignPose,
-    TwinRobot,
-    URRobot,
-    campaign_poses,
-    load_results,
-    run_campaign,
-)
-from tvist.ident.excitation import BangCoastBangMove, Excitation, random_excitation, to_urscript
-from tvist.ident.local_fit import FitOptions, LocalFit, fit_local, identify_local
-from tvist.ident.logs import LogWarning, Record, find_gaps, read_rtde_csv
-from tvist.ident.map_fit import ModeSpec, fit_map
-from tvist.ident.pose import PoseRecord, identify_pose
-from tvist.ident.preprocess import TangentialAcceleration, tangential_acceleration
-from tvist.ident.robustness import evaluate_map, prv_band, summarize, two_mode_shaper
-from tvist.ident.two_mode import TwoModeFit, fit_two_modes
+import importlib
+from typing import TYPE_CHECKING
+
+#: Public name -> the module that defines it. Each module loads on first access, so
+#: ``import tvist.ident.cli`` (every ``tvist`` command) does not pay for scipy.stats etc.
+_EXPORTS: dict[str, str] = {
+    "BangCoastBangMove": "tvist.ident.excitation",
+    "CampaignPose": "tvist.ident.campaign",
+    "Excitation": "tvist.ident.excitation",
+    "FitOptions": "tvist.ident.local_fit",
+    "LocalFit": "tvist.ident.local_fit",
+    "LogWarning": "tvist.ident.logs",
+    "ModeSpec": "tvist.ident.map_fit",
+    "PoseRecord": "tvist.ident.pose",
+    "Record": "tvist.ident.logs",
+    "TangentialAcceleration": "tvist.ident.preprocess",
+    "TwinRobot": "tvist.ident.campaign",
+    "TwoModeFit": "tvist.ident.two_mode",
+    "URRobot": "tvist.ident.campaign",
+    "campaign_poses": "tvist.ident.campaign",
+    "evaluate_map": "tvist.ident.robustness",
+    "find_gaps": "tvist.ident.logs",
+    "fit_local": "tvist.ident.local_fit",
+    "fit_map": "tvist.ident.map_fit",
+    "fit_two_modes": "tvist.ident.two_mode",
+    "identify_local": "tvist.ident.local_fit",
+    "identify_pose": "tvist.ident.pose",
+    "load_results": "tvist.ident.campaign",
+    "prv_band": "tvist.ident.robustness",
+    "random_excitation": "tvist.ident.excitation",
+    "read_rtde_csv": "tvist.ident.logs",
+    "run_campaign": "tvist.ident.campaign",
+    "summarize": "tvist.ident.robustness",
+    "tangential_acceleration": "tvist.ident.preprocess",
+    "to_urscript": "tvist.ident.excitation",
+    "two_mode_shaper": "tvist.ident.robustness",
+}
+
+if TYPE_CHECKING:
+    from tvist.ident.campaign import (
+        CampaignPose,
+        TwinRobot,
+        URRobot,
+        campaign_poses,
+        load_results,
+        run_campaign,
+    )
+    from tvist.ident.excitation import BangCoastBangMove, Excitation, random_excitation, to_urscript
+    from tvist.ident.local_fit import FitOptions, LocalFit, fit_local, identify_local
+    from tvist.ident.logs import LogWarning, Record, find_gaps, read_rtde_csv
+    from tvist.ident.map_fit import ModeSpec, fit_map
+    from tvist.ident.pose import PoseRecord, identify_pose
+    from tvist.ident.preprocess import TangentialAcceleration, tangential_acceleration
+    from tvist.ident.robustness import evaluate_map, prv_band, summarize, two_mode_shaper
+    from tvist.ident.two_mode import TwoModeFit, fit_two_modes
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'tvist.ident' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_EXPORTS))
+
 
 __all__ = [
     "BangCoastBangMove",
