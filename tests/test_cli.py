@@ -92,13 +92,19 @@ def test_shape_with_the_paper_map_and_zero_delay_equals_zero_delay(move_file, tm
     path, q = move_file
     out = tmp_path / "zd.csv"
     args = ["shape", str(path), "--out", str(out), "--paper-map", "--payload-kg", "5"]
-    assert main([*args, "--payload-com", "0,0,0.05", "--method", method]) == 0
+    assert main([*args, "--payload-com", "0", "0", "0.05", "--method", method]) == 0
     shaped, header = read_joint_csv(out)
     assert header == [f"q{j}" for j in range(6)]
     robot = tvist.robots.ur5e(5.0, (0.0, 0.0, 0.05))
     end_modes = modes_reference(PAPER_MODES, [robot.joint_inertia(q[-1])])[0]
+    # The command's fractional delays are linear, as for FD-TVIST (tvist.trajectory.shape_samples).
     expected = tvist.zero_delay(
-        q, DT_S, end_modes, shaper="zv", method="modified" if method == "mztdis" else "ztdis"
+        q,
+        DT_S,
+        end_modes,
+        shaper="zv",
+        method="modified" if method == "mztdis" else "ztdis",
+        interp="linear",
     )
     # 9 decimals in the file; the map evaluations agree to ~1e-15.
     np.testing.assert_allclose(shaped, expected.Q, rtol=0, atol=5e-10)
@@ -117,7 +123,7 @@ def test_shape_with_a_map_file_equals_the_map_driven_shaper(move_file, tmp_path,
     tvist.DynamicMap.paper_ur5e().save(map_path)
     out = tmp_path / "fd.csv"
     args = ["shape", str(path), "--out", str(out), "--map", str(map_path), "--payload-kg", "5"]
-    assert main([*args, "--payload-com", "0,0,0.05"]) == 0
+    assert main([*args, "--payload-com", "0", "0", "0.05"]) == 0
     shaped, _ = read_joint_csv(out)
     robot = tvist.robots.ur5e(5.0, (0.0, 0.0, 0.05))
     shaper = tvist.TvShaper(

@@ -122,5 +122,7 @@ def test_identify_usage_errors_are_one_line(campaign_logs, tmp_path, capsys):
     assert main(["identify", str(folder)]) == 2  # many logs need --out
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"tvist identify: error: {2 * len(KEYS)} logs: name the results file with --out"]
-    with pytest.raises(FileNotFoundError):  # reported on one line by tvist.cli.main
-        main(["fit-map", str(tmp_path / "none.jsonl")])
+    missing = tmp_path / "none.jsonl"
+    assert main(["fit-map", str(missing)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("tvist fit-map: error: ") and str(missing) in err[0]
