@@ -72,8 +72,11 @@ def test_an_extra_field_in_one_row_is_refused_naming_the_row(tmp_path):
     # The shifted row would read target_q = [.., 9.99, ..] and move every later column by one.
     rec = make_record()
     path = write_edited(tmp_path, rec, lambda lines: insert_field_in_row(lines, 7, 2))
-    with pytest.raises(LogFormatError, match=r"data row 7 \(line 9\) has 35 fields, the header "
-                       r"has 34") as caught:
+    with pytest.raises(
+        LogFormatError,
+        match=r"data row 7 \(line 9\) has 35 fields, the header "
+        r"has 34",
+    ) as caught:
         read_rtde_csv(path)
     assert str(path) in str(caught.value)
     assert isinstance(caught.value, ValueError)
@@ -141,8 +144,11 @@ def test_a_cell_that_is_not_a_number_is_named(tmp_path):
         return lines
 
     path = write_edited(tmp_path, rec, edit)
-    with pytest.raises(LogFormatError, match=r"data row 5 \(line 7\) column 'target_q_2' holds "
-                       r"'1_000', not a number"):
+    with pytest.raises(
+        LogFormatError,
+        match=r"data row 5 \(line 7\) column 'target_q_2' holds "
+        r"'1_000', not a number",
+    ):
         read_rtde_csv(path)
 
 
@@ -169,8 +175,9 @@ def duplicate_column(lines, name: str, values: str):
 def test_a_duplicated_column_is_refused_naming_it(tmp_path):
     rec = make_record()
     path = write_edited(tmp_path, rec, lambda lines: duplicate_column(lines, "actual_q_3", "other"))
-    with pytest.raises(LogFormatError, match=r"column 'actual_q_3' appears 2 times \(fields 23, 35\)"
-                       ) as caught:
+    with pytest.raises(
+        LogFormatError, match=r"column 'actual_q_3' appears 2 times \(fields 23, 35\)"
+    ) as caught:
         read_rtde_csv(path)
     assert str(path) in str(caught.value)
     assert "line 1 (the header)" in str(caught.value)
@@ -288,8 +295,11 @@ def test_resampling_a_time_jump_is_refused_above_the_grid_cap(tmp_path):
     rec = make_record(n=40)
     t = np.r_[rec.t_s[:20], rec.t_s[20:] + 1e6]
     path = with_times(rec, t).to_csv(tmp_path / "jump.csv", fmt="ur_client")
-    with pytest.raises(ValueError, match=r"resampling would build 500000040 samples .*limit "
-                       r"10000000.*before data row 20.*split the log at its time jump"):
+    with pytest.raises(
+        ValueError,
+        match=r"resampling would build 500000040 samples .*limit "
+        r"10000000.*before data row 20.*split the log at its time jump",
+    ):
         read_rtde_csv(path, resample=True)
     with pytest.warns(LogWarning, match="left as is"):  # without resampling: only reported
         assert read_rtde_csv(path).n_samples == 40
@@ -317,7 +327,9 @@ def test_resampling_cells_too_large_to_interpolate_is_refused(tmp_path):
         actual_TCP_pose=rec.actual_TCP_pose,
     ).select(np.r_[0:10, 13:40])  # 3 samples skipped between ±1.7e308
     path = gappy.to_csv(tmp_path / "big.csv", fmt="ur_client")
-    with pytest.raises(ValueError, match=r"cannot resample: actual_q_2 is -1.7e\+308 at data row 9"):
+    with pytest.raises(
+        ValueError, match=r"cannot resample: actual_q_2 is -1.7e\+308 at data row 9"
+    ):
         read_rtde_csv(path, resample=True)
     # Read without resampling, the cells come back exactly as written.
     with pytest.warns(LogWarning, match="left as is"):

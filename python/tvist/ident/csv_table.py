@@ -246,7 +246,7 @@ def _parse_cells(
 ) -> tuple[list[float] | None, str]:
     """The wanted cells of one row as floats, or ``(None, reason)`` naming the first bad cell."""
     out = []
-    for i, name in zip(use, wanted):
+    for i, name in zip(use, wanted, strict=True):
         cell = fields[i]
         try:
             if "_" in cell:
