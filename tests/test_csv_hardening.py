@@ -246,9 +246,12 @@ def test_a_byte_that_is_not_text_is_named_with_file_and_row(tmp_path):
     assert str(path) in message
     assert "data row 6 (line 8)" in message
     assert "byte 0xe9 at character 11 is not ASCII" in message
-    with pytest.warns(LogWarning, match=r"dropped 1 malformed row\(s\): data row 6"):
+    with pytest.warns(LogWarning) as caught:
         back = read_rtde_csv(path, repair="drop-bad-rows")
-    assert back.n_samples == rec.n_samples - 1
+    messages = [str(w.message) for w in caught]
+    assert any("dropped 1 malformed row(s): data row 6 (line 8)" in m for m in messages)
+    assert any("skipped sample(s) before data row(s) 7" in m for m in messages)  # its hole
+    assert_same(back, rec.select(np.delete(np.arange(rec.n_samples), 6)), ATOL_6DP)
 
 
 def test_a_header_that_is_not_utf8_is_named(tmp_path):
@@ -350,3 +353,15 @@ def test_identify_reports_a_malformed_row_on_one_line(tmp_path, capsys):
     assert len(err) == 1
     assert err[0].startswith("tvist identify: error: ")
     assert f"{path}: data row 3 (line 5) has 35 fields" in err[0]
+
+
+def test_text_in_an_unused_column_is_ignored(tmp_path):
+    rec = make_record()
+
+    def edit(lines):
+        return [
+            line + (",robot_state" if i == 0 else ",RUNNING_NORMAL") for i, line in enumerate(lines)
+        ]
+
+    path = write_edited(tmp_path, rec, edit)
+    assert_same(read_rtde_csv(path), rec, ATOL_6DP)

@@ -123,9 +123,10 @@ def _decode_data_line(line: bytes | str) -> tuple[str | None, str]:
 
 
 def _split(text: str, sep: str) -> list[str]:
-    """Fields of one line; trailing empty fields (a trailing separator) are removed."""
-    fields = [f.strip() for f in text.split(",")] if sep == "," else text.split()
-    while fields and not fields[-1]:
+    """Fields of one line (surrounding blanks kept: ``float`` ignores them); trailing empty
+    fields (a trailing separator) are removed."""
+    fields = text.split(",") if sep == "," else text.split()
+    while fields and not fields[-1].strip():
         fields.pop()
     return fields
 
@@ -182,7 +183,7 @@ def read_table(
         sep = separator(header)
     except ValueError as exc:
         raise LogFormatError(f"{path}: line {header_at + 1}: {exc}") from None
-    names = _split(header, sep)
+    names = [name.strip() for name in _split(header, sep)]
 
     where: dict[str, list[int]] = {}
     for i, name in enumerate(names):
@@ -218,7 +219,7 @@ def read_table(
             if len(fields) != len(names):
                 reason = f"has {len(fields)} fields, the header has {len(names)}"
             else:
-                parsed, reason = _parse_cells(fields, use, wanted)
+                parsed, reason = _parse_cells(text, fields, use, wanted)
         if parsed is None:
             if "drop-bad-rows" not in repairs:
                 raise LogFormatError(
@@ -242,16 +243,22 @@ def read_table(
 
 
 def _parse_cells(
-    fields: list[str], use: list[int], wanted: list[str]
+    text: str, fields: list[str], use: list[int], wanted: list[str]
 ) -> tuple[list[float] | None, str]:
-    """The wanted cells of one row as floats, or ``(None, reason)`` naming the first bad cell."""
+    """The wanted cells of one row (``text`` split into ``fields``) as floats, or
+    ``(None, reason)`` naming the first bad cell."""
+    if "_" not in text:  # fast path: every wanted cell parses
+        try:
+            return [float(fields[i]) for i in use], ""
+        except ValueError:
+            pass
     out = []
     for i, name in zip(use, wanted, strict=True):
         cell = fields[i]
         try:
-            if "_" in cell:
+            if "_" in cell:  # float() would read "1_0" as 10
                 raise ValueError
             out.append(float(cell))
         except ValueError:
-            return None, f"column {name!r} holds {cell[:40]!r}, not a number"
-    return out, ""
+            return None, f"column {name!r} holds {cell.strip()[:40]!r}, not a number"
+    return out, ""  # the "_" was in a column that is not wanted
