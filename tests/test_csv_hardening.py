@@ -93,7 +93,7 @@ def test_a_missing_field_is_refused_in_the_space_separated_format(tmp_path):
         return lines
 
     path = write_edited(tmp_path, rec, drop_field, fmt="ur_client")
-    with pytest.raises(ValueError, match=r"data row 4 \(line 6\) has 33 fields"):
+    with pytest.raises(LogFormatError, match=r"data row 4 \(line 6\) has 33 fields"):
         read_rtde_csv(path)
 
 
@@ -130,7 +130,7 @@ def test_row_numbers_after_a_repair_are_those_of_the_file(tmp_path):
         return lines
 
     path = write_edited(tmp_path, rec, edit)
-    with pytest.warns(LogWarning), pytest.raises(ValueError, match="backwards at data row 11"):
+    with pytest.warns(LogWarning), pytest.raises(LogFormatError, match="backwards at data row 11"):
         read_rtde_csv(path, repair="drop-bad-rows")
 
 
@@ -289,7 +289,7 @@ def test_a_last_timestamp_of_1e308_is_a_value_error(tmp_path):
     t[-1] = 1e308
     path = with_times(rec, t).to_csv(tmp_path / "huge_t.csv", fmt="ur_client")
     for resample in (False, True):
-        with pytest.raises(ValueError, match=r"more than 2\^53 periods.*data row 49"):
+        with pytest.raises(LogFormatError, match=r"more than 2\^53 periods.*data row 49"):
             read_rtde_csv(path, resample=resample)
 
 
@@ -312,7 +312,7 @@ def test_all_equal_timestamps_are_a_value_error(tmp_path):
     rec = make_record(n=10)
     path = with_times(rec, np.full(10, 5.0)).to_csv(tmp_path / "flat.csv", fmt="ur_client")
     with pytest.warns(LogWarning, match="repeated timestamp"):
-        with pytest.raises(ValueError, match="timestamps do not advance"):
+        with pytest.raises(LogFormatError, match="timestamps do not advance"):
             read_rtde_csv(path)
 
 

@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, assume, event, given, settings
 from hypothesis import strategies as st
 
 import tvist
-from tvist.ident.logs import Record, read_rtde_csv
+from tvist.ident.logs import LogFormatError, Record, read_rtde_csv
 
 # Reproducible in CI: a fixed search (derandomize), no example database written to disk, no
 # per-example time limit (the machine is shared; time is not what is tested).
@@ -86,6 +86,12 @@ def assert_same(expected: Record, got: Record, atol: float) -> None:
             np.testing.assert_array_equal(b, a)
         else:
             np.testing.assert_allclose(b, a, atol=atol, rtol=1e-15)
+
+
+def assert_names_the_file(error: ValueError, path) -> None:
+    """Every refusal of a log is a :class:`LogFormatError` whose message starts with the file."""
+    assert isinstance(error, LogFormatError), repr(error)
+    assert str(error).startswith(f"{path}: "), str(error)
 
 
 def _read_quietly(path, **kwargs) -> Record:
@@ -186,7 +192,8 @@ def test_csv_mutations_are_refused_or_read_as_the_repaired_input(tmp_path, data,
     # Without a repair option: a ValueError, or (the defect changed no number) the input.
     try:
         back = _read_quietly(path)
-    except ValueError:
+    except ValueError as e:
+        assert_names_the_file(e, path)
         event("refused without repair")
     else:
         # Only a garbage byte that changed no field can pass (e.g. a tab next to a separator).
@@ -205,7 +212,8 @@ def test_csv_mutations_are_refused_or_read_as_the_repaired_input(tmp_path, data,
         repaired_input = rec.select(np.delete(np.arange(rec.n_samples), where))
     try:
         back = _read_quietly(path, **kwargs)
-    except ValueError:
+    except ValueError as e:
+        assert_names_the_file(e, path)
         # Only when no repair applies: fewer than 2 rows left, or a damaged header.
         assert (
             repaired_input.n_samples < 2
@@ -250,6 +258,7 @@ def test_csv_extreme_numbers_never_give_other_errors_or_non_finite_output(
     try:
         back = _read_quietly(path, resample=resample)
     except ValueError as _e:
+        assert_names_the_file(_e, path)
         event("refused")
         return
     for a in _arrays(back):

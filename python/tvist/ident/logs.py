@@ -228,7 +228,11 @@ def _resample_uniform(record: Record) -> Record:
 
 
 def read_rtde_csv(
-    path: str | Path, *, repair: str | None = None, drop_nan: bool = False, resample: bool = False
+    path: str | Path,
+    *,
+    repair: str | tuple[str, ...] | None = None,
+    drop_nan: bool = False,
+    resample: bool = False,
 ) -> Record:
     """Read a UR RTDE log written by ur_rtde or by UR's ``record.py`` (format auto-detected).
 
@@ -256,11 +260,13 @@ def read_rtde_csv(
     Raises
     ------
     LogFormatError
-        (a ``ValueError``) Unknown format, missing or repeated columns, malformed rows or
-        undecodable bytes (unless repaired); the message names the file and the row.
+        (a ``ValueError``; the message names the file and, where one is at fault, the row)
+        Unknown format, missing or repeated columns, malformed rows or undecodable bytes
+        (unless repaired), NaN rows (unless ``drop_nan``), timestamps that go backwards, do
+        not advance or are corrupt, fewer than 2 samples, or a resampling grid over the cap or
+        cells too large to interpolate.
     ValueError
-        NaN rows (unless ``drop_nan``), timestamps that go backwards, do not advance or are
-        corrupt, fewer than 2 samples, or a resampling grid over the cap.
+        An unknown ``repair`` option.
     """
     path = Path(path)
     required = ["timestamp"]
@@ -299,7 +305,7 @@ def read_rtde_csv(
     bad = np.flatnonzero(~np.all(np.isfinite(take(used)), axis=1))
     if bad.size:
         if not drop_nan:
-            raise ValueError(
+            raise LogFormatError(
                 f"{path}: non-finite values in data row(s) {_rows_text(table.rows[bad])} "
                 "(drop them with --drop-nan, or drop_nan=True in Python)"
             )
@@ -314,14 +320,14 @@ def read_rtde_csv(
     rows = table.rows[keep]  # original data-row numbers of the kept rows
     data = data[keep]
     if data.shape[0] < 2:
-        raise ValueError(f"{path}: need at least 2 valid samples, got {data.shape[0]}")
+        raise LogFormatError(f"{path}: need at least 2 valid samples, got {data.shape[0]}")
 
     t = data[:, index["timestamp"]]
     step = np.diff(t)
     backwards = np.flatnonzero(step < 0) + 1
     if backwards.size:
         r = backwards[0]
-        raise ValueError(
+        raise LogFormatError(
             f"{path}: timestamp goes backwards at data row {rows[r]} "
             f"({t[r]:.6f} s after {t[r - 1]:.6f} s)"
         )
@@ -390,7 +396,7 @@ def _check_time_and_grid(
     finite with column names ``names``, ``rows`` the data-row number of each sample.
     """
     if t_s.size < 2:
-        raise ValueError(
+        raise LogFormatError(
             f"{path}: the timestamps do not advance: every sample has timestamp {t_s[0]:.6g} s"
         )
     step = np.diff(t_s)
@@ -403,7 +409,7 @@ def _check_time_and_grid(
         f"(timestamp {t_s[jump]:.6g} s)"
     )
     if not np.isfinite(span_periods) or span_periods > MAX_SPAN_PERIODS:
-        raise ValueError(
+        raise LogFormatError(
             f"{path}: the timestamps span {t_s[-1] - t_s[0]:.6g} s at a period of "
             f"{dt * 1e3:.6g} ms, more than 2^53 periods: a corrupt timestamp; {at_jump}; fix it "
             "or split the log at its time jump"
@@ -411,7 +417,7 @@ def _check_time_and_grid(
     if not resample or find_gaps(t_s).size == 0:
         return
     if span_periods + 1 > MAX_GRID_SAMPLES:
-        raise ValueError(
+        raise LogFormatError(
             f"{path}: resampling would build {int(span_periods) + 1} samples at "
             f"{dt * 1e3:.6g} ms (limit {MAX_GRID_SAMPLES}); {at_jump}; split the log at its "
             "time jump"
@@ -419,7 +425,7 @@ def _check_time_and_grid(
     too_large = np.argwhere(~(np.abs(values) <= MAX_INTERPOLATED_ABS))
     if too_large.size:
         r, c = too_large[0]
-        raise ValueError(
+        raise LogFormatError(
             f"{path}: cannot resample: {names[c]} is {values[r, c]:.6g} at data row {rows[r]}, "
             f"too large to interpolate (limit ±{MAX_INTERPOLATED_ABS:.3g}); fix that cell"
         )
@@ -428,7 +434,7 @@ def _check_time_and_grid(
     steep = np.argwhere(~np.isfinite(slope))
     if steep.size:
         r, c = steep[0]
-        raise ValueError(
+        raise LogFormatError(
             f"{path}: cannot resample: {names[c]} changes from {values[r, c]:.6g} to "
             f"{values[r + 1, c]:.6g} in {step[r]:.3g} s between data rows {rows[r]} and "
             f"{rows[r + 1]}, too fast to interpolate; fix those cells"
