@@ -191,7 +191,7 @@ def test_csv_mutations_are_refused_or_read_as_the_repaired_input(tmp_path, data,
 
     # Without a repair option: a ValueError, or (the defect changed no number) the input.
     try:
-        back = _read_quietly(path)
+        back = _read_quietly(path, resample=False)
     except ValueError as e:
         assert_names_the_file(e, path)
         event("refused without repair")
@@ -211,7 +211,7 @@ def test_csv_mutations_are_refused_or_read_as_the_repaired_input(tmp_path, data,
     if kind in ("insert-field", "delete-field", "nan"):
         repaired_input = rec.select(np.delete(np.arange(rec.n_samples), where))
     try:
-        back = _read_quietly(path, **kwargs)
+        back = _read_quietly(path, resample=False, **kwargs)  # a dropped row leaves a gap
     except ValueError as e:
         assert_names_the_file(e, path)
         # Only when no repair applies: fewer than 2 rows left, or a damaged header.
