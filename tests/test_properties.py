@@ -2,7 +2,7 @@
 satisfies its documented invariants or raises ``ValueError`` — never another exception, a
 crash or a silently wrong number.
 
-Example counts are bounded (about 1,150 cases in all) and the search is derandomized, so a
+Example counts are bounded (about 1,350 cases in all) and the search is derandomized, so a
 run is reproducible and takes well under a minute.
 """
 
