@@ -13,6 +13,15 @@ Validation at load time (every message names the offending rows, counted from 0 
 rows, i.e. not counting the header):
 
 - a missing required column is a ``ValueError`` naming the column;
+- the text is read strictly by :func:`tvist.ident.csv_table.read_table`: a row with the wrong
+  number of fields, a byte that is not ASCII text in a data row or a cell that is not a number
+  is a :class:`LogFormatError` (a ``ValueError``) naming the file, the data row and the line,
+  unless ``repair="drop-bad-rows"`` (then dropped with a :class:`LogWarning`); a repeated
+  column name is refused unless ``repair="keep-first-duplicate"``; a UTF-8 byte-order mark is
+  skipped;
+- timestamps that do not advance, or that span more than 2⁵³ sampling periods (a corrupt
+  timestamp such as 1e308), are a ``ValueError``; resampling refuses a grid longer than
+  :data:`tvist.trajectory.resample.MAX_GRID_SAMPLES` and cells too large to interpolate;
 - a row with NaN/inf is a ``ValueError`` unless ``drop_nan=True`` (then dropped with a
   :class:`LogWarning`);
 - a repeated timestamp (the recorder wrote the same sample twice) is dropped with a
@@ -34,7 +43,11 @@ from typing import Any, Literal
 
 import numpy as np
 
+from tvist.ident.csv_table import LogFormatError, read_table
+from tvist.trajectory.resample import MAX_GRID_SAMPLES
+
 __all__ = [
+    "LogFormatError",
     "LogWarning",
     "Record",
     "find_gaps",
@@ -252,13 +265,24 @@ def is_uniform(t_s: np.ndarray, tolerance: float = 0.25) -> bool:
     return bool(np.all(np.abs(step - dt) <= tolerance * dt))
 
 
-def read_rtde_csv(path: str | Path, *, drop_nan: bool = False, resample: bool = True) -> Record:
+def read_rtde_csv(
+    path: str | Path,
+    *,
+    repair: str | tuple[str, ...] | None = None,
+    drop_nan: bool = False,
+    resample: bool = True,
+) -> Record:
     """Read a UR RTDE log written by ur_rtde or by UR's ``record.py`` (format auto-detected).
 
     Parameters
     ----------
     path
         The CSV file.
+    repair
+        ``None`` (default: refuse a malformed file), ``"drop-bad-rows"`` (drop rows with the
+        wrong number of fields, non-ASCII bytes or non-numeric cells, with a
+        :class:`LogWarning` naming them), ``"keep-first-duplicate"`` (use the first of
+        repeated columns, with a :class:`LogWarning`), or a tuple of both.
     drop_nan
         Drop rows containing NaN/inf (with a :class:`LogWarning`) instead of raising.
     resample
@@ -273,38 +297,39 @@ def read_rtde_csv(path: str | Path, *, drop_nan: bool = False, resample: bool = 
 
     Raises
     ------
+    LogFormatError
+        (a ``ValueError``; the message names the file and, where one is at fault, the row)
+        Unknown format, missing or repeated columns, malformed rows or undecodable bytes
+        (unless repaired), NaN rows (unless ``drop_nan``), timestamps that go backwards, do
+        not advance or are corrupt, fewer than 2 samples, or a resampling grid over the cap or
+        cells too large to interpolate.
     ValueError
-        Unknown format, missing columns, NaN rows (unless ``drop_nan``), timestamps that go
-        backwards, or fewer than 2 samples.
+        An unknown ``repair`` option.
     """
     path = Path(path)
-    with path.open() as fh:
-        header_line = fh.readline().strip()
-    sep = _detect_separator(header_line)
-    names = header_line.split(",") if sep == "," else header_line.split()
-    names = [n.strip() for n in names]
-    while names and not names[-1]:  # a trailing separator leaves an empty last name
-        names.pop()
-    index = {name: i for i, name in enumerate(names)}
-
     required = ["timestamp"]
     for name, (rtde_name, width) in _FIELDS.items():
         if name not in _OPTIONAL:
             required += _columns(rtde_name, width)
-    missing = [c for c in required if c not in index]
-    if missing:
-        raise ValueError(f"{path}: missing column(s) {', '.join(missing)}")
-
-    try:
-        data = np.loadtxt(
-            path,
-            delimiter="," if sep == "," else None,
-            skiprows=1,
-            ndmin=2,
-            usecols=range(len(names)),
+    table = read_table(
+        path, required, _columns("actual_TCP_pose", 6), separator=_detect_separator, repair=repair
+    )
+    if table.dropped:
+        warnings.warn(
+            f"{path}: dropped {len(table.dropped)} malformed row(s): "
+            + "; ".join(f"data row {b.row} (line {b.line}) {b.reason}" for b in table.dropped[:5])
+            + (f"; and {len(table.dropped) - 5} more" if len(table.dropped) > 5 else ""),
+            LogWarning,
+            stacklevel=2,
         )
-    except ValueError as exc:
-        raise ValueError(f"{path}: malformed data row: {exc}") from exc
+    if table.duplicates:
+        warnings.warn(
+            f"{path}: column(s) {', '.join(table.duplicates)} appear more than once; "
+            "the first of each is used",
+            LogWarning,
+            stacklevel=2,
+        )
+    data, index = table.data, table.columns
 
     def take(columns: list[str]) -> np.ndarray:
         return data[:, [index[c] for c in columns]]
@@ -318,28 +343,29 @@ def read_rtde_csv(path: str | Path, *, drop_nan: bool = False, resample: bool = 
     bad = np.flatnonzero(~np.all(np.isfinite(take(used)), axis=1))
     if bad.size:
         if not drop_nan:
-            raise ValueError(
-                f"{path}: non-finite values in data row(s) {_rows_text(bad)} "
+            raise LogFormatError(
+                f"{path}: non-finite values in data row(s) {_rows_text(table.rows[bad])} "
                 "(drop them with --drop-nan, or drop_nan=True in Python)"
             )
         warnings.warn(
-            f"{path}: dropped {bad.size} row(s) with non-finite values: {_rows_text(bad)}",
+            f"{path}: dropped {bad.size} row(s) with non-finite values: "
+            f"{_rows_text(table.rows[bad])}",
             LogWarning,
             stacklevel=2,
         )
     keep = np.ones(data.shape[0], dtype=bool)
     keep[bad] = False
-    rows = np.flatnonzero(keep)  # original data-row numbers of the kept rows
+    rows = table.rows[keep]  # original data-row numbers of the kept rows
     data = data[keep]
     if data.shape[0] < 2:
-        raise ValueError(f"{path}: need at least 2 valid samples, got {data.shape[0]}")
+        raise LogFormatError(f"{path}: need at least 2 valid samples, got {data.shape[0]}")
 
     t = data[:, index["timestamp"]]
     step = np.diff(t)
     backwards = np.flatnonzero(step < 0) + 1
     if backwards.size:
         r = backwards[0]
-        raise ValueError(
+        raise LogFormatError(
             f"{path}: timestamp goes backwards at data row {rows[r]} "
             f"({t[r]:.6f} s after {t[r - 1]:.6f} s)"
         )
@@ -355,6 +381,7 @@ def read_rtde_csv(path: str | Path, *, drop_nan: bool = False, resample: bool = 
         keep[duplicate] = False
         data, rows = data[keep], rows[keep]
 
+    _check_time_and_grid(path, data[:, index["timestamp"]], take(used), used, rows, resample)
     record = Record(
         t_s=data[:, index["timestamp"]],
         target_q=_take(data, index, "target_q", 6),
@@ -373,7 +400,7 @@ def read_rtde_csv(path: str | Path, *, drop_nan: bool = False, resample: bool = 
             try:
                 record, filled = resample_uniform(record)
             except ValueError as exc:
-                raise ValueError(f"{path}: {exc}") from None
+                raise LogFormatError(f"{path}: {exc}") from None
             action = (
                 f"resampled onto a uniform grid: {filled} of {record.n_samples} samples "
                 f"({100 * filled / record.n_samples:.1f} %) filled by linear interpolation"
@@ -391,3 +418,70 @@ def read_rtde_csv(path: str | Path, *, drop_nan: bool = False, resample: bool = 
 def _take(data: np.ndarray, index: dict[str, int], rtde_name: str, width: int) -> np.ndarray:
     """Columns ``rtde_name_0 … rtde_name_{width-1}`` of ``data`` as an (n_samples, width) array."""
     return data[:, [index[c] for c in _columns(rtde_name, width)]]
+
+
+#: Timestamps spanning more sampling periods than this are corrupt (beyond 2⁵³, sample counts
+#: are not exact in float64).
+MAX_SPAN_PERIODS = 2.0**53
+#: Resampling refuses cells larger than this in magnitude: the difference of two of them, and
+#: the interpolation formula, must stay finite.
+MAX_INTERPOLATED_ABS = np.finfo(float).max / 4
+
+
+def _check_time_and_grid(
+    path: Path,
+    t_s: np.ndarray,
+    values: np.ndarray,
+    names: list[str],
+    rows: np.ndarray,
+    resample: bool,
+) -> None:
+    """Refuse timestamps the reader cannot count with and a resampling it cannot do safely.
+
+    ``t_s`` (n_samples,) finite and strictly increasing, ``values`` (n_samples, n_channels)
+    finite with column names ``names``, ``rows`` the data-row number of each sample.
+    """
+    if t_s.size < 2:
+        raise LogFormatError(
+            f"{path}: the timestamps do not advance: every sample has timestamp {t_s[0]:.6g} s"
+        )
+    step = np.diff(t_s)
+    dt = float(np.median(step))
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        span_periods = (t_s[-1] - t_s[0]) / dt
+    jump = int(np.argmax(step)) + 1  # the sample after the largest step
+    at_jump = (
+        f"the largest step is {step[jump - 1]:.6g} s, before data row {rows[jump]} "
+        f"(timestamp {t_s[jump]:.6g} s)"
+    )
+    if not np.isfinite(span_periods) or span_periods > MAX_SPAN_PERIODS:
+        raise LogFormatError(
+            f"{path}: the timestamps span {t_s[-1] - t_s[0]:.6g} s at a period of "
+            f"{dt * 1e3:.6g} ms, more than 2^53 periods: a corrupt timestamp; {at_jump}; fix it "
+            "or split the log at its time jump"
+        )
+    if not resample or find_gaps(t_s).size == 0:
+        return
+    if span_periods + 1 > MAX_GRID_SAMPLES:
+        raise LogFormatError(
+            f"{path}: resampling would build {int(span_periods) + 1} samples at "
+            f"{dt * 1e3:.6g} ms (limit {MAX_GRID_SAMPLES}); {at_jump}; split the log at its "
+            "time jump"
+        )
+    too_large = np.argwhere(~(np.abs(values) <= MAX_INTERPOLATED_ABS))
+    if too_large.size:
+        r, c = too_large[0]
+        raise LogFormatError(
+            f"{path}: cannot resample: {names[c]} is {values[r, c]:.6g} at data row {rows[r]}, "
+            f"too large to interpolate (limit ±{MAX_INTERPOLATED_ABS:.3g}); fix that cell"
+        )
+    with np.errstate(over="ignore"):
+        slope = np.diff(values, axis=0) / step[:, None]
+    steep = np.argwhere(~np.isfinite(slope))
+    if steep.size:
+        r, c = steep[0]
+        raise LogFormatError(
+            f"{path}: cannot resample: {names[c]} changes from {values[r, c]:.6g} to "
+            f"{values[r + 1, c]:.6g} in {step[r]:.3g} s between data rows {rows[r]} and "
+            f"{rows[r + 1]}, too fast to interpolate; fix those cells"
+        )
