@@ -441,11 +441,6 @@ def test_tvshaper_setup_constructs_or_raises(
     assert np.all(np.isfinite(out)) or s.last_status != 0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=OverflowError,
-    reason="the bindings take n_dof as an unsigned integer: a negative one is an OverflowError",
-)
 @pytest.mark.parametrize("provider", [False, True])
 def test_a_negative_n_dof_is_a_value_error(provider):
     dynamics = (lambda _q: [(50.0, 0.1)]) if provider else tvist.ConstantModes([(50.0, 0.1)])

@@ -237,7 +237,7 @@ impl PyTvShaper {
         py: Python<'_>,
         dynamics: &Bound<'_, PyAny>,
         dt_s: f64,
-        n_dof: usize,
+        n_dof: i64,
         shaper: &str,
         interp: &str,
         max_delay_s: Option<f64>,
@@ -245,9 +245,13 @@ impl PyTvShaper {
         tolerance: Option<f64>,
     ) -> PyResult<Self> {
         // Limits first: nothing below may allocate per channel before they are checked.
-        if n_dof == 0 {
-            return Err(PyValueError::new_err("n_dof must be at least 1"));
-        }
+        // A signed count, so that a negative one is a ValueError like any other bad count.
+        let n_dof = usize::try_from(n_dof)
+            .ok()
+            .filter(|&n| n >= 1)
+            .ok_or_else(|| {
+                PyValueError::new_err(format!("n_dof must be at least 1, got {n_dof}"))
+            })?;
         core::limits::check_n_dof(n_dof).map_err(value_error)?;
         let provider = if let Ok(c) = dynamics.cast::<PyConstantModes>() {
             Provider::Constant(c.get().inner.clone())
