@@ -163,22 +163,15 @@ impl<D: Dynamics> TvShaper<D> {
             self.start_at_input();
         }
         status |= self.dynamics.modes(&self.previous_output, &mut self.modes);
-        for i in 0..self.filters.len() {
-            let (done, rest) = self.filters.split_at_mut(i);
-            let src: &[f64] = match done.last() {
-                Some(prev) => prev.output(),
-                None => self.input.value(),
-            };
-            if let (Some(filter), Some(&mode)) = (rest.first_mut(), self.modes.get(i)) {
-                status |= filter.step(src, mode);
-            }
+        // Filter m shapes the output of filter m − 1 (the held input for the first).
+        let mut stage: &[f64] = self.input.value();
+        for (filter, &mode) in self.filters.iter_mut().zip(&self.modes) {
+            status |= filter.step(stage, mode);
+            let done: &ModeFilter = filter;
+            stage = done.output();
         }
-        let last: &[f64] = match self.filters.last() {
-            Some(f) => f.output(),
-            None => self.input.value(),
-        };
-        output.copy_from_slice(last);
-        self.previous_output.copy_from_slice(last);
+        output.copy_from_slice(stage);
+        self.previous_output.copy_from_slice(stage);
         status
     }
 
