@@ -174,6 +174,71 @@ impl DelayLine {
         (tap, clamped)
     }
 
+    /// [`Self::push`] then [`Self::read_taps`], with the channel loops unrolled for linear
+    /// reads of up to 8 channels (the arithmetic is the same; only the loop shape differs).
+    #[inline]
+    pub fn push_and_read(&mut self, x: &[f64], taps: &[Tap], out: &mut [f64]) {
+        if self.interp == Interpolation::Linear {
+            let done = match self.n_channels {
+                1 => self.push_read_linear::<1>(x, taps, out),
+                2 => self.push_read_linear::<2>(x, taps, out),
+                3 => self.push_read_linear::<3>(x, taps, out),
+                4 => self.push_read_linear::<4>(x, taps, out),
+                5 => self.push_read_linear::<5>(x, taps, out),
+                6 => self.push_read_linear::<6>(x, taps, out),
+                7 => self.push_read_linear::<7>(x, taps, out),
+                8 => self.push_read_linear::<8>(x, taps, out),
+                _ => false,
+            };
+            if done {
+                return;
+            }
+        }
+        self.push(x);
+        self.read_taps(taps, out);
+    }
+
+    /// The linear push-and-read for exactly `N` channels; `false` (nothing done) if a length
+    /// differs from `N`.
+    #[inline]
+    fn push_read_linear<const N: usize>(
+        &mut self,
+        x: &[f64],
+        taps: &[Tap],
+        out: &mut [f64],
+    ) -> bool {
+        let (Ok(x), Ok(out)) = (<&[f64; N]>::try_from(x), <&mut [f64; N]>::try_from(out)) else {
+            return false;
+        };
+        self.head = if self.head + 1 >= self.capacity {
+            0
+        } else {
+            self.head + 1
+        };
+        for slot in [self.head, self.head + self.capacity] {
+            if let Some(row) = self.buf.get_mut(slot * N..slot * N + N) {
+                row.copy_from_slice(x);
+            }
+        }
+        let mut acc = [0.0; N];
+        for tap in taps {
+            let start = (self.head + tap.lag) * N;
+            let Some(block) = self.buf.get(start..start + 2 * N) else {
+                continue;
+            };
+            let (r0, r1) = block.split_at(N);
+            let (Ok(r0), Ok(r1)) = (<&[f64; N]>::try_from(r0), <&[f64; N]>::try_from(r1)) else {
+                continue;
+            };
+            let [w0, w1, ..] = tap.weights;
+            for c in 0..N {
+                acc[c] += w0 * r0[c] + w1 * r1[c];
+            }
+        }
+        *out = acc;
+        true
+    }
+
     /// `out = Σ_taps tap(x)` over all channels (`out` is overwritten; no taps give zeros).
     /// Taps must come from this line (a foreign tap reads in-bounds garbage, never panics).
     #[inline]

@@ -52,8 +52,6 @@ pub struct TvShaper<D: Dynamics> {
     modes: Vec<Mode>,
     /// Last valid input sample (held when a non-finite sample arrives).
     input: HeldInput,
-    /// `q**_{n−1}`: the previous final output.
-    previous_output: Vec<f64>,
     n_dof: usize,
     dt_s: f64,
 }
@@ -125,7 +123,6 @@ impl<D: Dynamics> TvShaper<D> {
             filters,
             modes: vec![Mode::new(f64::NAN, f64::NAN); n_modes],
             input: HeldInput::new(n_dof),
-            previous_output: vec![0.0; n_dof],
             n_dof,
             dt_s,
         })
@@ -162,7 +159,13 @@ impl<D: Dynamics> TvShaper<D> {
         if first {
             self.start_at_input();
         }
-        status |= self.dynamics.modes(&self.previous_output, &mut self.modes);
+        // q**_{n−1}: the previous final output, kept by the last filter (at rest on the input
+        // after a start or reset).
+        let previous_output = match self.filters.last() {
+            Some(last) => last.output(),
+            None => self.input.value(),
+        };
+        status |= self.dynamics.modes(previous_output, &mut self.modes);
         // Filter m shapes the output of filter m − 1 (the held input for the first).
         let mut stage: &[f64] = self.input.value();
         for (filter, &mode) in self.filters.iter_mut().zip(&self.modes) {
@@ -171,13 +174,11 @@ impl<D: Dynamics> TvShaper<D> {
             stage = done.output();
         }
         output.copy_from_slice(stage);
-        self.previous_output.copy_from_slice(stage);
         status
     }
 
-    /// At rest on the held input: history and previous output equal it.
+    /// At rest on the held input: history and outputs (so the previous output) equal it.
     fn start_at_input(&mut self) {
-        self.previous_output.copy_from_slice(self.input.value());
         for f in &mut self.filters {
             f.reset(self.input.value());
         }

@@ -108,9 +108,9 @@ impl ModeFilter {
             Some(h) if h.wn_rad_s == mode.wn_rad_s && h.zeta == mode.zeta => self.design_status,
             _ => self.take_mode(mode),
         };
-        self.line.push(input);
         let n = self.impulses.len().min(MAX_IMPULSES);
-        self.line.read_taps(&self.taps[..n], &mut self.output);
+        self.line
+            .push_and_read(input, &self.taps[..n], &mut self.output);
         status
     }
 

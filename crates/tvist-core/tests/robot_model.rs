@@ -60,7 +60,8 @@ fn mass_matrix_is_symmetric_positive_definite_with_diagonal_joint_inertia() {
             let mut j = vec![0.0; n];
             assert!(robot.joint_inertia(&q, &mut j).is_ok());
             for r in 0..n {
-                // Same arithmetic path for the diagonal: equal to round-off (1e-12 relative).
+                // Composite-body CRBA against per-body sums about each axis: independent
+                // arithmetic, equal to round-off (1e-12 relative).
                 assert!(
                     (m[r * n + r] - j[r]).abs() <= 1e-12 * j[r].abs().max(1.0),
                     "{name}"
@@ -124,6 +125,41 @@ fn jacobian_matches_finite_differences_of_the_flange_pose() {
 
 /// Massless links and a point payload at the flange origin: `M = m J_vᵀ J_v` and
 /// `τ_g = m g J_v[z, :]`, an identity independent of the composite-body algebra.
+#[test]
+fn leading_joint_inertias_and_gravity_equal_the_full_evaluation() {
+    let mut rng = Rng(0xBEEF);
+    for name in ROBOTS {
+        let mut robot = ur_robot(name, 4.0);
+        let n = robot.n_dof();
+        for _ in 0..100 {
+            let q = rng.pose(n);
+            let (mut j_all, mut tau_all) = (vec![0.0; n], vec![0.0; n]);
+            assert!(robot.gravity_torque(&q, &mut tau_all).is_ok()); // composite-body path
+            assert!(robot.joint_inertia(&q, &mut j_all).is_ok());
+            for joints in 0..=n {
+                let (mut j, mut tau) = (vec![f64::NAN; n], vec![f64::NAN; n]);
+                let status =
+                    robot.leading_joint_inertia_and_gravity(&q, joints, &mut j, Some(&mut tau));
+                assert!(status.is_ok());
+                for i in 0..n {
+                    if i < joints {
+                        // Joint 0 is taken at angle 0 here (both quantities are independent
+                        // of it): equal to round-off, 1e-12 relative.
+                        assert!((j[i] - j_all[i]).abs() <= 1e-12 * j_all[i], "{name} J{i}");
+                        let scale = tau_all[i].abs().max(1.0);
+                        assert!((tau[i] - tau_all[i]).abs() <= 1e-12 * scale, "{name} τ{i}");
+                    } else {
+                        assert!(j[i].is_nan() && tau[i].is_nan(), "{name}: {i} was written");
+                    }
+                }
+            }
+        }
+        let mut j = vec![0.0; n];
+        let status = robot.leading_joint_inertia_and_gravity(&vec![0.0; n], n + 1, &mut j, None);
+        assert_eq!(status, Status::BAD_LENGTH);
+    }
+}
+
 #[test]
 fn point_payload_mass_matrix_and_gravity_follow_from_the_jacobian() {
     let mut rng = Rng(7);
