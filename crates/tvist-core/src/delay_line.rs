@@ -54,6 +54,8 @@ pub struct Tap {
 pub struct DelayLine {
     n_channels: usize,
     capacity: usize,
+    /// `capacity − 1 − reach`: the longest delay readable without clamping, samples.
+    max_delay: f64,
     head: usize,
     interp: Interpolation,
     buf: Vec<f64>,
@@ -85,6 +87,7 @@ impl DelayLine {
         Ok(DelayLine {
             n_channels,
             capacity,
+            max_delay: (capacity - 1 - interp.reach()) as f64,
             head: 0,
             interp,
             buf: vec![0.0; 2 * capacity * n_channels],
@@ -102,7 +105,7 @@ impl DelayLine {
 
     /// The longest delay (in samples) that can be read without clamping.
     pub fn max_delay_samples(&self) -> f64 {
-        (self.capacity - 1 - self.interp.reach()) as f64
+        self.max_delay
     }
 
     /// Sets every stored sample to `x` (the signal has been at rest at `x` forever).
@@ -198,9 +201,23 @@ impl DelayLine {
         self.read_taps(taps, out);
     }
 
+    /// [`Self::push_and_read`] for exactly `N` channels.
+    #[inline(always)]
+    pub(crate) fn push_and_read_fixed<const N: usize>(
+        &mut self,
+        x: &[f64; N],
+        taps: &[Tap],
+        out: &mut [f64],
+    ) {
+        if !(self.interp == Interpolation::Linear && self.push_read_linear::<N>(x, taps, out)) {
+            self.push(x);
+            self.read_taps(taps, out);
+        }
+    }
+
     /// The linear push-and-read for exactly `N` channels; `false` (nothing done) if a length
     /// differs from `N`.
-    #[inline]
+    #[inline(always)]
     fn push_read_linear<const N: usize>(
         &mut self,
         x: &[f64],
@@ -230,6 +247,10 @@ impl DelayLine {
             let (Ok(r0), Ok(r1)) = (<&[f64; N]>::try_from(r0), <&[f64; N]>::try_from(r1)) else {
                 continue;
             };
+            // A stencil ending at age 0 (a delay below one sample, such as every shaper's
+            // first impulse) takes the newest sample from `x` rather than reading back the
+            // store just made (a wide load of a fresh narrow store stalls).
+            let r1 = if tap.lag + 1 == self.capacity { x } else { r1 };
             let [w0, w1, ..] = tap.weights;
             for c in 0..N {
                 acc[c] += w0 * r0[c] + w1 * r1[c];

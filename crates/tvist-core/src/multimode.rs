@@ -152,6 +152,49 @@ impl<D: Dynamics> TvShaper<D> {
     /// ([`Status::INPUT_HELD`]); on a length mismatch nothing is computed and
     /// [`Status::BAD_LENGTH`] is returned.
     pub fn step(&mut self, input: &[f64], output: &mut [f64]) -> Status {
+        // The common channel counts run with fixed-size rows (unrolled, no copies through
+        // library calls); the arithmetic is the same for every count.
+        match self.n_dof {
+            1 => self.step_fixed::<1>(input, output),
+            2 => self.step_fixed::<2>(input, output),
+            3 => self.step_fixed::<3>(input, output),
+            4 => self.step_fixed::<4>(input, output),
+            5 => self.step_fixed::<5>(input, output),
+            6 => self.step_fixed::<6>(input, output),
+            7 => self.step_fixed::<7>(input, output),
+            _ => self.step_any(input, output),
+        }
+    }
+
+    /// [`Self::step`] for exactly `N` channels.
+    #[inline(always)]
+    fn step_fixed<const N: usize>(&mut self, input: &[f64], output: &mut [f64]) -> Status {
+        let (Ok(input), Ok(output)) = (
+            <&[f64; N]>::try_from(input),
+            <&mut [f64; N]>::try_from(output),
+        ) else {
+            return Status::BAD_LENGTH;
+        };
+        let (mut status, first) = self.input.accept_fixed(input);
+        if first {
+            self.start_at_input();
+        }
+        let previous_output = match self.filters.last() {
+            Some(last) => last.output(),
+            None => self.input.value(),
+        };
+        status |= self.dynamics.modes(previous_output, &mut self.modes);
+        let mut stage: [f64; N] = self.input.value_fixed();
+        for (filter, &mode) in self.filters.iter_mut().zip(&self.modes) {
+            status |= filter.step_fixed(&stage, mode);
+            stage = filter.output_fixed();
+        }
+        *output = stage;
+        status
+    }
+
+    /// [`Self::step`] for any channel count.
+    fn step_any(&mut self, input: &[f64], output: &mut [f64]) -> Status {
         if input.len() != self.n_dof || output.len() != self.n_dof {
             return Status::BAD_LENGTH;
         }

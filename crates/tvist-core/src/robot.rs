@@ -474,12 +474,16 @@ impl Robot {
             let origin = &ws.pos[i];
             let mut sum = 0.0;
             for ((body, c), rk) in bodies.clone().skip(i) {
-                // The axis in body k's frame: R_kᵀ a.
-                let u = [
-                    rk[0] * axis[0] + rk[3] * axis[1] + rk[6] * axis[2],
-                    rk[1] * axis[0] + rk[4] * axis[1] + rk[7] * axis[2],
-                    rk[2] * axis[0] + rk[5] * axis[1] + rk[8] * axis[2],
-                ];
+                // The axis in body k's frame: R_kᵀ a (for joint 0, a = e_z: R_k's last row).
+                let u = if i == 0 {
+                    [rk[6], rk[7], rk[8]]
+                } else {
+                    [
+                        rk[0] * axis[0] + rk[3] * axis[1] + rk[6] * axis[2],
+                        rk[1] * axis[0] + rk[4] * axis[1] + rk[7] * axis[2],
+                        rk[2] * axis[0] + rk[5] * axis[1] + rk[8] * axis[2],
+                    ]
+                };
                 let [xx, yy, zz, xy, xz, yz] = body.inertia_kg_m2;
                 let rotational = xx * u[0] * u[0]
                     + yy * u[1] * u[1]

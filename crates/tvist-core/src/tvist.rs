@@ -114,6 +114,25 @@ impl ModeFilter {
         status
     }
 
+    /// [`Self::step`] for exactly `N` channels (the filter's channel count).
+    #[inline(always)]
+    pub(crate) fn step_fixed<const N: usize>(&mut self, input: &[f64; N], mode: Mode) -> Status {
+        let status = match self.held {
+            Some(h) if h.wn_rad_s == mode.wn_rad_s && h.zeta == mode.zeta => self.design_status,
+            _ => self.take_mode(mode),
+        };
+        let n = self.impulses.len().min(MAX_IMPULSES);
+        self.line
+            .push_and_read_fixed(input, &self.taps[..n], &mut self.output);
+        status
+    }
+
+    /// The output of the latest cycle as `N` values (zeros if the filter has another count).
+    #[inline]
+    pub(crate) fn output_fixed<const N: usize>(&self) -> [f64; N] {
+        <[f64; N]>::try_from(self.output.as_slice()).unwrap_or([0.0; N])
+    }
+
     /// A mode other than the held one: redesign for it if valid, hold otherwise. Returns the
     /// cycle's status.
     fn take_mode(&mut self, mode: Mode) -> Status {
@@ -146,17 +165,15 @@ impl ModeFilter {
         } else {
             Status::OK
         };
-        for ((tap, &a), &t) in self
-            .taps
-            .iter_mut()
-            .zip(self.impulses.amplitudes())
-            .zip(self.impulses.times_s())
-        {
-            let (prepared, clamped) = self.line.tap(t * self.rate_hz, a);
+        let (amplitudes, times_s) = (self.impulses.amplitudes(), self.impulses.times_s());
+        for ((tap, a), t) in self.taps.iter_mut().zip(amplitudes).zip(times_s) {
+            let (prepared, clamped) = self.line.tap(t * self.rate_hz, *a);
             *tap = prepared;
-            if clamped {
-                status |= Status::DELAY_CLAMPED;
-            }
+            status |= if clamped {
+                Status::DELAY_CLAMPED
+            } else {
+                Status::OK
+            };
         }
         self.design_status = status;
         status
