@@ -394,11 +394,11 @@ impl EiTable {
     }
 
     /// Amplitudes (summing to 1) and phases `ω_n t_i` (rad) of the EI shaper for `zeta`
-    /// (limited to `[0, max_zeta]`; NaN reads node 0).
+    /// (limited to `[0, max_zeta]`; NaN reads the last node).
     #[inline]
     pub fn shape(&self, zeta: f64) -> ([f64; 3], [f64; 3]) {
         let n = self.nodes.len();
-        let [a1, a3, tau2, tau3] = if !(zeta < self.max_zeta) || n < STENCIL {
+        let [a1, a3, tau2, tau3] = if zeta.is_nan() || zeta >= self.max_zeta || n < STENCIL {
             self.nodes
                 .last()
                 .copied()
