@@ -106,7 +106,8 @@ def main() -> None:
     print(f"move: {DURATION_S:.0f} s at {1 / DT_S:.0f} Hz, {N_DOF} DOF, 2 modes ZV, linear")
     print(f"{ROUNDS} interleaved rounds, thread CPU time per step: min / median")
     print(
-        f"Rust TvShaper.shape : {t_rust.min() / n * 1e9:9.1f} / {np.median(t_rust) / n * 1e9:9.1f} ns"
+        f"Rust TvShaper.shape : {t_rust.min() / n * 1e9:9.1f} / "
+        f"{np.median(t_rust) / n * 1e9:9.1f} ns"
     )
     print(
         f"Python/numpy loop   : {t_python.min() / n * 1e9:9.1f} / "
