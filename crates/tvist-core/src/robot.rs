@@ -435,19 +435,34 @@ impl Robot {
         Status::OK
     }
 
-    /// Joint inertias and, if `tau_g` is given, gravity torques from one kinematics pass.
+    /// Joint inertias and, if `tau_g` is given, gravity torques from one kinematics pass
+    /// (the composite rigid body algorithm: the inertias are exactly the diagonal of
+    /// [`Self::mass_matrix`]).
     pub fn joint_inertia_and_gravity(
         &mut self,
         q: &[f64],
         inertia: &mut [f64],
         tau_g: Option<&mut [f64]>,
     ) -> Status {
-        self.leading_joint_inertia_and_gravity(q, self.joints.len(), inertia, tau_g)
+        let n = self.joints.len();
+        let tau_ok = tau_g.as_ref().is_none_or(|t| t.len() == n);
+        if inertia.len() != n || !tau_ok || !self.forward(q) {
+            return Status::BAD_LENGTH;
+        }
+        self.composites();
+        for (i, j) in inertia.iter_mut().enumerate() {
+            *j = self.crba_entry(i, i);
+        }
+        if let Some(t) = tau_g {
+            self.fill_gravity(t);
+        }
+        Status::OK
     }
 
     /// [`Self::joint_inertia_and_gravity`] for joints `0..joints` only (for example the
-    /// joints a dynamic map reads): entries from `joints` on are left untouched. Slices have
-    /// length `n_dof`; `joints <= n_dof`.
+    /// joints a dynamic map reads), at a fraction of the cost: entries from `joints` on are
+    /// left untouched. Slices have length `n_dof`; `joints <= n_dof`. Equal to the full
+    /// evaluation to rounding (different arithmetic).
     ///
     /// `J_i = Σ_{k≥i} (a_kᵀ I_k a_k + m_k |a_i × (c_k − p_i)|²)`: the rotational inertia of
     /// body `k` about joint `i`'s axis (`a_k`: that axis in body `k`'s frame) plus the
