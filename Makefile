@@ -68,7 +68,7 @@ fmt: $(PY)
 	$(VENV)/bin/ruff check --fix python tests benches examples
 
 bench: build
-	cargo bench -p tvist-core --bench step --bench map_step
+	cargo bench -q -p tvist-core --bench cycle
 	$(PY) benches/bench_shape.py
 	$(PY) benches/bench_sim.py
 

@@ -3,8 +3,10 @@
 A 10 s, 500 Hz, 6-DOF move is shaped by the two-mode ZV FD-TVIST of the paper's UR5e modes
 (Table 3, pose Q1) with linear fractional delays, once by the Rust core and once by a
 straightforward Python implementation of the same algorithm (circular buffer, impulses
-designed every cycle, cascade of two filters). Prints ns per step, the speedup and the
-largest difference between the two outputs.
+designed every cycle, cascade of two filters). Both run in the same interleaved rounds, the
+same number of times each, timed in CPU time of this thread (so time the scheduler gives to
+other processes is not counted); prints min and median ns per step of each, the median of the
+per-round speedups and the largest difference between the two outputs.
 
 Run: ``.venv/bin/python benches/bench_shape.py`` (or ``make bench``).
 """
@@ -74,13 +76,13 @@ def shape_python(q: np.ndarray) -> np.ndarray:
     return out
 
 
-def best_time_s(fn, repeats: int) -> float:
-    best = np.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
+ROUNDS = 15
+
+
+def cpu_time_s(fn) -> float:
+    t0 = time.thread_time()
+    fn()
+    return time.thread_time() - t0
 
 
 def main() -> None:
@@ -90,15 +92,28 @@ def main() -> None:
     def rust() -> np.ndarray:
         return tvist.TvShaper(tvist.ConstantModes(MODES), DT_S, N_DOF, shaper="zv").shape(q)
 
-    y_rust = rust()
-    y_python = shape_python(q)
-    t_rust = best_time_s(rust, 20)
-    t_python = best_time_s(lambda: shape_python(q), 2)
-    diff = float(np.abs(y_rust - y_python).max())
+    def python() -> np.ndarray:
+        return shape_python(q)
+
+    diff = float(np.abs(rust() - python()).max())
+    t_rust, t_python = [], []
+    for r in range(ROUNDS):
+        # Alternate which side runs first in a round.
+        for fn, times in [(rust, t_rust), (python, t_python)][:: 1 if r % 2 == 0 else -1]:
+            times.append(cpu_time_s(fn))
+    t_rust, t_python = np.array(t_rust), np.array(t_python)
+    speedup = np.median(t_python / t_rust)
     print(f"move: {DURATION_S:.0f} s at {1 / DT_S:.0f} Hz, {N_DOF} DOF, 2 modes ZV, linear")
-    print(f"Rust TvShaper.shape : {t_rust / n * 1e9:9.1f} ns/step")
-    print(f"Python/numpy loop   : {t_python / n * 1e9:9.1f} ns/step")
-    print(f"speedup             : {t_python / t_rust:9.0f}x")
+    print(f"{ROUNDS} interleaved rounds, thread CPU time per step: min / median")
+    print(
+        f"Rust TvShaper.shape : {t_rust.min() / n * 1e9:9.1f} / "
+        f"{np.median(t_rust) / n * 1e9:9.1f} ns"
+    )
+    print(
+        f"Python/numpy loop   : {t_python.min() / n * 1e9:9.1f} / "
+        f"{np.median(t_python) / n * 1e9:9.1f} ns"
+    )
+    print(f"speedup (median of per-round ratios): {speedup:.0f}x")
     print(f"max |difference|    : {diff:.2e} rad")
     if diff > 1e-12:
         raise SystemExit("the two implementations disagree")

@@ -31,14 +31,31 @@ impl Interpolation {
     }
 }
 
+/// A fractional read prepared once for a delay that stays fixed over many cycles: the
+/// stencil's position relative to the newest sample and its weights, oldest sample first.
+/// Made by [`DelayLine::tap`]; read by [`DelayLine::read_taps`].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Tap {
+    /// `capacity − age of the oldest stencil sample`, in `[1, capacity]`: the stencil's first
+    /// slot is `head + lag` in the mirrored buffer.
+    lag: usize,
+    /// Weights of the stencil's samples, oldest first (linear: the first two are used).
+    weights: [f64; 4],
+}
+
 /// Circular buffer of the last `capacity` samples of `n_channels` signals.
 ///
-/// Layout: sample-major (`buf[slot * n_channels + channel]`). `head` is the slot of the newest
-/// sample ("age 0"); the sample pushed `k` cycles earlier has age `k`.
+/// Layout: sample-major, mirrored: slot `s` and slot `s + capacity` hold the same sample
+/// (`buf[slot * n_channels + channel]`, `2 · capacity` slots), so every stencil of consecutive
+/// ages is one contiguous block, read without wrapping. `head` (in `[0, capacity)`) is the
+/// slot of the newest sample ("age 0"); the sample pushed `k` cycles earlier has age `k` and
+/// lives in slot `head + capacity − k` (and its mirror).
 #[derive(Debug, Clone)]
 pub struct DelayLine {
     n_channels: usize,
     capacity: usize,
+    /// `capacity − 1 − reach`: the longest delay readable without clamping, samples.
+    max_delay: f64,
     head: usize,
     interp: Interpolation,
     buf: Vec<f64>,
@@ -63,9 +80,10 @@ impl DelayLine {
         Ok(DelayLine {
             n_channels,
             capacity,
+            max_delay: (capacity - 1 - interp.reach()) as f64,
             head: 0,
             interp,
-            buf: vec![0.0; capacity * n_channels],
+            buf: vec![0.0; 2 * capacity * n_channels],
         })
     }
 
@@ -81,6 +99,19 @@ impl DelayLine {
         Ok(max_delay_samples.ceil() as usize + interp.reach() + 1)
     }
 
+    /// Bytes of sample storage a line of `n_channels` able to delay by `max_delay_samples`
+    /// allocates (every slot is stored twice, see the buffer layout); `None` on overflow.
+    pub fn bytes_for(
+        max_delay_samples: f64,
+        interp: Interpolation,
+        n_channels: usize,
+    ) -> Result<Option<usize>, Error> {
+        let slots = Self::capacity_for(max_delay_samples, interp)?;
+        Ok(slots
+            .checked_mul(n_channels)
+            .and_then(|values| values.checked_mul(2 * core::mem::size_of::<f64>())))
+    }
+
     pub fn n_channels(&self) -> usize {
         self.n_channels
     }
@@ -92,7 +123,7 @@ impl DelayLine {
 
     /// The longest delay (in samples) that can be read without clamping.
     pub fn max_delay_samples(&self) -> f64 {
-        (self.capacity - 1 - self.interp.reach()) as f64
+        self.max_delay
     }
 
     /// Sets every stored sample to `x` (the signal has been at rest at `x` forever).
@@ -112,28 +143,37 @@ impl DelayLine {
         if self.head >= self.capacity {
             self.head = 0;
         }
-        let start = self.head * self.n_channels;
-        if let Some(slot) = self.buf.get_mut(start..start + self.n_channels) {
+        let n = self.n_channels;
+        let (first, second) = (self.head * n, (self.head + self.capacity) * n);
+        if let Some(slot) = self.buf.get_mut(first..first + n) {
+            for (dst, &src) in slot.iter_mut().zip(x) {
+                *dst = src;
+            }
+        }
+        if let Some(slot) = self.buf.get_mut(second..second + n) {
             for (dst, &src) in slot.iter_mut().zip(x) {
                 *dst = src;
             }
         }
     }
 
-    /// Adds `weight · x(n − delay)` to `out` for every channel. `delay` is in samples and is
-    /// clamped to `[0, max_delay_samples]`; returns `true` if it had to be clamped.
+    /// The read of `weight · x(n − delay)`, prepared: `delay` is in samples and is clamped to
+    /// `[0, max_delay_samples]`; the flag is `true` if it had to be clamped.
     #[inline]
-    pub fn accumulate(&self, delay: f64, weight: f64, out: &mut [f64]) -> bool {
+    pub fn tap(&self, delay: f64, weight: f64) -> (Tap, bool) {
         let max = self.max_delay_samples();
         let clamped = delay.is_nan() || delay > max;
         let d = if clamped { max } else { delay.max(0.0) };
         // d ∈ [0, max]: truncation is the floor and the cast cannot overflow.
         let k = d as usize;
-        match self.interp {
+        let tap = match self.interp {
             Interpolation::Linear => {
                 let mu = d - k as f64;
-                // Ages k and k + 1 <= floor(max) + 1 = capacity − 1.
-                self.add_two(k, [weight * (1.0 - mu), weight * mu], out);
+                // Ages k + 1 (oldest, <= floor(max) + 1 = capacity − 1) and k.
+                Tap {
+                    lag: self.capacity - (k + 1),
+                    weights: [weight * mu, weight * (1.0 - mu), 0.0, 0.0],
+                }
             }
             Interpolation::Cubic => {
                 // Nodes at ages base..base+3 (<= floor(max) + 2 = capacity − 1), evaluated at
@@ -146,61 +186,170 @@ impl DelayLine {
                     -x * (x - 1.0) * (x - 3.0) / 2.0,
                     x * (x - 1.0) * (x - 2.0) / 6.0,
                 ];
-                self.add_four(base, l.map(|lj| weight * lj), out);
+                Tap {
+                    lag: self.capacity - (base + 3),
+                    weights: [weight * l[3], weight * l[2], weight * l[1], weight * l[0]],
+                }
             }
+        };
+        (tap, clamped)
+    }
+
+    /// [`Self::push`] then [`Self::read_taps`], with the channel loops unrolled for linear
+    /// reads of up to 8 channels (the arithmetic is the same; only the loop shape differs).
+    #[inline]
+    pub fn push_and_read(&mut self, x: &[f64], taps: &[Tap], out: &mut [f64]) {
+        if self.interp == Interpolation::Linear {
+            let done = match self.n_channels {
+                1 => self.push_read_linear::<1>(x, taps, out),
+                2 => self.push_read_linear::<2>(x, taps, out),
+                3 => self.push_read_linear::<3>(x, taps, out),
+                4 => self.push_read_linear::<4>(x, taps, out),
+                5 => self.push_read_linear::<5>(x, taps, out),
+                6 => self.push_read_linear::<6>(x, taps, out),
+                7 => self.push_read_linear::<7>(x, taps, out),
+                8 => self.push_read_linear::<8>(x, taps, out),
+                _ => false,
+            };
+            if done {
+                return;
+            }
+        }
+        self.push(x);
+        self.read_taps(taps, out);
+    }
+
+    /// [`Self::push_and_read`] for exactly `N` channels.
+    #[inline(always)]
+    pub(crate) fn push_and_read_fixed<const N: usize>(
+        &mut self,
+        x: &[f64; N],
+        taps: &[Tap],
+        out: &mut [f64],
+    ) {
+        if !(self.interp == Interpolation::Linear && self.push_read_linear::<N>(x, taps, out)) {
+            self.push(x);
+            self.read_taps(taps, out);
+        }
+    }
+
+    /// The linear push-and-read for exactly `N` channels; `false` (nothing done) if a length
+    /// differs from `N`.
+    #[inline(always)]
+    fn push_read_linear<const N: usize>(
+        &mut self,
+        x: &[f64],
+        taps: &[Tap],
+        out: &mut [f64],
+    ) -> bool {
+        let (Ok(x), Ok(out)) = (<&[f64; N]>::try_from(x), <&mut [f64; N]>::try_from(out)) else {
+            return false;
+        };
+        self.head = if self.head + 1 >= self.capacity {
+            0
+        } else {
+            self.head + 1
+        };
+        for slot in [self.head, self.head + self.capacity] {
+            if let Some(row) = self.buf.get_mut(slot * N..slot * N + N) {
+                row.copy_from_slice(x);
+            }
+        }
+        let mut acc = [0.0; N];
+        for tap in taps {
+            let start = (self.head + tap.lag) * N;
+            let Some(block) = self.buf.get(start..start + 2 * N) else {
+                continue;
+            };
+            let (r0, r1) = block.split_at(N);
+            let (Ok(r0), Ok(r1)) = (<&[f64; N]>::try_from(r0), <&[f64; N]>::try_from(r1)) else {
+                continue;
+            };
+            // A stencil ending at age 0 (a delay below one sample, such as every shaper's
+            // first impulse) takes the newest sample from `x` rather than reading back the
+            // store just made (a wide load of a fresh narrow store stalls).
+            let r1 = if tap.lag + 1 == self.capacity { x } else { r1 };
+            let [w0, w1, ..] = tap.weights;
+            for c in 0..N {
+                acc[c] += w0 * r0[c] + w1 * r1[c];
+            }
+        }
+        *out = acc;
+        true
+    }
+
+    /// `out = Σ_taps tap(x)` over all channels (`out` is overwritten; no taps give zeros).
+    /// Taps must come from this line (a foreign tap reads in-bounds garbage, never panics).
+    #[inline]
+    pub fn read_taps(&self, taps: &[Tap], out: &mut [f64]) {
+        let n = self.n_channels;
+        let len = n.min(out.len());
+        let out = &mut out[..len];
+        let Some((first, rest)) = taps.split_first() else {
+            out.fill(0.0);
+            return;
+        };
+        match self.interp {
+            Interpolation::Linear => {
+                let [w0, w1, ..] = first.weights;
+                let (r0, r1) = self.rows2(first.lag);
+                for ((o, a), b) in out.iter_mut().zip(r0).zip(r1) {
+                    *o = w0 * a + w1 * b;
+                }
+                for tap in rest {
+                    let [w0, w1, ..] = tap.weights;
+                    let (r0, r1) = self.rows2(tap.lag);
+                    for ((o, a), b) in out.iter_mut().zip(r0).zip(r1) {
+                        *o += w0 * a + w1 * b;
+                    }
+                }
+            }
+            Interpolation::Cubic => {
+                out.fill(0.0);
+                for tap in taps {
+                    let [w0, w1, w2, w3] = tap.weights;
+                    let block = self.block(tap.lag, 4);
+                    let (r01, r23) = block.split_at(block.len() / 2);
+                    let (r0, r1) = r01.split_at(r01.len() / 2);
+                    let (r2, r3) = r23.split_at(r23.len() / 2);
+                    for ((((o, a), b), c), d) in out.iter_mut().zip(r0).zip(r1).zip(r2).zip(r3) {
+                        *o += (w0 * a + w1 * b) + (w2 * c + w3 * d);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Adds `weight · x(n − delay)` to `out` for every channel. `delay` is in samples and is
+    /// clamped to `[0, max_delay_samples]`; returns `true` if it had to be clamped.
+    #[inline]
+    pub fn accumulate(&self, delay: f64, weight: f64, out: &mut [f64]) -> bool {
+        let (tap, clamped) = self.tap(delay, weight);
+        let n = self.n_channels;
+        let block = self.block(tap.lag, self.interp.reach() + 1);
+        for (c, o) in out.iter_mut().take(n).enumerate() {
+            let mut acc = 0.0;
+            for (w, row) in tap.weights.iter().zip(block.chunks_exact(n)) {
+                acc += w * row.get(c).copied().unwrap_or(0.0);
+            }
+            *o += acc;
         }
         clamped
     }
 
-    /// Slot of the sample of age `age` (`age < capacity`, guaranteed by the clamping in
-    /// `accumulate`; an older age still gives an in-bounds slot).
+    /// The `rows` consecutive stored samples starting `lag` slots after `head` (oldest first),
+    /// `rows · n_channels` values; empty only if the invariants broke.
     #[inline]
-    fn slot(&self, age: usize) -> usize {
-        debug_assert!(age < self.capacity);
-        if age <= self.head {
-            self.head - age
-        } else {
-            (self.head + self.capacity).saturating_sub(age)
-        }
+    fn block(&self, lag: usize, rows: usize) -> &[f64] {
+        let n = self.n_channels;
+        let start = (self.head + lag) * n;
+        self.buf.get(start..start + rows * n).unwrap_or(&[])
     }
 
-    /// The stored sample (all channels) of age `age`; empty only if the invariants broke.
+    /// The two stored samples of a linear stencil, oldest first.
     #[inline]
-    fn row(&self, age: usize) -> &[f64] {
-        let start = self.slot(age) * self.n_channels;
-        self.buf.get(start..start + self.n_channels).unwrap_or(&[])
-    }
-
-    /// `out += w0 · sample(age) + w1 · sample(age + 1)` over all channels, in one pass.
-    #[inline]
-    fn add_two(&self, age: usize, [w0, w1]: [f64; 2], out: &mut [f64]) {
-        let (r0, r1) = (self.row(age), self.row(age + 1));
-        // Equal-length views: the loop below has no bounds checks and vectorizes.
-        let n = out.len().min(r0.len()).min(r1.len());
-        let (out, r0, r1) = (&mut out[..n], &r0[..n], &r1[..n]);
-        for i in 0..n {
-            out[i] += w0 * r0[i] + w1 * r1[i];
-        }
-    }
-
-    /// `out += Σ_{j<4} w_j · sample(age + j)` over all channels, in one pass.
-    #[inline]
-    fn add_four(&self, age: usize, [w0, w1, w2, w3]: [f64; 4], out: &mut [f64]) {
-        let (r0, r1, r2, r3) = (
-            self.row(age),
-            self.row(age + 1),
-            self.row(age + 2),
-            self.row(age + 3),
-        );
-        let n = out
-            .len()
-            .min(r0.len())
-            .min(r1.len())
-            .min(r2.len())
-            .min(r3.len());
-        let (out, r0, r1, r2, r3) = (&mut out[..n], &r0[..n], &r1[..n], &r2[..n], &r3[..n]);
-        for i in 0..n {
-            out[i] += (w0 * r0[i] + w1 * r1[i]) + (w2 * r2[i] + w3 * r3[i]);
-        }
+    fn rows2(&self, lag: usize) -> (&[f64], &[f64]) {
+        let block = self.block(lag, 2);
+        block.split_at(block.len() / 2)
     }
 }

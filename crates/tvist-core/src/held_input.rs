@@ -36,6 +36,28 @@ impl HeldInput {
         (status, first)
     }
 
+    /// [`Self::accept`] for exactly `N` channels (a held sample of another length is kept).
+    #[inline]
+    pub fn accept_fixed<const N: usize>(&mut self, input: &[f64; N]) -> (Status, bool) {
+        let status = if input.iter().all(|v| v.is_finite()) {
+            if let Ok(value) = <&mut [f64; N]>::try_from(self.value.as_mut_slice()) {
+                *value = *input;
+            }
+            Status::OK
+        } else {
+            Status::INPUT_HELD
+        };
+        let first = !self.started;
+        self.started = true;
+        (status, first)
+    }
+
+    /// The held sample as `N` values (zeros if it has another length).
+    #[inline]
+    pub fn value_fixed<const N: usize>(&self) -> [f64; N] {
+        <[f64; N]>::try_from(self.value.as_slice()).unwrap_or([0.0; N])
+    }
+
     /// Sets the held sample to `x0` (non-finite entries taken as 0) and marks the filter
     /// started.
     pub fn set(&mut self, x0: &[f64]) {

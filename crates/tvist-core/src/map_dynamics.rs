@@ -146,7 +146,8 @@ impl MapDynamics {
         &self.map
     }
 
-    /// Joint inertias of the latest [`Dynamics::modes`] call, kg m².
+    /// Joint inertias of the latest [`Dynamics::modes`] call, kg m² (joints the map does not
+    /// read are not evaluated and stay 0).
     pub fn last_inertia(&self) -> &[f64] {
         &self.inertia
     }
@@ -168,9 +169,13 @@ impl Dynamics for MapDynamics {
         } else {
             None
         };
-        let status = self
-            .robot
-            .joint_inertia_and_gravity(q, &mut self.inertia, tau);
+        // Only the joints the map reads (the base and shoulder for the UR5e map).
+        let status = self.robot.leading_joint_inertia_and_gravity(
+            q,
+            self.map.required_joints(),
+            &mut self.inertia,
+            tau,
+        );
         if !status.is_ok() {
             out.fill(Mode::new(f64::NAN, f64::NAN));
             return status;

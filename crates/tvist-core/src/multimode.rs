@@ -52,8 +52,6 @@ pub struct TvShaper<D: Dynamics> {
     modes: Vec<Mode>,
     /// Last valid input sample (held when a non-finite sample arrives).
     input: HeldInput,
-    /// `q**_{n−1}`: the previous final output.
-    previous_output: Vec<f64>,
     n_dof: usize,
     dt_s: f64,
 }
@@ -127,10 +125,8 @@ impl<D: Dynamics> TvShaper<D> {
             if !(max_delay.is_finite() && max_delay >= 0.0) {
                 break; // refused with its own message by ModeFilter::new below
             }
-            let slots = DelayLine::capacity_for(max_delay / dt_s, interp)?;
-            bytes = bytes
-                .zip(slots.checked_mul(n_dof))
-                .and_then(|(b, values)| b.checked_add(values.checked_mul(8)?));
+            let line = DelayLine::bytes_for(max_delay / dt_s, interp, n_dof)?;
+            bytes = bytes.zip(line).and_then(|(b, l)| b.checked_add(l));
         }
         crate::limits::check_delay_line_bytes(
             bytes,
@@ -145,7 +141,6 @@ impl<D: Dynamics> TvShaper<D> {
             filters,
             modes: vec![Mode::new(f64::NAN, f64::NAN); n_modes],
             input: HeldInput::new(n_dof),
-            previous_output: vec![0.0; n_dof],
             n_dof,
             dt_s,
         })
@@ -175,6 +170,49 @@ impl<D: Dynamics> TvShaper<D> {
     /// ([`Status::INPUT_HELD`]); on a length mismatch nothing is computed and
     /// [`Status::BAD_LENGTH`] is returned.
     pub fn step(&mut self, input: &[f64], output: &mut [f64]) -> Status {
+        // The common channel counts run with fixed-size rows (unrolled, no copies through
+        // library calls); the arithmetic is the same for every count.
+        match self.n_dof {
+            1 => self.step_fixed::<1>(input, output),
+            2 => self.step_fixed::<2>(input, output),
+            3 => self.step_fixed::<3>(input, output),
+            4 => self.step_fixed::<4>(input, output),
+            5 => self.step_fixed::<5>(input, output),
+            6 => self.step_fixed::<6>(input, output),
+            7 => self.step_fixed::<7>(input, output),
+            _ => self.step_any(input, output),
+        }
+    }
+
+    /// [`Self::step`] for exactly `N` channels.
+    #[inline(always)]
+    fn step_fixed<const N: usize>(&mut self, input: &[f64], output: &mut [f64]) -> Status {
+        let (Ok(input), Ok(output)) = (
+            <&[f64; N]>::try_from(input),
+            <&mut [f64; N]>::try_from(output),
+        ) else {
+            return Status::BAD_LENGTH;
+        };
+        let (mut status, first) = self.input.accept_fixed(input);
+        if first {
+            self.start_at_input();
+        }
+        let previous_output = match self.filters.last() {
+            Some(last) => last.output(),
+            None => self.input.value(),
+        };
+        status |= self.dynamics.modes(previous_output, &mut self.modes);
+        let mut stage: [f64; N] = self.input.value_fixed();
+        for (filter, &mode) in self.filters.iter_mut().zip(&self.modes) {
+            status |= filter.step_fixed(&stage, mode);
+            stage = filter.output_fixed();
+        }
+        *output = stage;
+        status
+    }
+
+    /// [`Self::step`] for any channel count.
+    fn step_any(&mut self, input: &[f64], output: &mut [f64]) -> Status {
         if input.len() != self.n_dof || output.len() != self.n_dof {
             return Status::BAD_LENGTH;
         }
@@ -182,29 +220,26 @@ impl<D: Dynamics> TvShaper<D> {
         if first {
             self.start_at_input();
         }
-        status |= self.dynamics.modes(&self.previous_output, &mut self.modes);
-        for i in 0..self.filters.len() {
-            let (done, rest) = self.filters.split_at_mut(i);
-            let src: &[f64] = match done.last() {
-                Some(prev) => prev.output(),
-                None => self.input.value(),
-            };
-            if let (Some(filter), Some(&mode)) = (rest.first_mut(), self.modes.get(i)) {
-                status |= filter.step(src, mode);
-            }
-        }
-        let last: &[f64] = match self.filters.last() {
-            Some(f) => f.output(),
+        // q**_{n−1}: the previous final output, kept by the last filter (at rest on the input
+        // after a start or reset).
+        let previous_output = match self.filters.last() {
+            Some(last) => last.output(),
             None => self.input.value(),
         };
-        output.copy_from_slice(last);
-        self.previous_output.copy_from_slice(last);
+        status |= self.dynamics.modes(previous_output, &mut self.modes);
+        // Filter m shapes the output of filter m − 1 (the held input for the first).
+        let mut stage: &[f64] = self.input.value();
+        for (filter, &mode) in self.filters.iter_mut().zip(&self.modes) {
+            status |= filter.step(stage, mode);
+            let done: &ModeFilter = filter;
+            stage = done.output();
+        }
+        output.copy_from_slice(stage);
         status
     }
 
-    /// At rest on the held input: history and previous output equal it.
+    /// At rest on the held input: history and outputs (so the previous output) equal it.
     fn start_at_input(&mut self) {
-        self.previous_output.copy_from_slice(self.input.value());
         for f in &mut self.filters {
             f.reset(self.input.value());
         }

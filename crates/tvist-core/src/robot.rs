@@ -147,6 +147,8 @@ struct Workspace {
     /// Joint `i` as a spatial motion about the world origin: `ω = z_i`, `v_O = p_i × z_i`.
     axis_w: Vec<[f64; 3]>,
     axis_v: Vec<[f64; 3]>,
+    /// World position of each body's centre of mass.
+    com: Vec<[f64; 3]>,
 }
 
 impl Workspace {
@@ -159,6 +161,7 @@ impl Workspace {
             comp_inertia: vec![[0.0; 9]; n],
             axis_w: vec![[0.0; 3]; n],
             axis_v: vec![[0.0; 3]; n],
+            com: vec![[0.0; 3]; n],
         }
     }
 }
@@ -290,26 +293,65 @@ impl Robot {
     }
 
     /// Forward kinematics of every frame into the workspace. False on a wrong `q` length.
+    ///
+    /// `R_{k+1} = R_k Rz(q_k) Rx(α_k)` column by column: with `u = cos q R e_x + sin q R e_y`
+    /// and `v = −sin q R e_x + cos q R e_y`, the new columns are `u`, `cos α v + sin α R e_z`
+    /// and `−sin α v + cos α R e_z`; the origin moves by `a u + d R e_z`.
     fn forward(&mut self, q: &[f64]) -> bool {
+        self.forward_turned(q, true)
+    }
+
+    /// [`Self::forward`]; with `turn_base == false` joint 0 is taken at angle 0. Joint 0 turns
+    /// the whole arm about the base `z` axis, the gravity axis, so joint-axis inertias and
+    /// gravity torques do not depend on it (its sine and cosine are then not needed).
+    fn forward_turned(&mut self, q: &[f64], turn_base: bool) -> bool {
         let n = self.joints.len();
         if q.len() != n {
             return false;
         }
         let ws = &mut self.ws;
-        ws.rot[0] = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
-        ws.pos[0] = [0.0; 3];
-        for (k, qk) in q.iter().enumerate() {
-            let (st, ct) = qk.sin_cos();
-            let (ca, sa) = (self.cos_alpha[k], self.sin_alpha[k]);
-            let DhJoint { d_m, a_m, .. } = self.joints[k];
-            let local = [ct, -st * ca, st * sa, st, ct * ca, -ct * sa, 0.0, sa, ca];
-            let r = ws.rot[k];
-            let t = [a_m * ct, a_m * st, d_m];
-            let p = ws.pos[k];
-            ws.pos[k + 1] = add3(&p, &mat_vec(&r, &t));
-            ws.rot[k + 1] = mat_mul(&r, &local);
+        let mut r = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+        let mut p = [0.0; 3];
+        ws.rot[0] = r;
+        ws.pos[0] = p;
+        let frames = ws.rot[1..].iter_mut().zip(&mut ws.pos[1..]);
+        let dh = self.joints.iter().zip(&self.cos_alpha).zip(&self.sin_alpha);
+        for (k, ((qk, ((joint, &ca), &sa)), (rot, pos))) in q.iter().zip(dh).zip(frames).enumerate()
+        {
+            let (st, ct) = if k == 0 && !turn_base {
+                (0.0, 1.0)
+            } else {
+                qk.sin_cos()
+            };
+            let mut u = [0.0; 3];
+            let mut v = [0.0; 3];
+            for row in 0..3 {
+                let (x, y, z) = (r[3 * row], r[3 * row + 1], r[3 * row + 2]);
+                u[row] = ct * x + st * y;
+                v[row] = ct * y - st * x;
+                p[row] += joint.a_m * u[row] + joint.d_m * z;
+                r[3 * row] = u[row];
+                r[3 * row + 1] = ca * v[row] + sa * z;
+                r[3 * row + 2] = ca * z - sa * v[row];
+            }
+            *rot = r;
+            *pos = p;
         }
         true
+    }
+
+    /// World centres of mass of every body (needs [`Self::forward`] first).
+    fn centres_of_mass(&mut self) {
+        let ws = &mut self.ws;
+        for (((c, body), r), p) in ws
+            .com
+            .iter_mut()
+            .zip(&self.bodies)
+            .zip(&ws.rot[1..])
+            .zip(&ws.pos[1..])
+        {
+            *c = add3(p, &mat_vec(r, &body.com_m));
+        }
     }
 
     /// Joint axes and composite-body inertias (needs [`Self::forward`] first).
@@ -431,7 +473,9 @@ impl Robot {
         Status::OK
     }
 
-    /// Joint inertias and, if `tau_g` is given, gravity torques from one kinematics pass.
+    /// Joint inertias and, if `tau_g` is given, gravity torques from one kinematics pass
+    /// (the composite rigid body algorithm: the inertias are exactly the diagonal of
+    /// [`Self::mass_matrix`]).
     pub fn joint_inertia_and_gravity(
         &mut self,
         q: &[f64],
@@ -449,6 +493,74 @@ impl Robot {
         }
         if let Some(t) = tau_g {
             self.fill_gravity(t);
+        }
+        Status::OK
+    }
+
+    /// [`Self::joint_inertia_and_gravity`] for joints `0..joints` only (for example the
+    /// joints a dynamic map reads), at a fraction of the cost: entries from `joints` on are
+    /// left untouched. Slices have length `n_dof`; `joints <= n_dof`. Equal to the full
+    /// evaluation to rounding (different arithmetic).
+    ///
+    /// `J_i = Σ_{k≥i} (a_kᵀ I_k a_k + m_k |a_i × (c_k − p_i)|²)`: the rotational inertia of
+    /// body `k` about joint `i`'s axis (`a_k`: that axis in body `k`'s frame) plus the
+    /// parallel-axis term of its centre of mass `c_k`. The diagonal of the composite rigid
+    /// body algorithm, without forming the composite inertias.
+    pub fn leading_joint_inertia_and_gravity(
+        &mut self,
+        q: &[f64],
+        joints: usize,
+        inertia: &mut [f64],
+        tau_g: Option<&mut [f64]>,
+    ) -> Status {
+        let n = self.joints.len();
+        let tau_ok = tau_g.as_ref().is_none_or(|t| t.len() == n);
+        if inertia.len() != n || joints > n || !tau_ok || !self.forward_turned(q, false) {
+            return Status::BAD_LENGTH;
+        }
+        self.centres_of_mass();
+        let ws = &self.ws;
+        let bodies = self.bodies.iter().zip(&ws.com).zip(&ws.rot[1..]);
+        for (i, j) in inertia.iter_mut().enumerate().take(joints) {
+            let r = &ws.rot[i];
+            let axis = [r[2], r[5], r[8]];
+            let origin = &ws.pos[i];
+            let mut sum = 0.0;
+            for ((body, c), rk) in bodies.clone().skip(i) {
+                // The axis in body k's frame: R_kᵀ a (for joint 0, a = e_z: R_k's last row).
+                let u = if i == 0 {
+                    [rk[6], rk[7], rk[8]]
+                } else {
+                    [
+                        rk[0] * axis[0] + rk[3] * axis[1] + rk[6] * axis[2],
+                        rk[1] * axis[0] + rk[4] * axis[1] + rk[7] * axis[2],
+                        rk[2] * axis[0] + rk[5] * axis[1] + rk[8] * axis[2],
+                    ]
+                };
+                let [xx, yy, zz, xy, xz, yz] = body.inertia_kg_m2;
+                let rotational = xx * u[0] * u[0]
+                    + yy * u[1] * u[1]
+                    + zz * u[2] * u[2]
+                    + 2.0 * (xy * u[0] * u[1] + xz * u[0] * u[2] + yz * u[1] * u[2]);
+                let d = sub3(c, origin);
+                let along = dot3(&d, &axis);
+                sum += rotational + body.mass_kg * (dot3(&d, &d) - along * along);
+            }
+            *j = sum;
+        }
+        if let Some(t) = tau_g {
+            for (i, ti) in t.iter_mut().enumerate().take(joints) {
+                let r = &ws.rot[i];
+                let origin = &ws.pos[i];
+                // ∂V/∂q_i = g · e_z · (z_i × Σ_{k≥i} m_k (c_k − p_i)).
+                let mut arm = [0.0; 3];
+                for (body, c) in self.bodies.iter().zip(&ws.com).skip(i) {
+                    for ((a, ck), pk) in arm.iter_mut().zip(c).zip(origin) {
+                        *a += body.mass_kg * (ck - pk);
+                    }
+                }
+                *ti = GRAVITY_M_S2 * (r[2] * arm[1] - r[5] * arm[0]);
+            }
         }
         Status::OK
     }

@@ -101,27 +101,6 @@ impl ImpulseArray {
         times_s: [0.0; MAX_IMPULSES],
     };
 
-    /// Builds a sequence from raw (unnormalized) amplitudes and times; normalizes `Σ A = 1`.
-    /// `raw_a` and `raw_t` have equal length `<= MAX_IMPULSES` by construction at every call site.
-    fn normalized(raw_a: &[f64], raw_t: &[f64]) -> ImpulseArray {
-        let mut out = ImpulseArray {
-            len: 0,
-            amplitudes: [0.0; MAX_IMPULSES],
-            times_s: [0.0; MAX_IMPULSES],
-        };
-        let sum: f64 = raw_a.iter().sum();
-        for ((a, t), (oa, ot)) in raw_a
-            .iter()
-            .zip(raw_t)
-            .zip(out.amplitudes.iter_mut().zip(out.times_s.iter_mut()))
-        {
-            *oa = a / sum;
-            *ot = *t;
-            out.len += 1;
-        }
-        out
-    }
-
     #[inline]
     pub fn len(&self) -> usize {
         self.len
@@ -259,50 +238,157 @@ impl ShaperKind {
 
     /// The impulse sequence for `mode`. Allocation-free; the caller guarantees
     /// `mode.is_valid()` (checked at setup, or held by the time-varying filter).
+    #[inline]
     pub fn design(&self, mode: Mode) -> ImpulseArray {
-        let zeta = mode.zeta;
-        let df = (1.0 - zeta * zeta).sqrt();
-        let td = 2.0 * PI / (mode.wn_rad_s * df); // damped period, s
-        let k = (-zeta * PI / df).exp();
+        self.damped_shape(mode.zeta).at(mode.wn_rad_s)
+    }
+
+    /// The sequence for damping ratio `zeta` with times as phases `ω_n t` (rad): every
+    /// family's shape depends on `ζ` only, and designing for a mode of that `ζ` divides the
+    /// phases by `ω_n` ([`DampedShape::at`]). Allocation-free; `0 <= zeta < 1`.
+    pub fn damped_shape(&self, zeta: f64) -> DampedShape {
         match *self {
-            ShaperKind::Zv => ImpulseArray::normalized(&[1.0, k], &[0.0, 0.5 * td]),
-            ShaperKind::Zvd => {
-                ImpulseArray::normalized(&[1.0, 2.0 * k, k * k], &[0.0, 0.5 * td, td])
+            ShaperKind::Ei { v_tol } => {
+                let ei = ei::design(v_tol, zeta);
+                DampedShape::three(&ei.amplitudes, &ei.phases_rad)
             }
-            ShaperKind::Zvdd => ImpulseArray::normalized(
+            ShaperKind::Ei2Hump => expansion(&EI2_A, &EI2_T, zeta),
+            ShaperKind::Ei3Hump => expansion(&EI3_A, &EI3_T, zeta),
+            closed => closed.closed_form(zeta),
+        }
+    }
+
+    /// ZV, ZVD, ZVDD and MZV: closed forms in `K = exp(−ζπ/√(1−ζ²))` and the damped half
+    /// period `π/√(1−ζ²)` (rad of `ω_n t`). Other kinds give the identity.
+    #[inline]
+    fn closed_form(&self, zeta: f64) -> DampedShape {
+        let df = (1.0 - zeta * zeta).sqrt();
+        let half = PI / df; // ω_n · T_d / 2
+        let k = (-zeta * half).exp();
+        match *self {
+            ShaperKind::Zv => DampedShape::normalized(&[1.0, k], &[0.0, half]),
+            ShaperKind::Zvd => {
+                DampedShape::normalized(&[1.0, 2.0 * k, k * k], &[0.0, half, 2.0 * half])
+            }
+            ShaperKind::Zvdd => DampedShape::normalized(
                 &[1.0, 3.0 * k, 3.0 * k * k, k * k * k],
-                &[0.0, 0.5 * td, td, 1.5 * td],
+                &[0.0, half, 2.0 * half, 3.0 * half],
             ),
             ShaperKind::Mzv => {
-                let km = (-0.75 * zeta * PI / df).exp();
+                // K^{3/4} = exp(−0.75 ζπ/√(1−ζ²)).
+                let km = (-0.75 * zeta * half).exp();
                 let a1 = 1.0 - core::f64::consts::FRAC_1_SQRT_2;
                 let a2 = (core::f64::consts::SQRT_2 - 1.0) * km;
                 let a3 = a1 * km * km;
-                ImpulseArray::normalized(&[a1, a2, a3], &[0.0, 0.375 * td, 0.75 * td])
+                DampedShape::normalized(&[a1, a2, a3], &[0.0, 0.75 * half, 1.5 * half])
             }
-            ShaperKind::Ei { v_tol } => {
-                let ei = ei::design(v_tol, zeta);
-                let [_, tau2, tau3] = ei.phases_rad;
-                let wn = mode.wn_rad_s;
-                ImpulseArray::normalized(&ei.amplitudes, &[0.0, tau2 / wn, tau3 / wn])
-            }
-            ShaperKind::Ei2Hump => expansion(&EI2_A, &EI2_T, mode),
-            ShaperKind::Ei3Hump => expansion(&EI3_A, &EI3_T, mode),
+            _ => DampedShape::IDENTITY,
+        }
+    }
+
+    /// The vibration tolerance of the exact EI family (its shape is a Newton solve per `ζ`).
+    pub(crate) fn ei_tolerance(&self) -> Option<f64> {
+        match *self {
+            ShaperKind::Ei { v_tol } => Some(v_tol),
+            _ => None,
+        }
+    }
+}
+
+/// An impulse sequence for one damping ratio with times as phases `ω_n t_i` (rad),
+/// normalized to `Σ A = 1`, phases non-decreasing from 0.
+///
+/// Invariant: `len <= MAX_IMPULSES`; entries past `len` are zero.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DampedShape {
+    len: usize,
+    amplitudes: [f64; MAX_IMPULSES],
+    phases_rad: [f64; MAX_IMPULSES],
+}
+
+impl DampedShape {
+    /// One unit impulse at phase 0.
+    pub const IDENTITY: DampedShape = DampedShape {
+        len: 1,
+        amplitudes: [1.0, 0.0, 0.0, 0.0, 0.0],
+        phases_rad: [0.0; MAX_IMPULSES],
+    };
+
+    /// Normalizes `Σ A = 1`; `raw_a` and `raw_phases` have equal length `<= MAX_IMPULSES` at
+    /// every call site (extra entries are ignored).
+    #[inline]
+    fn normalized(raw_a: &[f64], raw_phases: &[f64]) -> DampedShape {
+        let mut out = DampedShape {
+            len: 0,
+            amplitudes: [0.0; MAX_IMPULSES],
+            phases_rad: [0.0; MAX_IMPULSES],
+        };
+        let inv_sum = 1.0 / raw_a.iter().sum::<f64>();
+        for ((a, p), (oa, op)) in raw_a
+            .iter()
+            .zip(raw_phases)
+            .zip(out.amplitudes.iter_mut().zip(out.phases_rad.iter_mut()))
+        {
+            *oa = a * inv_sum;
+            *op = *p;
+            out.len += 1;
+        }
+        out
+    }
+
+    /// An EI shaper's amplitudes (summing to 1) and phases.
+    #[inline]
+    pub(crate) fn three(amplitudes: &[f64; 3], phases_rad: &[f64; 3]) -> DampedShape {
+        DampedShape::normalized(amplitudes, phases_rad)
+    }
+
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    #[inline]
+    pub fn amplitudes(&self) -> &[f64] {
+        &self.amplitudes[..self.len]
+    }
+
+    /// Impulse phases `ω_n t_i`, rad.
+    #[inline]
+    pub fn phases_rad(&self) -> &[f64] {
+        &self.phases_rad[..self.len]
+    }
+
+    /// The sequence for the mode of natural frequency `wn_rad_s`: `t_i = phase_i / ω_n`.
+    #[inline]
+    pub fn at(&self, wn_rad_s: f64) -> ImpulseArray {
+        let period = 1.0 / wn_rad_s; // s per rad of ω_n t
+        let mut times_s = [0.0; MAX_IMPULSES];
+        for (t, p) in times_s.iter_mut().zip(self.phases_rad()) {
+            *t = p * period;
+        }
+        ImpulseArray {
+            len: self.len,
+            amplitudes: self.amplitudes,
+            times_s,
         }
     }
 }
 
 /// Shaper from ζ-expansion tables; times are in undamped periods `2π/ω_n`.
-fn expansion<const N: usize>(a: &[[f64; 4]; N], t: &[[f64; 4]; N], mode: Mode) -> ImpulseArray {
-    let period = 2.0 * PI / mode.wn_rad_s;
+fn expansion<const N: usize>(a: &[[f64; 4]; N], t: &[[f64; 4]; N], zeta: f64) -> DampedShape {
     let mut raw_a = [0.0; MAX_IMPULSES];
-    let mut raw_t = [0.0; MAX_IMPULSES];
+    let mut raw_phases = [0.0; MAX_IMPULSES];
     for (i, (ca, ct)) in a.iter().zip(t).enumerate().take(MAX_IMPULSES) {
-        raw_a[i] = poly(ca, mode.zeta);
-        raw_t[i] = poly(ct, mode.zeta) * period;
+        raw_a[i] = poly(ca, zeta);
+        raw_phases[i] = poly(ct, zeta) * (2.0 * PI);
     }
     let n = N.min(MAX_IMPULSES);
-    ImpulseArray::normalized(&raw_a[..n], &raw_t[..n])
+    DampedShape::normalized(&raw_a[..n], &raw_phases[..n])
 }
 
 /// A heap-backed, validated impulse sequence (custom sets, convolutions, analysis).

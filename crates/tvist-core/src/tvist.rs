@@ -3,27 +3,41 @@
 //! Each cycle the impulse sequence is redesigned for the mode of that cycle and the delayed
 //! samples are read with a fractional-delay FIR, so a slowly varying mode gives a smoothly
 //! varying output (no whole-sample jumps, no buffer resets).
+//!
+//! Cost structure: a cycle whose mode equals the held one reads prepared taps (position and
+//! weights per impulse, [`Tap`]) and returns the status stored with them. A new `ω_n` only
+//! rescales the delays; a new `ζ` also redesigns the shape ([`DampedShape`]: amplitudes and
+//! phases depend on `ζ` alone); for the exact EI shaper a change of `ζ` interpolates its
+//! tabulated solution ([`EiTable`], within 1e-9 of the Newton solve) instead of solving.
 
-use crate::delay_line::{DelayLine, Interpolation};
+use crate::delay_line::{DelayLine, Interpolation, Tap};
+use crate::ei::EiTable;
 use crate::error::{Error, Status};
-use crate::shaper::{ImpulseArray, Mode, ShaperKind, MAX_IMPULSES};
+use crate::shaper::{DampedShape, ImpulseArray, Mode, ShaperKind, MAX_IMPULSES};
 
 /// One time-varying shaper for one mode, applied to all channels.
 #[derive(Debug, Clone)]
 pub struct ModeFilter {
     kind: ShaperKind,
+    /// `1 / dt_s`, samples per second.
+    rate_hz: f64,
     dt_s: f64,
     line: DelayLine,
     /// Last valid mode seen; `None` until the first one (the filter then passes through).
     held: Option<Mode>,
+    /// Damping ratio `shape` was designed for (after limiting); NaN before the first design.
+    shape_zeta: f64,
+    /// The sequence for `shape_zeta`, times as phases `ω_n t`.
+    shape: DampedShape,
     /// The sequence used in the latest cycle, designed for `held`.
     impulses: ImpulseArray,
-    /// `impulses.times_s() / dt_s`: the delays in samples (entries past its length are 0).
-    delays_samples: [f64; MAX_IMPULSES],
-    /// True if `impulses` was designed with ζ limited to the shaper's range.
-    zeta_clamped: bool,
-    /// True if the held mode's `ω_n` is at or above the Nyquist frequency `π/dt_s`.
-    above_nyquist: bool,
+    /// One prepared read per impulse of `impulses` (the first `impulses.len()` are used).
+    taps: [Tap; MAX_IMPULSES],
+    /// What the current design reports every cycle: [`Status::ZETA_CLAMPED`] if `ζ` was
+    /// limited to the shaper's range, [`Status::DELAY_CLAMPED`] if a delay exceeds the line.
+    design_status: Status,
+    /// The exact EI solution over `ζ` (EI shapers only).
+    ei_table: Option<EiTable>,
     /// Output of the latest cycle, one value per channel.
     output: Vec<f64>,
 }
@@ -47,17 +61,22 @@ impl ModeFilter {
                 "max_delay_s = {max_delay_s} must be finite and >= 0"
             )));
         }
-        Ok(ModeFilter {
+        let mut filter = ModeFilter {
             kind,
+            rate_hz: 1.0 / dt_s,
             dt_s,
             line: DelayLine::new(n_channels, max_delay_s / dt_s, interp)?,
             held: None,
+            shape_zeta: f64::NAN,
+            shape: DampedShape::IDENTITY,
             impulses: ImpulseArray::IDENTITY,
-            delays_samples: [0.0; MAX_IMPULSES],
-            zeta_clamped: false,
-            above_nyquist: false,
+            taps: [Tap::default(); MAX_IMPULSES],
+            design_status: Status::OK,
+            ei_table: kind.ei_tolerance().map(EiTable::new),
             output: vec![0.0; n_channels],
-        })
+        };
+        filter.forget_mode();
+        Ok(filter)
     }
 
     /// Puts the filter at rest at `x0`: its whole history equals `x0`.
@@ -71,17 +90,11 @@ impl ModeFilter {
     /// Forgets the held mode (used when a shaper is reset).
     pub fn forget_mode(&mut self) {
         self.held = None;
-        self.zeta_clamped = false;
-        self.above_nyquist = false;
-        self.set_impulses(ImpulseArray::IDENTITY);
-    }
-
-    fn set_impulses(&mut self, impulses: ImpulseArray) {
-        self.impulses = impulses;
-        self.delays_samples = [0.0; MAX_IMPULSES];
-        for (d, &t) in self.delays_samples.iter_mut().zip(impulses.times_s()) {
-            *d = t / self.dt_s;
-        }
+        self.shape_zeta = f64::NAN;
+        self.shape = DampedShape::IDENTITY;
+        self.impulses = ImpulseArray::IDENTITY;
+        self.taps[0] = self.line.tap(0.0, 1.0).0;
+        self.design_status = Status::OK;
     }
 
     /// One cycle: push `input`, design the sequence for `mode` (or hold the last valid one),
@@ -91,41 +104,85 @@ impl ModeFilter {
     /// ratio beyond [`ShaperKind::max_zeta`] is limited to it ([`Status::ZETA_CLAMPED`]); a
     /// mode at or above the Nyquist frequency is shaped as given and reported
     /// ([`Status::MODE_ABOVE_NYQUIST`]).
+    #[inline]
     pub fn step(&mut self, input: &[f64], mode: Mode) -> Status {
-        let mut status = Status::OK;
-        if mode.is_valid() {
-            if self.held != Some(mode) {
-                let (design_mode, limited) = self.kind.within_range(mode);
-                self.zeta_clamped = limited;
-                self.above_nyquist = mode.wn_rad_s * self.dt_s >= core::f64::consts::PI;
-                self.set_impulses(self.kind.design(design_mode));
-                self.held = Some(mode);
-            }
+        let status = match self.held {
+            Some(h) if h.wn_rad_s == mode.wn_rad_s && h.zeta == mode.zeta => self.design_status,
+            _ => self.take_mode(mode),
+        };
+        let n = self.impulses.len().min(MAX_IMPULSES);
+        self.line
+            .push_and_read(input, &self.taps[..n], &mut self.output);
+        status
+    }
+
+    /// [`Self::step`] for exactly `N` channels (the filter's channel count).
+    #[inline(always)]
+    pub(crate) fn step_fixed<const N: usize>(&mut self, input: &[f64; N], mode: Mode) -> Status {
+        let status = match self.held {
+            Some(h) if h.wn_rad_s == mode.wn_rad_s && h.zeta == mode.zeta => self.design_status,
+            _ => self.take_mode(mode),
+        };
+        let n = self.impulses.len().min(MAX_IMPULSES);
+        self.line
+            .push_and_read_fixed(input, &self.taps[..n], &mut self.output);
+        status
+    }
+
+    /// The output of the latest cycle as `N` values (zeros if the filter has another count).
+    #[inline]
+    pub(crate) fn output_fixed<const N: usize>(&self) -> [f64; N] {
+        <[f64; N]>::try_from(self.output.as_slice()).unwrap_or([0.0; N])
+    }
+
+    /// A mode other than the held one: redesign for it if valid, hold otherwise. Returns the
+    /// cycle's status.
+    fn take_mode(&mut self, mode: Mode) -> Status {
+        if !mode.is_valid() {
+            let unshaped = if self.held.is_none() {
+                Status::UNSHAPED
+            } else {
+                Status::OK
+            };
+            return Status::MODES_HELD | unshaped | self.design_status;
+        }
+        let (design_mode, limited) = self.kind.within_range(mode);
+        if design_mode.zeta != self.shape_zeta {
+            self.shape = match &self.ei_table {
+                // A change of ζ while shaping: the tabulated exact solution. The first design
+                // (after construction or a reset) is solved, so constant modes get exactly
+                // the offline design.
+                Some(table) if self.held.is_some() => {
+                    let (amplitudes, phases_rad) = table.shape(design_mode.zeta);
+                    DampedShape::three(&amplitudes, &phases_rad)
+                }
+                _ => self.kind.damped_shape(design_mode.zeta),
+            };
+            self.shape_zeta = design_mode.zeta;
+        }
+        self.held = Some(mode);
+        self.impulses = self.shape.at(design_mode.wn_rad_s);
+        let mut status = if limited {
+            Status::ZETA_CLAMPED
         } else {
-            status |= Status::MODES_HELD;
-            if self.held.is_none() {
-                status |= Status::UNSHAPED;
-            }
-        }
-        if self.zeta_clamped {
-            status |= Status::ZETA_CLAMPED;
-        }
-        if self.above_nyquist {
+            Status::OK
+        };
+        // A mode at or above the Nyquist frequency π/dt_s is shaped as given (its impulses
+        // fall within about one sample) and reported every cycle it is held.
+        if mode.wn_rad_s * self.dt_s >= core::f64::consts::PI {
             status |= Status::MODE_ABOVE_NYQUIST;
         }
-        self.line.push(input);
-        self.output.fill(0.0);
-        let n = self.impulses.len();
-        for (&a, &d) in self
-            .impulses
-            .amplitudes()
-            .iter()
-            .zip(&self.delays_samples[..n])
-        {
-            if self.line.accumulate(d, a, &mut self.output) {
-                status |= Status::DELAY_CLAMPED;
-            }
+        let (amplitudes, times_s) = (self.impulses.amplitudes(), self.impulses.times_s());
+        for ((tap, a), t) in self.taps.iter_mut().zip(amplitudes).zip(times_s) {
+            let (prepared, clamped) = self.line.tap(t * self.rate_hz, *a);
+            *tap = prepared;
+            status |= if clamped {
+                Status::DELAY_CLAMPED
+            } else {
+                Status::OK
+            };
         }
+        self.design_status = status;
         status
     }
 

@@ -127,6 +127,44 @@ fn jacobian_matches_finite_differences_of_the_flange_pose() {
 /// Massless links and a point payload at the flange origin: `M = m J_vᵀ J_v` and
 /// `τ_g = m g J_v[z, :]`, an identity independent of the composite-body algebra.
 #[test]
+fn leading_joint_inertias_and_gravity_equal_the_full_evaluation() {
+    let mut rng = Rng(0xBEEF);
+    for name in ROBOTS {
+        let mut robot = ur_robot(name, 4.0);
+        let n = robot.n_dof();
+        for _ in 0..100 {
+            let q = rng.pose(n);
+            let (mut j_all, mut tau_all) = (vec![0.0; n], vec![0.0; n]);
+            assert!(robot.gravity_torque(&q, &mut tau_all).is_ok());
+            assert!(robot.joint_inertia(&q, &mut j_all).is_ok());
+            for joints in 0..=n {
+                let (mut j, mut tau) = (vec![f64::NAN; n], vec![f64::NAN; n]);
+                let status =
+                    robot.leading_joint_inertia_and_gravity(&q, joints, &mut j, Some(&mut tau));
+                assert!(status.is_ok());
+                for i in 0..n {
+                    if i < joints {
+                        // Per-body sums (joint 0 at angle 0: both quantities are independent
+                        // of it) against the composite-body algorithm: independent arithmetic,
+                        // equal to round-off. The composite algorithm sums inertias about the
+                        // base origin, so its rounding is relative to the largest, J_0.
+                        let tol = 1e-12 * j_all[0];
+                        assert!((j[i] - j_all[i]).abs() <= tol, "{name} J{i}");
+                        let scale = tau_all[i].abs().max(1.0);
+                        assert!((tau[i] - tau_all[i]).abs() <= 1e-12 * scale, "{name} τ{i}");
+                    } else {
+                        assert!(j[i].is_nan() && tau[i].is_nan(), "{name}: {i} was written");
+                    }
+                }
+            }
+        }
+        let mut j = vec![0.0; n];
+        let status = robot.leading_joint_inertia_and_gravity(&vec![0.0; n], n + 1, &mut j, None);
+        assert_eq!(status, Status::BAD_LENGTH);
+    }
+}
+
+#[test]
 fn point_payload_mass_matrix_and_gravity_follow_from_the_jacobian() {
     let mut rng = Rng(7);
     let m_kg = 2.5;
