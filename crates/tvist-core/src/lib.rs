@@ -10,6 +10,8 @@
 //!   inertia (composite rigid body) and gravity torques, allocation-free per call.
 //! - [`dynmap`]: the dynamic map from joint-axis inertias to modes (eqs. 42–51).
 //! - [`map_dynamics`]: the provider that evaluates robot inertia and map every cycle.
+//! - [`modal_map`]: modes from the mass matrix and joint flexibility (generalized eigenproblem,
+//!   [`sym_eigen`]); [`modal_dynamics`]: its per-cycle provider.
 //! - `robot_data` (feature `json`): the UR e-series parameter file, embedded.
 //! - [`ztdis`]: zero-time-delay shaping: time scales and the modified-ZTDIS compensator.
 //!
@@ -24,12 +26,15 @@ pub mod ei;
 pub mod error;
 mod held_input;
 pub mod map_dynamics;
+pub mod modal_dynamics;
+pub mod modal_map;
 pub mod multimode;
 pub mod prv;
 pub mod robot;
 #[cfg(feature = "json")]
 pub mod robot_data;
 pub mod shaper;
+pub mod sym_eigen;
 pub mod tvist;
 pub mod ztdis;
 
@@ -38,6 +43,8 @@ pub use dynamics::{ConstantModes, Dynamics};
 pub use dynmap::{DynamicMap, InertiaRange, MapCoefficients, ModeMap};
 pub use error::{Error, Status};
 pub use map_dynamics::MapDynamics;
+pub use modal_dynamics::ModalDynamics;
+pub use modal_map::{FlexJoint, LoadLaw, ModalMap};
 pub use multimode::{TvShaper, TvShaperConfig};
 pub use prv::prv;
 pub use robot::{DhJoint, RigidBody, Robot};

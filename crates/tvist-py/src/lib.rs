@@ -10,6 +10,7 @@ use tvist_core as core;
 use tvist_core::{Dynamics, Mode, Status};
 
 mod convert;
+mod modal;
 mod robot;
 mod ztdis;
 
@@ -205,6 +206,7 @@ enum Provider {
     Constant(core::ConstantModes),
     Callable(CallableModes),
     Map(Box<core::MapDynamics>),
+    Modal(Box<core::ModalDynamics>),
 }
 
 impl Dynamics for Provider {
@@ -213,6 +215,7 @@ impl Dynamics for Provider {
             Provider::Constant(p) => p.n_modes(),
             Provider::Callable(p) => p.n_modes(),
             Provider::Map(p) => p.n_modes(),
+            Provider::Modal(p) => p.n_modes(),
         }
     }
     fn modes(&mut self, q: &[f64], out: &mut [Mode]) -> Status {
@@ -220,6 +223,7 @@ impl Dynamics for Provider {
             Provider::Constant(p) => p.modes(q, out),
             Provider::Callable(p) => p.modes(q, out),
             Provider::Map(p) => p.modes(q, out),
+            Provider::Modal(p) => p.modes(q, out),
         }
     }
     fn slowest_mode(&self, index: usize) -> Option<Mode> {
@@ -227,6 +231,7 @@ impl Dynamics for Provider {
             Provider::Constant(p) => p.slowest_mode(index),
             Provider::Callable(p) => p.slowest_mode(index),
             Provider::Map(p) => p.slowest_mode(index),
+            Provider::Modal(p) => p.slowest_mode(index),
         }
     }
     fn n_dof(&self) -> Option<usize> {
@@ -234,6 +239,7 @@ impl Dynamics for Provider {
             Provider::Constant(p) => p.n_dof(),
             Provider::Callable(p) => p.n_dof(),
             Provider::Map(p) => p.n_dof(),
+            Provider::Modal(p) => p.n_dof(),
         }
     }
 }
@@ -300,6 +306,8 @@ impl PyTvShaper {
             Provider::Constant(c.get().inner.clone())
         } else if let Ok(m) = dynamics.cast::<robot::PyMapDynamics>() {
             Provider::Map(Box::new(m.borrow().inner.clone()))
+        } else if let Ok(m) = dynamics.cast::<modal::PyModalDynamics>() {
+            Provider::Modal(Box::new(m.borrow().inner.clone()))
         } else if dynamics.is_callable() {
             if max_delay_s.is_none() {
                 return Err(PyValueError::new_err(
@@ -511,6 +519,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyConstantModes>()?;
     m.add_class::<PyTvShaper>()?;
     robot::register(m)?;
+    modal::register(m)?;
     m.add_function(wrap_pyfunction!(design_shaper, m)?)?;
     m.add_function(wrap_pyfunction!(convolve, m)?)?;
     m.add_function(wrap_pyfunction!(prv_flat, m)?)?;
