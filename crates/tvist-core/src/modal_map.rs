@@ -87,7 +87,8 @@ impl LoadLaw {
     }
 
     fn validate(&self, what: &str, positive_at_zero: bool) -> Result<(), Error> {
-        let finite = self.at_zero.is_finite() && self.per_nm.is_finite() && self.per_nm2.is_finite();
+        let finite =
+            self.at_zero.is_finite() && self.per_nm.is_finite() && self.per_nm2.is_finite();
         let at_zero_ok = if positive_at_zero {
             self.at_zero > 0.0
         } else {

@@ -167,8 +167,12 @@ impl PyModalMap {
             } else {
                 &tau[r * n_dof..(r + 1) * n_dof]
             };
-            self.inner
-                .modes_from_mass_matrix(&mass[r * nn..(r + 1) * nn], n_dof, tau_row, &mut modes);
+            self.inner.modes_from_mass_matrix(
+                &mass[r * nn..(r + 1) * nn],
+                n_dof,
+                tau_row,
+                &mut modes,
+            );
             for (pair, mode) in chunk.chunks_exact_mut(2).zip(&modes) {
                 pair[0] = mode.wn_rad_s;
                 pair[1] = mode.zeta;

@@ -197,6 +197,10 @@ def _cmd_fit_map(args: argparse.Namespace) -> int:
     if not results:
         print(f"{args.results}: no pose records", file=sys.stderr)
         return 1
+    if args.kind == "modal":
+        from tvist.ident.modal_fit import fit_map_command
+
+        return fit_map_command(results, args)
     dynmap = fit_map(
         results,
         include_low_confidence=args.include_low_confidence,
@@ -239,6 +243,12 @@ def add_fit_map_command(sub: argparse._SubParsersAction) -> None:
     p.add_argument("results", help="campaign results (JSON lines)")
     p.add_argument("--out", default="out/map.json", help="map file to write")
     p.add_argument("--robot", default="ur5e", help="robot model name stored in the map")
+    p.add_argument(
+        "--kind",
+        choices=("paper10", "modal"),
+        default="paper10",
+        help="map form: the published 10 coefficients (paper10) or the modal map (modal)",
+    )
     p.add_argument(
         "--include-low-confidence", action="store_true", help="also use flagged identifications"
     )
