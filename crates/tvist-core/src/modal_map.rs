@@ -78,8 +78,13 @@ impl LoadLaw {
     /// The value at gravity torque `load_nm` (N m).
     #[inline]
     pub fn value(&self, load_nm: f64) -> f64 {
-        let l = smooth_abs_torque_nm(load_nm);
-        self.at_zero + self.per_nm * l + self.per_nm2 * load_nm * load_nm
+        // The smooth |L| only where it is read (it costs a square root).
+        let linear = if self.per_nm == 0.0 {
+            0.0
+        } else {
+            self.per_nm * smooth_abs_torque_nm(load_nm)
+        };
+        self.at_zero + linear + self.per_nm2 * load_nm * load_nm
     }
 
     fn uses_load(&self) -> bool {

@@ -647,3 +647,30 @@ def _se_text(se: float | None) -> str:
 
 def _per(term: str) -> str:
     return {"at_zero": "", "per_nm": " per N m", "per_nm2": " per (N m)²"}[term]
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m tvist.ident.modal_fit RESULTS.jsonl [--robot R] [--folds K]``: both map
+    forms' errors, in-sample and on held-out poses, as a markdown table."""
+    import argparse
+
+    from tvist.ident.campaign import load_results
+
+    p = argparse.ArgumentParser(prog="python -m tvist.ident.modal_fit", description=main.__doc__)
+    p.add_argument("results", help="campaign results (JSON lines)")
+    p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
+    p.add_argument("--folds", type=int, default=5, help="folds over poses (default 5)")
+    args = p.parse_args(argv)
+    records = load_results(args.results)
+    try:
+        cv = cross_validate(records, args.robot, folds=args.folds)
+    except ValueError as exc:
+        print(f"python -m tvist.ident.modal_fit: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"{cv['n_poses']} poses, {cv['folds']}-fold over poses (seed {cv['seed']})")
+    print(format_comparison(cv))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,69 @@
+"""The demo's modal-map row: a :class:`tvist.ModalMap` fitted to the same reduced campaign as
+the identified published map, shaping through the same real-time path
+(``tvist.MapDynamics(robot, modal_map)``, evaluated in Rust every cycle)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import tvist
+from tvist.demo.methods import TVIST_SHAPER, Method, MotionContext, Reference, _run_tv_shaper
+from tvist.modal_map import ModalMap
+
+KEY = "fd-tvist-identified-modal-map"
+LABEL = "FD-TVIST ZV, identified modal map"
+MAP_FILE = "identified_modal_map.json"
+
+
+def fd_tvist_modal(key: str, label: str, modal: ModalMap) -> Method:
+    """A two-mode ZV FD-TVIST row driven by ``modal`` through :class:`tvist.MapDynamics`."""
+
+    def build(ctx: MotionContext) -> Reference:
+        provider = tvist.MapDynamics(ctx.robot, modal)
+        shaper = tvist.TvShaper(
+            provider, ctx.trajectory.dt_s, ctx.trajectory.n_dof, shaper=TVIST_SHAPER
+        )
+        source = modal.metadata.get("source") or "modal map"
+        return _run_tv_shaper(shaper, ctx, f"MapDynamics (modal): {source}")
+
+    # ``dynmap`` only needs ``modes(robot, q)`` (the mode tracks of the report).
+    return Method(key=key, label=label, build=build, dynmap=modal)  # type: ignore[arg-type]
+
+
+def identify_modal_map(
+    records: Sequence[dict], out_dir: str | Path, log: Any = None
+) -> tuple[Method | None, dict[str, Any]]:
+    """Fit the modal map to the demo campaign's ``records``, save it next to them, and return
+    its row with a summary (errors against the twin's true modes at the campaign poses), or
+    ``(None, {"error": ...})`` if the fit fails."""
+    from tvist.ident.modal_fit import fit_modal_map, modal_poses, relative_errors
+
+    try:
+        poses = modal_poses(records, "ur5e")
+        modal = fit_modal_map(
+            poses,
+            "ur5e",
+            metadata={"source": f"reduced campaign on the twin ({poses.n_poses} poses)"},
+        )
+        modal.save(Path(out_dir) / MAP_FILE)
+    except ValueError as exc:
+        if log is not None:
+            log(f"identified modal map skipped: {exc}")
+        return None, {"error": str(exc)}
+    pred = modal.modes_from_mass_matrix_many(
+        poses.mass_kg_m2, poses.gravity_torque_nm if modal.uses_gravity else None
+    )
+    usable = np.isfinite(poses.wn_rad_s)
+    truth_wn = np.where(usable, poses.true_wn_rad_s, np.nan)
+    truth_zeta = np.where(usable, poses.true_zeta, np.nan)
+    summary = {
+        "map_file": MAP_FILE,
+        "flex_joints": modal.flex_joints,
+        "fit_statistics": modal.metadata["fit_statistics"],
+        "versus_true_modes": relative_errors(pred, truth_wn, truth_zeta),
+    }
+    return fd_tvist_modal(KEY, LABEL, modal), summary
