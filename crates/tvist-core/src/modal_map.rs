@@ -39,9 +39,11 @@
 //! non-negative and `k_0 > 0`, so stiffness is positive everywhere.
 //!
 //! **Mode assignment.** The modes to shape are named by a joint each (`mode_joints`, e.g.
-//! `[0, 1]` for base then shoulder): mode `m` is the not-yet-assigned eigenmode that stores
-//! the largest share of its strain energy in joint `mode_joints[m]`. So "base" and
-//! "shoulder" keep their meaning when the frequencies cross.
+//! `[0, 1]` for base then shoulder): mode `m` is the eigenmode that stores the largest share
+//! of its strain energy in joint `mode_joints[m]`, so "base" and "shoulder" keep their
+//! meaning when the frequencies cross. Precisely, a share-weighted average (weights
+//! `share^4`) of the eigenmodes: the dominant one where one dominates, a continuous blend
+//! where two close modes share the joint (see `ModalMap::assign`).
 //!
 //! Evaluation ([`ModalMap::modes_from_mass_matrix`]) uses fixed-size arrays only: no
 //! allocation, no panic.
@@ -268,7 +270,7 @@ impl ModalMap {
             strain_share: [[0.0; MAX_FLEX_JOINTS]; MAX_FLEX_JOINTS],
         };
         for i in 0..nf {
-            if !(mu[i] > 0.0) {
+            if mu[i].is_nan() || mu[i] <= 0.0 {
                 return None;
             }
             let wn = 1.0 / mu[i].sqrt();
@@ -310,29 +312,33 @@ impl ModalMap {
         Status::OK
     }
 
-    /// Assigns eigenmodes to the shaped modes by dominant joint (module docs).
+    /// Assigns eigenmodes to the shaped modes by dominant joint (module docs): mode `m` is
+    /// the average of the eigenmodes weighted by `share^ASSIGNMENT_POWER` of their strain
+    /// energy in joint `m`. Where one eigenmode dominates the joint (the usual case) that is
+    /// the eigenmode itself to well under a per mille; where two eigenmodes share the joint
+    /// (a veering of two close frequencies) it blends them, so the shaped modes stay
+    /// continuous along a motion instead of jumping between the two branches (a jump in a
+    /// filter's delay is a step in the shaped reference).
     fn assign(&self, sol: &ModalSolution, out: &mut [Mode]) {
-        let mut taken = [false; MAX_FLEX_JOINTS];
         for (o, &f) in out.iter_mut().zip(&self.mode_flex_index) {
-            let mut best: Option<usize> = None;
+            let (mut sum_w, mut wn, mut zeta) = (0.0, 0.0, 0.0);
             for i in 0..sol.n {
-                if taken[i] {
-                    continue;
-                }
-                if best.is_none_or(|b| sol.strain_share[i][f] > sol.strain_share[b][f]) {
-                    best = Some(i);
-                }
+                let w = sol.strain_share[i][f].powi(ASSIGNMENT_POWER);
+                sum_w += w;
+                wn += w * sol.wn_rad_s[i];
+                zeta += w * sol.zeta[i];
             }
-            *o = match best {
-                Some(i) => {
-                    taken[i] = true;
-                    Mode::new(sol.wn_rad_s[i], sol.zeta[i])
-                }
-                None => Mode::new(f64::NAN, f64::NAN),
+            *o = if sum_w > 0.0 {
+                Mode::new(wn / sum_w, zeta / sum_w)
+            } else {
+                Mode::new(f64::NAN, f64::NAN)
             };
         }
     }
 }
+
+/// Exponent of the strain-energy shares that weigh the eigenmodes of one shaped mode.
+pub const ASSIGNMENT_POWER: i32 = 4;
 
 #[cfg(test)]
 mod tests {

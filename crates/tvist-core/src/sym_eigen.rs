@@ -135,6 +135,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::needless_range_loop)] // a symmetric fill reads clearest with indices
     fn six_by_six_residuals_and_orthonormality() {
         let mut a = [[0.0; MAX_DIM]; MAX_DIM];
         let mut seed = 7u64;

@@ -39,7 +39,8 @@ fn two_coupled_joints_match_the_characteristic_equation() {
         // Off-diagonal up to 90 % of the geometric mean: strongly coupled yet positive definite.
         let m12 = 0.9 * (2.0 * rng.next_f64() - 1.0) * (m11 * m22).sqrt();
         let (k1, k2) = (1e3 + 1e5 * rng.next_f64(), 1e3 + 1e5 * rng.next_f64());
-        let map = ModalMap::new(vec![joint(0, k1, 0.0), joint(1, k2, 0.0)], &[0, 1]).unwrap();
+        let map =
+            ModalMap::new(vec![joint(0, k1, 0.0), joint(1, k2, 0.0)], &[0, 1]).expect("valid");
         let sol = map
             .solve(&[m11, m12, m12, m22], 2, &[])
             .expect("positive definite");
@@ -60,7 +61,7 @@ fn two_coupled_joints_match_the_characteristic_equation() {
 #[test]
 fn modal_damping_of_a_single_joint_is_exact() {
     // One flexible joint: ζ = c / (2 √(k J)) exactly, whatever the rest of M.
-    let map = ModalMap::new(vec![joint(1, 2.0e4, 300.0)], &[1]).unwrap();
+    let map = ModalMap::new(vec![joint(1, 2.0e4, 300.0)], &[1]).expect("valid");
     let mass = [3.0, 0.4, 0.4, 5.0];
     let mut out = [Mode::new(0.0, 0.0)];
     assert!(map.modes_from_mass_matrix(&mass, 2, &[], &mut out).is_ok());
@@ -86,7 +87,7 @@ fn modes_keep_their_joint_through_a_frequency_crossing() {
             vec![joint(0, k_base, 20.0), joint(1, k_shoulder, 80.0)],
             &[0, 1],
         )
-        .unwrap();
+        .expect("valid");
         let mut out = [Mode::new(0.0, 0.0); 2];
         map.modes_from_mass_matrix(&mass, 2, &[], &mut out);
         if let Some(prev) = previous {
@@ -118,11 +119,12 @@ fn the_ur5e_provider_gives_valid_modes_above_its_delay_bound() {
         ],
         &[0, 1],
     )
-    .unwrap();
-    let mut provider = ModalDynamics::new(robot_support::ur_robot("ur5e", 5.0), map).unwrap();
+    .expect("valid");
+    let mut provider =
+        ModalDynamics::new(robot_support::ur_robot("ur5e", 5.0), map).expect("valid");
     let slowest = [
-        provider.slowest_mode(0).unwrap(),
-        provider.slowest_mode(1).unwrap(),
+        provider.slowest_mode(0).expect("valid"),
+        provider.slowest_mode(1).expect("valid"),
     ];
     let mut rng = robot_support::Rng(17);
     let mut out = [Mode::new(0.0, 0.0); 2];

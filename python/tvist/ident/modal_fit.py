@@ -58,6 +58,8 @@ MODE_JOINTS = (0, 1)
 DEFAULT_DAMPING_LOAD = {0: 1}
 #: A joint whose gravity torque stays below this over the poses gets no load terms, N m.
 MIN_LOAD_SPAN_NM = 1.0
+#: Relative frequency error beyond which a residual counts as an outlier (robust loss).
+ROBUST_SCALE = 0.02
 #: A fitted zero-load stiffness stays within this factor of its starting value.
 STIFFNESS_SPAN = 100.0
 _LSQ = {"x_scale": "jac", "xtol": 1e-12, "ftol": 1e-12, "gtol": 1e-12, "max_nfev": 400}
@@ -261,7 +263,12 @@ def _fit_stiffness(
     span = math.log(STIFFNESS_SPAN)
     lower = [x0[i] - span if t.name == "k_0" else 0.0 for i, t in enumerate(terms)]
     upper = [x0[i] + span if t.name == "k_0" else np.inf for i, t in enumerate(terms)]
-    res = optimize.least_squares(residual, x0, bounds=(lower, upper), **_LSQ)
+    # A robust loss: a mode the local fit mistook for another (a few per cent of a campaign's
+    # poses, folded ones) must not pull the stiffnesses; residuals up to ROBUST_SCALE weigh
+    # as in plain least squares.
+    res = optimize.least_squares(
+        residual, x0, bounds=(lower, upper), loss="soft_l1", f_scale=ROBUST_SCALE, **_LSQ
+    )
     return _stiffness_laws(res.x, terms, flex_joints), res.x, res.jac, res.fun
 
 
@@ -393,6 +400,29 @@ def fit_modal_map(
     while True:
         stiffness, x, jac, fun = _fit_stiffness(poses, flex_joints, stiff_terms, load, start)
         se = _standard_errors(jac, fun)
+        # A flexible joint other than base and shoulder whose stiffness the poses cannot
+        # determine (standard error of log k above 0.5, or k at its bound) is made rigid.
+        undetermined = [
+            (se[i], t.joint)
+            for i, t in enumerate(stiff_terms)
+            if t.name == "k_0"
+            and t.joint not in MODE_JOINTS
+            and (
+                not se[i] < 0.5
+                or abs(x[i] - math.log(start[t.joint])) > 0.999 * math.log(STIFFNESS_SPAN)
+            )
+        ]
+        if undetermined:
+            rigid = max(undetermined)[1]
+            i = next(i for i, t in enumerate(stiff_terms) if t.joint == rigid and t.name == "k_0")
+            dropped[f"joint {rigid} made rigid"] = {
+                "stiffness_nm_per_rad": stiffness[rigid][0],
+                "se_log": _json_number(se[i]),
+            }
+            flex_joints = tuple(j for j in flex_joints if j != rigid)
+            stiff_terms = [t for t in stiff_terms if t.joint != rigid]
+            damp_terms = [t for t in damp_terms if t.joint != rigid]
+            continue
         weak = [
             (abs(x[i]) / se[i] if se[i] > 0 else math.inf, i)
             for i, t in enumerate(stiff_terms)
