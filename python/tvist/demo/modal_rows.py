@@ -50,6 +50,12 @@ def identify_modal_map(
             metadata={"source": f"reduced campaign on the twin ({poses.n_poses} poses)"},
         )
         modal.save(Path(out_dir) / MAP_FILE)
+        # The real-time provider rejects a map with an overdamped mode at a sampled pose.
+        from tvist.demo.motions import PAYLOAD_COM_M, PAYLOAD_KG
+
+        tvist.MapDynamics(
+            tvist.robots.ur5e(payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M), modal
+        )
     except ValueError as exc:
         if log is not None:
             log(f"identified modal map skipped: {exc}")
