@@ -48,6 +48,7 @@ def test_quick_demo_writes_results_report_and_figures(quick_run):
         "fd-tvist-truth",
         "fd-tvist-paper-map",
         "fd-tvist-identified-map",
+        "fd-tvist-identified-modal-map",
         "zero-delay-modified",
         "zero-delay-ztdis",
         "fixed-start",

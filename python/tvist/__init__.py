@@ -13,6 +13,7 @@ import numpy as np
 from tvist import _core, robots
 from tvist._core import ConstantModes, Impulses, TvShaper
 from tvist.dynmap import DynamicMap, MapDynamics
+from tvist.modal_map import ModalDynamics, ModalMap
 from tvist.ztdis import ZeroDelayResult, zero_delay
 
 __all__ = [
@@ -23,6 +24,8 @@ __all__ = [
     "DynamicMap",
     "Impulses",
     "MapDynamics",
+    "ModalDynamics",
+    "ModalMap",
     "Status",
     "TvShaper",
     "ZeroDelayResult",

@@ -121,6 +121,42 @@ class MapDynamics:
     @property
     def n_modes(self) -> int: ...
 
+# --- modal map (crates/tvist-py/src/modal.rs) ---
+
+FLEX_JOINT_FIELDS: list[str]
+
+class ModalMap:
+    def __init__(
+        self, flex_joints: Sequence[dict[str, Any]], mode_joints: Sequence[int]
+    ) -> None: ...
+    @property
+    def flex_joints(self) -> list[dict[str, Any]]: ...
+    @property
+    def mode_joints(self) -> list[int]: ...
+    @property
+    def n_modes(self) -> int: ...
+    @property
+    def required_joints(self) -> int: ...
+    @property
+    def uses_gravity(self) -> bool: ...
+    def modes_from_mass_matrix_many(
+        self,
+        mass_kg_m2: npt.NDArray[np.float64],
+        n_dof: int,
+        gravity_torque_nm: npt.NDArray[np.float64] | None = None,
+    ) -> npt.NDArray[np.float64]: ...
+
+class ModalDynamics:
+    validation_poses: int
+    def __init__(self, robot: Robot, modal_map: ModalMap) -> None: ...
+    def modes(self, q: npt.NDArray[np.float64]) -> list[tuple[float, float]]: ...
+    @property
+    def slowest_modes(self) -> list[tuple[float, float]]: ...
+    @property
+    def n_dof(self) -> int: ...
+    @property
+    def n_modes(self) -> int: ...
+
 # --- shaping core: shapers, PRV, multi-mode FD-TVIST (crates/tvist-py/src/lib.rs) ---
 
 SHAPERS: list[str]
@@ -154,7 +190,7 @@ class ConstantModes:
 class TvShaper:
     def __init__(
         self,
-        dynamics: ConstantModes | MapDynamics | Any,
+        dynamics: ConstantModes | MapDynamics | ModalDynamics | Any,
         dt_s: float,
         n_dof: int,
         shaper: str = "zv",

@@ -305,6 +305,10 @@ class MapDynamics(_core.MapDynamics):
     def __new__(
         cls, robot: Robot, dynmap: DynamicMap, *, allow_other_robot: bool = False
     ) -> MapDynamics:
+        from tvist.modal_map import ModalDynamics, ModalMap
+
+        if isinstance(dynmap, ModalMap):  # the modal map's own provider (same protocol)
+            return ModalDynamics(robot, dynmap)  # type: ignore[return-value]
         if not isinstance(robot, Robot):
             raise TypeError(f"robot must be a tvist.robots.Robot, got {type(robot).__name__}")
         if not isinstance(dynmap, DynamicMap):

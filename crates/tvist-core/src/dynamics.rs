@@ -2,6 +2,7 @@
 
 use crate::error::{Error, Status};
 use crate::map_dynamics::MapDynamics;
+use crate::modal_dynamics::ModalDynamics;
 use crate::shaper::Mode;
 
 /// Supplies the modes `(ω_n, ζ)` to shape for, given the configuration `q` (the previous
@@ -84,13 +85,15 @@ impl<D: Dynamics + ?Sized> Dynamics for Box<D> {
     }
 }
 
-/// Every kind of provider the bindings offer, in one type: fixed modes, a dynamic map, or a
+/// Every kind of provider the bindings offer, in one type: fixed modes, a dynamic map, a modal
+/// map, or a
 /// binding-specific callback `C` (the Python bindings call a Python function; the C API has
 /// none and uses [`NoCallback`]). A new provider kind is one more variant here.
 #[derive(Debug)]
 pub enum Provider<C = NoCallback> {
     Constant(ConstantModes),
     Map(Box<MapDynamics>),
+    Modal(Box<ModalDynamics>),
     Callback(C),
 }
 
@@ -115,6 +118,7 @@ impl<C: Dynamics> Dynamics for Provider<C> {
         match self {
             Provider::Constant(p) => p.n_modes(),
             Provider::Map(p) => p.n_modes(),
+            Provider::Modal(p) => p.n_modes(),
             Provider::Callback(p) => p.n_modes(),
         }
     }
@@ -123,6 +127,7 @@ impl<C: Dynamics> Dynamics for Provider<C> {
         match self {
             Provider::Constant(p) => p.modes(q, out),
             Provider::Map(p) => p.modes(q, out),
+            Provider::Modal(p) => p.modes(q, out),
             Provider::Callback(p) => p.modes(q, out),
         }
     }
@@ -130,6 +135,7 @@ impl<C: Dynamics> Dynamics for Provider<C> {
         match self {
             Provider::Constant(p) => p.slowest_mode(index),
             Provider::Map(p) => p.slowest_mode(index),
+            Provider::Modal(p) => p.slowest_mode(index),
             Provider::Callback(p) => p.slowest_mode(index),
         }
     }
@@ -137,6 +143,7 @@ impl<C: Dynamics> Dynamics for Provider<C> {
         match self {
             Provider::Constant(p) => p.n_dof(),
             Provider::Map(p) => p.n_dof(),
+            Provider::Modal(p) => p.n_dof(),
             Provider::Callback(p) => p.n_dof(),
         }
     }

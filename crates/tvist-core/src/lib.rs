@@ -10,6 +10,8 @@
 //!   inertia (composite rigid body) and gravity torques, allocation-free per call.
 //! - [`dynmap`]: the dynamic map from joint-axis inertias to modes (eqs. 42–51).
 //! - [`map_dynamics`]: the provider that evaluates robot inertia and map every cycle.
+//! - [`modal_map`]: modes from the mass matrix and joint flexibility (generalized eigenproblem,
+//!   [`sym_eigen`]); [`modal_dynamics`]: its per-cycle provider.
 //! - `robot_data` (feature `json`): the UR e-series parameter file (`data/`), embedded and
 //!   parsed once.
 //! - `map_file` (feature `json`): the map file format: parse, validate, write.
@@ -30,12 +32,15 @@ pub mod limits;
 pub mod map_dynamics;
 #[cfg(feature = "json")]
 pub mod map_file;
+pub mod modal_dynamics;
+pub mod modal_map;
 pub mod multimode;
 pub mod prv;
 pub mod robot;
 #[cfg(feature = "json")]
 pub mod robot_data;
 pub mod shaper;
+pub mod sym_eigen;
 pub mod tvist;
 pub mod ztdis;
 
@@ -44,6 +49,8 @@ pub use dynamics::{ConstantModes, Dynamics, NoCallback, Provider};
 pub use dynmap::{DynamicMap, InertiaRange, MapCoefficients, ModeMap};
 pub use error::{Error, Status, StatusCounter};
 pub use map_dynamics::MapDynamics;
+pub use modal_dynamics::ModalDynamics;
+pub use modal_map::{FlexJoint, LoadLaw, ModalMap};
 pub use multimode::{TvShaper, TvShaperConfig};
 pub use prv::prv;
 pub use robot::{DhJoint, RigidBody, Robot};

@@ -202,6 +202,15 @@ fn range_text(range: Option<InertiaRange>) -> String {
     range.map_or_else(|| "unbounded".to_string(), |r| r.to_string())
 }
 
+/// Halton configuration `k` (`1..=VALIDATION_POSES`), the same poses [`MapDynamics`] checks:
+/// joint `i` at `π (2 r(k, p_i) − 1)` with `p_i` the `i`-th prime (setup time: allocates).
+pub(crate) fn halton_pose(k: usize, q: &mut [f64]) {
+    let primes = first_primes(q.len());
+    for (qi, p) in q.iter_mut().zip(primes) {
+        *qi = core::f64::consts::PI * (2.0 * radical_inverse(k, p) - 1.0);
+    }
+}
+
 /// Van der Corput radical inverse of `k` in base `base`, in `[0, 1)`.
 fn radical_inverse(mut k: usize, base: usize) -> f64 {
     let inv = 1.0 / base as f64;

@@ -12,6 +12,7 @@ use tvist_core::{Dynamics, Mode, Status, StatusCounter};
 
 mod convert;
 mod json;
+mod modal;
 mod robot;
 mod ztdis;
 
@@ -257,6 +258,8 @@ impl PyTvShaper {
             Provider::Constant(c.get().inner.clone())
         } else if let Ok(m) = dynamics.cast::<robot::PyMapDynamics>() {
             Provider::Map(Box::new(m.borrow().inner.clone()))
+        } else if let Ok(m) = dynamics.cast::<modal::PyModalDynamics>() {
+            Provider::Modal(Box::new(m.borrow().inner.clone()))
         } else if dynamics.is_callable() {
             if max_delay_s.is_none() {
                 return Err(PyValueError::new_err(
@@ -464,6 +467,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyConstantModes>()?;
     m.add_class::<PyTvShaper>()?;
     robot::register(m)?;
+    modal::register(m)?;
     m.add_function(wrap_pyfunction!(design_shaper, m)?)?;
     m.add_function(wrap_pyfunction!(convolve, m)?)?;
     m.add_function(wrap_pyfunction!(prv_flat, m)?)?;

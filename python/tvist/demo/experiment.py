@@ -367,6 +367,7 @@ def run_experiment(
     methods: Sequence[Method] | None = None,
     motions: Sequence[Motion] | None = None,
     log: Any = None,
+    flex: Any = None,
 ) -> DemoResult:
     """Run the experiment without writing anything.
 
@@ -381,6 +382,9 @@ def run_experiment(
         ``quick``).
     log
         Optional ``log(text)`` for progress lines.
+    flex
+        The twin's :class:`~tvist.sim.FlexParams` (default: the UR5e's; e.g. a variant of
+        :mod:`tvist.sim.variants`).
     """
     start = time.perf_counter()
     rows = list(default_methods() if methods is None else methods)
@@ -390,7 +394,7 @@ def run_experiment(
     chosen = list(motions) if motions is not None else list(MOTIONS[:1] if quick else MOTIONS)
     tail_s = QUICK_TAIL_S if quick else TAIL_S
     window_s = QUICK_SPECTRUM_WINDOW_S if quick else SPECTRUM_WINDOW_S
-    twin = Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M)
+    twin = Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M, flex=flex)
     robot = robots.ur5e(payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M)
     runs = [
         run_motion(motion, rows, twin, robot, tail_s=tail_s, spectrum_window_s=window_s, log=log)

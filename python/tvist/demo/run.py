@@ -61,6 +61,14 @@ def run_demo(
             # Right after the last map-driven row, so the map rows stand together.
             after = max((i for i, m in enumerate(rows) if m.dynmap is not None), default=0)
             rows.insert(after + 1, identified.method)
+            from tvist.demo.modal_rows import identify_modal_map
+
+            modal_row, modal_summary = identify_modal_map(
+                identified.records, out_dir, console.print
+            )
+            identification = {**identification, "modal_map": modal_summary}
+            if modal_row is not None:
+                rows.insert(after + 2, modal_row)
     result = run_experiment(quick=quick, methods=rows, log=console.print)
     result = dataclasses.replace(
         result,

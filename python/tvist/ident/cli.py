@@ -335,6 +335,10 @@ def _cmd_fit_map(args: argparse.Namespace) -> int:
     results = load_results(args.results)
     if not results:
         return _error("fit-map", f"{args.results}: no pose records")
+    if args.kind == "modal":
+        from tvist.ident.modal_fit import fit_map_command
+
+        return fit_map_command(results, args)
     dynmap = fit_map(
         results,
         k_0=args.k0,
@@ -386,6 +390,12 @@ def add_fit_map_command(sub: argparse._SubParsersAction) -> None:
         default=10000.0,
         help="stiffness at zero inertia, N m/rad (fixes the scale of the stiffness terms; "
         "default 10000)",
+    )
+    p.add_argument(
+        "--kind",
+        choices=("paper10", "modal"),
+        default="paper10",
+        help="map form: the published 10 coefficients (paper10) or the modal map (modal)",
     )
     p.add_argument(
         "--include-low-confidence", action="store_true", help="also use flagged identifications"

@@ -212,7 +212,29 @@ UR5E_FLEX = FlexParams(
     c_load2_per_nm=(0.056, 0.0, 0.0, 0.0, 0.0, 0.0),
 )
 
-_DEFAULTS: dict[str, FlexParams] = {"ur5e": UR5E_FLEX}
+#: UR10e, effective joint stiffness and damping, scaled from :data:`UR5E_FLEX` by gear size
+#: (no measured UR10e modes are published; these put its modes where a stiffer, larger arm
+#: would ring: about 4-6 Hz stretched with 5 kg, 12-20 Hz folded).
+#:
+#: - ``k1``: base 45 000, shoulder 38 000 N m/rad (size-4 gears, 330 N m rated), elbow
+#:   200 000 (stiff, as for the UR5e, so that its flexibility joins the shoulder mode), wrists
+#:   1-2 20 000 (size 2, 56 N m rated), wrist 3 3 000 (the tool-axis inertia is small; see the
+#:   UR5e note on the time step).
+#: - ``k3``: the same 25 % stiffening at rated torque, ``k3 = 0.25 k1 / (3 delta_r²)`` with
+#:   ``delta_r = 3 tau_r / (3.25 k1)``.
+#: - Damping: the UR5e's laws with the load factors scaled by the ratio of rated torques
+#:   (150/330 for the base and shoulder), so that the damping doubles at the same fraction of
+#:   the rated load; ``c0`` of the shoulder and elbow scaled by ``sqrt(k J)``.
+UR10E_FLEX = FlexParams(
+    k1_nm_per_rad=(45000.0, 38000.0, 200000.0, 20000.0, 20000.0, 3000.0),
+    k3_nm_per_rad3=(8.18e7, 4.93e7, 3.48e10, 2.49e8, 2.49e8, 8.42e5),
+    c0_nms_per_rad=(8.0, 150.0, 80.0, 8.0, 8.0, 0.3),
+    c_load_per_nm=(0.025, 0.0045, 0.0045, 0.005, 0.005, 0.005),
+    damper_load_joint=(1, 1, 2, 3, 4, 5),
+    c_load2_per_nm=(0.025, 0.0, 0.0, 0.0, 0.0, 0.0),
+)
+
+_DEFAULTS: dict[str, FlexParams] = {"ur5e": UR5E_FLEX, "ur10e": UR10E_FLEX}
 
 
 def default_flex(robot_name: str) -> FlexParams:

@@ -1,0 +1,382 @@
+//! The modal map: pose-dependent modes from the link-side mass matrix and identified joint
+//! flexibility, for any serial arm.
+//!
+//! **Model.** Each flexible joint `j` (at least base, shoulder and elbow; any subset of at most
+//! [`MAX_FLEX_JOINTS`] joints) is a torsional spring `k_j` and damper `c_j` between its motor
+//! and its link. The motors are held rigidly by the position servo (the servo bandwidth is far
+//! above the structural modes), and the joints not declared flexible are rigid, so the
+//! deflections `δ` of the flexible joints obey
+//!
+//! ```text
+//! M_ff(q) δ'' + C δ' + K δ = 0,   K = diag(k_j),  C = diag(c_j)
+//! ```
+//!
+//! with `M_ff` the block of the link-side joint-space inertia matrix `M(q)` (CRBA, payload
+//! included) on the flexible joints. Gravity stiffness `∂τ_g/∂q` (below 1 % of the gear
+//! stiffness on UR arms) and the flexibility of joints left out are neglected.
+//!
+//! **Modes.** The undamped modes solve the generalized symmetric eigenproblem
+//! `K φ = ω² M_ff φ`. With `K` diagonal and positive it becomes the standard symmetric
+//! problem `B v = μ v`, `B = K^{-1/2} M_ff K^{-1/2}`, `μ = 1/ω²`, `φ = K^{-1/2} v`, solved by
+//! Jacobi ([`crate::sym_eigen`]). Because `v` is unit-length, `v_j²` is the share of the
+//! mode's gear strain energy stored in joint `j`.
+//!
+//! **Damping: modal (diagonal) projection.** `ζ_i = φ_iᵀ C φ_i / (2 ω_i φ_iᵀ M φ_i)
+//! = (ω_i/2) Σ_j c_j v_ij² / k_j`. Joint dampers are not proportional to `M` and `K`, so the
+//! projected damping matrix `Φᵀ C Φ` has off-diagonal terms; they are neglected. That is
+//! accurate when they are small against the modes' frequency separation (the coupling
+//! shifts the eigenvalues at second order in `c_ik / (ω_i² − ω_k²)`): joint dampers couple
+//! two modes only through the joints both move, and the UR arms' base and shoulder modes
+//! share little motion (the off-diagonal inertia `M_01` comes from the small out-of-plane
+//! offsets). Solving the exact damped problem (a non-symmetric 2n × 2n eigenproblem) every
+//! cycle would cost several times more for a sub-percent change there.
+//!
+//! **Load dependence.** Gears stiffen and damp more under load. Both laws are
+//! `v(L) = v_0 + v_1 |L|_s + v_2 L²` with `L` a static gravity torque (N m): for the
+//! stiffness of joint `j` its own `τ_g,j`; for its damping the torque of `damping_load_joint`
+//! (for a base joint, which carries no gravity torque, the shoulder's: the tilting moment on
+//! its bearing). `|x|_s` is [`crate::dynmap::smooth_abs_torque_nm`]. The coefficients are
+//! non-negative and `k_0 > 0`, so stiffness is positive everywhere.
+//!
+//! **Mode assignment.** The modes to shape are named by a joint each (`mode_joints`, e.g.
+//! `[0, 1]` for base then shoulder): mode `m` is the eigenmode that stores the largest share
+//! of its strain energy in joint `mode_joints[m]`, so "base" and "shoulder" keep their
+//! meaning when the frequencies cross. Precisely, a share-weighted average (weights
+//! `share^4`) of the eigenmodes: the dominant one where one dominates, a continuous blend
+//! where two close modes share the joint (see `ModalMap::assign`).
+//!
+//! Evaluation ([`ModalMap::modes_from_mass_matrix`]) uses fixed-size arrays only: no
+//! allocation, no panic.
+
+use crate::dynmap::smooth_abs_torque_nm;
+use crate::error::{Error, Status};
+use crate::shaper::Mode;
+use crate::sym_eigen::{sym_eigen, MAX_DIM};
+
+/// Largest number of flexible joints.
+pub const MAX_FLEX_JOINTS: usize = MAX_DIM;
+
+/// A quantity that grows with a joint's static load: `v_0 + v_1 |L|_s + v_2 L²`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoadLaw {
+    /// Value at zero load (N m/rad for a stiffness, N m s/rad for a damping).
+    pub at_zero: f64,
+    /// Growth per N m of load.
+    pub per_nm: f64,
+    /// Growth per (N m)² of load.
+    pub per_nm2: f64,
+}
+
+impl LoadLaw {
+    /// A law that does not depend on the load.
+    pub const fn constant(value: f64) -> LoadLaw {
+        LoadLaw {
+            at_zero: value,
+            per_nm: 0.0,
+            per_nm2: 0.0,
+        }
+    }
+
+    /// The value at gravity torque `load_nm` (N m).
+    #[inline]
+    pub fn value(&self, load_nm: f64) -> f64 {
+        // The smooth |L| only where it is read (it costs a square root).
+        let linear = if self.per_nm == 0.0 {
+            0.0
+        } else {
+            self.per_nm * smooth_abs_torque_nm(load_nm)
+        };
+        self.at_zero + linear + self.per_nm2 * load_nm * load_nm
+    }
+
+    fn uses_load(&self) -> bool {
+        self.per_nm != 0.0 || self.per_nm2 != 0.0
+    }
+
+    fn validate(&self, what: &str, positive_at_zero: bool) -> Result<(), Error> {
+        let finite =
+            self.at_zero.is_finite() && self.per_nm.is_finite() && self.per_nm2.is_finite();
+        let at_zero_ok = if positive_at_zero {
+            self.at_zero > 0.0
+        } else {
+            self.at_zero >= 0.0
+        };
+        if !finite || !at_zero_ok || self.per_nm < 0.0 || self.per_nm2 < 0.0 {
+            return Err(Error::InvalidParameter(format!(
+                "{what}: needs finite coefficients, at_zero {} 0 and per_nm, per_nm2 >= 0, got \
+                 {self:?}",
+                if positive_at_zero { ">" } else { ">=" }
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// One flexible joint: gear spring and damper between motor and link.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FlexJoint {
+    /// Joint index (0 = base).
+    pub joint: usize,
+    /// Spring stiffness, N m/rad, loaded by the joint's own gravity torque.
+    pub stiffness_nm_per_rad: LoadLaw,
+    /// Damping, N m s/rad, loaded by the gravity torque of `damping_load_joint`.
+    pub damping_nms_per_rad: LoadLaw,
+    /// The joint whose gravity torque loads the damper.
+    pub damping_load_joint: usize,
+}
+
+/// All modes of the flexible joints at one pose, sorted by the flexible joints' order of
+/// the eigen-solver (not by frequency). Plain data on the stack.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ModalSolution {
+    /// Number of modes (= number of flexible joints).
+    pub n: usize,
+    /// Undamped natural frequencies, rad/s.
+    pub wn_rad_s: [f64; MAX_FLEX_JOINTS],
+    /// Modal damping ratios.
+    pub zeta: [f64; MAX_FLEX_JOINTS],
+    /// `strain_share[i][f]`: share of mode `i`'s strain energy in flexible joint `f` (the
+    /// `f`-th entry of [`ModalMap::flex_joints`]); each row sums to 1.
+    pub strain_share: [[f64; MAX_FLEX_JOINTS]; MAX_FLEX_JOINTS],
+}
+
+/// Flexible joints plus the list of modes to shape (see the module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModalMap {
+    flex: Vec<FlexJoint>,
+    /// For each shaped mode, the index into `flex` of the joint that must dominate it.
+    mode_flex_index: Vec<usize>,
+}
+
+impl ModalMap {
+    /// Validates and builds the map.
+    ///
+    /// `flex`: 1 to [`MAX_FLEX_JOINTS`] joints, distinct. `mode_joints`: the joints naming the
+    /// shaped modes in cascade order, each one of the flexible joints, distinct, at least one.
+    pub fn new(flex: Vec<FlexJoint>, mode_joints: &[usize]) -> Result<ModalMap, Error> {
+        if flex.is_empty() || flex.len() > MAX_FLEX_JOINTS {
+            return Err(Error::InvalidParameter(format!(
+                "a modal map needs 1 to {MAX_FLEX_JOINTS} flexible joints, got {}",
+                flex.len()
+            )));
+        }
+        for (i, f) in flex.iter().enumerate() {
+            if flex[..i].iter().any(|g| g.joint == f.joint) {
+                return Err(Error::InvalidParameter(format!(
+                    "flexible joint {} is listed twice",
+                    f.joint
+                )));
+            }
+            f.stiffness_nm_per_rad
+                .validate(&format!("stiffness of joint {}", f.joint), true)?;
+            f.damping_nms_per_rad
+                .validate(&format!("damping of joint {}", f.joint), false)?;
+        }
+        if mode_joints.is_empty() {
+            return Err(Error::InvalidParameter(
+                "a modal map needs at least one mode to shape".into(),
+            ));
+        }
+        let mut mode_flex_index = Vec::with_capacity(mode_joints.len());
+        for (m, &joint) in mode_joints.iter().enumerate() {
+            let Some(index) = flex.iter().position(|f| f.joint == joint) else {
+                return Err(Error::InvalidParameter(format!(
+                    "mode {m} is named by joint {joint}, which is not one of the flexible \
+                     joints {:?}",
+                    flex.iter().map(|f| f.joint).collect::<Vec<_>>()
+                )));
+            };
+            if mode_flex_index.contains(&index) {
+                return Err(Error::InvalidParameter(format!(
+                    "joint {joint} names two modes"
+                )));
+            }
+            mode_flex_index.push(index);
+        }
+        Ok(ModalMap {
+            flex,
+            mode_flex_index,
+        })
+    }
+
+    /// The flexible joints, in the order given.
+    pub fn flex_joints(&self) -> &[FlexJoint] {
+        &self.flex
+    }
+
+    /// The joints naming the shaped modes, in cascade order.
+    pub fn mode_joints(&self) -> impl Iterator<Item = usize> + '_ {
+        self.mode_flex_index.iter().map(|&i| self.flex[i].joint)
+    }
+
+    /// Number of shaped modes.
+    pub fn n_modes(&self) -> usize {
+        self.mode_flex_index.len()
+    }
+
+    /// Number of joints the map reads (largest joint or load-joint index + 1).
+    pub fn required_joints(&self) -> usize {
+        self.flex
+            .iter()
+            .map(|f| f.joint.max(f.damping_load_joint) + 1)
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// Whether any law reads a gravity torque.
+    pub fn uses_gravity(&self) -> bool {
+        self.flex
+            .iter()
+            .any(|f| f.stiffness_nm_per_rad.uses_load() || f.damping_nms_per_rad.uses_load())
+    }
+
+    /// Every mode of the flexible joints from the mass matrix `mass` (row-major
+    /// `n_dof × n_dof`, kg m²) and gravity torques `tau_g` (`n_dof` values, N m; may be empty
+    /// when [`Self::uses_gravity`] is false). `None` on wrong lengths, non-finite input or a
+    /// mass block that is not positive definite.
+    pub fn solve(&self, mass: &[f64], n_dof: usize, tau_g: &[f64]) -> Option<ModalSolution> {
+        let nf = self.flex.len();
+        let need = self.required_joints();
+        if mass.len() != n_dof * n_dof || n_dof < need {
+            return None;
+        }
+        let gravity = self.uses_gravity();
+        if gravity && tau_g.len() < need {
+            return None;
+        }
+        let load = |j: usize| if gravity { tau_g[j] } else { 0.0 };
+        let mut inv_sqrt_k = [0.0; MAX_FLEX_JOINTS];
+        let mut c_over_k = [0.0; MAX_FLEX_JOINTS];
+        for (i, f) in self.flex.iter().enumerate() {
+            let k = f.stiffness_nm_per_rad.value(load(f.joint));
+            let c = f.damping_nms_per_rad.value(load(f.damping_load_joint));
+            if !(k > 0.0 && k.is_finite() && c.is_finite()) {
+                return None;
+            }
+            inv_sqrt_k[i] = 1.0 / k.sqrt();
+            c_over_k[i] = c / k;
+        }
+        let mut b = [[0.0; MAX_DIM]; MAX_DIM];
+        for (r, fr) in self.flex.iter().enumerate() {
+            for (s, fs) in self.flex.iter().enumerate().skip(r) {
+                b[r][s] = mass[fr.joint * n_dof + fs.joint] * inv_sqrt_k[r] * inv_sqrt_k[s];
+            }
+        }
+        let (mu, v) = sym_eigen(&b, nf)?;
+        let mut out = ModalSolution {
+            n: nf,
+            wn_rad_s: [0.0; MAX_FLEX_JOINTS],
+            zeta: [0.0; MAX_FLEX_JOINTS],
+            strain_share: [[0.0; MAX_FLEX_JOINTS]; MAX_FLEX_JOINTS],
+        };
+        for i in 0..nf {
+            if mu[i].is_nan() || mu[i] <= 0.0 {
+                return None;
+            }
+            let wn = 1.0 / mu[i].sqrt();
+            let mut modal_c = 0.0;
+            for f in 0..nf {
+                let share = v[f][i] * v[f][i];
+                out.strain_share[i][f] = share;
+                modal_c += c_over_k[f] * share;
+            }
+            out.wn_rad_s[i] = wn;
+            out.zeta[i] = 0.5 * wn * modal_c;
+        }
+        Some(out)
+    }
+
+    /// The shaped modes, in cascade order, from the mass matrix and gravity torques (see
+    /// [`Self::solve`]). Writes NaN modes and returns [`Status::BAD_LENGTH`] on wrong lengths
+    /// (`out` must hold [`Self::n_modes`]); NaN modes with [`Status::OK`] when the input is not
+    /// finite or not positive definite (the shaper then holds its last valid modes).
+    pub fn modes_from_mass_matrix(
+        &self,
+        mass: &[f64],
+        n_dof: usize,
+        tau_g: &[f64],
+        out: &mut [Mode],
+    ) -> Status {
+        let bad_length = out.len() != self.n_modes()
+            || mass.len() != n_dof * n_dof
+            || n_dof < self.required_joints()
+            || (self.uses_gravity() && tau_g.len() < self.required_joints());
+        if bad_length {
+            out.fill(Mode::new(f64::NAN, f64::NAN));
+            return Status::BAD_LENGTH;
+        }
+        match self.solve(mass, n_dof, tau_g) {
+            Some(sol) => self.assign(&sol, out),
+            None => out.fill(Mode::new(f64::NAN, f64::NAN)),
+        }
+        Status::OK
+    }
+
+    /// Assigns eigenmodes to the shaped modes by dominant joint (module docs): mode `m` is
+    /// the average of the eigenmodes weighted by `share^ASSIGNMENT_POWER` of their strain
+    /// energy in joint `m`. Where one eigenmode dominates the joint (the usual case) that is
+    /// the eigenmode itself to well under a per mille; where two eigenmodes share the joint
+    /// (a veering of two close frequencies) it blends them, so the shaped modes stay
+    /// continuous along a motion instead of jumping between the two branches (a jump in a
+    /// filter's delay is a step in the shaped reference).
+    fn assign(&self, sol: &ModalSolution, out: &mut [Mode]) {
+        for (o, &f) in out.iter_mut().zip(&self.mode_flex_index) {
+            let (mut sum_w, mut wn, mut zeta) = (0.0, 0.0, 0.0);
+            for i in 0..sol.n {
+                let w = sol.strain_share[i][f].powi(ASSIGNMENT_POWER);
+                sum_w += w;
+                wn += w * sol.wn_rad_s[i];
+                zeta += w * sol.zeta[i];
+            }
+            *o = if sum_w > 0.0 {
+                Mode::new(wn / sum_w, zeta / sum_w)
+            } else {
+                Mode::new(f64::NAN, f64::NAN)
+            };
+        }
+    }
+}
+
+/// Exponent of the strain-energy shares that weigh the eigenmodes of one shaped mode.
+pub const ASSIGNMENT_POWER: i32 = 4;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn joint(j: usize, k: f64, c: f64) -> FlexJoint {
+        FlexJoint {
+            joint: j,
+            stiffness_nm_per_rad: LoadLaw::constant(k),
+            damping_nms_per_rad: LoadLaw::constant(c),
+            damping_load_joint: j,
+        }
+    }
+
+    #[test]
+    fn uncoupled_joints_give_the_single_joint_modes() {
+        // Diagonal M: each mode is one joint, ω = √(k/J), ζ = c / (2 √(k J)).
+        let map = ModalMap::new(vec![joint(0, 2.0e4, 50.0), joint(1, 1.8e4, 80.0)], &[1, 0])
+            .expect("valid");
+        let mass = [4.0, 0.0, 0.0, 9.0];
+        let mut out = [Mode::new(0.0, 0.0); 2];
+        assert!(map.modes_from_mass_matrix(&mass, 2, &[], &mut out).is_ok());
+        let expect = |k: f64, j: f64, c: f64| Mode::new((k / j).sqrt(), c / (2.0 * (k * j).sqrt()));
+        let (shoulder, base) = (expect(1.8e4, 9.0, 80.0), expect(2.0e4, 4.0, 50.0));
+        assert!((out[0].wn_rad_s - shoulder.wn_rad_s).abs() < 1e-10);
+        assert!((out[0].zeta - shoulder.zeta).abs() < 1e-14);
+        assert!((out[1].wn_rad_s - base.wn_rad_s).abs() < 1e-10);
+        assert!((out[1].zeta - base.zeta).abs() < 1e-14);
+    }
+
+    #[test]
+    fn bad_maps_are_refused() {
+        assert!(ModalMap::new(vec![], &[0]).is_err());
+        assert!(ModalMap::new(vec![joint(0, 1.0, 0.0), joint(0, 1.0, 0.0)], &[0]).is_err());
+        assert!(ModalMap::new(vec![joint(0, 0.0, 0.0)], &[0]).is_err());
+        assert!(ModalMap::new(vec![joint(0, 1.0, -1.0)], &[0]).is_err());
+        assert!(ModalMap::new(vec![joint(0, 1.0, 0.0)], &[1]).is_err());
+        assert!(ModalMap::new(vec![joint(0, 1.0, 0.0)], &[0, 0]).is_err());
+        assert!(ModalMap::new(vec![joint(0, 1.0, 0.0)], &[]).is_err());
+    }
+}

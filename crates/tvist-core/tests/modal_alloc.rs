@@ -1,0 +1,98 @@
+//! The modal map, its provider and the shaper driven by it never allocate per call.
+//!
+//! Its own test binary with a counting global allocator (see `alloc_support`).
+
+mod robot_support;
+
+mod alloc_support;
+
+use alloc_support::{allocations_in, the_counter_sees_this_thread_only};
+use tvist_core::{
+    Dynamics, FlexJoint, LoadLaw, ModalDynamics, ModalMap, Mode, ShaperKind, Status, TvShaper,
+    TvShaperConfig,
+};
+
+fn ur5e_like_map() -> ModalMap {
+    let law = |v0: f64, v1: f64, v2: f64| LoadLaw {
+        at_zero: v0,
+        per_nm: v1,
+        per_nm2: v2,
+    };
+    ModalMap::new(
+        vec![
+            FlexJoint {
+                joint: 0,
+                stiffness_nm_per_rad: LoadLaw::constant(22_000.0),
+                damping_nms_per_rad: law(5.0, 0.56, 0.0157),
+                damping_load_joint: 1,
+            },
+            FlexJoint {
+                joint: 1,
+                stiffness_nm_per_rad: law(18_000.0, 0.0, 0.23),
+                damping_nms_per_rad: law(60.0, 0.6, 0.0),
+                damping_load_joint: 1,
+            },
+            FlexJoint {
+                joint: 2,
+                stiffness_nm_per_rad: LoadLaw::constant(120_000.0),
+                damping_nms_per_rad: LoadLaw::constant(40.0),
+                damping_load_joint: 2,
+            },
+        ],
+        &[0, 1],
+    )
+    .expect("valid map")
+}
+
+#[test]
+fn modal_map_provider_and_shaper_never_allocate() {
+    the_counter_sees_this_thread_only();
+
+    let map = ur5e_like_map();
+    let mut modes = [Mode::new(0.0, 0.0); 2];
+    let mass = [
+        9.0, 0.1, 0.05, 0.0, 0.0, 0.0, //
+        0.1, 8.0, 2.0, 0.0, 0.0, 0.0, //
+        0.05, 2.0, 1.5, 0.0, 0.0, 0.0, //
+        0.0, 0.0, 0.0, 0.1, 0.0, 0.0, //
+        0.0, 0.0, 0.0, 0.0, 0.1, 0.0, //
+        0.0, 0.0, 0.0, 0.0, 0.0, 0.01,
+    ];
+    let tau = [0.0, 40.0, 10.0, 1.0, 0.5, 0.0];
+    let n = allocations_in(|| {
+        map.modes_from_mass_matrix(&mass, 6, &tau, &mut modes);
+        let _ = map.solve(&mass, 6, &tau);
+        // Wrong lengths and non-finite input take the same allocation-free path.
+        map.modes_from_mass_matrix(&mass[..30], 6, &tau, &mut modes);
+        map.modes_from_mass_matrix(&[f64::NAN; 36], 6, &tau, &mut modes);
+    });
+    assert_eq!(n, 0, "ModalMap evaluation allocated {n} times");
+
+    let mut provider =
+        ModalDynamics::new(robot_support::ur_robot("ur5e", 5.0), map).expect("valid map");
+    let mut rng = robot_support::Rng(11);
+    let poses: Vec<Vec<f64>> = (0..200).map(|_| rng.pose(6)).collect();
+    let n = allocations_in(|| {
+        for q in &poses {
+            provider.modes(q, &mut modes);
+        }
+        provider.modes(&[0.0; 4], &mut modes);
+    });
+    assert_eq!(n, 0, "ModalDynamics::modes allocated {n} times");
+
+    let config = TvShaperConfig::new(0.002, 6, ShaperKind::Zv);
+    let mut shaper = TvShaper::new(provider, &config).expect("valid config");
+    let mut out = [0.0; 6];
+    let mut statuses = Status::OK;
+    let n = allocations_in(|| {
+        for q in &poses {
+            statuses |= shaper.step(q, &mut out);
+        }
+        let mut bad = [0.0; 6];
+        bad[2] = f64::NAN;
+        statuses |= shaper.step(&bad, &mut out);
+        statuses |= shaper.step(&[0.0; 3], &mut out);
+    });
+    assert_eq!(n, 0, "TvShaper<ModalDynamics>::step allocated {n} times");
+    assert!(statuses.contains(Status::INPUT_HELD) && statuses.contains(Status::BAD_LENGTH));
+}

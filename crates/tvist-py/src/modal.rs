@@ -1,0 +1,249 @@
+//! Bindings of the modal map and its per-cycle provider.
+
+use numpy::{PyArrayDyn, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use tvist_core as core;
+use tvist_core::{Dynamics, Mode};
+
+use crate::convert::{self, rows, value_error};
+use crate::robot::PyRobot;
+
+/// Keys of one flexible joint's dict, in the order of the file format.
+pub const FLEX_JOINT_FIELDS: [&str; 4] = [
+    "joint",
+    "stiffness_nm_per_rad",
+    "damping_nms_per_rad",
+    "damping_load_joint",
+];
+
+fn law_from(d: &Bound<'_, PyDict>, key: &str, joint: usize) -> PyResult<core::LoadLaw> {
+    let item = d
+        .get_item(key)?
+        .ok_or_else(|| PyValueError::new_err(format!("flexible joint {joint}: missing {key:?}")))?;
+    let v: Vec<f64> = item.extract().map_err(|_| {
+        PyValueError::new_err(format!(
+            "flexible joint {joint}: {key:?} must be [at_zero, per_nm, per_nm2]"
+        ))
+    })?;
+    if v.len() != 3 {
+        return Err(PyValueError::new_err(format!(
+            "flexible joint {joint}: {key:?} must have 3 values [at_zero, per_nm, per_nm2], got {}",
+            v.len()
+        )));
+    }
+    Ok(core::LoadLaw {
+        at_zero: v[0],
+        per_nm: v[1],
+        per_nm2: v[2],
+    })
+}
+
+fn flex_from(d: &Bound<'_, PyDict>, index: usize) -> PyResult<core::FlexJoint> {
+    let get_u = |key: &str| -> PyResult<usize> {
+        d.get_item(key)?
+            .ok_or_else(|| {
+                PyValueError::new_err(format!("flexible joint entry {index}: missing {key:?}"))
+            })?
+            .extract::<usize>()
+            .map_err(|_| {
+                PyValueError::new_err(format!(
+                    "flexible joint entry {index}: {key:?} must be a non-negative integer"
+                ))
+            })
+    };
+    let joint = get_u("joint")?;
+    Ok(core::FlexJoint {
+        joint,
+        stiffness_nm_per_rad: law_from(d, "stiffness_nm_per_rad", joint)?,
+        damping_nms_per_rad: law_from(d, "damping_nms_per_rad", joint)?,
+        damping_load_joint: get_u("damping_load_joint")?,
+    })
+}
+
+/// Modal map: flexible joints (dicts of FLEX_JOINT_FIELDS, laws as [at_zero, per_nm,
+/// per_nm2]) and the joints naming the shaped modes, in cascade order.
+#[pyclass(name = "ModalMap", module = "tvist._core", frozen)]
+#[derive(Clone)]
+pub struct PyModalMap {
+    pub inner: core::ModalMap,
+}
+
+#[pymethods]
+impl PyModalMap {
+    #[new]
+    fn new(flex_joints: Vec<Bound<'_, PyDict>>, mode_joints: Vec<usize>) -> PyResult<Self> {
+        let flex = flex_joints
+            .iter()
+            .enumerate()
+            .map(|(i, d)| flex_from(d, i))
+            .collect::<PyResult<Vec<_>>>()?;
+        Ok(PyModalMap {
+            inner: core::ModalMap::new(flex, &mode_joints).map_err(value_error)?,
+        })
+    }
+
+    /// The flexible joints as dicts (see the constructor).
+    #[getter]
+    fn flex_joints<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        self.inner
+            .flex_joints()
+            .iter()
+            .map(|f| {
+                let d = PyDict::new(py);
+                let law = |l: &core::LoadLaw| vec![l.at_zero, l.per_nm, l.per_nm2];
+                d.set_item("joint", f.joint)?;
+                d.set_item("stiffness_nm_per_rad", law(&f.stiffness_nm_per_rad))?;
+                d.set_item("damping_nms_per_rad", law(&f.damping_nms_per_rad))?;
+                d.set_item("damping_load_joint", f.damping_load_joint)?;
+                Ok(d)
+            })
+            .collect()
+    }
+
+    #[getter]
+    fn mode_joints(&self) -> Vec<usize> {
+        self.inner.mode_joints().collect()
+    }
+
+    #[getter]
+    fn n_modes(&self) -> usize {
+        self.inner.n_modes()
+    }
+
+    #[getter]
+    fn required_joints(&self) -> usize {
+        self.inner.required_joints()
+    }
+
+    #[getter]
+    fn uses_gravity(&self) -> bool {
+        self.inner.uses_gravity()
+    }
+
+    /// Shaped modes for every pose: mass matrices (n_poses, n_dof * n_dof) row-major, gravity
+    /// torques (n_poses, n_dof) or None when the map reads none -> (n_poses, n_modes, 2) of
+    /// (wn_rad_s, zeta); NaN where the eigenproblem has no valid solution.
+    #[pyo3(signature = (mass_kg_m2, n_dof, gravity_torque_nm=None))]
+    fn modes_from_mass_matrix_many<'py>(
+        &self,
+        py: Python<'py>,
+        mass_kg_m2: PyReadonlyArray2<'py, f64>,
+        n_dof: usize,
+        gravity_torque_nm: Option<PyReadonlyArray2<'py, f64>>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let need = self.inner.required_joints();
+        if n_dof < need {
+            return Err(PyValueError::new_err(format!(
+                "the modal map reads {need} joints, got n_dof = {n_dof}"
+            )));
+        }
+        let (n, mass) = rows(&mass_kg_m2, n_dof * n_dof, "mass_kg_m2")?;
+        let tau = match gravity_torque_nm {
+            Some(t) => {
+                let (tn, tau) = rows(&t, n_dof, "gravity_torque_nm")?;
+                if tn != n {
+                    return Err(PyValueError::new_err(format!(
+                        "gravity_torque_nm has {tn} rows, mass_kg_m2 {n}"
+                    )));
+                }
+                tau
+            }
+            None if self.inner.uses_gravity() => {
+                return Err(PyValueError::new_err(
+                    "the modal map's laws read gravity torques: pass gravity_torque_nm",
+                ));
+            }
+            None => Vec::new(),
+        };
+        let m = self.inner.n_modes();
+        let mut modes = vec![Mode::new(0.0, 0.0); m];
+        let mut out = vec![0.0; n * m * 2];
+        let nn = n_dof * n_dof;
+        for (r, chunk) in out.chunks_exact_mut(2 * m).enumerate() {
+            let tau_row = if tau.is_empty() {
+                &[][..]
+            } else {
+                &tau[r * n_dof..(r + 1) * n_dof]
+            };
+            self.inner.modes_from_mass_matrix(
+                &mass[r * nn..(r + 1) * nn],
+                n_dof,
+                tau_row,
+                &mut modes,
+            );
+            for (pair, mode) in chunk.chunks_exact_mut(2).zip(&modes) {
+                pair[0] = mode.wn_rad_s;
+                pair[1] = mode.zeta;
+            }
+        }
+        convert::array(py, &[n, m, 2], out)
+    }
+}
+
+/// Provider for TvShaper: robot mass matrix at the previous shaped output -> modal map ->
+/// modes.
+#[pyclass(name = "ModalDynamics", module = "tvist._core", subclass)]
+pub struct PyModalDynamics {
+    pub inner: core::ModalDynamics,
+}
+
+#[pymethods]
+impl PyModalDynamics {
+    #[new]
+    fn new(robot: PyRef<'_, PyRobot>, modal_map: PyRef<'_, PyModalMap>) -> PyResult<Self> {
+        let inner = core::ModalDynamics::new(robot.inner.clone(), modal_map.inner.clone())
+            .map_err(value_error)?;
+        Ok(PyModalDynamics { inner })
+    }
+
+    /// Modes [(wn_rad_s, zeta), ...] at configuration q (invalid ones as NaN).
+    fn modes(&mut self, q: PyReadonlyArray1<'_, f64>) -> PyResult<Vec<(f64, f64)>> {
+        let q = q.as_slice()?;
+        let n = self.inner.robot().n_dof();
+        if q.len() != n {
+            return Err(PyValueError::new_err(format!(
+                "q has {} values, expected {n}",
+                q.len()
+            )));
+        }
+        let mut out = vec![Mode::new(0.0, 0.0); self.inner.n_modes()];
+        self.inner.modes(q, &mut out);
+        Ok(out.iter().map(|m| (m.wn_rad_s, m.zeta)).collect())
+    }
+
+    /// Per-mode (wn_rad_s, zeta) bounds used to size the delay lines.
+    #[getter]
+    fn slowest_modes(&self) -> Vec<(f64, f64)> {
+        self.inner
+            .slowest_modes()
+            .iter()
+            .map(|m| (m.wn_rad_s, m.zeta))
+            .collect()
+    }
+
+    /// Number of configurations checked at construction.
+    #[classattr]
+    fn validation_poses() -> usize {
+        core::map_dynamics::VALIDATION_POSES
+    }
+
+    #[getter]
+    fn n_dof(&self) -> usize {
+        self.inner.robot().n_dof()
+    }
+
+    #[getter]
+    fn n_modes(&self) -> usize {
+        self.inner.n_modes()
+    }
+}
+
+/// Registers the classes of this module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyModalMap>()?;
+    m.add_class::<PyModalDynamics>()?;
+    m.add("FLEX_JOINT_FIELDS", FLEX_JOINT_FIELDS.to_vec())?;
+    Ok(())
+}

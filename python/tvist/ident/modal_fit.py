@@ -1,0 +1,706 @@
+"""Fit a :class:`tvist.ModalMap` to modes identified at many poses (a mapping campaign).
+
+The same pose records as :func:`tvist.ident.map_fit.fit_map` (the campaign's JSON lines) are
+used, plus each pose's configuration ``q`` and payload, from which the robot model gives the
+mass matrix and the gravity torques. Two steps, like the published map's fit:
+
+1. **Stiffness** (nonlinear least squares on relative frequency errors). Per flexible joint
+   ``k(L) = k_0 (1 + a_1 |L|_s + a_2 L²)`` with ``L`` its gravity torque; the parameters are
+   ``log k_0`` and ``a_1, a_2 >= 0`` (the load terms only for joints whose gravity torque
+   varies over the poses). The frequencies do not depend on the damping (modal damping).
+2. **Damping** with the stiffness fixed. The modal damping ratio is *linear* in the damping
+   laws' coefficients, ``ζ = (ω/2) Σ_j (v_j²/k_j)(c_0 + c_1 |L|_s + c_2 L²)``, so it is a
+   non-negative linear least-squares problem on relative errors; its columns are evaluations
+   of the core map with one unit coefficient each (the physics stays in one place, the
+   Rust core).
+
+A term whose estimate is below ``drop_t`` standard errors is dropped and the step refitted.
+Standard errors are ``√diag(σ² (JᵀJ)⁻¹)`` at the solution, in physical units.
+
+:func:`cross_validate` compares this form with the published 10-coefficient form on held-out
+poses (k-fold over poses), against the identified modes and, for a twin's campaign, against
+the true modes.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import optimize
+
+from tvist.modal_map import ModalMap
+from tvist.robots import Payload, Robot, params
+
+__all__ = [
+    "DEFAULT_FLEX_JOINTS",
+    "ModalPoses",
+    "cross_validate",
+    "fit_modal_map",
+    "modal_poses",
+    "relative_errors",
+]
+
+#: Flexible joints of the default fit: base, shoulder, elbow, wrists 1 and 2. The wrists'
+#: compliance matters where the base inertia is small (arm pointing up): there a base-shoulder-
+#: elbow map puts the base mode up to 6 % high on the UR5e twin, while the wrist stiffnesses
+#: are identified from the same campaign to about ±15 %. Wrist 3 (tool axis) hardly moves
+#: in the base and shoulder modes.
+DEFAULT_FLEX_JOINTS = (0, 1, 2, 3, 4)
+#: The identified modes, in cascade order: base, shoulder.
+MODE_JOINTS = (0, 1)
+#: The base carries no gravity torque; its bearing and gear friction grow with the arm's
+#: tilting moment, which the shoulder's gravity torque measures (see ``tvist.sim.flex``).
+DEFAULT_DAMPING_LOAD = {0: 1}
+#: A joint whose gravity torque stays below this over the poses gets no load terms, N m.
+MIN_LOAD_SPAN_NM = 1.0
+#: Relative frequency error beyond which a residual counts as an outlier (robust loss).
+ROBUST_SCALE = 0.02
+#: A fitted zero-load stiffness stays within this factor of its starting value.
+STIFFNESS_SPAN = 100.0
+_LSQ = {"x_scale": "jac", "xtol": 1e-12, "ftol": 1e-12, "gtol": 1e-12, "max_nfev": 400}
+_INVALID_RESIDUAL = 10.0
+
+
+@dataclass(frozen=True)
+class ModalPoses:
+    """The campaign's poses with what the modal map needs, arrays over poses.
+
+    Attributes
+    ----------
+    mass_kg_m2
+        Link-side mass matrices, payload included, ``(n_poses, n_dof, n_dof)``.
+    gravity_torque_nm
+        ``(n_poses, n_dof)``.
+    wn_rad_s, zeta
+        Identified modes ``(n_poses, 2)`` (base, shoulder); NaN where not usable (missing,
+        failed or flagged low-confidence).
+    true_wn_rad_s, true_zeta
+        The twin's true modes ``(n_poses, 2)``, NaN where unknown.
+    inertia_kg_m2
+        Joint inertias ``(n_poses, n_dof)`` (for the published form).
+    keys
+        Pose keys.
+    """
+
+    mass_kg_m2: np.ndarray
+    gravity_torque_nm: np.ndarray
+    wn_rad_s: np.ndarray
+    zeta: np.ndarray
+    true_wn_rad_s: np.ndarray
+    true_zeta: np.ndarray
+    inertia_kg_m2: np.ndarray
+    keys: tuple[str, ...]
+
+    @property
+    def n_poses(self) -> int:
+        return int(self.mass_kg_m2.shape[0])
+
+    def subset(self, index: np.ndarray) -> ModalPoses:
+        """The poses at ``index``."""
+        return ModalPoses(
+            self.mass_kg_m2[index],
+            self.gravity_torque_nm[index],
+            self.wn_rad_s[index],
+            self.zeta[index],
+            self.true_wn_rad_s[index],
+            self.true_zeta[index],
+            self.inertia_kg_m2[index],
+            tuple(self.keys[i] for i in np.asarray(index)),
+        )
+
+
+def modal_poses(
+    records: Sequence[Mapping[str, Any]],
+    robot_name: str,
+    *,
+    include_low_confidence: bool = False,
+) -> ModalPoses:
+    """Mass matrices, gravity torques and modes of every reachable campaign pose.
+
+    Raises
+    ------
+    ValueError
+        No record with a configuration ``q``.
+    """
+    robot_params = params(robot_name)
+    robots: dict[tuple, Robot] = {}
+    mass, tau, inertia, wn, zeta, twn, tzeta, keys = [], [], [], [], [], [], [], []
+    for i, r in enumerate(records):
+        q = r.get("q")
+        if q is None or r.get("error"):
+            continue
+        q = np.asarray(q, dtype=float)
+        if q.shape != (robot_params.n_dof,) or not np.all(np.isfinite(q)):
+            raise ValueError(f"records[{i}]: 'q' must be {robot_params.n_dof} finite angles")
+        key = (float(r.get("payload_kg", 0.0)), tuple(r.get("payload_com_m", (0.0, 0.0, 0.0))))
+        if key not in robots:
+            robots[key] = Robot(robot_params, Payload(key[0], key[1]))
+        model = robots[key]
+        mass.append(model.mass_matrix(q))
+        tau.append(model.gravity_torque(q))
+        inertia.append(model.joint_inertia(q))
+        obs = np.full((2, 2), np.nan)
+        for mode in r.get("modes", []):
+            j = mode.get("joint")
+            if j not in MODE_JOINTS or "wn_rad_s" not in mode:
+                continue
+            if mode.get("low_confidence", False) and not include_low_confidence:
+                continue
+            w, z = float(mode.get("wn_rad_s", math.nan)), float(mode.get("zeta", math.nan))
+            if math.isfinite(w) and math.isfinite(z) and w > 0 and z > 0:
+                obs[MODE_JOINTS.index(j)] = (w, z)
+        truth = np.full((2, 2), np.nan)
+        for mode in r.get("true_modes") or []:
+            if mode.get("joint") in MODE_JOINTS:
+                truth[MODE_JOINTS.index(mode["joint"])] = (mode["wn_rad_s"], mode["zeta"])
+        wn.append(obs[:, 0])
+        zeta.append(obs[:, 1])
+        twn.append(truth[:, 0])
+        tzeta.append(truth[:, 1])
+        keys.append(str(r.get("key", i)))
+    if not mass:
+        raise ValueError(f"no campaign record with a configuration 'q' among {len(records)}")
+    return ModalPoses(
+        np.array(mass),
+        np.array(tau),
+        np.array(wn),
+        np.array(zeta),
+        np.array(twn),
+        np.array(tzeta),
+        np.array(inertia),
+        tuple(keys),
+    )
+
+
+# --------------------------------------------------------------------------- the two steps
+
+
+def _entries(
+    flex_joints: Sequence[int],
+    stiffness: Mapping[int, Sequence[float]],
+    damping: Mapping[int, Sequence[float]],
+    damping_load: Mapping[int, int],
+) -> list[dict[str, Any]]:
+    return [
+        {
+            "joint": j,
+            "stiffness_nm_per_rad": [float(v) for v in stiffness[j]],
+            "damping_nms_per_rad": [float(v) for v in damping.get(j, (0.0, 0.0, 0.0))],
+            "damping_load_joint": int(damping_load.get(j, j)),
+        }
+        for j in flex_joints
+    ]
+
+
+@dataclass
+class _Term:
+    joint: int
+    name: str  # "k_0", "a_1", "a_2" or "c_0", "c_1", "c_2"
+
+
+def _stiffness_laws(
+    x: np.ndarray, terms: Sequence[_Term], flex_joints: Sequence[int]
+) -> dict[int, list[float]]:
+    k0 = {j: 0.0 for j in flex_joints}
+    a = {j: [0.0, 0.0] for j in flex_joints}
+    for value, t in zip(x, terms, strict=True):
+        if t.name == "k_0":
+            k0[t.joint] = math.exp(value)
+        else:
+            a[t.joint][int(t.name[-1]) - 1] = value
+    return {j: [k0[j], k0[j] * a[j][0], k0[j] * a[j][1]] for j in flex_joints}
+
+
+def _predict(
+    poses: ModalPoses,
+    flex_joints: Sequence[int],
+    stiffness: Mapping[int, Sequence[float]],
+    damping: Mapping[int, Sequence[float]],
+    damping_load: Mapping[int, int],
+) -> np.ndarray:
+    """(n_poses, 2, 2) predicted (wn, zeta) through the core map."""
+    m = ModalMap(_entries(flex_joints, stiffness, damping, damping_load), MODE_JOINTS)
+    tau = poses.gravity_torque_nm if m.uses_gravity else None
+    return m.modes_from_mass_matrix_many(poses.mass_kg_m2, tau)
+
+
+def _standard_errors(jac: np.ndarray, residual: np.ndarray) -> np.ndarray:
+    n, p = jac.shape
+    sigma2 = float(residual @ residual) / max(n - p, 1)
+    sv = np.linalg.svd(jac, compute_uv=False)
+    if p == 0:
+        return np.zeros(0)
+    if sv[-1] <= 1e-12 * sv[0]:
+        return np.full(p, math.inf)
+    cov = np.linalg.inv(jac.T @ jac) * sigma2
+    return np.sqrt(np.maximum(np.diag(cov), 0.0))
+
+
+def _fit_stiffness(
+    poses: ModalPoses,
+    flex_joints: Sequence[int],
+    terms: list[_Term],
+    damping_load: Mapping[int, int],
+    start: Mapping[int, float],
+) -> tuple[dict[int, list[float]], np.ndarray, np.ndarray, np.ndarray]:
+    observed = np.isfinite(poses.wn_rad_s)
+    target = poses.wn_rad_s[observed]
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        laws = _stiffness_laws(x, terms, flex_joints)
+        pred = _predict(poses, flex_joints, laws, {}, damping_load)[:, :, 0][observed]
+        r = pred / target - 1.0
+        return np.where(np.isfinite(r), r, _INVALID_RESIDUAL)
+
+    x0 = np.array([math.log(start[t.joint]) if t.name == "k_0" else 0.0 for t in terms])
+    # Stiffness within a factor STIFFNESS_SPAN of its start (keeps exp() finite and positive
+    # for a joint the data hardly constrain); load terms non-negative.
+    span = math.log(STIFFNESS_SPAN)
+    lower = [x0[i] - span if t.name == "k_0" else 0.0 for i, t in enumerate(terms)]
+    upper = [x0[i] + span if t.name == "k_0" else np.inf for i, t in enumerate(terms)]
+    # A robust loss: a mode the local fit mistook for another (a few per cent of a campaign's
+    # poses, folded ones) must not pull the stiffnesses; residuals up to ROBUST_SCALE weigh
+    # as in plain least squares.
+    res = optimize.least_squares(
+        residual, x0, bounds=(lower, upper), loss="soft_l1", f_scale=ROBUST_SCALE, **_LSQ
+    )
+    return _stiffness_laws(res.x, terms, flex_joints), res.x, res.jac, res.fun
+
+
+def _stiffness_start(poses: ModalPoses, flex_joints: Sequence[int]) -> dict[int, float]:
+    """Single-joint guesses ``k = ω² J``: the base and shoulder from their identified modes,
+    any other joint 5 times the stiffest of those (a stiff joint, refined by the fit)."""
+    start = {}
+    for m, j in enumerate(MODE_JOINTS):
+        ok = np.isfinite(poses.wn_rad_s[:, m])
+        if j in flex_joints and np.any(ok):
+            start[j] = float(np.median(poses.wn_rad_s[ok, m] ** 2 * poses.mass_kg_m2[ok, j, j]))
+    stiff = max(start.values(), default=1.0e4)
+    return {j: start.get(j, 5.0 * stiff) for j in flex_joints}
+
+
+def _fit_damping(
+    poses: ModalPoses,
+    flex_joints: Sequence[int],
+    stiffness: Mapping[int, Sequence[float]],
+    terms: list[_Term],
+    damping_load: Mapping[int, int],
+) -> tuple[dict[int, list[float]], np.ndarray, np.ndarray, np.ndarray]:
+    observed = np.isfinite(poses.zeta) & np.isfinite(poses.wn_rad_s)
+    target = poses.zeta[observed]
+    columns = []
+    for t in terms:
+        unit = [0.0, 0.0, 0.0]
+        unit[int(t.name[-1])] = 1.0
+        pred = _predict(poses, flex_joints, stiffness, {t.joint: unit}, damping_load)
+        columns.append(pred[:, :, 1][observed])
+    a = np.column_stack(columns) / target[:, None]
+    ok = np.all(np.isfinite(a), axis=1)
+    a, b = a[ok], np.ones(int(ok.sum()))
+    # Column scaling for a well-conditioned NNLS; the solution is scaled back.
+    scale = np.linalg.norm(a, axis=0)
+    scale[scale == 0] = 1.0
+    x_scaled, _ = optimize.nnls(a / scale, b)
+    x = x_scaled / scale
+    laws = {j: [0.0, 0.0, 0.0] for j in flex_joints}
+    for value, t in zip(x, terms, strict=True):
+        laws[t.joint][int(t.name[-1])] = float(value)
+    return laws, x, a, a @ x - b
+
+
+def _json_number(value: float) -> float | None:
+    """``value`` as a float, or ``None`` (JSON null) when it is not finite (an unidentifiable
+    term's standard error)."""
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def _load_span(poses: ModalPoses, joint: int) -> float:
+    return float(np.ptp(np.abs(poses.gravity_torque_nm[:, joint])))
+
+
+def fit_modal_map(
+    records: Sequence[Mapping[str, Any]] | ModalPoses,
+    robot_name: str = "ur5e",
+    *,
+    flex_joints: Sequence[int] = DEFAULT_FLEX_JOINTS,
+    damping_load: Mapping[int, int] | None = None,
+    drop_t: float = 3.0,
+    include_low_confidence: bool = False,
+    metadata: Mapping[str, Any] | None = None,
+) -> ModalMap:
+    """Fit a :class:`tvist.ModalMap` to a campaign's identified modes.
+
+    Parameters
+    ----------
+    records
+        Campaign pose records (JSON lines of :func:`tvist.ident.campaign.run_campaign`), or
+        :func:`modal_poses` of them.
+    robot_name
+        The robot model (mass matrices, gravity torques).
+    flex_joints
+        Flexible joints (default base, shoulder, elbow, wrists 1-2); must include 0 and 1.
+    damping_load
+        ``{joint: load joint}`` of the damping laws (default: the base's damper is loaded by
+        the shoulder's gravity torque, every other by its own).
+    drop_t
+        Terms below ``drop_t`` standard errors are dropped (set to 0) and the step refitted.
+    include_low_confidence
+        Also use identifications flagged low-confidence.
+    metadata
+        Extra metadata; ``fit_statistics`` is filled in here.
+
+    Returns
+    -------
+    ModalMap
+        With ``metadata["fit_statistics"]``: every law coefficient with its standard error,
+        the dropped terms, the RMS relative errors per mode against the identified modes.
+
+    Raises
+    ------
+    ValueError
+        Too few usable identifications, or flexible joints without base and shoulder.
+    """
+    flex_joints = tuple(int(j) for j in flex_joints)
+    if not set(MODE_JOINTS) <= set(flex_joints):
+        raise ValueError(
+            f"flex_joints must include the base and shoulder (0, 1), got {flex_joints}"
+        )
+    load = dict(DEFAULT_DAMPING_LOAD if damping_load is None else damping_load)
+    poses = (
+        records
+        if isinstance(records, ModalPoses)
+        else modal_poses(records, robot_name, include_low_confidence=include_low_confidence)
+    )
+    if poses.mass_kg_m2.shape[1] <= max(flex_joints):
+        raise ValueError(f"flex_joints {flex_joints}: the robot has {poses.mass_kg_m2.shape[1]}")
+    n_obs = int(np.isfinite(poses.wn_rad_s).sum())
+    stiff_terms = [_Term(j, "k_0") for j in flex_joints]
+    for j in flex_joints:
+        if _load_span(poses, j) > MIN_LOAD_SPAN_NM:
+            stiff_terms += [_Term(j, "a_1"), _Term(j, "a_2")]
+    damp_terms = []
+    for j in flex_joints:
+        damp_terms.append(_Term(j, "c_0"))
+        if _load_span(poses, load.get(j, j)) > MIN_LOAD_SPAN_NM:
+            damp_terms += [_Term(j, "c_1"), _Term(j, "c_2")]
+    if n_obs < len(stiff_terms) + 2:
+        raise ValueError(
+            f"{n_obs} usable identified frequencies, need at least {len(stiff_terms) + 2} for "
+            f"{len(stiff_terms)} stiffness parameters"
+        )
+    start = _stiffness_start(poses, flex_joints)
+
+    dropped: dict[str, Any] = {}
+    while True:
+        stiffness, x, jac, fun = _fit_stiffness(poses, flex_joints, stiff_terms, load, start)
+        se = _standard_errors(jac, fun)
+        # A flexible joint other than base and shoulder whose stiffness the poses cannot
+        # determine (standard error of log k above 0.5, or k at its bound) is made rigid.
+        undetermined = [
+            (se[i], t.joint)
+            for i, t in enumerate(stiff_terms)
+            if t.name == "k_0"
+            and t.joint not in MODE_JOINTS
+            and (
+                not se[i] < 0.5
+                or abs(x[i] - math.log(start[t.joint])) > 0.999 * math.log(STIFFNESS_SPAN)
+            )
+        ]
+        if undetermined:
+            rigid = max(undetermined)[1]
+            i = next(i for i, t in enumerate(stiff_terms) if t.joint == rigid and t.name == "k_0")
+            dropped[f"joint {rigid} made rigid"] = {
+                "stiffness_nm_per_rad": stiffness[rigid][0],
+                "se_log": _json_number(se[i]),
+            }
+            flex_joints = tuple(j for j in flex_joints if j != rigid)
+            stiff_terms = [t for t in stiff_terms if t.joint != rigid]
+            damp_terms = [t for t in damp_terms if t.joint != rigid]
+            continue
+        weak = [
+            (abs(x[i]) / se[i] if se[i] > 0 else math.inf, i)
+            for i, t in enumerate(stiff_terms)
+            if t.name != "k_0"
+        ]
+        weak = [w for w in weak if w[0] < drop_t]
+        if not weak:
+            break
+        _, i = min(weak)
+        t = stiff_terms.pop(i)
+        dropped[f"stiffness {t.name} of joint {t.joint}"] = {
+            "value": float(x[i]),
+            "se": _json_number(se[i]),
+        }
+    stiffness_stats = []
+    for i, t in enumerate(stiff_terms):
+        k0 = stiffness[t.joint][0]
+        if t.name == "k_0":
+            stiffness_stats.append(
+                {"joint": t.joint, "term": "at_zero", "value": k0, "se": _json_number(k0 * se[i])}
+            )
+        else:
+            index = int(t.name[-1])
+            stiffness_stats.append(
+                {
+                    "joint": t.joint,
+                    "term": ("per_nm", "per_nm2")[index - 1],
+                    "value": stiffness[t.joint][index],
+                    "se": _json_number(k0 * se[i]),
+                }
+            )
+    while True:
+        damping, xd, a, fun_d = _fit_damping(poses, flex_joints, stiffness, damp_terms, load)
+        active = xd > 0
+        se_d = np.full(len(damp_terms), math.inf)
+        if active.any():
+            se_d[active] = _standard_errors(a[:, active], fun_d)
+        weak = [
+            (xd[i] / se_d[i] if se_d[i] > 0 else math.inf, i)
+            for i in range(len(damp_terms))
+            if damp_terms[i].name != "c_0" or damp_terms[i].joint not in MODE_JOINTS
+        ]
+        weak = [w for w in weak if w[0] < drop_t]
+        if not weak or len(damp_terms) <= 1:
+            break
+        _, i = min(weak)
+        t = damp_terms.pop(i)
+        dropped[f"damping {t.name} of joint {t.joint}"] = {
+            "value": float(xd[i]),
+            "se": _json_number(se_d[i]),
+        }
+    damping_stats = [
+        {
+            "joint": t.joint,
+            "term": ("at_zero", "per_nm", "per_nm2")[int(t.name[-1])],
+            "value": float(xd[i]),
+            "se": _json_number(se_d[i]),
+        }
+        for i, t in enumerate(damp_terms)
+    ]
+    entries = _entries(flex_joints, stiffness, damping, load)
+    fitted = ModalMap(entries, MODE_JOINTS)
+    pred = fitted.modes_from_mass_matrix_many(
+        poses.mass_kg_m2, poses.gravity_torque_nm if fitted.uses_gravity else None
+    )
+    stats = {
+        "robot": robot_name,
+        "n_poses": poses.n_poses,
+        "usable_identifications": {
+            "base": int(np.isfinite(poses.wn_rad_s[:, 0]).sum()),
+            "shoulder": int(np.isfinite(poses.wn_rad_s[:, 1]).sum()),
+        },
+        "stiffness_nm_per_rad": stiffness_stats,
+        "damping_nms_per_rad": damping_stats,
+        "dropped": dropped,
+        "drop_t": drop_t,
+        "versus_identified": relative_errors(pred, poses.wn_rad_s, poses.zeta),
+    }
+    meta = {"robot": robot_name, "source": "tvist.ident.fit_modal_map", **(metadata or {})}
+    meta["fit_statistics"] = stats
+    return ModalMap(entries, MODE_JOINTS, meta)
+
+
+# --------------------------------------------------------------------------- evaluation
+
+
+def relative_errors(pred: np.ndarray, wn_rad_s: np.ndarray, zeta: np.ndarray) -> dict[str, Any]:
+    """RMS and max relative errors of predictions ``(n, 2, 2)`` against modes ``(n, 2)``,
+    per mode (base, shoulder), over the finite entries."""
+    out: dict[str, Any] = {}
+    for m, name in enumerate(("base", "shoulder")):
+        entry: dict[str, Any] = {}
+        for q, ref in (("frequency", wn_rad_s[:, m]), ("damping", zeta[:, m])):
+            rel = pred[:, m, 0 if q == "frequency" else 1] / ref - 1.0
+            rel = rel[np.isfinite(rel)]
+            entry[q] = {
+                "n": int(rel.size),
+                "rms": float(np.sqrt(np.mean(rel**2))) if rel.size else math.nan,
+                "max": float(np.max(np.abs(rel))) if rel.size else math.nan,
+            }
+        out[name] = entry
+    return out
+
+
+def _published_predictions(
+    train: ModalPoses, test: ModalPoses, records_like: bool = True
+) -> np.ndarray:
+    """Fit the published 10-coefficient form on ``train`` and predict ``test``."""
+    from tvist.ident.map_fit import fit_map
+
+    train_records = _as_records(train)
+    dynmap = fit_map(train_records)
+    tau = test.gravity_torque_nm if dynmap.uses_gravity else None
+    return dynmap.modes_from_inertia_many(test.inertia_kg_m2, tau)
+
+
+def _as_records(poses: ModalPoses) -> list[dict[str, Any]]:
+    """The map fit's record form of ``poses`` (usable identifications only)."""
+    out = []
+    for i in range(poses.n_poses):
+        modes = [
+            {"joint": j, "wn_rad_s": float(poses.wn_rad_s[i, m]), "zeta": float(poses.zeta[i, m])}
+            for m, j in enumerate(MODE_JOINTS)
+            if np.isfinite(poses.wn_rad_s[i, m])
+        ]
+        out.append(
+            {
+                "inertia_kg_m2": poses.inertia_kg_m2[i].tolist(),
+                "gravity_torque_nm": poses.gravity_torque_nm[i].tolist(),
+                "modes": modes,
+            }
+        )
+    return out
+
+
+def cross_validate(
+    records: Sequence[Mapping[str, Any]],
+    robot_name: str = "ur5e",
+    *,
+    folds: int = 5,
+    seed: int = 0,
+    flex_joints: Sequence[int] = DEFAULT_FLEX_JOINTS,
+) -> dict[str, Any]:
+    """Both map forms, in-sample and on held-out poses (``folds``-fold over poses).
+
+    Returns, per form (``"modal"``, ``"published"``) and per set (``"in_sample"``,
+    ``"held_out"``), :func:`relative_errors` against the identified modes and, where the
+    records carry them (a twin's campaign), against the true modes. Held-out predictions
+    come from the fold's fit on the other poses; every pose is held out once.
+    """
+    from tvist.ident.map_fit import fit_map
+
+    poses = modal_poses(records, robot_name)
+    n = poses.n_poses
+    if folds < 2 or folds > n:
+        raise ValueError(f"folds must be in [2, {n}], got {folds}")
+    order = np.random.default_rng(seed).permutation(n)
+    held = {"modal": np.full((n, 2, 2), np.nan), "published": np.full((n, 2, 2), np.nan)}
+    for k in range(folds):
+        test = np.sort(order[k::folds])
+        train = np.setdiff1d(np.arange(n), test)
+        tr, te = poses.subset(train), poses.subset(test)
+        modal = fit_modal_map(tr, robot_name, flex_joints=flex_joints)
+        held["modal"][test] = modal.modes_from_mass_matrix_many(
+            te.mass_kg_m2, te.gravity_torque_nm if modal.uses_gravity else None
+        )
+        held["published"][test] = _published_predictions(tr, te)
+    modal = fit_modal_map(poses, robot_name, flex_joints=flex_joints)
+    published = fit_map(_as_records(poses))
+    in_sample = {
+        "modal": modal.modes_from_mass_matrix_many(
+            poses.mass_kg_m2, poses.gravity_torque_nm if modal.uses_gravity else None
+        ),
+        "published": published.modes_from_inertia_many(
+            poses.inertia_kg_m2, poses.gravity_torque_nm if published.uses_gravity else None
+        ),
+    }
+    has_truth = bool(np.isfinite(poses.true_wn_rad_s).any())
+    out: dict[str, Any] = {"n_poses": n, "folds": folds, "seed": seed}
+    for form in ("modal", "published"):
+        out[form] = {}
+        for label, pred in (("in_sample", in_sample[form]), ("held_out", held[form])):
+            entry = {"versus_identified": relative_errors(pred, poses.wn_rad_s, poses.zeta)}
+            if has_truth:
+                entry["versus_true"] = relative_errors(pred, poses.true_wn_rad_s, poses.true_zeta)
+            out[form][label] = entry
+    return out
+
+
+def format_comparison(cv: Mapping[str, Any]) -> str:
+    """A markdown table of :func:`cross_validate`'s frequency and damping errors."""
+    lines = [
+        "| form | poses | against | mode | f RMS [%] | f max [%] | ζ RMS [%] | ζ max [%] |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for form, label in (("modal", "modal map"), ("published", "published form")):
+        for where in ("in_sample", "held_out"):
+            for against in ("versus_true", "versus_identified"):
+                entry = cv[form][where].get(against)
+                if entry is None:
+                    continue
+                for mode in ("base", "shoulder"):
+                    f, z = entry[mode]["frequency"], entry[mode]["damping"]
+                    lines.append(
+                        f"| {label} | {where.replace('_', ' ')} | "
+                        f"{against.replace('versus_', '')} | {mode} | {100 * f['rms']:.2f} | "
+                        f"{100 * f['max']:.2f} | {100 * z['rms']:.1f} | {100 * z['max']:.1f} |"
+                    )
+    return "\n".join(lines)
+
+
+def fit_map_command(records: Sequence[Mapping[str, Any]], args: Any) -> int:
+    """``tvist fit-map --kind modal``: fit, print the laws with standard errors, write the
+    map file (``args``: ``results``, ``out``, ``robot``, ``include_low_confidence``)."""
+    try:
+        modal = fit_modal_map(
+            records,
+            args.robot,
+            include_low_confidence=args.include_low_confidence,
+            metadata={"source": f"tvist fit-map --kind modal {args.results}"},
+        )
+    except ValueError as exc:
+        print(f"tvist fit-map: error: {exc}", file=sys.stderr)
+        return 2
+    stats = modal.metadata["fit_statistics"]
+    print(
+        f"modal map of {args.robot}: {stats['n_poses']} poses, usable identifications "
+        f"base {stats['usable_identifications']['base']}, "
+        f"shoulder {stats['usable_identifications']['shoulder']}"
+    )
+    for what, unit in (("stiffness_nm_per_rad", "N m/rad"), ("damping_nms_per_rad", "N m s/rad")):
+        for t in stats[what]:
+            print(
+                f"  joint {t['joint']} {what.split('_')[0]} {t['term']}: "
+                f"{t['value']:.5g} ± {_se_text(t['se'])} ({unit}{_per(t['term'])})"
+            )
+    if stats["dropped"]:
+        print(f"  dropped as negligible: {', '.join(stats['dropped'])}")
+    for name, entry in stats["versus_identified"].items():
+        print(
+            f"  {name}: RMS relative error frequency {100 * entry['frequency']['rms']:.2f} %, "
+            f"damping {100 * entry['damping']['rms']:.1f} %"
+        )
+    modal.save(args.out)
+    print(f"modal map written to {args.out}")
+    return 0
+
+
+def _se_text(se: float | None) -> str:
+    return "?" if se is None else f"{se:.2g}"
+
+
+def _per(term: str) -> str:
+    return {"at_zero": "", "per_nm": " per N m", "per_nm2": " per (N m)²"}[term]
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m tvist.ident.modal_fit RESULTS.jsonl [--robot R] [--folds K]``: both map
+    forms' errors, in-sample and on held-out poses, as a markdown table."""
+    import argparse
+
+    from tvist.ident.campaign import load_results
+
+    p = argparse.ArgumentParser(prog="python -m tvist.ident.modal_fit", description=main.__doc__)
+    p.add_argument("results", help="campaign results (JSON lines)")
+    p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
+    p.add_argument("--folds", type=int, default=5, help="folds over poses (default 5)")
+    args = p.parse_args(argv)
+    records = load_results(args.results)
+    try:
+        cv = cross_validate(records, args.robot, folds=args.folds)
+    except ValueError as exc:
+        print(f"python -m tvist.ident.modal_fit: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"{cv['n_poses']} poses, {cv['folds']}-fold over poses (seed {cv['seed']})")
+    print(format_comparison(cv))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,299 @@
+"""The modal map as data: flexible joints, their load laws, save and load.
+
+The physics lives in the Rust core (``tvist-core/src/modal_map.rs``): every flexible joint
+``j`` is a torsional spring ``k_j`` and damper ``c_j`` between its motor (held rigidly by the
+servo) and its link; at each pose the modes solve ``K φ = ω² M_ff(q) φ`` with ``M_ff`` the
+block of the link-side mass matrix on the flexible joints, damping by modal projection
+``ζ = φᵀCφ / (2 ω φᵀMφ)``; each shaped mode is the eigenmode that stores the largest share
+of its strain energy in the joint that names it, so "base" and "shoulder" keep their meaning
+when their frequencies cross. Stiffness and damping grow with the static load ``L`` (gravity
+torque, N m): ``v(L) = v_0 + v_1 |L|_s + v_2 L²``; the stiffness of joint ``j`` reads its own
+gravity torque, its damping that of ``damping_load_joint``.
+
+Map files are strict JSON (no NaN or infinity), ``"kind": "modal"``::
+
+    {"schema_version": 1, "kind": "modal",
+     "metadata": {"robot": "ur5e", "source": "...", "fit_statistics": {...} | null},
+     "mode_joints": [0, 1],
+     "flex_joints": [{"joint": 0, "stiffness_nm_per_rad": [k_0, k_1, k_2],
+                      "damping_nms_per_rad": [c_0, c_1, c_2], "damping_load_joint": 1},
+                     ...]}
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tvist import _core
+from tvist.robots import Robot
+
+__all__ = ["KIND", "SCHEMA_VERSION", "ModalDynamics", "ModalMap", "modal_map_from_flex"]
+
+SCHEMA_VERSION = 1
+#: The ``kind`` of a modal map file.
+KIND = "modal"
+#: Fields of one flexible joint.
+FLEX_JOINT_FIELDS: tuple[str, ...] = tuple(_core.FLEX_JOINT_FIELDS)
+_LAW_FIELDS = ("stiffness_nm_per_rad", "damping_nms_per_rad")
+_INDEX_FIELDS = ("joint", "damping_load_joint")
+
+
+def _joint_index(value: Any, where: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+        raise ValueError(f"{where}: must be a joint index >= 0, got {value!r}")
+    return int(value)
+
+
+def _law(value: Any, where: str) -> list[float]:
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 3:
+        raise ValueError(f"{where}: must be [at_zero, per_nm, per_nm2], got {value!r}")
+    out = []
+    for i, v in enumerate(value):
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)):
+            raise ValueError(f"{where}[{i}]: must be a number, got {v!r}")
+        if not math.isfinite(float(v)):
+            raise ValueError(f"{where}[{i}]: must be finite, got {v!r}")
+        out.append(float(v))
+    return out
+
+
+def _validate_flex(entry: Any, where: str) -> dict[str, Any]:
+    if not isinstance(entry, Mapping):
+        raise ValueError(f"{where}: must be an object with fields {', '.join(FLEX_JOINT_FIELDS)}")
+    unknown = sorted(set(entry) - set(FLEX_JOINT_FIELDS))
+    if unknown:
+        raise ValueError(f"{where}: unknown field(s) {', '.join(unknown)}")
+    out: dict[str, Any] = {}
+    for key in FLEX_JOINT_FIELDS:
+        if key not in entry:
+            raise ValueError(f"{where}.{key}: missing")
+        if key in _INDEX_FIELDS:
+            out[key] = _joint_index(entry[key], f"{where}.{key}")
+        else:
+            out[key] = _law(entry[key], f"{where}.{key}")
+    return out
+
+
+def _strict_constant(name: str) -> float:
+    raise ValueError(f"not strict JSON: {name} is not a number JSON allows")
+
+
+class ModalMap:
+    """Modes from the mass matrix and identified joint flexibility.
+
+    Parameters
+    ----------
+    flex_joints
+        One mapping per flexible joint with :data:`FLEX_JOINT_FIELDS`: ``joint``,
+        ``stiffness_nm_per_rad`` and ``damping_nms_per_rad`` as ``[v_0, v_1, v_2]`` (value
+        at zero load, per N m, per (N m)²; ``v_0 > 0`` for the stiffness, all ``>= 0``), and
+        ``damping_load_joint``.
+    mode_joints
+        The joints naming the shaped modes, in cascade order (default base, shoulder).
+    metadata
+        ``robot``, ``source``, ``fit_statistics`` and anything else JSON-ready.
+
+    Raises
+    ------
+    ValueError
+        Naming the field: missing, unknown, non-finite or negative values, a joint listed
+        twice, a mode joint that is not flexible.
+    """
+
+    def __init__(
+        self,
+        flex_joints: Sequence[Mapping[str, Any]],
+        mode_joints: Sequence[int] = (0, 1),
+        metadata: Mapping[str, Any] | None = None,
+    ) -> None:
+        if isinstance(flex_joints, (str, bytes)) or not isinstance(flex_joints, Sequence):
+            raise ValueError("flex_joints: must be a list of flexible-joint objects")
+        checked = [_validate_flex(f, f"flex_joints[{i}]") for i, f in enumerate(flex_joints)]
+        if isinstance(mode_joints, (str, bytes)) or not isinstance(mode_joints, Sequence):
+            raise ValueError("mode_joints: must be a list of joint indices")
+        joints = [_joint_index(j, f"mode_joints[{i}]") for i, j in enumerate(mode_joints)]
+        self._core = _core.ModalMap(checked, joints)
+        if metadata is not None and not isinstance(metadata, Mapping):
+            raise ValueError("metadata: must be an object")
+        self.metadata: dict[str, Any] = {"robot": None, "source": None, "fit_statistics": None}
+        self.metadata.update(metadata or {})
+
+    @property
+    def core(self) -> _core.ModalMap:
+        """The Rust map (pass-through for :class:`ModalDynamics`)."""
+        return self._core
+
+    @property
+    def flex_joints(self) -> list[dict[str, Any]]:
+        """The flexible joints (see the constructor)."""
+        return self._core.flex_joints
+
+    @property
+    def mode_joints(self) -> list[int]:
+        """The joints naming the shaped modes, in cascade order."""
+        return self._core.mode_joints
+
+    @property
+    def n_modes(self) -> int:
+        return self._core.n_modes
+
+    @property
+    def uses_gravity(self) -> bool:
+        """True if a stiffness or damping law reads a gravity torque."""
+        return self._core.uses_gravity
+
+    def modes_from_mass_matrix_many(
+        self, mass_kg_m2: np.ndarray, gravity_torque_nm: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Shaped modes for mass matrices ``(n_poses, n_dof, n_dof)`` (kg m²) and gravity
+        torques ``(n_poses, n_dof)`` (N m; needed when :attr:`uses_gravity`).
+
+        Returns ``(n_poses, n_modes, 2)``: ``[..., 0]`` ``wn_rad_s``, ``[..., 1]`` ``zeta``;
+        NaN where the mass block is not positive definite or not finite.
+        """
+        m = np.asarray(mass_kg_m2, dtype=float)
+        if m.ndim != 3 or m.shape[1] != m.shape[2]:
+            raise ValueError(f"mass_kg_m2 must have shape (n_poses, n, n), got {m.shape}")
+        n_dof = m.shape[1]
+        flat = np.ascontiguousarray(m.reshape(m.shape[0], n_dof * n_dof))
+        tau = None
+        if gravity_torque_nm is not None:
+            tau = np.ascontiguousarray(gravity_torque_nm, dtype=float)
+            if tau.shape != (m.shape[0], n_dof):
+                raise ValueError(
+                    f"gravity_torque_nm must have shape {(m.shape[0], n_dof)}, got {tau.shape}"
+                )
+        return self._core.modes_from_mass_matrix_many(flat, n_dof, tau)
+
+    def modes_many(self, robot: Robot, q: np.ndarray) -> np.ndarray:
+        """Shaped modes at every configuration ``q`` ``(n_poses, n_dof)`` of ``robot``
+        (payload included): ``(n_poses, n_modes, 2)``."""
+        q = np.ascontiguousarray(np.atleast_2d(q), dtype=float)
+        tau = robot.gravity_torque_many(q) if self.uses_gravity else None
+        return self.modes_from_mass_matrix_many(robot.mass_matrix_many(q), tau)
+
+    def modes(self, robot: Robot, q: Sequence[float] | np.ndarray) -> list[tuple[float, float]]:
+        """Shaped modes ``[(wn_rad_s, zeta), ...]`` at configuration ``q`` of ``robot``."""
+        out = self.modes_many(robot, np.asarray(q, dtype=float)[None, :])[0]
+        return [(float(wn), float(z)) for wn, z in out]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON document of this map."""
+        return {
+            "schema_version": SCHEMA_VERSION,
+            "kind": KIND,
+            "metadata": self.metadata,
+            "mode_joints": self.mode_joints,
+            "flex_joints": self.flex_joints,
+        }
+
+    def save(self, path: str | Path) -> None:
+        """Write the map as strict JSON (see the module docstring)."""
+        text = json.dumps(self.to_dict(), indent=2, allow_nan=False)
+        Path(path).write_text(text + "\n", encoding="utf-8")
+
+    @classmethod
+    def from_dict(cls, doc: Any) -> ModalMap:
+        """Validate and build from a parsed map document."""
+        if not isinstance(doc, Mapping):
+            raise ValueError("map file: top level must be a JSON object")
+        if doc.get("kind") != KIND:
+            raise ValueError(f"kind: expected {KIND!r}, got {doc.get('kind')!r}")
+        if doc.get("schema_version") != SCHEMA_VERSION:
+            raise ValueError(
+                f"schema_version: expected {SCHEMA_VERSION}, got {doc.get('schema_version')!r}"
+            )
+        for key in ("flex_joints", "mode_joints"):
+            if key not in doc:
+                raise ValueError(f"{key}: missing")
+        unknown = sorted(set(doc) - {"schema_version", "kind", "metadata", *_TOP_FIELDS})
+        if unknown:
+            raise ValueError(f"map file: unknown field(s) {', '.join(unknown)}")
+        return cls(doc["flex_joints"], doc["mode_joints"], doc.get("metadata"))
+
+    @classmethod
+    def load(cls, path: str | Path) -> ModalMap:
+        """Read and validate a modal map file; malformed files raise ValueError naming the
+        field."""
+        text = Path(path).read_text(encoding="utf-8")
+        try:
+            doc = json.loads(text, parse_constant=_strict_constant)
+        except json.JSONDecodeError as exc:
+            raise ValueError(f"{path}: not valid JSON ({exc})") from None
+        except ValueError as exc:
+            raise ValueError(f"{path}: {exc}") from None
+        return cls.from_dict(doc)
+
+    def __repr__(self) -> str:
+        joints = [f["joint"] for f in self.flex_joints]
+        return (
+            f"ModalMap(flex_joints={joints}, mode_joints={self.mode_joints}, "
+            f"robot={self.metadata.get('robot')!r})"
+        )
+
+
+_TOP_FIELDS = ("flex_joints", "mode_joints")
+
+
+class ModalDynamics(_core.ModalDynamics):
+    """Per-cycle dynamics provider for :class:`tvist.TvShaper`: robot mass matrix + modal map.
+
+    Every cycle the mass matrix (and the gravity torques, if the map's laws read them) of
+    ``robot`` are evaluated at the previous shaped output and the modal eigenproblem is
+    solved, in Rust, allocation-free. ``tvist.MapDynamics(robot, modal_map)`` returns one.
+    Construction rejects a map that gives an overdamped mode at any of
+    ``ModalDynamics.validation_poses`` sampled configurations or reads joints the robot
+    does not have.
+    """
+
+    def __new__(cls, robot: Robot, modal_map: ModalMap) -> ModalDynamics:
+        if not isinstance(robot, Robot):
+            raise TypeError(f"robot must be a tvist.robots.Robot, got {type(robot).__name__}")
+        if not isinstance(modal_map, ModalMap):
+            raise TypeError(f"modal_map must be a tvist.ModalMap, got {type(modal_map).__name__}")
+        return super().__new__(cls, robot.core, modal_map.core)
+
+    def __init__(self, robot: Robot, modal_map: ModalMap) -> None:
+        self.robot = robot
+        self.dynmap = modal_map
+
+    def __repr__(self) -> str:
+        return f"ModalDynamics({self.robot!r}, {self.dynmap!r})"
+
+
+def modal_map_from_flex(
+    flex: Any,
+    joints: Sequence[int] = (0, 1, 2),
+    mode_joints: Sequence[int] = (0, 1),
+    metadata: Mapping[str, Any] | None = None,
+) -> ModalMap:
+    """The modal map of a flexible-joint twin's gear laws (:class:`tvist.sim.FlexParams`).
+
+    The twin's spring ``k1 δ + k3 δ³`` has the tangent stiffness ``k1 + 3 k3 δ²``; with the
+    static deflection ``δ ≈ L / k1`` that is ``k1 + (3 k3 / k1²) L²``. Its damper
+    ``c0 (1 + a |L|)(1 + b |L|)`` expands to ``c0 + c0 (a + b) |L| + c0 a b L²``. Both are
+    first-order approximations (the twin's smoothing width of ``|L|`` also differs), so this
+    is a physically derived prior, not an exact copy of the twin.
+    """
+    c_load2 = flex.c_load2()
+    load_joint = flex.damper_load_index()
+    entries = []
+    for j in joints:
+        k1, k3 = float(flex.k1_nm_per_rad[j]), float(flex.k3_nm_per_rad3[j])
+        c0, a, b = float(flex.c0_nms_per_rad[j]), float(flex.c_load_per_nm[j]), float(c_load2[j])
+        entries.append(
+            {
+                "joint": int(j),
+                "stiffness_nm_per_rad": [k1, 0.0, 3.0 * k3 / (k1 * k1)],
+                "damping_nms_per_rad": [c0, c0 * (a + b), c0 * a * b],
+                "damping_load_joint": int(load_joint[j]),
+            }
+        )
+    meta = {"source": "gear laws of a flexible-joint twin (FlexParams)", **(metadata or {})}
+    return ModalMap(entries, mode_joints, meta)

@@ -1,0 +1,151 @@
+"""Twin variants whose flexibility the modal map does not model exactly.
+
+The default twin (:data:`tvist.sim.flex.UR5E_FLEX`) is itself a flexible-joint model with a
+stiff elbow and stiff wrists, so a modal map of base, shoulder and elbow agrees with it partly
+by construction. A variant changes the plant, not the map:
+
+``"ur5e-soft-gears"``
+    Strain-wave gears with the stiffness curve of a real harmonic drive: soft at low torque
+    and stiffening strongly with load (the tangent stiffness ``k1 + 3 k3 δ²`` triples at rated
+    torque instead of growing by 25 %), so the static stiffness grows as about ``τ^(2/3)``
+    at large loads, which the map's ``k_0 + k_1|L| + k_2 L²`` only approximates, and the
+    vibration itself (a few mrad) sweeps a stiffness that varies along the cycle. The elbow
+    is soft (40 000 N m/rad instead of 120 000: at folded poses the base mode then depends on
+    the elbow's flexibility), and wrists 1-2 are soft (5 000 N m/rad instead of 15 000) and
+    not modelled by a three-joint modal map at all: their compliance lowers the base and
+    shoulder modes by a pose-dependent amount the map has to absorb in its base, shoulder
+    and elbow laws.
+
+Run a campaign on a variant with :func:`run_variant_campaign` (the twin campaign's records,
+with ``true_modes`` from the variant's own eigen-analysis), or build the twin directly:
+``Twin("ur5e", flex=variant_flex("ur5e-soft-gears"))``.
+
+Not expressible as a variant of the gear laws: flexible links (extra bending degrees of
+freedom) and gear hysteresis (a stiffness that depends on the loading history); both need the
+twin's time-stepping loop to carry extra state.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+from pathlib import Path
+
+from tvist.sim.flex import UR5E_FLEX, FlexParams
+
+__all__ = ["VARIANTS", "VariantTwinRobot", "run_variant_campaign", "variant_flex"]
+
+
+def _stiffening(k1: float, rated_nm: float, growth: float) -> float:
+    """``k3`` (N m/rad³) such that the tangent stiffness ``k1 + 3 k3 δ²`` is ``growth`` times
+    ``k1`` at the deflection that carries ``rated_nm``: ``δ_r`` solves
+    ``k1 δ + k3 δ³ = τ_r``; with ``3 k3 δ_r² = (growth − 1) k1`` this is
+    ``δ_r = 3 τ_r / ((growth + 2) k1)``."""
+    delta_r = 3.0 * rated_nm / ((growth + 2.0) * k1)
+    return (growth - 1.0) * k1 / (3.0 * delta_r * delta_r)
+
+
+_SOFT_K1 = (16000.0, 13000.0, 40000.0, 5000.0, 5000.0, 2000.0)
+_RATED_NM = (150.0, 150.0, 150.0, 28.0, 28.0, 28.0)
+
+#: Named variants: ``{name: (robot_name, FlexParams)}``.
+VARIANTS: dict[str, tuple[str, FlexParams]] = {
+    "ur5e-soft-gears": (
+        "ur5e",
+        replace(
+            UR5E_FLEX,
+            k1_nm_per_rad=_SOFT_K1,
+            k3_nm_per_rad3=tuple(
+                _stiffening(k, t, 3.0) for k, t in zip(_SOFT_K1, _RATED_NM, strict=True)
+            ),
+        ),
+    ),
+}
+
+
+def variant_flex(name: str) -> FlexParams:
+    """The :class:`~tvist.sim.FlexParams` of variant ``name`` (see :data:`VARIANTS`).
+
+    Raises
+    ------
+    ValueError
+        Unknown variant.
+    """
+    try:
+        return VARIANTS[name][1]
+    except KeyError:
+        raise ValueError(f"unknown twin variant {name!r}; known: {', '.join(VARIANTS)}") from None
+
+
+class VariantTwinRobot:
+    """A campaign robot (:class:`tvist.ident.campaign.CampaignRobot`) on a twin variant.
+
+    Parameters
+    ----------
+    variant
+        A name of :data:`VARIANTS`.
+    accel_noise_std, seed
+        As for :class:`tvist.ident.campaign.TwinRobot`.
+    """
+
+    def __init__(self, variant: str, accel_noise_std: float = 0.05, seed: int = 0) -> None:
+        self.robot_name, self.flex = VARIANTS[variant][0], variant_flex(variant)
+        self.variant = variant
+        self.accel_noise_std = float(accel_noise_std)
+        self.seed = int(seed)
+        self._twin = None
+        self._payload: tuple | None = None
+
+    def set_payload(self, payload_kg: float, payload_com_m: Sequence[float]) -> None:
+        key = (float(payload_kg), tuple(float(v) for v in payload_com_m))
+        if key == self._payload:
+            return
+        from tvist.sim.twin import Twin
+
+        self._twin = Twin(
+            self.robot_name,
+            payload_kg=key[0],
+            payload_com_m=key[1],
+            flex=self.flex,
+            accel_noise_std=self.accel_noise_std,
+            seed=self.seed,
+        )
+        self._payload = key
+
+    def _require_twin(self):
+        if self._twin is None:
+            raise RuntimeError("call set_payload() before running excitations")
+        return self._twin
+
+    def record_excitation(self, excitation):
+        from tvist.ident.logs import Record
+
+        noise_seed = None if excitation.seed is None else [self.seed, excitation.seed]
+        sim = self._require_twin().run(excitation.q, dt_s=excitation.dt_s, noise_seed=noise_seed)
+        return Record.from_rtde_fields(sim)
+
+    def true_modes(self, q):
+        return self._require_twin().modes(q)
+
+
+def run_variant_campaign(
+    variant: str,
+    results_path: str | Path,
+    *,
+    every: int = 1,
+    part: tuple[int, int] = (0, 1),
+    seed: int = 0,
+    progress: bool = False,
+) -> list[dict]:
+    """Algorithm 1's campaign (every ``every``-th pose) on a twin variant, in this process.
+
+    ``part = (i, n)`` runs only poses ``i, i + n, ...`` of those (to split a campaign over
+    processes that write separate files).
+    """
+    from tvist.ident.campaign import campaign_poses, run_campaign
+
+    robot = VariantTwinRobot(variant, seed=seed)
+    poses = campaign_poses(robot.robot_name, seed=seed)[::every]
+    return run_campaign(
+        poses[part[0] :: part[1]], results_path, robot=robot, noise_seed=seed, progress=progress
+    )

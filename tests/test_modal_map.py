@@ -1,0 +1,259 @@
+"""The modal map: against scipy's generalized eigensolver and the exact damped modes, its file
+format, the real-time provider, and its fit to modes of the full flexible twin."""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+import tvist
+from tvist.ident.campaign import campaign_poses
+from tvist.ident.modal_fit import cross_validate, fit_modal_map
+from tvist.modal_map import ModalMap, modal_map_from_flex
+from tvist.sim import Twin, default_flex
+from tvist.sim.modal import modal_analysis
+
+ROBOT = tvist.robots.ur5e(payload_kg=5.0, payload_com_m=(0.0, 0.0, 0.05))
+#: The UR5e twin's gear laws, linearized at the gravity load (see modal_map_from_flex).
+ENTRIES = [
+    {
+        "joint": 0,
+        "stiffness_nm_per_rad": [22000.0, 0.0, 0.0],
+        "damping_nms_per_rad": [5.0, 0.56, 0.0157],
+        "damping_load_joint": 1,
+    },
+    {
+        "joint": 1,
+        "stiffness_nm_per_rad": [18000.0, 0.0, 0.234],
+        "damping_nms_per_rad": [60.0, 0.6, 0.0],
+        "damping_load_joint": 1,
+    },
+    {
+        "joint": 2,
+        "stiffness_nm_per_rad": [120000.0, 0.0, 1.56],
+        "damping_nms_per_rad": [40.0, 0.4, 0.0],
+        "damping_load_joint": 2,
+    },
+]
+
+
+def _law(v, load):
+    smooth = np.hypot(load, 1.0) - 1.0  # the core's |L|_s with a 1 N m width
+    return v[0] + v[1] * smooth + v[2] * load * load
+
+
+@functools.cache
+def _campaign_q(payload_kg: float = 5.0) -> np.ndarray:
+    return np.array(
+        [p.q for p in campaign_poses("ur5e", payloads_kg=(payload_kg,)) if p.q is not None]
+    )
+
+
+def _system(q: np.ndarray):
+    m = ROBOT.mass_matrix(q)[:3, :3]
+    tau = ROBOT.gravity_torque(q)
+    k = np.array([_law(e["stiffness_nm_per_rad"], tau[e["joint"]]) for e in ENTRIES])
+    c = np.array([_law(e["damping_nms_per_rad"], tau[e["damping_load_joint"]]) for e in ENTRIES])
+    return m, k, c
+
+
+def test_modes_match_scipy_generalized_eigh_weighted_by_strain_energy():
+    modal = ModalMap(ENTRIES)
+    rng = np.random.default_rng(4)
+    q_all = rng.uniform(-math.pi, math.pi, (200, 6))
+    got = modal.modes_many(ROBOT, q_all)
+    for q, pred in zip(q_all, got, strict=True):
+        m, k, c = _system(q)
+        w2, phi = scipy.linalg.eigh(np.diag(k), m)  # K φ = ω² M φ, φᵀ M φ = 1
+        wn = np.sqrt(w2)
+        zeta = np.einsum("ji,j,ji->i", phi, c, phi) / (2.0 * wn)
+        share = k[:, None] * phi**2
+        share /= share.sum(axis=0)
+        # Each shaped mode: the eigenmodes weighted by the 4th power of their strain-energy
+        # share in its joint (the dominant eigenmode, blended where two share the joint).
+        weights = share[:2] ** 4
+        weights /= weights.sum(axis=1, keepdims=True)
+        want = np.column_stack([weights @ wn, weights @ zeta])
+        # Two independent eigensolvers (Jacobi, LAPACK) agree to rounding.
+        np.testing.assert_allclose(pred, want, rtol=1e-9)
+
+
+def test_modal_damping_is_close_to_the_exact_damped_modes_over_the_campaign():
+    # The exact modes of M δ'' + C δ' + K δ = 0 (complex eigenvalues of the first-order form,
+    # tvist.sim.modal) against the modal projection, at every campaign pose with 5 kg. Measured:
+    # ω within 0.8 %, ζ within 1.3 %; the bounds leave a margin for the pose draw.
+    modal = ModalMap(ENTRIES)
+    q_all = _campaign_q()
+    got = modal.modes_many(ROBOT, q_all)
+    for q, pred in zip(q_all, got, strict=True):
+        m, k, c = _system(q)
+        exact = modal_analysis(m, np.diag(c), np.diag(k), k)
+        base = exact.dominant_mode(0)
+        shoulder = exact.dominant_mode(1, exclude=(base,))
+        for row, i in zip(pred, (base, shoulder), strict=True):
+            assert row[0] == pytest.approx(exact.wn_rad_s[i], rel=0.015)
+            assert row[1] == pytest.approx(exact.zeta[i], rel=0.03)
+
+
+def test_map_files_round_trip_and_are_strict(tmp_path):
+    modal = ModalMap(ENTRIES, (1, 0), {"robot": "ur5e", "source": "test"})
+    path = tmp_path / "modal.json"
+    modal.save(path)
+    doc = json.loads(path.read_text())
+    assert doc["kind"] == "modal" and doc["mode_joints"] == [1, 0]
+    again = ModalMap.load(path)
+    assert again.flex_joints == modal.flex_joints and again.metadata["robot"] == "ur5e"
+    np.testing.assert_array_equal(
+        again.modes_many(ROBOT, _campaign_q()[:5]), modal.modes_many(ROBOT, _campaign_q()[:5])
+    )
+
+    bad = dict(doc, flex_joints=[dict(ENTRIES[0], stiffness_nm_per_rad=[-1.0, 0.0, 0.0])])
+    path.write_text(json.dumps(bad))
+    with pytest.raises(ValueError, match="stiffness of joint 0"):
+        ModalMap.load(path)
+    path.write_text(json.dumps(doc).replace("22000.0", "NaN"))
+    with pytest.raises(ValueError, match="not strict JSON"):
+        ModalMap.load(path)
+    with pytest.raises(ValueError, match="kind"):
+        ModalMap.from_dict(dict(doc, kind="paper10"))
+    with pytest.raises(ValueError, match="unknown field"):
+        ModalMap.from_dict(dict(doc, extra=1))
+    with pytest.raises(ValueError, match="not one of the flexible joints"):
+        ModalMap(ENTRIES, (0, 4))
+    with pytest.raises(ValueError, match="missing"):
+        ModalMap([{k: v for k, v in ENTRIES[0].items() if k != "damping_load_joint"}])
+
+
+def test_map_dynamics_takes_a_modal_map_and_shapes_in_rust():
+    modal = ModalMap(ENTRIES)
+    provider = tvist.MapDynamics(ROBOT, modal)
+    assert isinstance(provider, tvist.ModalDynamics) and provider.n_modes == 2
+    q0 = np.array([0.0, -math.pi, 0.0, -math.pi / 2, 0.0, 0.0])
+    q1 = np.array([math.pi / 2, -math.pi / 2, 5 * math.pi / 6, -math.pi / 2, 0.0, 0.0])
+    np.testing.assert_allclose(provider.modes(q1), modal.modes(ROBOT, q1), rtol=1e-12)
+    # The Rayleigh bound sizes the delay lines below every mode the map gives.
+    slowest = provider.slowest_modes
+    modes = modal.modes_many(ROBOT, _campaign_q())
+    assert np.all(modes[:, :, 0] >= np.array([s[0] for s in slowest]))
+
+    traj = tvist.trajectory.double_s(q0, q1, 0.002, 1.5, 2.0, 0.02)
+    shaper = tvist.TvShaper(provider, 0.002, 6, shaper="zv")
+    shaper.reset(q0)
+    shaped = shaper.shape(np.vstack([traj.q, np.repeat(traj.q[-1:], 200, axis=0)]))
+    counts = {k: v for k, v in shaper.status_counts.items() if v}
+    assert not counts, counts
+    np.testing.assert_allclose(shaped[-1], q1, atol=1e-12)
+    # At rest at q1 the cascade's delay is the two ZV half-periods of the map's modes there.
+    (w0, z0), (w1, z1) = modal.modes(ROBOT, q1)
+    expect = math.pi / (w0 * math.sqrt(1 - z0**2)) + math.pi / (w1 * math.sqrt(1 - z1**2))
+    assert shaper.delay_s == pytest.approx(expect, rel=1e-9)
+    with pytest.raises(TypeError):
+        tvist.ModalDynamics(ROBOT, {"flex_joints": ENTRIES})
+
+
+def _twin_records(robot_name: str, payloads, every: int, seed: int, noise: float = 0.004):
+    """Campaign-format records whose modes come from the full twin's eigen-analysis (six
+    flexible joints, nonlinear gears linearized at the gravity deflection, gravity stiffness,
+    exact damped modes): a more complete model than the modal map's, with noise of the size
+    of the local identification's errors (0.4 % on ω, 3 % on ζ)."""
+    rng = np.random.default_rng(seed)
+    records = []
+    for payload in payloads:
+        twin = Twin(robot_name, payload_kg=payload)
+        poses = campaign_poses(robot_name, payloads_kg=(payload,), seed=seed)[::every]
+        for p in poses:
+            if p.q is None:
+                continue
+            truth = twin.modes(p.q)
+            modes = [
+                {
+                    "joint": j,
+                    "wn_rad_s": wn * (1 + noise * rng.standard_normal()),
+                    "zeta": z * (1 + 0.03 * rng.standard_normal()),
+                }
+                for j, (wn, z) in enumerate(truth)
+            ]
+            records.append(
+                {
+                    "key": p.key,
+                    "payload_kg": payload,
+                    "payload_com_m": list(p.payload_com_m),
+                    "q": p.q.tolist(),
+                    "inertia_kg_m2": [0.0] * 6,
+                    "modes": modes,
+                    "true_modes": [
+                        {"joint": j, "wn_rad_s": wn, "zeta": z} for j, (wn, z) in enumerate(truth)
+                    ],
+                }
+            )
+    for r in records:  # the published form reads the model's inertias
+        model = tvist.robots.Robot(
+            tvist.robots.params(robot_name), tvist.robots.Payload(r["payload_kg"])
+        )
+        r["inertia_kg_m2"] = model.joint_inertia(np.array(r["q"])).tolist()
+        r["gravity_torque_nm"] = model.gravity_torque(np.array(r["q"])).tolist()
+    return records
+
+
+def test_fit_predicts_the_full_twins_modes_on_held_out_poses():
+    records = _twin_records("ur5e", (0.0, 5.0), every=2, seed=3)
+    cv = cross_validate(records, "ur5e", folds=4, seed=1)
+    held = cv["modal"]["held_out"]["versus_true"]
+    for mode in ("base", "shoulder"):
+        # The acceptance of the modal map: ≤ 2 % RMS, ≤ 5 % max against the true modes on
+        # held-out poses (the fit sees 0.4 % noise).
+        assert held[mode]["frequency"]["rms"] < 0.02, held
+        assert held[mode]["frequency"]["max"] < 0.05, held
+        assert held[mode]["damping"]["rms"] < 0.15, held
+    # Beside it the published form, fitted to the same poses: worse for the base.
+    published = cv["published"]["held_out"]["versus_true"]
+    assert published["base"]["frequency"]["rms"] > held["base"]["frequency"]["rms"]
+
+    modal = fit_modal_map(records, "ur5e")
+    stats = modal.metadata["fit_statistics"]
+    k_base = next(t for t in stats["stiffness_nm_per_rad"] if t["joint"] == 0)
+    # The twin's base gear: 22 000 N m/rad.
+    assert k_base["value"] == pytest.approx(22000.0, rel=0.1)
+    assert 0 < k_base["se"] < 0.05 * k_base["value"]
+    json.dumps(modal.to_dict(), allow_nan=False)  # statistics stay strict JSON
+
+
+def test_prior_from_the_twins_gear_laws_is_close_to_its_modes():
+    twin = Twin("ur5e", payload_kg=5.0)
+    modal = modal_map_from_flex(default_flex("ur5e"))
+    for q in _campaign_q()[::6]:
+        for (wn, _), (true_wn, _) in zip(modal.modes(ROBOT, q), twin.modes(q), strict=True):
+            # Neglected: wrist flexibility and gravity stiffness (about 1 % RMS, 3 % at most).
+            assert wn == pytest.approx(true_wn, rel=0.04)
+
+
+def test_fit_map_cli_writes_a_modal_map_that_shapes_a_ur10e(tmp_path, capsys):
+    from tvist.cli import main
+
+    records = _twin_records("ur10e", (0.0, 5.0), every=4, seed=5)
+    results = tmp_path / "c.jsonl"
+    results.write_text("".join(json.dumps(r) + "\n" for r in records))
+    out = tmp_path / "m.json"
+    code = main(["fit-map", str(results), "--kind", "modal", "--robot", "ur10e", "--out", str(out)])
+    assert code == 0
+    assert "joint 0 stiffness at_zero" in capsys.readouterr().out
+    modal = ModalMap.load(out)
+    robot = tvist.robots.ur10e(payload_kg=5.0, payload_com_m=(0.0, 0.0, 0.05))
+    twin = Twin("ur10e", payload_kg=5.0)
+    q = np.array([0.3, -2.0, 1.6, -1.2, 1.0, 0.0])
+    for (wn, _), (true_wn, _) in zip(modal.modes(robot, q), twin.modes(q), strict=True):
+        assert wn == pytest.approx(true_wn, rel=0.03)
+    shaper = tvist.TvShaper(tvist.MapDynamics(robot, modal), 0.002, 6)
+    shaper.reset(q)
+    shaper.shape(np.repeat(q[None, :], 10, axis=0))
+    assert shaper.delay_s > 0
+
+    bad = tmp_path / "bad.jsonl"
+    bad.write_text(json.dumps({"key": "x", "q": None, "error": "unreachable"}) + "\n")
+    assert main(["fit-map", str(bad), "--kind", "modal", "--out", str(out)]) == 2
+    assert "tvist fit-map: error:" in capsys.readouterr().err
