@@ -365,3 +365,16 @@ def test_text_in_an_unused_column_is_ignored(tmp_path):
 
     path = write_edited(tmp_path, rec, edit)
     assert_same(read_rtde_csv(path), rec, ATOL_6DP)
+
+
+def test_identify_repairs_a_malformed_row_when_asked(tmp_path, capsys):
+    from tvist.cli import main
+
+    rec = make_record()
+    path = write_edited(tmp_path, rec, lambda lines: insert_field_in_row(lines, 3, 5))
+    main(["identify", str(path), "--joint", "0"])
+    assert "--repair drop-bad-rows" in capsys.readouterr().err  # the hint names the flag
+    main(["identify", str(path), "--joint", "0", "--repair", "drop-bad-rows", "--json"])
+    err = capsys.readouterr().err
+    assert "has 35 fields" not in err.split("warning")[0]  # no longer refused for the row
+    assert "tvist identify: warning:" in err and "data row 3" in err  # repaired, with a warning

@@ -80,11 +80,13 @@ class LoadedLog:
     warnings: tuple[str, ...] = ()
 
 
-def load_log(path: Path, drop_nan: bool = False, resample: bool = True) -> LoadedLog:
+def load_log(
+    path: Path, drop_nan: bool = False, resample: bool = True, repair: tuple[str, ...] = ()
+) -> LoadedLog:
     """Read ``path`` and find its excited joint and pose (warnings are kept, not shown)."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        record = read_rtde_csv(path, drop_nan=drop_nan, resample=resample)
+        record = read_rtde_csv(path, repair=repair or None, drop_nan=drop_nan, resample=resample)
     return LoadedLog(
         path=Path(path),
         record=record,
@@ -175,9 +177,11 @@ def _identify_pair(pair: PosePair, job: _Job) -> dict[str, Any]:
     return record
 
 
-def _load_safely(path: Path, drop_nan: bool, resample: bool) -> LoadedLog | str:
+def _load_safely(
+    path: Path, drop_nan: bool, resample: bool, repair: tuple[str, ...]
+) -> LoadedLog | str:
     try:
-        return load_log(path, drop_nan, resample)
+        return load_log(path, drop_nan, resample, repair)
     except (ValueError, OSError) as exc:
         return f"{path}: {exc}"
 
@@ -193,6 +197,7 @@ def identify_logs(
     separate_modes: bool = True,
     drop_nan: bool = False,
     resample: bool = True,
+    repair: tuple[str, ...] = (),
     workers: int | None = None,
     on_message: Callable[[str], None] = lambda _: None,
     progress: bool = False,
@@ -215,7 +220,9 @@ def identify_logs(
     try:
         with ProcessPoolExecutor(max_workers=n_workers) as pool:
             loaded: list[LoadedLog] = []
-            futures = [pool.submit(_load_safely, p, drop_nan, resample) for p in paths]
+            futures = [
+                pool.submit(_load_safely, p, drop_nan, resample, tuple(repair)) for p in paths
+            ]
             for future in futures:
                 item = future.result()
                 bar.advance("read")

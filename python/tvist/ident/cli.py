@@ -183,6 +183,7 @@ def _identify_batch(args: argparse.Namespace, paths: list[Path]) -> int:
         separate_modes=not args.single_mode,
         drop_nan=args.drop_nan,
         resample=not args.no_resample,
+        repair=tuple(args.repair or ()),
         workers=args.workers,
         on_message=message,
         progress=sys.stderr.isatty(),
@@ -218,7 +219,12 @@ def _identify_one(args: argparse.Namespace, path: Path) -> int:
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LogWarning)
-        record = read_rtde_csv(path, drop_nan=args.drop_nan, resample=not args.no_resample)
+        record = read_rtde_csv(
+            path,
+            repair=tuple(args.repair or ()) or None,
+            drop_nan=args.drop_nan,
+            resample=not args.no_resample,
+        )
     for w in caught:
         print(f"tvist identify: warning: {w.message}", file=sys.stderr)
     joint = excited_joint(record) if args.joint is None else args.joint
@@ -290,6 +296,14 @@ def add_identify_command(sub: argparse._SubParsersAction) -> None:
         help="report the paper's single-mode base fit (no base/shoulder separation)",
     )
     p.add_argument("--drop-nan", action="store_true", help="drop rows with NaN (with a warning)")
+    p.add_argument(
+        "--repair",
+        action="append",
+        choices=("drop-bad-rows", "keep-first-duplicate"),
+        help="repair a malformed log instead of refusing it (repeatable, with a warning): "
+        "drop rows with the wrong field count or unreadable cells; use the first of "
+        "repeated columns",
+    )
     p.add_argument(
         "--no-resample",
         action="store_true",

@@ -199,7 +199,7 @@ def read_table(
         raise LogFormatError(
             f"{path}: line {header_at + 1} (the header): column {c!r} appears "
             f"{len(where[c])} times (fields {fields}); remove all but one, or pass "
-            "repair='keep-first-duplicate' (Python) to use the first"
+            "repair='keep-first-duplicate' (CLI: --repair keep-first-duplicate) to use the first"
         )
     use = [where[c][0] for c in wanted]
 
@@ -224,8 +224,8 @@ def read_table(
             if "drop-bad-rows" not in repairs:
                 raise LogFormatError(
                     f"{path}: data row {row} (line {line_at + 1}) {reason}; fix or delete "
-                    "that line, or pass repair='drop-bad-rows' (Python) to drop such rows "
-                    "with a warning"
+                    "that line, or pass repair='drop-bad-rows' (CLI: --repair drop-bad-rows) "
+                    "to drop such rows with a warning"
                 )
             dropped.append(BadRow(row, line_at + 1, reason))
             continue
