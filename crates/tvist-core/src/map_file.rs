@@ -490,6 +490,10 @@ fn modal_from(doc: &Map<String, Value>) -> Result<ModalMap, Error> {
             ))
         }
     };
+    // The flexible joints first (count, duplicates, signs: the map's own checks, whose
+    // messages name the joint), with a mode they certainly have; then the mode joints.
+    let first = flex.first().map_or(0, |f| f.joint);
+    ModalMap::new(flex.clone(), &[first]).map_err(|e| Error::document("flex_joints", reason(e)))?;
     if mode_joints.is_empty() {
         return Err(Error::document(
             "mode_joints",
@@ -507,9 +511,7 @@ fn modal_from(doc: &Map<String, Value>) -> Result<ModalMap, Error> {
             ));
         }
     }
-    // The remaining checks (count, duplicates, signs) are the map's own; their messages
-    // name the joint.
-    ModalMap::new(flex, &mode_joints).map_err(|e| Error::document("flex_joints", reason(e)))
+    ModalMap::new(flex, &mode_joints).map_err(|e| Error::document("mode_joints", reason(e)))
 }
 
 fn flex_from(value: &Value, path: &str) -> Result<FlexJoint, Error> {
@@ -951,7 +953,11 @@ mod tests {
             ),
             (
                 text.replacen(r#""joint": 1"#, r#""joint": 0"#, 1),
-                "mode_joints[1]: joint 1 must be one of the flexible joints [0, 0]",
+                "flex_joints: flexible joint 0 is listed twice",
+            ),
+            (
+                text.replacen("\n    1\n", "\n    4\n", 1),
+                "mode_joints[1]: joint 4 must be one of the flexible joints [0, 1], named once",
             ),
             (
                 text.replacen("\n    1\n", "\n    0\n", 1),
