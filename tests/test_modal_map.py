@@ -145,7 +145,10 @@ def test_a_file_in_the_earlier_python_layout_loads_through_the_core(tmp_path):
         assert isinstance(loaded, ModalMap) and loaded.robot == "ur5e"
         assert loaded.flex_joints == ENTRIES and loaded.mode_joints == [0, 1]
     # Written back by the core: the same document plus metadata.payload = null.
-    assert ModalMap.load(path).to_dict() == {**old, "metadata": {**old["metadata"], "payload": None}}
+    assert ModalMap.load(path).to_dict() == {
+        **old,
+        "metadata": {**old["metadata"], "payload": None},
+    }
     # One loader for both kinds; each class refuses the other kind, naming the file.
     paper = tmp_path / "paper.json"
     tvist.DynamicMap.paper_ur5e().save(paper)
