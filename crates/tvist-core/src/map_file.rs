@@ -122,6 +122,22 @@ impl MapForm {
         }
     }
 
+    /// The paper10 map, if this is one.
+    pub fn as_paper10(&self) -> Option<&DynamicMap> {
+        match self {
+            MapForm::Paper10(map) => Some(map),
+            MapForm::Modal(_) => None,
+        }
+    }
+
+    /// The modal map, if this is one.
+    pub fn as_modal(&self) -> Option<&ModalMap> {
+        match self {
+            MapForm::Modal(map) => Some(map),
+            MapForm::Paper10(_) => None,
+        }
+    }
+
     /// The robot the map was identified on, if known.
     pub fn robot(&self) -> Option<&str> {
         match self {
@@ -748,9 +764,7 @@ mod tests {
         assert_eq!(back, file);
         assert_eq!(back.kind(), KIND_PAPER10);
         assert_eq!(back.robot(), Some("ur5e"));
-        let MapForm::Paper10(map) = back.form() else {
-            panic!("paper10")
-        };
+        let map = back.form().as_paper10().expect("paper10");
         assert_eq!(map.robot(), Some("ur5e"));
         assert_eq!(map.mode_maps(), DynamicMap::paper_ur5e().mode_maps());
     }
@@ -848,9 +862,7 @@ mod tests {
         assert!(text.contains(r#""rms": null"#), "{text}");
         assert!(!text.contains("NaN"));
         // The metadata's robot is the map's robot.
-        let MapForm::Paper10(map) = file.form() else {
-            panic!("paper10")
-        };
+        let map = file.form().as_paper10().expect("paper10");
         assert_eq!(map.robot(), Some("ur10e"));
     }
 
@@ -906,9 +918,7 @@ mod tests {
         let file = MapFile::parse(PYTHON_MODAL_FILE).expect("python modal file");
         assert_eq!(file.kind(), KIND_MODAL);
         assert_eq!(file.robot(), Some("ur5e"));
-        let MapForm::Modal(map) = file.form() else {
-            panic!("modal")
-        };
+        let map = file.form().as_modal().expect("modal");
         assert_eq!(map.robot(), Some("ur5e"));
         assert_eq!(map.mode_joints().collect::<Vec<_>>(), vec![0, 1]);
         let base = map.flex_joints()[0];
@@ -1003,7 +1013,7 @@ mod tests {
             let map = DynamicMap::new(vec![ModeMap::general(c, 1)]).expect("finite");
             let file = MapFile::new(MapForm::Paper10(map), &Value::Null).expect("valid");
             let back = MapFile::parse(&file.to_json()).expect("round trip");
-            let MapForm::Paper10(read) = back.form() else { panic!("paper10") };
+            let read = back.form().as_paper10().expect("paper10");
             let got = read.mode_maps()[0].coefficients;
             for (a, b) in [(got.k_0, c.k_0), (got.k_j, c.k_j), (got.k_g, c.k_g), (got.k_p, c.k_p),
                            (got.c_0, c.c_0), (got.c_1, c.c_1), (got.c_2, c.c_2),

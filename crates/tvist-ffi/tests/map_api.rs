@@ -184,9 +184,11 @@ fn a_map_file_from_c_shapes_exactly_as_the_core() {
         assert_eq!(code, TVIST_OK, "{}", last_error());
         let ur = ur_e_series(robot, RigidBody::point(PAYLOAD_KG, PAYLOAD_COM_M)).expect("robot");
         let file = MapFile::load(&map.0).expect("map");
-        let MapForm::Paper10(dynmap) = file.into_form() else {
-            panic!("a paper10 map")
-        };
+        let dynmap = match file.into_form() {
+            MapForm::Paper10(map) => Some(map),
+            MapForm::Modal(_) => None,
+        }
+        .expect("a paper10 map");
         let dynamics = MapDynamics::new(ur, dynmap).expect("provider");
         let config = TvShaperConfig::new(DT_S, 6, ShaperKind::Zv);
         let mut core = TvShaper::new(dynamics, &config).expect("shaper");
@@ -228,9 +230,11 @@ fn a_modal_map_file_from_c_shapes_exactly_as_the_core_modal_provider() {
         let (code, mut h) = new_map(robot, &map, "zv", None);
         assert_eq!(code, TVIST_OK, "{}", last_error());
         let ur = ur_e_series(robot, RigidBody::point(PAYLOAD_KG, PAYLOAD_COM_M)).expect("robot");
-        let MapForm::Modal(modal) = MapFile::load(&map.0).expect("map").into_form() else {
-            panic!("a modal map")
-        };
+        let modal = match MapFile::load(&map.0).expect("map").into_form() {
+            MapForm::Modal(map) => Some(map),
+            MapForm::Paper10(_) => None,
+        }
+        .expect("a modal map");
         let dynamics = ModalDynamics::new(ur, modal).expect("provider");
         let config = TvShaperConfig::new(DT_S, 6, ShaperKind::Zv);
         let mut core = TvShaper::new(dynamics, &config).expect("shaper");
