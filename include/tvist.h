@@ -126,8 +126,9 @@ int32_t tvist_shaper_new_ur_map(const char *robot_name, double payload_kg,
                                 const char *shaper_name, TvistShaper **out);
 
 /*
- * Shaper driven by the dynamic map in file map_json_path (any map file tvist writes:
- * `tvist fit-map`, DynamicMap.save) for UR e-Series robot `robot` ("ur3e", "ur5e", "ur10e",
+ * Shaper driven by the map in file map_json_path (any map file tvist writes:
+ * `tvist fit-map`, DynamicMap.save, ModalMap.save; a "kind": "modal" file solves the
+ * mass-matrix eigenproblem of its flexible joints every cycle) for UR e-Series robot `robot` ("ur3e", "ur5e", "ur10e",
  * "ur16e", "ur20") with a point payload of payload_kg at payload_com_m (flange frame, m);
  * shapes the robot's 6 joints sampled every dt_s seconds. The map must have been identified
  * on that robot (TVIST_ERR_ROBOT_MISMATCH otherwise; see allow_other_robot of the _ex form).

@@ -71,7 +71,7 @@ public:
         return Shaper(out);
     }
 
-    /* The dynamic map in map_json_path for UR e-Series robot `robot` with a point payload. */
+    /* The map in map_json_path (paper10 or modal map file) for UR e-Series robot `robot` with a point payload. */
     static Shaper from_map(const std::string &robot, double payload_kg,
                            const std::array<double, 3> &payload_com_m,
                            const std::string &map_json_path, double dt_s,

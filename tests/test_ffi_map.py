@@ -1,14 +1,15 @@
 """Maps cross the language boundary: C++ (tvist.hpp over the C API) shapes exactly as Python.
 
-A map written by ``tvist fit-map`` and one written by ``DynamicMap.save`` are loaded in C++
-through ``tvist_shaper_new_map`` (``examples/cpp/shape_with_map.cpp``) and in Python through
-``DynamicMap.load``; both shape the same samples of a move. The two run the same core code
+Maps written by ``tvist fit-map`` (paper10 and ``--kind modal``), ``DynamicMap.save`` and
+``ModalMap.save`` are loaded in C++ through ``tvist_shaper_new_map``
+(``examples/cpp/shape_with_map.cpp``) and in Python through ``tvist.load_map``; both shape
+the same samples of a move. The two run the same core code
 on the same parsed map, so they must agree to rounding: 1e-12 rad (the C++ program writes 17
 significant digits, which reproduce a double exactly; any larger gap is a different map or a
 different filter).
 
-The fit-map input is synthetic: the modes of a known map at the inertias of random poses of
-the robot, written in the campaign-record format.
+The fit-map input is synthetic: the modes of a known map (paper10: at the inertias of random
+poses of the robot; modal: from the mass matrices there) written in the campaign-record format.
 """
 
 from __future__ import annotations
@@ -39,8 +40,10 @@ def program() -> Path:
     return PROGRAM
 
 
-def _campaign_records(path: Path, robot_name: str, truth: tvist.DynamicMap) -> None:
-    """Campaign-style records of ``truth``'s modes at the inertias of random robot poses."""
+def _campaign_records(
+    path: Path, robot_name: str, truth: tvist.DynamicMap | tvist.ModalMap
+) -> None:
+    """Campaign-style records of ``truth``'s modes at random robot poses."""
     robot = tvist.robots.Robot(tvist.robots.params(robot_name), tvist.robots.Payload(*_payload()))
     rng = np.random.default_rng(7)
     limits = tvist.robots.params(robot_name).joint_limits_rad
@@ -48,9 +51,15 @@ def _campaign_records(path: Path, robot_name: str, truth: tvist.DynamicMap) -> N
         for i in range(40):
             q = rng.uniform(limits[:, 0], limits[:, 1])
             inertia = robot.joint_inertia(q)
-            modes = truth.modes_from_inertia(inertia)
+            if isinstance(truth, tvist.ModalMap):
+                modes = truth.modes(robot, q)
+            else:
+                modes = truth.modes_from_inertia(inertia)
             record = {
                 "key": f"p{i}",
+                "q": [float(v) for v in q],
+                "payload_kg": PAYLOAD_KG,
+                "payload_com_m": list(COM_M),
                 "inertia_kg_m2": [float(v) for v in inertia],
                 "modes": [
                     {"joint": j, "wn_rad_s": w, "zeta": z, "low_confidence": False}
@@ -77,7 +86,7 @@ def _move(robot_name: str) -> np.ndarray:
 def _python_shaped(robot_name: str, map_path: Path, q: np.ndarray) -> np.ndarray:
     robot = tvist.robots.Robot(tvist.robots.params(robot_name), tvist.robots.Payload(*_payload()))
     shaper = tvist.TvShaper(
-        tvist.MapDynamics(robot, tvist.DynamicMap.load(map_path)), DT_S, 6, shaper="zv"
+        tvist.MapDynamics(robot, tvist.load_map(map_path)), DT_S, 6, shaper="zv"
     )
     shaper.reset(q[0])
     return shaper.shape(q)
@@ -103,11 +112,45 @@ def _maps(robot_name: str, tmp: Path) -> dict[str, Path]:
     return {"fit-map": fitted, "save": saved}
 
 
+#: Gear laws of the modal map the modal files are made from (base and shoulder flexible,
+#: the base damper loaded by the shoulder's gravity torque; N m/rad, N m s/rad).
+MODAL_ENTRIES = [
+    {
+        "joint": 0,
+        "stiffness_nm_per_rad": [22000.0, 0.0, 0.0],
+        "damping_nms_per_rad": [5.0, 0.56, 0.0157],
+        "damping_load_joint": 1,
+    },
+    {
+        "joint": 1,
+        "stiffness_nm_per_rad": [18000.0, 0.0, 0.234],
+        "damping_nms_per_rad": [60.0, 0.6, 0.0],
+        "damping_load_joint": 1,
+    },
+]
+
+
+def _modal_maps(robot_name: str, tmp: Path) -> dict[str, Path]:
+    """A ``fit-map --kind modal`` output and a ModalMap.save output, both for ``robot_name``."""
+    truth = tvist.ModalMap(MODAL_ENTRIES, (0, 1), {"robot": robot_name})
+    results = tmp / f"{robot_name}_modal.jsonl"
+    _campaign_records(results, robot_name, truth)
+    fitted = tmp / f"{robot_name}_modal_fit.json"
+    args = ["fit-map", str(results), "--kind", "modal", "--out", str(fitted)]
+    assert main([*args, "--robot", robot_name]) == 0
+    saved = tmp / f"{robot_name}_modal_saved.json"
+    truth.save(saved)
+    return {"fit-map --kind modal": fitted, "ModalMap.save": saved}
+
+
 @pytest.mark.parametrize("robot_name", ["ur5e", "ur10e"])
 def test_cpp_shapes_a_map_file_exactly_as_python(program, tmp_path, robot_name):
     q = _move(robot_name)
-    for source, path in _maps(robot_name, tmp_path).items():
-        assert tvist.DynamicMap.load(path).robot == robot_name
+    maps = {**_maps(robot_name, tmp_path), **_modal_maps(robot_name, tmp_path)}
+    for source, path in maps.items():
+        kind = tvist.ModalMap if "modal" in source.lower() else tvist.DynamicMap
+        loaded = tvist.load_map(path)
+        assert isinstance(loaded, kind) and loaded.robot == robot_name, source
         expected = _python_shaped(robot_name, path, q)
         got = _cpp_shaped(program, robot_name, path, q, tmp_path)
         assert got.shape == expected.shape
@@ -116,9 +159,13 @@ def test_cpp_shapes_a_map_file_exactly_as_python(program, tmp_path, robot_name):
         np.testing.assert_allclose(got, expected, rtol=0, atol=TOLERANCE_RAD, err_msg=source)
 
 
-def test_cpp_refuses_a_map_of_another_robot(program, tmp_path):
+@pytest.mark.parametrize("kind", ["paper10", "modal"])
+def test_cpp_refuses_a_map_of_another_robot(program, tmp_path, kind):
     path = tmp_path / "ur5e.json"
-    tvist.DynamicMap.paper_ur5e().save(path)
+    if kind == "modal":
+        tvist.ModalMap(MODAL_ENTRIES, (0, 1), {"robot": "ur5e"}).save(path)
+    else:
+        tvist.DynamicMap.paper_ur5e().save(path)
     args = ["ur10e", "5", "0", "0", "0.05", str(path), "0.002", "zv"]
     q = tmp_path / "q.txt"
     np.savetxt(q, _move("ur10e")[:5])

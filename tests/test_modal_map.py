@@ -114,19 +114,62 @@ def test_map_files_round_trip_and_are_strict(tmp_path):
 
     bad = dict(doc, flex_joints=[dict(ENTRIES[0], stiffness_nm_per_rad=[-1.0, 0.0, 0.0])])
     path.write_text(json.dumps(bad))
-    with pytest.raises(ValueError, match="stiffness of joint 0"):
+    with pytest.raises(ValueError, match=r"modal.json: flex_joints: stiffness of joint 0"):
         ModalMap.load(path)
     path.write_text(json.dumps(doc).replace("22000.0", "NaN"))
-    with pytest.raises(ValueError, match="not strict JSON"):
+    with pytest.raises(ValueError, match="not valid JSON"):
         ModalMap.load(path)
-    with pytest.raises(ValueError, match="kind"):
-        ModalMap.from_dict(dict(doc, kind="paper10"))
+    with pytest.raises(ValueError, match="a paper10 map, not a modal map"):
+        ModalMap.from_dict(tvist.DynamicMap.paper_ur5e().to_dict())
     with pytest.raises(ValueError, match="unknown field"):
         ModalMap.from_dict(dict(doc, extra=1))
-    with pytest.raises(ValueError, match="not one of the flexible joints"):
+    with pytest.raises(ValueError, match=r"mode_joints\[1\]: joint 4 must be one of the flexible"):
         ModalMap(ENTRIES, (0, 4))
     with pytest.raises(ValueError, match="missing"):
         ModalMap([{k: v for k, v in ENTRIES[0].items() if k != "damping_load_joint"}])
+
+
+def test_a_file_in_the_earlier_python_layout_loads_through_the_core(tmp_path):
+    # The layout the Python writer produced before the core read modal files: metadata with
+    # robot, source and fit_statistics only (no payload), json.dumps(indent=2).
+    old = {
+        "schema_version": 1,
+        "kind": "modal",
+        "metadata": {"robot": "ur5e", "source": "test", "fit_statistics": None},
+        "mode_joints": [0, 1],
+        "flex_joints": ENTRIES,
+    }
+    path = tmp_path / "old.json"
+    path.write_text(json.dumps(old, indent=2, allow_nan=False) + "\n")
+    for loaded in (ModalMap.load(path), tvist.load_map(path)):
+        assert isinstance(loaded, ModalMap) and loaded.robot == "ur5e"
+        assert loaded.flex_joints == ENTRIES and loaded.mode_joints == [0, 1]
+    # Written back by the core: the same document plus metadata.payload = null.
+    assert ModalMap.load(path).to_dict() == {
+        **old,
+        "metadata": {**old["metadata"], "payload": None},
+    }
+    # One loader for both kinds; each class refuses the other kind, naming the file.
+    paper = tmp_path / "paper.json"
+    tvist.DynamicMap.paper_ur5e().save(paper)
+    assert isinstance(tvist.load_map(paper), tvist.DynamicMap)
+    with pytest.raises(ValueError, match=r"old.json: kind: a modal map, not a paper10 map"):
+        tvist.DynamicMap.load(path)
+    with pytest.raises(ValueError, match=r"paper.json: kind: a paper10 map, not a modal map"):
+        ModalMap.load(paper)
+
+
+def test_a_modal_map_of_another_robot_is_refused_unless_allowed():
+    other = ModalMap(ENTRIES, metadata={"robot": "ur10e"})
+    for make in (tvist.MapDynamics, tvist.ModalDynamics):
+        with pytest.raises(ValueError, match="identified on ur10e, not on ur5e"):
+            make(ROBOT, other)
+        provider = make(ROBOT, other, allow_other_robot=True)
+        assert isinstance(provider, tvist.ModalDynamics)
+        q = np.array([0.3, -1.2, 1.0, -1.5, 0.0, 0.0])
+        np.testing.assert_allclose(provider.modes(q), other.modes(ROBOT, q), rtol=1e-12)
+    # A map without a robot name is not checked.
+    assert tvist.MapDynamics(ROBOT, ModalMap(ENTRIES)).n_modes == 2
 
 
 def test_map_dynamics_takes_a_modal_map_and_shapes_in_rust():

@@ -95,6 +95,34 @@ def test_map_source_fd_tvist_equals_the_map_driven_shaper(move_csv, tmp_path):
     np.testing.assert_allclose(shaped, ref.shape(padded), atol=ATOL_FILE)
 
 
+def test_modal_map_file_fd_tvist_equals_the_modal_map_driven_shaper(move_csv, tmp_path):
+    # --map dispatches on the file's kind: a modal map file drives the modal provider.
+    path, q = move_csv
+    entries = [
+        {
+            "joint": j,
+            "stiffness_nm_per_rad": [k, 0.0, 0.0],
+            "damping_nms_per_rad": [c, 0.0, 0.0],
+            "damping_load_joint": j,
+        }
+        for j, k, c in ((0, 22000.0, 5.0), (1, 18000.0, 60.0))
+    ]
+    modal = tvist.ModalMap(entries, (0, 1), {"robot": "ur5e"})
+    map_path = tmp_path / "modal.json"
+    modal.save(map_path)
+    out = tmp_path / "modal.csv"
+    args = ["shape", str(path), "--out", str(out), "--map", str(map_path), "--payload-kg", "3"]
+    assert main(args) == 0
+    shaped, _ = read_joint_csv(out)
+    robot = tvist.robots.ur5e(3.0, (0.0, 0.0, 0.05))  # the default CoM of every command
+    ref = tvist.TvShaper(tvist.MapDynamics(robot, tvist.ModalMap.load(map_path)), DT, 6)
+    padded = np.vstack([q, np.repeat(q[-1:], shaped.shape[0] - q.shape[0], axis=0)])
+    expected = ref.shape(padded)
+    # The move must be shaped for the comparison to mean anything.
+    assert np.max(np.abs(expected - padded)) > 1e-3
+    np.testing.assert_allclose(shaped, expected, atol=ATOL_FILE)
+
+
 def waypoint_file(tmp_path, name="plan.csv"):
     """10 Hz waypoints Q1 -> Q3 over 2.4 s (25 rows) with a `time` column in the middle and
     the UR joints in a shuffled order."""

@@ -1,6 +1,7 @@
 /*
- * Shapes joint moves of a UR e-Series arm from C++ with a dynamic map loaded from a map file
- * (written by `tvist fit-map` or DynamicMap.save), through the header-only tvist.hpp.
+ * Shapes joint moves of a UR e-Series arm from C++ with a map loaded from a map file, paper10
+ * or modal (written by `tvist fit-map [--kind modal]`, DynamicMap.save or ModalMap.save),
+ * through the header-only tvist.hpp.
  *
  *   shape_with_map ROBOT PAYLOAD_KG COM_X COM_Y COM_Z MAP_JSON DT_S SHAPER [IN OUT]
  *

@@ -13,6 +13,7 @@ import numpy as np
 from tvist import _core, robots
 from tvist._core import ConstantModes, Impulses, TvShaper
 from tvist.dynmap import DynamicMap, MapDynamics
+from tvist.map_files import load_map
 from tvist.modal_map import ModalDynamics, ModalMap
 from tvist.ztdis import ZeroDelayResult, zero_delay
 
@@ -30,6 +31,7 @@ __all__ = [
     "TvShaper",
     "ZeroDelayResult",
     "convolve",
+    "load_map",
     "prv",
     "robots",
     "shaper",

@@ -140,10 +140,16 @@ class DynamicMap:
             "metadata": _plain_metadata(metadata),
             "modes": [dict(m) if isinstance(m, Mapping) else m for m in modes],
         }
-        self._core, self.metadata = _core.map_from_document(document)
+        core, self.metadata = _core.map_from_document(document)
+        self._core: _core.DynamicMap = core
 
     @classmethod
-    def _from_core(cls, core: _core.DynamicMap, metadata: dict[str, Any]) -> DynamicMap:
+    def _from_core(cls, core: Any, metadata: dict[str, Any]) -> DynamicMap:
+        if not isinstance(core, _core.DynamicMap):
+            raise ValueError(
+                "kind: a modal map, not a paper10 map: read it with tvist.ModalMap.load or "
+                "tvist.load_map"
+            )
         out = cls.__new__(cls)
         out._core, out.metadata = core, metadata
         return out
@@ -268,13 +274,13 @@ class DynamicMap:
     @classmethod
     def load(cls, path: str | Path) -> DynamicMap:
         """Read and validate a map file; malformed files raise ValueError naming the file and
-        the field (overflowing numbers, NaN tokens and deep nesting included)."""
+        the field (overflowing numbers, NaN tokens and deep nesting included). A modal map
+        file is refused (:func:`tvist.load_map` reads either kind)."""
+        from tvist.map_files import parse_map_file
+
+        core, metadata = parse_map_file(path)
         try:
-            text = Path(path).read_text(encoding="utf-8")
-        except UnicodeDecodeError as exc:
-            raise ValueError(f"{path}: not UTF-8 text ({exc})") from None
-        try:
-            return cls._from_core(*_core.parse_map(text))
+            return cls._from_core(core, metadata)
         except ValueError as exc:
             raise ValueError(f"{path}: {exc}") from None
 
@@ -296,7 +302,8 @@ class MapDynamics(_core.MapDynamics):
     robot
         The arm with its payload (:class:`tvist.robots.Robot`).
     dynmap
-        The map (:class:`DynamicMap`). A map identified on another robot (its
+        The map (:class:`DynamicMap`, or a :class:`tvist.ModalMap`, which gives a
+        :class:`tvist.ModalDynamics`). A map identified on another robot (its
         ``metadata["robot"]`` differs from the robot's name) raises ``ValueError`` naming both.
     allow_other_robot
         Accept such a map anyway (research use).
@@ -308,7 +315,9 @@ class MapDynamics(_core.MapDynamics):
         from tvist.modal_map import ModalDynamics, ModalMap
 
         if isinstance(dynmap, ModalMap):  # the modal map's own provider (same protocol)
-            return ModalDynamics(robot, dynmap)  # type: ignore[return-value]
+            return ModalDynamics(  # type: ignore[return-value]
+                robot, dynmap, allow_other_robot=allow_other_robot
+            )
         if not isinstance(robot, Robot):
             raise TypeError(f"robot must be a tvist.robots.Robot, got {type(robot).__name__}")
         if not isinstance(dynmap, DynamicMap):

@@ -10,20 +10,26 @@ when their frequencies cross. Stiffness and damping grow with the static load ``
 torque, N m): ``v(L) = v_0 + v_1 |L|_s + v_2 L²``; the stiffness of joint ``j`` reads its own
 gravity torque, its damping that of ``damping_load_joint``.
 
-Map files are strict JSON (no NaN or infinity), ``"kind": "modal"``::
+Map files are strict JSON, read, checked and written by the Rust core (one validation for
+Python, Rust and C; errors name the field path, e.g. ``flex_joints[1].stiffness_nm_per_rad``),
+``"kind": "modal"``::
 
     {"schema_version": 1, "kind": "modal",
-     "metadata": {"robot": "ur5e", "source": "...", "fit_statistics": {...} | null},
+     "metadata": {"robot": "ur5e", "payload": null, "source": "...",
+                  "fit_statistics": {...} | null},
      "mode_joints": [0, 1],
      "flex_joints": [{"joint": 0, "stiffness_nm_per_rad": [k_0, k_1, k_2],
                       "damping_nms_per_rad": [c_0, c_1, c_2], "damping_load_joint": 1},
                      ...]}
+
+``metadata`` is as in a paper10 map file (:mod:`tvist.dynmap`): ``metadata.robot`` names the
+robot the map was identified on, and :class:`ModalDynamics` refuses the map for another
+robot unless ``allow_other_robot=True``. :func:`tvist.load_map` reads a map file of either
+kind.
 """
 
 from __future__ import annotations
 
-import json
-import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -35,53 +41,25 @@ from tvist.robots import Robot
 
 __all__ = ["KIND", "SCHEMA_VERSION", "ModalDynamics", "ModalMap", "modal_map_from_flex"]
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION: int = _core.MAP_SCHEMA_VERSION
 #: The ``kind`` of a modal map file.
-KIND = "modal"
+KIND: str = _core.MAP_KIND_MODAL
 #: Fields of one flexible joint.
 FLEX_JOINT_FIELDS: tuple[str, ...] = tuple(_core.FLEX_JOINT_FIELDS)
-_LAW_FIELDS = ("stiffness_nm_per_rad", "damping_nms_per_rad")
-_INDEX_FIELDS = ("joint", "damping_load_joint")
 
 
-def _joint_index(value: Any, where: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
-        raise ValueError(f"{where}: must be a joint index >= 0, got {value!r}")
-    return int(value)
-
-
-def _law(value: Any, where: str) -> list[float]:
-    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 3:
-        raise ValueError(f"{where}: must be [at_zero, per_nm, per_nm2], got {value!r}")
-    out = []
-    for i, v in enumerate(value):
-        if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)):
-            raise ValueError(f"{where}[{i}]: must be a number, got {v!r}")
-        if not math.isfinite(float(v)):
-            raise ValueError(f"{where}[{i}]: must be finite, got {v!r}")
-        out.append(float(v))
-    return out
-
-
-def _validate_flex(entry: Any, where: str) -> dict[str, Any]:
-    if not isinstance(entry, Mapping):
-        raise ValueError(f"{where}: must be an object with fields {', '.join(FLEX_JOINT_FIELDS)}")
-    unknown = sorted(set(entry) - set(FLEX_JOINT_FIELDS))
-    if unknown:
-        raise ValueError(f"{where}: unknown field(s) {', '.join(unknown)}")
-    out: dict[str, Any] = {}
-    for key in FLEX_JOINT_FIELDS:
-        if key not in entry:
-            raise ValueError(f"{where}.{key}: missing")
-        if key in _INDEX_FIELDS:
-            out[key] = _joint_index(entry[key], f"{where}.{key}")
-        else:
-            out[key] = _law(entry[key], f"{where}.{key}")
-    return out
-
-
-def _strict_constant(name: str) -> float:
-    raise ValueError(f"not strict JSON: {name} is not a number JSON allows")
+def _plain(value: Any) -> Any:
+    """``value`` with numpy scalars and arrays as Python numbers and lists (the core reads
+    JSON-like Python objects)."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, Mapping):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
 
 
 class ModalMap:
@@ -114,15 +92,30 @@ class ModalMap:
     ) -> None:
         if isinstance(flex_joints, (str, bytes)) or not isinstance(flex_joints, Sequence):
             raise ValueError("flex_joints: must be a list of flexible-joint objects")
-        checked = [_validate_flex(f, f"flex_joints[{i}]") for i, f in enumerate(flex_joints)]
         if isinstance(mode_joints, (str, bytes)) or not isinstance(mode_joints, Sequence):
             raise ValueError("mode_joints: must be a list of joint indices")
-        joints = [_joint_index(j, f"mode_joints[{i}]") for i, j in enumerate(mode_joints)]
-        self._core = _core.ModalMap(checked, joints)
         if metadata is not None and not isinstance(metadata, Mapping):
             raise ValueError("metadata: must be an object")
-        self.metadata: dict[str, Any] = {"robot": None, "source": None, "fit_statistics": None}
-        self.metadata.update(metadata or {})
+        document = {
+            "schema_version": SCHEMA_VERSION,
+            "kind": KIND,
+            "metadata": _plain(metadata),
+            "mode_joints": _plain(mode_joints),
+            "flex_joints": _plain(flex_joints),
+        }
+        core, self.metadata = _core.map_from_document(document)
+        self._core: _core.ModalMap = core
+
+    @classmethod
+    def _from_core(cls, core: Any, metadata: dict[str, Any]) -> ModalMap:
+        if not isinstance(core, _core.ModalMap):
+            raise ValueError(
+                "kind: a paper10 map, not a modal map: read it with tvist.DynamicMap.load or "
+                "tvist.load_map"
+            )
+        out = cls.__new__(cls)
+        out._core, out.metadata = core, metadata
+        return out
 
     @property
     def core(self) -> _core.ModalMap:
@@ -183,52 +176,40 @@ class ModalMap:
         out = self.modes_many(robot, np.asarray(q, dtype=float)[None, :])[0]
         return [(float(wn), float(z)) for wn, z in out]
 
+    @property
+    def robot(self) -> str | None:
+        """The robot the map was identified on (``metadata["robot"]``), or ``None``."""
+        return self._core.robot
+
     def to_dict(self) -> dict[str, Any]:
-        """The JSON document of this map."""
-        return {
-            "schema_version": SCHEMA_VERSION,
-            "kind": KIND,
-            "metadata": self.metadata,
-            "mode_joints": self.mode_joints,
-            "flex_joints": self.flex_joints,
-        }
+        """The JSON document of this map (as the core writes it)."""
+        return _core.map_document(self._core, self.metadata)
+
+    def to_json(self) -> str:
+        """The map file's text: strict JSON (see the module docstring)."""
+        return _core.write_map(self._core, self.metadata)
 
     def save(self, path: str | Path) -> None:
-        """Write the map as strict JSON (see the module docstring)."""
-        text = json.dumps(self.to_dict(), indent=2, allow_nan=False)
-        Path(path).write_text(text + "\n", encoding="utf-8")
+        """Write the map file (see the module docstring for the format)."""
+        Path(path).write_text(self.to_json(), encoding="utf-8")
 
     @classmethod
     def from_dict(cls, doc: Any) -> ModalMap:
         """Validate and build from a parsed map document."""
-        if not isinstance(doc, Mapping):
-            raise ValueError("map file: top level must be a JSON object")
-        if doc.get("kind") != KIND:
-            raise ValueError(f"kind: expected {KIND!r}, got {doc.get('kind')!r}")
-        if doc.get("schema_version") != SCHEMA_VERSION:
-            raise ValueError(
-                f"schema_version: expected {SCHEMA_VERSION}, got {doc.get('schema_version')!r}"
-            )
-        for key in ("flex_joints", "mode_joints"):
-            if key not in doc:
-                raise ValueError(f"{key}: missing")
-        unknown = sorted(set(doc) - {"schema_version", "kind", "metadata", *_TOP_FIELDS})
-        if unknown:
-            raise ValueError(f"map file: unknown field(s) {', '.join(unknown)}")
-        return cls(doc["flex_joints"], doc["mode_joints"], doc.get("metadata"))
+        return cls._from_core(*_core.map_from_document(doc))
 
     @classmethod
     def load(cls, path: str | Path) -> ModalMap:
         """Read and validate a modal map file; malformed files raise ValueError naming the
-        field."""
-        text = Path(path).read_text(encoding="utf-8")
+        file and the field. A paper10 map file is refused (:func:`tvist.load_map` reads
+        either kind)."""
+        from tvist.map_files import parse_map_file
+
+        core, metadata = parse_map_file(path)
         try:
-            doc = json.loads(text, parse_constant=_strict_constant)
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{path}: not valid JSON ({exc})") from None
+            return cls._from_core(core, metadata)
         except ValueError as exc:
             raise ValueError(f"{path}: {exc}") from None
-        return cls.from_dict(doc)
 
     def __repr__(self) -> str:
         joints = [f["joint"] for f in self.flex_joints]
@@ -236,9 +217,6 @@ class ModalMap:
             f"ModalMap(flex_joints={joints}, mode_joints={self.mode_joints}, "
             f"robot={self.metadata.get('robot')!r})"
         )
-
-
-_TOP_FIELDS = ("flex_joints", "mode_joints")
 
 
 class ModalDynamics(_core.ModalDynamics):
@@ -249,17 +227,23 @@ class ModalDynamics(_core.ModalDynamics):
     solved, in Rust, allocation-free. ``tvist.MapDynamics(robot, modal_map)`` returns one.
     Construction rejects a map that gives an overdamped mode at any of
     ``ModalDynamics.validation_poses`` sampled configurations or reads joints the robot
-    does not have.
+    does not have. A map identified on another robot (its ``metadata["robot"]`` differs from
+    the robot's name) raises ``ValueError`` naming both, unless ``allow_other_robot=True``
+    (research use).
     """
 
-    def __new__(cls, robot: Robot, modal_map: ModalMap) -> ModalDynamics:
+    def __new__(
+        cls, robot: Robot, modal_map: ModalMap, *, allow_other_robot: bool = False
+    ) -> ModalDynamics:
         if not isinstance(robot, Robot):
             raise TypeError(f"robot must be a tvist.robots.Robot, got {type(robot).__name__}")
         if not isinstance(modal_map, ModalMap):
             raise TypeError(f"modal_map must be a tvist.ModalMap, got {type(modal_map).__name__}")
-        return super().__new__(cls, robot.core, modal_map.core)
+        return super().__new__(cls, robot.core, modal_map.core, bool(allow_other_robot))
 
-    def __init__(self, robot: Robot, modal_map: ModalMap) -> None:
+    def __init__(
+        self, robot: Robot, modal_map: ModalMap, *, allow_other_robot: bool = False
+    ) -> None:
         self.robot = robot
         self.dynmap = modal_map
 

@@ -17,7 +17,7 @@ bag; other topics are copied unchanged (:func:`tvist.trajectory.bags.shape_bag`)
 Methods: ``tvist`` (multi-mode FD-TVIST: the output is longer by the shaper delay at the end
 pose), ``ztdis`` / ``mztdis`` (zero added delay, same length; rest padding is kept and only
 the motion is compressed). Modes come from ``--modes`` (fixed, ``FREQ_HZ:ZETA,...``) or from
-a dynamic map (``--map FILE`` or ``--paper-map``) with the robot model (``--robot``,
+a map (``--map FILE``, paper10 or modal, or ``--paper-map``) with the robot model (``--robot``,
 ``--payload-kg``, ``--payload-com X Y Z``). The largest distance of the shaped tool path from
 the planned one (:func:`tvist.analysis.path_deviation`) is reported for the ``--robot`` model.
 """
@@ -201,7 +201,7 @@ def _dynamics(args: argparse.Namespace, robot):
         return parse_modes(args.modes)
     if not (args.map or args.paper_map):
         raise ValueError("give --modes, --map FILE or --paper-map")
-    dynmap = tvist.DynamicMap.paper_ur5e() if args.paper_map else tvist.DynamicMap.load(args.map)
+    dynmap = tvist.DynamicMap.paper_ur5e() if args.paper_map else tvist.load_map(args.map)
     return tvist.MapDynamics(robot, dynmap)
 
 
@@ -342,7 +342,9 @@ def add_shape_command(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--shaper", default="zv", help="registry shaper name (default zv)")
     source = p.add_mutually_exclusive_group()
     source.add_argument("--modes", help="fixed modes FREQ_HZ:ZETA,... (undamped frequency)")
-    source.add_argument("--map", help="dynamic map file (tvist fit-map)")
+    source.add_argument(
+        "--map", help="map file, paper10 or modal (tvist fit-map, DynamicMap/ModalMap.save)"
+    )
     source.add_argument("--paper-map", action="store_true", help="the paper's UR5e map")
     p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
     p.add_argument("--payload-kg", type=float, default=0.0, help="payload mass (kg)")

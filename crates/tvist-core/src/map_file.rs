@@ -11,16 +11,26 @@
 //!             "damping_gain_exponent": 1.0, "frequency_gain_exponent": -0.5,
 //!             "frequency_inertia_range_kg_m2": [0.7, 9.1] | null,     (optional)
 //!             "damping_inertia_range_kg_m2": [0.2, 9.3] | null}, ...]} (optional)
+//!
+//! {"schema_version": 1,
+//!  "kind": "modal",
+//!  "metadata": {...as above...},
+//!  "mode_joints": [0, 1],
+//!  "flex_joints": [{"joint": 0, "stiffness_nm_per_rad": [k_0, k_1, k_2],
+//!                   "damping_nms_per_rad": [c_0, c_1, c_2], "damping_load_joint": 1}, ...]}
 //! ```
 //!
 //! - `schema_version` is the integer 1 (not `1.0`, not `true`).
 //! - `kind` names the form of the map. `"paper10"`: the ten-coefficient physical map of
-//!   [`crate::dynmap`] ([`MapForm::Paper10`]). Files written before `kind` named the form carry
+//!   [`crate::dynmap`] ([`MapForm::Paper10`]); `"modal"`: the modal map of
+//!   [`crate::modal_map`] ([`MapForm::Modal`]: load laws `[at_zero, per_nm, per_nm2]` of
+//!   every flexible joint, and the joints naming the shaped modes in cascade order). Files
+//!   written before `kind` named the form carry
 //!   `"tvist.dynamic_map"` or no `kind`; both are read as `"paper10"` (and written back as it).
 //!   Another form is one more [`MapForm`] variant and one more arm in [`MapForm::parse`] and
 //!   [`MapForm::to_value`]; the file layout around it stays.
 //! - `metadata.robot` names the robot the map was identified on; a map is refused for
-//!   another robot ([`crate::MapDynamics::new`]). `metadata.payload` is `{"mass_kg",
+//!   another robot ([`crate::MapDynamics::new`], [`crate::ModalDynamics::new`]). `metadata.payload` is `{"mass_kg",
 //!   "com_m", "inertia_kg_m2"}` (inertia `null` for a point mass).
 //! - Strict JSON: no `NaN` or `Infinity` tokens are read or written. `null` means "none" for a
 //!   range (unbounded) and "not available" for metadata; a statistic that could not be
@@ -32,6 +42,7 @@
 
 use crate::dynmap::{DynamicMap, InertiaRange, MapCoefficients, ModeMap, MAX_JOINT_INDEX};
 use crate::error::Error;
+use crate::modal_map::{FlexJoint, LoadLaw, ModalMap};
 use serde_json::{Map, Number, Value};
 use std::path::Path;
 
@@ -40,6 +51,17 @@ pub const SCHEMA_VERSION: u64 = 1;
 
 /// `kind` of the ten-coefficient physical map ([`MapForm::Paper10`]).
 pub const KIND_PAPER10: &str = "paper10";
+
+/// `kind` of the modal map ([`MapForm::Modal`]).
+pub const KIND_MODAL: &str = "modal";
+
+/// Fields of one flexible joint of a `modal` map, in the order they are written.
+pub const FLEX_JOINT_FIELDS: [&str; 4] = [
+    "joint",
+    "stiffness_nm_per_rad",
+    "damping_nms_per_rad",
+    "damping_load_joint",
+];
 
 /// `kind` of files written before `kind` named the map form; read as [`KIND_PAPER10`].
 pub const LEGACY_KIND: &str = "tvist.dynamic_map";
@@ -70,13 +92,16 @@ pub const RANGE_FIELDS: [&str; 2] = [
 /// Metadata fields every map has (`null` when not available), in the order they are written.
 pub const METADATA_FIELDS: [&str; 4] = ["robot", "payload", "source", "fit_statistics"];
 
-const TOP_LEVEL_FIELDS: [&str; 4] = ["schema_version", "kind", "metadata", "modes"];
+/// Fields of every map document; each form adds its own ([`MapForm::fields`]).
+const COMMON_FIELDS: [&str; 3] = ["schema_version", "kind", "metadata"];
 
 /// The form of a map: how its modes follow from the robot's state.
 #[derive(Debug, Clone, PartialEq)]
 pub enum MapForm {
     /// The ten-coefficient physical map from joint inertias (paper eqs. 42–51).
     Paper10(DynamicMap),
+    /// Modes from the mass matrix and the flexible joints' load laws ([`crate::modal_map`]).
+    Modal(ModalMap),
 }
 
 impl MapForm {
@@ -84,6 +109,40 @@ impl MapForm {
     pub fn kind(&self) -> &'static str {
         match self {
             MapForm::Paper10(_) => KIND_PAPER10,
+            MapForm::Modal(_) => KIND_MODAL,
+        }
+    }
+
+    /// The document fields of form `kind` besides [`COMMON_FIELDS`] (`None`: unknown kind).
+    fn fields(kind: &str) -> Option<&'static [&'static str]> {
+        match kind {
+            KIND_PAPER10 | LEGACY_KIND => Some(&["modes"]),
+            KIND_MODAL => Some(&["mode_joints", "flex_joints"]),
+            _ => None,
+        }
+    }
+
+    /// The paper10 map, if this is one.
+    pub fn as_paper10(&self) -> Option<&DynamicMap> {
+        match self {
+            MapForm::Paper10(map) => Some(map),
+            MapForm::Modal(_) => None,
+        }
+    }
+
+    /// The modal map, if this is one.
+    pub fn as_modal(&self) -> Option<&ModalMap> {
+        match self {
+            MapForm::Modal(map) => Some(map),
+            MapForm::Paper10(_) => None,
+        }
+    }
+
+    /// The robot the map was identified on, if known.
+    pub fn robot(&self) -> Option<&str> {
+        match self {
+            MapForm::Paper10(map) => map.robot(),
+            MapForm::Modal(map) => map.robot(),
         }
     }
 
@@ -91,9 +150,13 @@ impl MapForm {
     fn parse(kind: &str, doc: &Map<String, Value>) -> Result<MapForm, Error> {
         match kind {
             KIND_PAPER10 | LEGACY_KIND => Ok(MapForm::Paper10(paper10_from(doc)?)),
+            KIND_MODAL => Ok(MapForm::Modal(modal_from(doc)?)),
             other => Err(Error::document(
                 "kind",
-                format!("unknown map kind {other:?}; this version reads {KIND_PAPER10:?}"),
+                format!(
+                    "unknown map kind {other:?}; this version reads {KIND_PAPER10:?} and \
+                     {KIND_MODAL:?}"
+                ),
             )),
         }
     }
@@ -105,12 +168,23 @@ impl MapForm {
                 "modes",
                 Value::Array(map.mode_maps().iter().map(mode_to_value).collect()),
             )],
+            MapForm::Modal(map) => vec![
+                (
+                    "mode_joints",
+                    Value::from(map.mode_joints().collect::<Vec<_>>()),
+                ),
+                (
+                    "flex_joints",
+                    Value::Array(map.flex_joints().iter().map(flex_to_value).collect()),
+                ),
+            ],
         }
     }
 
     fn set_robot(self, robot: Option<&str>) -> MapForm {
         match (self, robot) {
             (MapForm::Paper10(map), Some(name)) => MapForm::Paper10(map.for_robot(name)),
+            (MapForm::Modal(map), Some(name)) => MapForm::Modal(map.for_robot(name)),
             (form, _) => form,
         }
     }
@@ -159,17 +233,6 @@ impl MapFile {
         let doc = doc
             .as_object()
             .ok_or_else(|| Error::document("(document)", "top level must be a JSON object"))?;
-        let unknown: Vec<&str> = doc
-            .keys()
-            .map(String::as_str)
-            .filter(|k| !TOP_LEVEL_FIELDS.contains(k))
-            .collect();
-        if !unknown.is_empty() {
-            return Err(Error::document(
-                "(document)",
-                format!("unknown field(s) {}", unknown.join(", ")),
-            ));
-        }
         match doc.get("schema_version") {
             Some(Value::Number(n)) if n.as_u64() == Some(SCHEMA_VERSION) => {}
             Some(other) => {
@@ -190,6 +253,19 @@ impl MapFile {
                 ))
             }
         };
+        // An unknown kind is reported by `MapForm::parse`; its fields are not judged.
+        let form_fields = MapForm::fields(kind).unwrap_or(&[]);
+        let unknown: Vec<&str> = doc
+            .keys()
+            .map(String::as_str)
+            .filter(|k| !COMMON_FIELDS.contains(k) && !form_fields.contains(k))
+            .collect();
+        if !unknown.is_empty() && MapForm::fields(kind).is_some() {
+            return Err(Error::document(
+                "(document)",
+                format!("unknown field(s) {}", unknown.join(", ")),
+            ));
+        }
         let form = MapForm::parse(kind, doc)?;
         Self::new(form, doc.get("metadata").unwrap_or(&Value::Null))
     }
@@ -400,6 +476,132 @@ fn mode_from(value: &Value, path: &str) -> Result<ModeMap, Error> {
     })
 }
 
+/// The `modal` form's fields: `mode_joints` and `flex_joints`.
+fn modal_from(doc: &Map<String, Value>) -> Result<ModalMap, Error> {
+    let mode_joints = match doc.get("mode_joints") {
+        None => return Err(Error::document("mode_joints", "missing")),
+        Some(Value::Array(joints)) => joints
+            .iter()
+            .enumerate()
+            .map(|(i, j)| joint_index(Some(j), &format!("mode_joints[{i}]")))
+            .collect::<Result<Vec<_>, _>>()?,
+        Some(other) => {
+            return Err(Error::document(
+                "mode_joints",
+                format!("must be a list of joint indices, got {other}"),
+            ))
+        }
+    };
+    let flex = match doc.get("flex_joints") {
+        None => return Err(Error::document("flex_joints", "missing")),
+        Some(Value::Array(entries)) => entries
+            .iter()
+            .enumerate()
+            .map(|(i, e)| flex_from(e, &format!("flex_joints[{i}]")))
+            .collect::<Result<Vec<_>, _>>()?,
+        Some(other) => {
+            return Err(Error::document(
+                "flex_joints",
+                format!("must be a list of flexible-joint objects, got {other}"),
+            ))
+        }
+    };
+    // The flexible joints first (count, duplicates, signs: the map's own checks, whose
+    // messages name the joint), with a mode they certainly have; then the mode joints.
+    let first = flex.first().map_or(0, |f| f.joint);
+    ModalMap::new(flex.clone(), &[first]).map_err(|e| Error::document("flex_joints", reason(e)))?;
+    if mode_joints.is_empty() {
+        return Err(Error::document(
+            "mode_joints",
+            "must name at least one mode",
+        ));
+    }
+    for (i, joint) in mode_joints.iter().enumerate() {
+        if !flex.iter().any(|f| f.joint == *joint) || mode_joints[..i].contains(joint) {
+            return Err(Error::document(
+                format!("mode_joints[{i}]"),
+                format!(
+                    "joint {joint} must be one of the flexible joints {:?}, named once",
+                    flex.iter().map(|f| f.joint).collect::<Vec<_>>()
+                ),
+            ));
+        }
+    }
+    ModalMap::new(flex, &mode_joints).map_err(|e| Error::document("mode_joints", reason(e)))
+}
+
+fn flex_from(value: &Value, path: &str) -> Result<FlexJoint, Error> {
+    let entry = value.as_object().ok_or_else(|| {
+        Error::document(
+            path,
+            format!(
+                "must be an object with fields {}",
+                FLEX_JOINT_FIELDS.join(", ")
+            ),
+        )
+    })?;
+    let unknown: Vec<&str> = entry
+        .keys()
+        .map(String::as_str)
+        .filter(|k| !FLEX_JOINT_FIELDS.contains(k))
+        .collect();
+    if !unknown.is_empty() {
+        return Err(Error::document(
+            path,
+            format!("unknown field(s) {}", unknown.join(", ")),
+        ));
+    }
+    let field = |key: &str| format!("{path}.{key}");
+    Ok(FlexJoint {
+        joint: joint_index(entry.get("joint"), &field("joint"))?,
+        stiffness_nm_per_rad: law_from(
+            entry.get("stiffness_nm_per_rad"),
+            &field("stiffness_nm_per_rad"),
+        )?,
+        damping_nms_per_rad: law_from(
+            entry.get("damping_nms_per_rad"),
+            &field("damping_nms_per_rad"),
+        )?,
+        damping_load_joint: joint_index(
+            entry.get("damping_load_joint"),
+            &field("damping_load_joint"),
+        )?,
+    })
+}
+
+/// A load law `[at_zero, per_nm, per_nm2]` (signs are checked by [`ModalMap::new`]).
+fn law_from(value: Option<&Value>, path: &str) -> Result<LoadLaw, Error> {
+    match value {
+        None => Err(Error::document(path, "missing")),
+        Some(Value::Array(v)) if v.len() == 3 => {
+            let x = |i: usize| number(v.get(i), &format!("{path}[{i}]"));
+            Ok(LoadLaw {
+                at_zero: x(0)?,
+                per_nm: x(1)?,
+                per_nm2: x(2)?,
+            })
+        }
+        Some(other) => Err(Error::document(
+            path,
+            format!("must be [at_zero, per_nm, per_nm2], got {other}"),
+        )),
+    }
+}
+
+/// One flexible joint of a `modal` map as written in a map file.
+pub fn flex_to_value(f: &FlexJoint) -> Value {
+    let law = |l: &LoadLaw| Value::Array(vec![float(l.at_zero), float(l.per_nm), float(l.per_nm2)]);
+    let mut out = Map::new();
+    out.insert("joint".into(), Value::from(f.joint));
+    out.insert("stiffness_nm_per_rad".into(), law(&f.stiffness_nm_per_rad));
+    out.insert("damping_nms_per_rad".into(), law(&f.damping_nms_per_rad));
+    out.insert(
+        "damping_load_joint".into(),
+        Value::from(f.damping_load_joint),
+    );
+    Value::Object(out)
+}
+
 fn float(x: f64) -> Value {
     Number::from_f64(x).map_or(Value::Null, Value::Number)
 }
@@ -562,7 +764,7 @@ mod tests {
         assert_eq!(back, file);
         assert_eq!(back.kind(), KIND_PAPER10);
         assert_eq!(back.robot(), Some("ur5e"));
-        let MapForm::Paper10(map) = back.form();
+        let map = back.form().as_paper10().expect("paper10");
         assert_eq!(map.robot(), Some("ur5e"));
         assert_eq!(map.mode_maps(), DynamicMap::paper_ur5e().mode_maps());
     }
@@ -660,8 +862,134 @@ mod tests {
         assert!(text.contains(r#""rms": null"#), "{text}");
         assert!(!text.contains("NaN"));
         // The metadata's robot is the map's robot.
-        let MapForm::Paper10(map) = file.form();
+        let map = file.form().as_paper10().expect("paper10");
         assert_eq!(map.robot(), Some("ur10e"));
+    }
+
+    /// A modal map file exactly as the Python package wrote it before the core read modal
+    /// files (metadata without `payload`, fields in that order).
+    const PYTHON_MODAL_FILE: &str = r#"{
+  "schema_version": 1,
+  "kind": "modal",
+  "metadata": {
+    "robot": "ur5e",
+    "source": "gear laws of a flexible-joint twin (FlexParams)",
+    "fit_statistics": null
+  },
+  "mode_joints": [
+    0,
+    1
+  ],
+  "flex_joints": [
+    {
+      "joint": 0,
+      "stiffness_nm_per_rad": [
+        26000.0,
+        0.0,
+        0.012
+      ],
+      "damping_nms_per_rad": [
+        14.0,
+        0.35,
+        0.0
+      ],
+      "damping_load_joint": 1
+    },
+    {
+      "joint": 1,
+      "stiffness_nm_per_rad": [
+        22000.0,
+        0.0,
+        0.0
+      ],
+      "damping_nms_per_rad": [
+        21.0,
+        0.0,
+        0.0
+      ],
+      "damping_load_joint": 1
+    }
+  ]
+}
+"#;
+
+    #[test]
+    fn a_modal_file_written_by_python_reads_and_writes_back_identically() {
+        let file = MapFile::parse(PYTHON_MODAL_FILE).expect("python modal file");
+        assert_eq!(file.kind(), KIND_MODAL);
+        assert_eq!(file.robot(), Some("ur5e"));
+        let map = file.form().as_modal().expect("modal");
+        assert_eq!(map.robot(), Some("ur5e"));
+        assert_eq!(map.mode_joints().collect::<Vec<_>>(), vec![0, 1]);
+        let base = map.flex_joints()[0];
+        assert_eq!((base.joint, base.damping_load_joint), (0, 1));
+        assert_eq!(base.stiffness_nm_per_rad.per_nm2, 0.012);
+        assert_eq!(base.damping_nms_per_rad.per_nm, 0.35);
+        // Written back: the same document plus `metadata.payload: null`.
+        let back = MapFile::parse(&file.to_json()).expect("round trip");
+        assert_eq!(back, file);
+        let mut expected: Value = serde_json::from_str(PYTHON_MODAL_FILE).expect("json");
+        expected["metadata"]["payload"] = Value::Null;
+        assert_eq!(file.to_value(), expected);
+    }
+
+    #[test]
+    fn modal_errors_name_the_field_and_the_reason() {
+        let text = PYTHON_MODAL_FILE;
+        let cases = [
+            (
+                text.replacen("26000.0", r#""stiff""#, 1),
+                "flex_joints[0].stiffness_nm_per_rad[0]: must be a number",
+            ),
+            (
+                text.replacen("26000.0,", "", 1),
+                "flex_joints[0].stiffness_nm_per_rad: must be [at_zero, per_nm, per_nm2]",
+            ),
+            (
+                text.replacen(
+                    r#""damping_load_joint": 1"#,
+                    r#""damping_load_joint": -1"#,
+                    1,
+                ),
+                "flex_joints[0].damping_load_joint: must be a joint index",
+            ),
+            (
+                text.replacen(r#""joint": 0"#, r#""joint": 0, "gear": 1"#, 1),
+                "flex_joints[0]: unknown field(s) gear",
+            ),
+            (
+                text.replacen("26000.0", "-1.0", 1),
+                "flex_joints: stiffness of joint 0",
+            ),
+            (
+                text.replacen(r#""joint": 1"#, r#""joint": 0"#, 1),
+                "flex_joints: flexible joint 0 is listed twice",
+            ),
+            (
+                text.replacen("\n    1\n", "\n    4\n", 1),
+                "mode_joints[1]: joint 4 must be one of the flexible joints [0, 1], named once",
+            ),
+            (
+                text.replacen("\n    1\n", "\n    0\n", 1),
+                "mode_joints[1]: joint 0 must be one of the flexible joints [0, 1], named once",
+            ),
+            (
+                text.replace(r#""mode_joints""#, r#""modes""#),
+                "(document): unknown field(s) modes",
+            ),
+            (
+                text.replacen("0.012", "NaN", 1),
+                "(document): not valid JSON",
+            ),
+        ];
+        for (doc, expected) in cases {
+            assert_ne!(doc, text, "{expected}");
+            let msg = reason_of(&doc);
+            assert!(msg.contains(expected), "{msg:?} lacks {expected:?}");
+        }
+        let without = text.replace(r#""robot": "ur5e""#, r#""robot": null"#);
+        let file = MapFile::parse(&without).expect("no robot");
+        assert_eq!(file.form().robot(), None);
     }
 
     proptest::proptest! {
@@ -685,7 +1013,7 @@ mod tests {
             let map = DynamicMap::new(vec![ModeMap::general(c, 1)]).expect("finite");
             let file = MapFile::new(MapForm::Paper10(map), &Value::Null).expect("valid");
             let back = MapFile::parse(&file.to_json()).expect("round trip");
-            let MapForm::Paper10(read) = back.form();
+            let read = back.form().as_paper10().expect("paper10");
             let got = read.mode_maps()[0].coefficients;
             for (a, b) in [(got.k_0, c.k_0), (got.k_j, c.k_j), (got.k_g, c.k_g), (got.k_p, c.k_p),
                            (got.c_0, c.c_0), (got.c_1, c.c_1), (got.c_2, c.c_2),

@@ -25,7 +25,25 @@ impl ModalDynamics {
     /// Rejected: a map reading joints the robot does not have, or one that gives an invalid
     /// mode (`ζ >= 1`, or a mass block that is not positive definite) at any of
     /// [`VALIDATION_POSES`] configurations sampled like [`crate::MapDynamics`] does.
+    ///
+    /// A map identified on another robot than `robot` (both names known and different) is
+    /// refused with [`Error::RobotMismatch`]; [`Self::new_allowing_other_robot`] skips that
+    /// check.
     pub fn new(robot: Robot, map: ModalMap) -> Result<ModalDynamics, Error> {
+        if let (Some(map_robot), Some(name)) = (map.robot(), robot.name()) {
+            if map_robot != name {
+                return Err(Error::RobotMismatch {
+                    map_robot: map_robot.to_string(),
+                    robot: name.to_string(),
+                });
+            }
+        }
+        Self::new_allowing_other_robot(robot, map)
+    }
+
+    /// As [`Self::new`] without the robot-name check (research use). Every other check
+    /// applies.
+    pub fn new_allowing_other_robot(robot: Robot, map: ModalMap) -> Result<ModalDynamics, Error> {
         let n = robot.n_dof();
         if map.required_joints() > n {
             return Err(Error::DimensionMismatch {

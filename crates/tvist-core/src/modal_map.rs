@@ -146,6 +146,8 @@ pub struct ModalMap {
     flex: Vec<FlexJoint>,
     /// For each shaped mode, the index into `flex` of the joint that must dominate it.
     mode_flex_index: Vec<usize>,
+    /// The robot the map was identified on, if known.
+    robot: Option<String>,
 }
 
 impl ModalMap {
@@ -153,6 +155,7 @@ impl ModalMap {
     ///
     /// `flex`: 1 to [`MAX_FLEX_JOINTS`] joints, distinct. `mode_joints`: the joints naming the
     /// shaped modes in cascade order, each one of the flexible joints, distinct, at least one.
+    /// The robot is unknown until [`Self::for_robot`].
     pub fn new(flex: Vec<FlexJoint>, mode_joints: &[usize]) -> Result<ModalMap, Error> {
         if flex.is_empty() || flex.len() > MAX_FLEX_JOINTS {
             return Err(Error::InvalidParameter(format!(
@@ -196,7 +199,19 @@ impl ModalMap {
         Ok(ModalMap {
             flex,
             mode_flex_index,
+            robot: None,
         })
+    }
+
+    /// The same map, marked as identified on robot `name` (for example `"ur5e"`).
+    pub fn for_robot(mut self, name: impl Into<String>) -> ModalMap {
+        self.robot = Some(name.into());
+        self
+    }
+
+    /// The robot the map was identified on, if known.
+    pub fn robot(&self) -> Option<&str> {
+        self.robot.as_deref()
     }
 
     /// The flexible joints, in the order given.

@@ -19,8 +19,8 @@ use tvist_core::error::N_STATUS_FLAGS;
 use tvist_core::map_file::{MapFile, MapForm};
 use tvist_core::robot_data::{ur_e_series_entries, RobotEntry};
 use tvist_core::{
-    ConstantModes, DynamicMap, Interpolation, MapDynamics, Mode, Provider, RigidBody, ShaperKind,
-    Status, StatusCounter, TvShaper, TvShaperConfig,
+    ConstantModes, DynamicMap, Interpolation, MapDynamics, ModalDynamics, Mode, Provider,
+    RigidBody, ShaperKind, Status, StatusCounter, TvShaper, TvShaperConfig,
 };
 
 /// Largest number of joint channels a handle accepts (the core's limit).
@@ -394,8 +394,9 @@ pub unsafe extern "C" fn tvist_shaper_new_ur_map(
     }
 }
 
-/// Creates a shaper driven by the dynamic map in file `map_json_path` (any map file tvist
-/// writes: `tvist fit-map`, `DynamicMap.save`) for UR e-Series robot `robot_name` (`"ur3e"`,
+/// Creates a shaper driven by the map in file `map_json_path` (any map file tvist writes:
+/// `tvist fit-map`, `DynamicMap.save`, `ModalMap.save`; a `"kind": "modal"` file drives the
+/// modal provider, which solves the mass-matrix eigenproblem every cycle) for UR e-Series robot `robot_name` (`"ur3e"`,
 /// `"ur5e"`, `"ur10e"`, `"ur16e"`, `"ur20"`) with a point payload of `payload_kg` at
 /// `payload_com_m` (flange frame, m), shaping its joints sampled every `dt_s` seconds.
 ///
@@ -476,14 +477,25 @@ pub unsafe extern "C" fn tvist_shaper_new_map_ex(
                 return Err(fail(TVIST_ERR_MAP_FILE, "map_json_path is not valid UTF-8"));
             };
             let file = MapFile::load(Path::new(path)).map_err(|e| fail_with(&e))?;
-            let dynamics = match file.into_form() {
-                MapForm::Paper10(map) if options.allow_other_robot != 0 => {
+            let other_robot = options.allow_other_robot != 0;
+            let provider = match file.into_form() {
+                MapForm::Paper10(map) if other_robot => {
                     MapDynamics::new_allowing_other_robot(robot, map)
+                        .map(|d| Provider::Map(Box::new(d)))
                 }
-                MapForm::Paper10(map) => MapDynamics::new(robot, map),
+                MapForm::Paper10(map) => {
+                    MapDynamics::new(robot, map).map(|d| Provider::Map(Box::new(d)))
+                }
+                MapForm::Modal(map) if other_robot => {
+                    ModalDynamics::new_allowing_other_robot(robot, map)
+                        .map(|d| Provider::Modal(Box::new(d)))
+                }
+                MapForm::Modal(map) => {
+                    ModalDynamics::new(robot, map).map(|d| Provider::Modal(Box::new(d)))
+                }
             }
             .map_err(|e| fail_with(&e))?;
-            build(Provider::Map(Box::new(dynamics)), &config)
+            build(provider, &config)
         })
     }
 }

@@ -15,8 +15,8 @@ use tvist::{
 use tvist_core::map_file::{MapFile, MapForm};
 use tvist_core::robot_data::ur_e_series;
 use tvist_core::{
-    ConstantModes, DynamicMap, Interpolation, MapDynamics, Mode, RigidBody, ShaperKind, Status,
-    TvShaper, TvShaperConfig,
+    ConstantModes, DynamicMap, FlexJoint, Interpolation, LoadLaw, MapDynamics, ModalDynamics,
+    ModalMap, Mode, RigidBody, ShaperKind, Status, TvShaper, TvShaperConfig,
 };
 
 const PI: f64 = std::f64::consts::PI;
@@ -83,6 +83,32 @@ impl TempMap {
     fn of_robot(tag: &str, robot: &str) -> TempMap {
         let meta = serde_json::json!({"robot": robot, "source": "test"});
         let file = MapFile::new(MapForm::Paper10(DynamicMap::paper_ur5e()), &meta).expect("map");
+        TempMap::new(tag, &file.to_json())
+    }
+
+    /// A modal map file (base and shoulder flexible; the laws read gravity torques).
+    fn modal_of_robot(tag: &str, robot: &str) -> TempMap {
+        let flex = |joint: usize, k: f64, c: f64| FlexJoint {
+            joint,
+            stiffness_nm_per_rad: LoadLaw {
+                at_zero: k,
+                per_nm: 0.0,
+                per_nm2: 0.2,
+            },
+            damping_nms_per_rad: LoadLaw {
+                at_zero: c,
+                per_nm: 0.5,
+                per_nm2: 0.0,
+            },
+            damping_load_joint: 1,
+        };
+        let map = ModalMap::new(
+            vec![flex(0, 22_000.0, 5.0), flex(1, 18_000.0, 60.0)],
+            &[0, 1],
+        )
+        .expect("modal map");
+        let meta = serde_json::json!({"robot": robot, "source": "test"});
+        let file = MapFile::new(MapForm::Modal(map), &meta).expect("modal file");
         TempMap::new(tag, &file.to_json())
     }
 
@@ -158,7 +184,11 @@ fn a_map_file_from_c_shapes_exactly_as_the_core() {
         assert_eq!(code, TVIST_OK, "{}", last_error());
         let ur = ur_e_series(robot, RigidBody::point(PAYLOAD_KG, PAYLOAD_COM_M)).expect("robot");
         let file = MapFile::load(&map.0).expect("map");
-        let MapForm::Paper10(dynmap) = file.into_form();
+        let dynmap = match file.into_form() {
+            MapForm::Paper10(map) => Some(map),
+            MapForm::Modal(_) => None,
+        }
+        .expect("a paper10 map");
         let dynamics = MapDynamics::new(ur, dynmap).expect("provider");
         let config = TvShaperConfig::new(DT_S, 6, ShaperKind::Zv);
         let mut core = TvShaper::new(dynamics, &config).expect("shaper");
@@ -194,19 +224,41 @@ fn the_plain_constructor_equals_the_ex_form_with_default_options() {
 }
 
 #[test]
-fn a_map_of_another_robot_is_refused_naming_both_unless_allowed() {
-    let map = TempMap::of_robot("mismatch", "ur5e");
-    let (code, h) = new_map("ur10e", &map, "zv", None);
-    assert_eq!((code, h.0.is_null()), (TVIST_ERR_ROBOT_MISMATCH, true));
-    let msg = last_error();
-    assert!(msg.contains("ur10e") && msg.contains("ur5e"), "{msg}");
+fn a_modal_map_file_from_c_shapes_exactly_as_the_core_modal_provider() {
+    for robot in ["ur5e", "ur10e"] {
+        let map = TempMap::modal_of_robot(&format!("modal-{robot}"), robot);
+        let (code, mut h) = new_map(robot, &map, "zv", None);
+        assert_eq!(code, TVIST_OK, "{}", last_error());
+        let ur = ur_e_series(robot, RigidBody::point(PAYLOAD_KG, PAYLOAD_COM_M)).expect("robot");
+        let modal = match MapFile::load(&map.0).expect("map").into_form() {
+            MapForm::Modal(map) => Some(map),
+            MapForm::Paper10(_) => None,
+        }
+        .expect("a modal map");
+        let dynamics = ModalDynamics::new(ur, modal).expect("provider");
+        let config = TvShaperConfig::new(DT_S, 6, ShaperKind::Zv);
+        let mut core = TvShaper::new(dynamics, &config).expect("shaper");
+        assert_same_as_core(&mut h, &mut core);
+    }
+}
 
-    let allow = TvistShaperOptions {
-        allow_other_robot: 1,
-        ..TvistShaperOptions::default()
-    };
-    let (code, h) = new_map("ur10e", &map, "zv", Some(&allow));
-    assert_eq!((code, h.0.is_null()), (TVIST_OK, false), "{}", last_error());
+#[test]
+fn a_map_of_another_robot_is_refused_naming_both_unless_allowed() {
+    let paper10 = TempMap::of_robot("mismatch", "ur5e");
+    let modal = TempMap::modal_of_robot("mismatch-modal", "ur5e");
+    for map in [&paper10, &modal] {
+        let (code, h) = new_map("ur10e", map, "zv", None);
+        assert_eq!((code, h.0.is_null()), (TVIST_ERR_ROBOT_MISMATCH, true));
+        let msg = last_error();
+        assert!(msg.contains("ur10e") && msg.contains("ur5e"), "{msg}");
+
+        let allow = TvistShaperOptions {
+            allow_other_robot: 1,
+            ..TvistShaperOptions::default()
+        };
+        let (code, h) = new_map("ur10e", map, "zv", Some(&allow));
+        assert_eq!((code, h.0.is_null()), (TVIST_OK, false), "{}", last_error());
+    }
 }
 
 #[test]

@@ -1,5 +1,5 @@
 //! `tvist_shaper_step`, `_reset`, `_delay_s` and `_status_counts` never allocate, for every
-//! constructor (constant modes, the paper's map, a map file).
+//! constructor (constant modes, the paper's map, a paper10 map file, a modal map file).
 //!
 //! Its own test binary: the counting global allocator sees only this file's allocations, and
 //! a single `#[test]` keeps other test threads out of the measured windows.
@@ -16,7 +16,7 @@ use tvist::{
     TvistShaper, TVIST_N_STATUS_FLAGS, TVIST_OK,
 };
 use tvist_core::map_file::{MapFile, MapForm};
-use tvist_core::DynamicMap;
+use tvist_core::{DynamicMap, FlexJoint, LoadLaw, ModalMap};
 
 /// Runs 500 cycles of a moving 6-joint input, a reset and delay queries on `shaper`.
 fn cycle(shaper: *mut TvistShaper) -> usize {
@@ -62,6 +62,30 @@ fn per_cycle_calls_never_allocate() {
     let file = MapFile::new(MapForm::Paper10(DynamicMap::paper_ur5e()), &meta).expect("map");
     std::fs::write(&path, file.to_json()).expect("write map");
     let c_path = CString::new(path.to_str().expect("UTF-8 path")).expect("path");
+    // A modal map whose base stiffness and damping read gravity torques (both per-cycle
+    // evaluations: mass matrix and gravity).
+    let flex = |joint: usize, k: f64, c: f64| FlexJoint {
+        joint,
+        stiffness_nm_per_rad: LoadLaw {
+            at_zero: k,
+            per_nm: 0.0,
+            per_nm2: 0.01,
+        },
+        damping_nms_per_rad: LoadLaw {
+            at_zero: c,
+            per_nm: 0.2,
+            per_nm2: 0.0,
+        },
+        damping_load_joint: 1,
+    };
+    let modal = ModalMap::new(vec![flex(0, 2.6e4, 14.0), flex(1, 2.2e4, 21.0)], &[0, 1])
+        .expect("modal map");
+    let modal_path =
+        std::env::temp_dir().join(format!("tvist-no-alloc-modal-{}.json", std::process::id()));
+    let modal_file = MapFile::new(MapForm::Modal(modal), &meta).expect("modal file");
+    std::fs::write(&modal_path, modal_file.to_json()).expect("write modal map");
+    let c_modal_path = CString::new(modal_path.to_str().expect("UTF-8 path")).expect("path");
+    let mut from_modal_file = ptr::null_mut();
     let ur10e = CString::new("ur10e").expect("name");
     // SAFETY: arrays of the stated lengths, NUL-terminated names, writable outputs.
     unsafe {
@@ -96,15 +120,28 @@ fn per_cycle_calls_never_allocate() {
             &mut from_file,
         );
         assert_eq!(code, TVIST_OK);
+        let code = tvist_shaper_new_map(
+            ur10e.as_ptr(),
+            5.0,
+            com.as_ptr(),
+            c_modal_path.as_ptr(),
+            0.002,
+            zv.as_ptr(),
+            &mut from_modal_file,
+        );
+        assert_eq!(code, TVIST_OK);
     }
     let _ = std::fs::remove_file(&path);
+    let _ = std::fs::remove_file(&modal_path);
     assert_eq!(cycle(constant), 0, "constant-mode shaper allocated");
     assert_eq!(cycle(map), 0, "map-driven shaper allocated");
     assert_eq!(cycle(from_file), 0, "map-file shaper allocated");
+    assert_eq!(cycle(from_modal_file), 0, "modal map-file shaper allocated");
     // SAFETY: handles from the constructors, freed once.
     unsafe {
         tvist_shaper_free(constant);
         tvist_shaper_free(map);
         tvist_shaper_free(from_file);
+        tvist_shaper_free(from_modal_file);
     }
 }

@@ -10,13 +10,7 @@ use tvist_core::{Dynamics, Mode};
 use crate::convert::{self, rows, value_error};
 use crate::robot::PyRobot;
 
-/// Keys of one flexible joint's dict, in the order of the file format.
-pub const FLEX_JOINT_FIELDS: [&str; 4] = [
-    "joint",
-    "stiffness_nm_per_rad",
-    "damping_nms_per_rad",
-    "damping_load_joint",
-];
+use tvist_core::map_file::FLEX_JOINT_FIELDS;
 
 fn law_from(d: &Bound<'_, PyDict>, key: &str, joint: usize) -> PyResult<core::LoadLaw> {
     let item = d
@@ -100,6 +94,12 @@ impl PyModalMap {
                 Ok(d)
             })
             .collect()
+    }
+
+    /// The robot the map was identified on (`metadata.robot` of its file), or None.
+    #[getter]
+    fn robot(&self) -> Option<String> {
+        self.inner.robot().map(str::to_owned)
     }
 
     #[getter]
@@ -191,10 +191,21 @@ pub struct PyModalDynamics {
 
 #[pymethods]
 impl PyModalDynamics {
+    /// `allow_other_robot`: accept a map identified on another robot (research use).
     #[new]
-    fn new(robot: PyRef<'_, PyRobot>, modal_map: PyRef<'_, PyModalMap>) -> PyResult<Self> {
-        let inner = core::ModalDynamics::new(robot.inner.clone(), modal_map.inner.clone())
-            .map_err(value_error)?;
+    #[pyo3(signature = (robot, modal_map, allow_other_robot=false))]
+    fn new(
+        robot: PyRef<'_, PyRobot>,
+        modal_map: PyRef<'_, PyModalMap>,
+        allow_other_robot: bool,
+    ) -> PyResult<Self> {
+        let (robot, map) = (robot.inner.clone(), modal_map.inner.clone());
+        let inner = if allow_other_robot {
+            core::ModalDynamics::new_allowing_other_robot(robot, map)
+        } else {
+            core::ModalDynamics::new(robot, map)
+        }
+        .map_err(value_error)?;
         Ok(PyModalDynamics { inner })
     }
 

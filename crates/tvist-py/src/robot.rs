@@ -8,6 +8,7 @@ use tvist_core::{Dynamics, Mode, Status};
 
 use crate::convert::{self, rows, value_error};
 use crate::json::{self, NonFinite};
+use crate::modal::PyModalMap;
 use pyo3::types::PyDict;
 use tvist_core::map_file::{self, MapFile, MapForm};
 use tvist_core::robot_data;
@@ -217,57 +218,74 @@ fn map_file_from(doc: &Bound<'_, PyAny>) -> PyResult<MapFile> {
     MapFile::from_value(&value).map_err(value_error)
 }
 
-fn paper10(file: MapFile) -> core::DynamicMap {
+fn paper10(file: MapFile) -> PyResult<core::DynamicMap> {
     match file.into_form() {
-        MapForm::Paper10(map) => map,
+        MapForm::Paper10(map) => Ok(map),
+        other => Err(PyValueError::new_err(format!(
+            "kind: a {:?} map, not a {:?} map",
+            other.kind(),
+            map_file::KIND_PAPER10
+        ))),
     }
 }
 
-/// A parsed map file as `(DynamicMap, metadata dict)`.
-fn map_parts(py: Python<'_>, file: MapFile) -> PyResult<(PyDynamicMap, Bound<'_, PyAny>)> {
+/// A parsed map file as `(DynamicMap or ModalMap, metadata dict)`, by the file's kind.
+fn map_parts(py: Python<'_>, file: MapFile) -> PyResult<(Bound<'_, PyAny>, Bound<'_, PyAny>)> {
     let metadata = json::to_py(py, &serde_json::Value::Object(file.metadata().clone()))?;
-    Ok((
-        PyDynamicMap {
-            inner: paper10(file),
-        },
-        metadata,
-    ))
+    let map = match file.into_form() {
+        MapForm::Paper10(inner) => Bound::new(py, PyDynamicMap { inner })?.into_any(),
+        MapForm::Modal(inner) => Bound::new(py, PyModalMap { inner })?.into_any(),
+    };
+    Ok((map, metadata))
+}
+
+/// The map form of a `DynamicMap` or `ModalMap`.
+fn form_of(map: &Bound<'_, PyAny>) -> PyResult<MapForm> {
+    if let Ok(m) = map.cast::<PyDynamicMap>() {
+        Ok(MapForm::Paper10(m.borrow().inner.clone()))
+    } else if let Ok(m) = map.cast::<PyModalMap>() {
+        Ok(MapForm::Modal(m.get().inner.clone()))
+    } else {
+        Err(pyo3::exceptions::PyTypeError::new_err(
+            "map must be a _core.DynamicMap or a _core.ModalMap",
+        ))
+    }
 }
 
 /// Validates a map document (a dict as read from JSON) with the core's map-file rules and
-/// returns `(DynamicMap, metadata)`; errors name the field.
+/// returns `(DynamicMap or ModalMap, metadata)` by its kind; errors name the field.
 #[pyfunction]
 fn map_from_document<'py>(
     py: Python<'py>,
     doc: &Bound<'py, PyAny>,
-) -> PyResult<(PyDynamicMap, Bound<'py, PyAny>)> {
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
     map_parts(py, map_file_from(doc)?)
 }
 
-/// Parses and validates map-file text (strict JSON): `(DynamicMap, metadata)`.
+/// Parses and validates map-file text (strict JSON): `(DynamicMap or ModalMap, metadata)`.
 #[pyfunction]
-fn parse_map<'py>(py: Python<'py>, text: &str) -> PyResult<(PyDynamicMap, Bound<'py, PyAny>)> {
+fn parse_map<'py>(py: Python<'py>, text: &str) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
     map_parts(py, MapFile::parse(text).map_err(value_error)?)
 }
 
-/// The map file of `dynmap` with `metadata`, as strict JSON text (non-finite metadata
-/// numbers written as null).
+/// The map file of `map` (DynamicMap or ModalMap) with `metadata`, as strict JSON text
+/// (non-finite metadata numbers written as null).
 #[pyfunction]
-fn write_map(dynmap: PyRef<'_, PyDynamicMap>, metadata: &Bound<'_, PyAny>) -> PyResult<String> {
+fn write_map(map: &Bound<'_, PyAny>, metadata: &Bound<'_, PyAny>) -> PyResult<String> {
     let meta = json::to_value(metadata, "metadata", NonFinite::AsNull)?;
-    let file = MapFile::new(MapForm::Paper10(dynmap.inner.clone()), &meta).map_err(value_error)?;
+    let file = MapFile::new(form_of(map)?, &meta).map_err(value_error)?;
     Ok(file.to_json())
 }
 
-/// The map document of `dynmap` with `metadata` as a dict (what `write_map` writes).
+/// The map document of `map` with `metadata` as a dict (what `write_map` writes).
 #[pyfunction]
 fn map_document<'py>(
     py: Python<'py>,
-    dynmap: PyRef<'_, PyDynamicMap>,
+    map: &Bound<'py, PyAny>,
     metadata: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let meta = json::to_value(metadata, "metadata", NonFinite::AsNull)?;
-    let file = MapFile::new(MapForm::Paper10(dynmap.inner.clone()), &meta).map_err(value_error)?;
+    let file = MapFile::new(form_of(map)?, &meta).map_err(value_error)?;
     json::to_py(py, &file.to_value())
 }
 
@@ -354,7 +372,7 @@ impl PyDynamicMap {
         doc.set_item("metadata", meta)?;
         doc.set_item("modes", modes)?;
         Ok(PyDynamicMap {
-            inner: paper10(map_file_from(doc.as_any())?),
+            inner: paper10(map_file_from(doc.as_any())?)?,
         })
     }
 
@@ -548,6 +566,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MAP_METADATA_FIELDS", map_file::METADATA_FIELDS.to_vec())?;
     m.add("MAP_SCHEMA_VERSION", map_file::SCHEMA_VERSION)?;
     m.add("MAP_KIND_PAPER10", map_file::KIND_PAPER10)?;
+    m.add("MAP_KIND_MODAL", map_file::KIND_MODAL)?;
     m.add("ROBOT_DATA_JSON", robot_data::UR_E_SERIES_JSON)?;
     m.add_function(wrap_pyfunction!(map_from_document, m)?)?;
     m.add_function(wrap_pyfunction!(parse_map, m)?)?;
