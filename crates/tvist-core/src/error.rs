@@ -88,7 +88,7 @@ impl fmt::Display for Error {
             Error::Document { path, reason } => write!(f, "{path}: {reason}"),
             Error::RobotMismatch { map_robot, robot } => write!(
                 f,
-                "the dynamic map was identified on {map_robot}, not on {robot}: identify a \
+                "the map was identified on {map_robot}, not on {robot}: identify a \
                  map for {robot} (tvist campaign, tvist fit-map) or explicitly allow a map \
                  of another robot"
             ),
