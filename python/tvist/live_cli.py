@@ -99,16 +99,9 @@ def _cmd_record(args: argparse.Namespace) -> int:
 
 
 def _add_payload(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--robot", default="ur5e", help="robot model for the map (default ur5e)")
-    p.add_argument("--payload-kg", type=float, default=0.0, help="payload mass, kg")
-    p.add_argument(
-        "--payload-com",
-        type=float,
-        nargs=3,
-        default=(0.0, 0.0, 0.0),
-        metavar=("X", "Y", "Z"),
-        help="payload centre of mass in the flange frame, m",
-    )
+    from tvist.cli_args import add_robot_and_payload
+
+    add_robot_and_payload(p)
 
 
 def add_run_command(sub: argparse._SubParsersAction) -> None:

@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tvist.cli_args import add_robot_and_payload
 from tvist.trajectory.joint_names import joint_order
 from tvist.trajectory.shaping import METHODS, shape_samples
 
@@ -346,14 +347,5 @@ def add_shape_command(sub: argparse._SubParsersAction) -> None:
         "--map", help="map file, paper10 or modal (tvist fit-map, DynamicMap/ModalMap.save)"
     )
     source.add_argument("--paper-map", action="store_true", help="the paper's UR5e map")
-    p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
-    p.add_argument("--payload-kg", type=float, default=0.0, help="payload mass (kg)")
-    p.add_argument(
-        "--payload-com",
-        type=float,
-        nargs=3,
-        default=(0.0, 0.0, 0.05),
-        metavar=("X", "Y", "Z"),
-        help="payload centre of mass in the flange frame (m, default 0 0 0.05)",
-    )
+    add_robot_and_payload(p)
     p.set_defaults(func=_cmd_shape)

@@ -29,16 +29,9 @@ def _error(command: str, message: str) -> int:
 
 
 def _add_payload_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
-    p.add_argument("--payload-kg", type=float, default=0.0, help="payload mass (kg)")
-    p.add_argument(
-        "--payload-com",
-        type=float,
-        nargs=3,
-        default=(0.0, 0.0, 0.05),
-        metavar=("X", "Y", "Z"),
-        help="payload centre of mass in the flange frame (m, default 0 0 0.05)",
-    )
+    from tvist.cli_args import add_robot_and_payload
+
+    add_robot_and_payload(p)
 
 
 # --------------------------------------------------------------------------- campaign

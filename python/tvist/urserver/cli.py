@@ -50,16 +50,9 @@ def add_twin_server_command(sub: argparse._SubParsersAction) -> None:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The twin server's options (shared by ``tvist twin-server`` and
     ``python -m tvist.urserver``)."""
-    p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
-    p.add_argument("--payload-kg", type=float, default=0.0, help="mounted payload, kg")
-    p.add_argument(
-        "--payload-com",
-        type=float,
-        nargs=3,
-        default=(0.0, 0.0, 0.0),
-        metavar=("X", "Y", "Z"),
-        help="payload centre of mass in the flange frame, m",
-    )
+    from tvist.cli_args import add_robot_and_payload
+
+    add_robot_and_payload(p, payload_help="mounted payload")
     p.add_argument("--host", default="127.0.0.1", help="address to listen on")
     p.add_argument(
         "--q0",
