@@ -15,7 +15,14 @@ import pytest
 from scipy import signal
 
 from ident_reference import mode_signals
-from tvist.ident.local_fit import NO_RINGING, FitOptions, LocalFit, fit_local, saturated_samples
+from tvist.ident.local_fit import (
+    NO_RINGING,
+    FitOptions,
+    LocalFit,
+    fit_local,
+    interval_mean_acceleration,
+    saturated_samples,
+)
 from tvist.ident.zoh import zoh_responses
 
 
@@ -164,6 +171,32 @@ def test_a_rigid_arm_is_reported_as_no_ringing():
     assert reasons_of(fit, NO_RINGING)
 
 
+def test_ringing_snr_follows_the_noise_level_and_ignores_the_units():
+    """The ringing SNR is an energy ratio: 20 dB more white noise on the same response lowers
+    it by 20 dB, and a change of units (ψ x 1000) leaves it unchanged. Tolerance 1.5 dB: the
+    residual is the noise less the small share the fit absorbs, and the excess of the rigid
+    residual over it is the mode's ringing (the same in both cases) to within its
+    correlation with the noise."""
+    u, clean, dt = mode_signals(1, 2 * math.pi * 15.0, 0.05, snr_db=None)
+    rng = np.random.default_rng(11)
+    noise = rng.normal(0.0, 0.01 * np.std(clean), clean.size)
+    quiet, noisy = (fit_local(u, clean + k * noise, dt) for k in (1.0, 10.0))
+    assert quiet.ringing_snr_db - noisy.ringing_snr_db == pytest.approx(20.0, abs=1.5)
+    scaled = fit_local(u, 1000.0 * (clean + 10.0 * noise), dt)
+    assert scaled.ringing_snr_db == pytest.approx(noisy.ringing_snr_db, abs=0.01)
+
+
+def test_interval_mean_acceleration_integrates_to_the_logged_velocities():
+    # qd(t) = t² (q̈ = 2t): the mean over [t_k, t_k+1] is 2 t_k + dt; the last sample repeats
+    # the one before (there is no next velocity).
+    dt = 0.002
+    t = dt * np.arange(7)
+    mean = interval_mean_acceleration(t**2, dt)
+    np.testing.assert_allclose(mean[:-1], 2.0 * t[:-1] + dt, rtol=1e-9)
+    assert mean[-1] == mean[-2]
+    np.testing.assert_allclose(np.cumsum(mean[:-1]) * dt, t[1:] ** 2, rtol=1e-9)
+
+
 def test_a_clear_mode_is_not_reported_as_no_ringing():
     u, y, dt = mode_signals(1, 2 * math.pi * 15.0, 0.05, snr_db=20.0)
     fit = fit_local(u, y, dt)
@@ -212,7 +245,9 @@ def test_the_damping_error_has_an_absolute_floor():
 def test_a_mode_above_the_band_is_flagged_at_its_edge():
     u, y, dt = mode_signals(6, 2 * math.pi * 60.0, 0.05, snr_db=30.0)
     fit = fit_local(u, y, dt, options=FitOptions(f_max_hz=40.0))
-    assert reasons_of(fit, "frequency 40.00 Hz at the edge of the searched band"), fit.reasons
+    assert reasons_of(fit, "frequency 40.00 Hz at the edge of the searched band 1.00-40.00 Hz"), (
+        fit.reasons
+    )
 
 
 def test_an_overdamped_response_is_flagged():
