@@ -462,3 +462,29 @@ def test_peak_train_ends_at_the_first_wide_gap():
     np.testing.assert_array_equal(_regular_train(np.append(train, 40 + 26)), train)
     np.testing.assert_array_equal(_regular_train(np.append(train, 40 + 24)), [*train, 64])
     np.testing.assert_array_equal(_regular_train(np.array([3, 90])), [3, 90])  # too few to judge
+
+
+def test_peak_refinement_averages_the_noise_of_closely_spaced_peaks():
+    """A 30 Hz mode sampled at 500 Hz has magnitude peaks ~8 samples apart, so each peak is
+    refined over a 5-sample window (cubic least squares) rather than the 3-point parabola.
+    With white noise of 1 % of the amplitude, the RMS error of the log-decay amplitude
+    against the method applied to the continuous signal (``log_decay_reference``) over 100
+    noise realisations and random phases is 2.3 % (measured); the 3-point parabola on the
+    same data gives 2.9 %. The bound 2.6 % is about 2 standard errors of the RMS estimate
+    (±7 % relative for 100 realisations) from either."""
+    rng = np.random.default_rng(30)
+    t = np.arange(0.0, 3.0, DT_S)
+    wn, zeta, amplitude = 2.0 * math.pi * 30.0, 0.2, 2.0
+    wd = wn * math.sqrt(1.0 - zeta**2)
+    errors = []
+    for _ in range(100):
+        phase = rng.uniform(0.0, 2.0 * math.pi)
+
+        def free(tau, phase=phase):
+            return amplitude * np.exp(-zeta * wn * tau) * np.cos(wd * tau + phase)
+
+        accel = decay_signal(free, T_STOP_S, t) + rng.normal(0.0, 0.01 * amplitude, t.size)
+        rv = residual_vibration(t, accel, T_STOP_S, refine=False)
+        errors.append(rv.log_decay_amplitude / log_decay_reference(free) - 1.0)
+    rms = math.sqrt(np.mean(np.square(errors)))
+    assert rms < 0.026, rms

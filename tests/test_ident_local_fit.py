@@ -15,7 +15,14 @@ import pytest
 from scipy import signal
 
 from ident_reference import mode_signals
-from tvist.ident.local_fit import NO_RINGING, FitOptions, LocalFit, fit_local, saturated_samples
+from tvist.ident.local_fit import (
+    NO_RINGING,
+    FitOptions,
+    LocalFit,
+    fit_local,
+    interval_mean_acceleration,
+    saturated_samples,
+)
 from tvist.ident.zoh import zoh_responses
 
 
@@ -30,6 +37,25 @@ def test_zoh_responses_match_a_fine_grid_simulation(delay_s):
     den = [1, 2 * zeta * wn, wn**2]
     t_fine = dt / fine * np.arange(u.size * fine)
     # u(t - delay) with u[k] on [t_k, t_k+1); zero before the first sample
+    index = np.floor((t_fine - delay_s) / dt + 1e-9).astype(int)
+    u_fine = np.where(index < 0, u[0], u[np.clip(index, 0, u.size - 1)])
+    ours = zoh_responses(wn, zeta, u, dt, delay_s)
+    for col, num in enumerate(([1], [1, 0])):
+        ref = signal.lsim(signal.lti(num, den), u_fine, t_fine, interp=False)[1][::fine]
+        np.testing.assert_allclose(ours[:, col], ref, atol=1e-9 * np.max(np.abs(ref)))
+
+
+@pytest.mark.parametrize("zeta", [1.0, 1.0 - 3e-9, 1.0 + 3e-9, 1.0 - 3e-5, 1.0 + 3e-3])
+def test_zoh_responses_at_and_near_critical_damping(zeta):
+    """Where the two eigenvalues merge (|ζ² - 1| < 1e-8: the augmented matrix exponential) and
+    just outside it (nearly equal eigenvalues in Sylvester's formula), against the same
+    fine-grid lsim reference."""
+    dt, fine, delay_s = 0.002, 100, 0.0013
+    rng = np.random.default_rng(5)
+    u = np.repeat(rng.normal(0.0, 1.0, 40), 5)
+    wn = 2 * math.pi * 9.0
+    den = [1, 2 * zeta * wn, wn**2]
+    t_fine = dt / fine * np.arange(u.size * fine)
     index = np.floor((t_fine - delay_s) / dt + 1e-9).astype(int)
     u_fine = np.where(index < 0, u[0], u[np.clip(index, 0, u.size - 1)])
     ours = zoh_responses(wn, zeta, u, dt, delay_s)
@@ -77,6 +103,58 @@ def test_no_excitation_is_an_error():
         fit_local(np.zeros(4000), rng.normal(size=4000), 0.002)
 
 
+@pytest.mark.parametrize("dt_s", [0.0, -0.002, math.nan, math.inf])
+def test_the_sampling_period_must_be_positive_and_finite(dt_s):
+    u, y, _ = mode_signals(0, 2 * math.pi * 10.0, 0.1, snr_db=None, duration_s=2.0)
+    with pytest.raises(ValueError, match="dt_s must be finite and > 0"):
+        fit_local(u, y, dt_s)
+
+
+def test_fit_percent_is_the_nrmse_about_the_mean_of_the_response():
+    """A constant offset in ψ (the standstill gravity estimate is never exact) changes neither
+    the fit nor its NRMSE, which compares the residual with the response's spread about its
+    mean. Reference: the textbook NRMSE with the added white noise as the residual."""
+    u, clean, dt = mode_signals(4, 2 * math.pi * 15.0, 0.05, snr_db=None)
+    rng = np.random.default_rng(4)
+    noise = rng.normal(0.0, 0.2 * np.std(clean), clean.size)
+    for offset in (0.0, 5.0 * np.std(clean)):
+        y = clean + noise + offset
+        fit = fit_local(u, y, dt)
+        expected = 100.0 * (1.0 - np.linalg.norm(noise) / np.linalg.norm(y - y.mean()))
+        # The fit absorbs a share ~6/n of the noise energy (6 parameters, 4000 samples) and the
+        # noise's own mean and correlation with ψ: well under 0.5 percentage points of ~80 %.
+        assert fit.fit_percent == pytest.approx(expected, abs=0.5), offset
+        assert fit.offset == pytest.approx(offset, abs=0.05 * np.std(clean))
+
+
+def lightly_damped_fit(field_values: dict) -> LocalFit:
+    base = dict(
+        wn_rad_s=2 * math.pi * 10.0,
+        zeta=0.05,
+        k_a=0.0,
+        k_b=1.0,
+        k_c=2 * 0.05 * 2 * math.pi * 10.0,
+        k_d=(2 * math.pi * 10.0) ** 2,
+        offset=0.0,
+        delay_s=0.0,
+        fit_percent=90.0,
+        wn_se_rad_s=0.1,
+        zeta_se=0.001,
+        n_samples=4000,
+        n_used=4000,
+        low_confidence=False,
+    )
+    return LocalFit(**{**base, **field_values})
+
+
+def test_damped_natural_frequency():
+    # ζ = 0.6: √(1 - ζ²) = 0.8 exactly; from ζ = 1 on there is no oscillation (NaN).
+    assert lightly_damped_fit({"zeta": 0.6}).fd_hz == pytest.approx(8.0, rel=1e-12)
+    assert lightly_damped_fit({"zeta": 0.0}).fd_hz == pytest.approx(10.0, rel=1e-12)
+    for zeta in (1.0, 1.2, 1.9):
+        assert math.isnan(lightly_damped_fit({"zeta": zeta}).fd_hz), zeta
+
+
 # One case per low-confidence reason; each asserts its own reason (others may come along).
 
 
@@ -91,6 +169,32 @@ def test_a_rigid_arm_is_reported_as_no_ringing():
     fit = fit_local(u, y, dt)
     assert fit.low_confidence and fit.no_ringing
     assert reasons_of(fit, NO_RINGING)
+
+
+def test_ringing_snr_follows_the_noise_level_and_ignores_the_units():
+    """The ringing SNR is an energy ratio: 20 dB more white noise on the same response lowers
+    it by 20 dB, and a change of units (ψ x 1000) leaves it unchanged. Tolerance 1.5 dB: the
+    residual is the noise less the small share the fit absorbs, and the excess of the rigid
+    residual over it is the mode's ringing (the same in both cases) to within its
+    correlation with the noise."""
+    u, clean, dt = mode_signals(1, 2 * math.pi * 15.0, 0.05, snr_db=None)
+    rng = np.random.default_rng(11)
+    noise = rng.normal(0.0, 0.01 * np.std(clean), clean.size)
+    quiet, noisy = (fit_local(u, clean + k * noise, dt) for k in (1.0, 10.0))
+    assert quiet.ringing_snr_db - noisy.ringing_snr_db == pytest.approx(20.0, abs=1.5)
+    scaled = fit_local(u, 1000.0 * (clean + 10.0 * noise), dt)
+    assert scaled.ringing_snr_db == pytest.approx(noisy.ringing_snr_db, abs=0.01)
+
+
+def test_interval_mean_acceleration_integrates_to_the_logged_velocities():
+    # qd(t) = t² (q̈ = 2t): the mean over [t_k, t_k+1] is 2 t_k + dt; the last sample repeats
+    # the one before (there is no next velocity).
+    dt = 0.002
+    t = dt * np.arange(7)
+    mean = interval_mean_acceleration(t**2, dt)
+    np.testing.assert_allclose(mean[:-1], 2.0 * t[:-1] + dt, rtol=1e-9)
+    assert mean[-1] == mean[-2]
+    np.testing.assert_allclose(np.cumsum(mean[:-1]) * dt, t[1:] ** 2, rtol=1e-9)
 
 
 def test_a_clear_mode_is_not_reported_as_no_ringing():
@@ -122,10 +226,28 @@ def test_an_ill_determined_damping_is_flagged():
     assert 0.1 * fit.zeta < fit.zeta_se < 0.5
 
 
+def test_the_damping_error_has_an_absolute_floor():
+    """A lightly damped mode is flagged for its damping only when the standard error of ζ
+    exceeds both 10 % of ζ and 0.005 (FitOptions.max_zeta_rel_se): 2 s of a 15 Hz mode with
+    ζ = 0.02 at 0 dB and at -6 dB SNR, standard errors 0.0029 and 0.0056 (measured), both
+    above 10 % of ζ."""
+    u, y_0db, dt = mode_signals(1, 2 * math.pi * 15.0, 0.02, snr_db=0.0, duration_s=2.0)
+    _, y_6db, _ = mode_signals(1, 2 * math.pi * 15.0, 0.02, snr_db=-6.0, duration_s=2.0)
+    below, above = fit_local(u, y_0db, dt), fit_local(u, y_6db, dt)
+    for fit in (below, above):
+        assert fit.zeta_se > 0.1 * fit.zeta  # the relative limit alone would flag both
+    # the cases sit on either side of the floor, and not near a relative threshold's scale
+    assert 0.002 < below.zeta_se < 0.004 and 0.0052 < above.zeta_se < 0.007
+    assert not reasons_of(below, "uncertain damping"), below.reasons
+    assert reasons_of(above, "uncertain damping"), above.reasons
+
+
 def test_a_mode_above_the_band_is_flagged_at_its_edge():
     u, y, dt = mode_signals(6, 2 * math.pi * 60.0, 0.05, snr_db=30.0)
     fit = fit_local(u, y, dt, options=FitOptions(f_max_hz=40.0))
-    assert reasons_of(fit, "frequency 40.00 Hz at the edge of the searched band"), fit.reasons
+    assert reasons_of(fit, "frequency 40.00 Hz at the edge of the searched band 1.00-40.00 Hz"), (
+        fit.reasons
+    )
 
 
 def test_an_overdamped_response_is_flagged():
