@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 
 import tvist
+from tvist.demo.ztdis_benchmark import format_table, plot_benchmark, run_benchmark
 from tvist.trajectory import min_jerk
-from tvist.ztdis_benchmark import format_table, plot_benchmark, run_benchmark
 
 wn_rad_s, zeta, dt_s = 2.0 * np.pi * 2.55, 0.04, 0.002
 move = min_jerk([0.0], [0.3], duration_s=0.734, dt_s=dt_s).q  # (n_samples, 1), rest to rest

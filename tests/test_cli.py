@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import tvist
-from tvist.cli import _demo_row_method, build_parser
+from tvist.cli import build_parser
+from tvist.cli.demo import demo_row_method
 from tvist.demo import default_methods
 
 
@@ -21,10 +22,10 @@ def test_every_command_parses_its_help():
 
 
 def test_demo_rows_belong_to_the_methods_a_user_can_choose():
-    kinds = {m.key: _demo_row_method(m.key) for m in default_methods()}
+    kinds = {m.key: demo_row_method(m.key) for m in default_methods()}
     assert kinds["unshaped"] == "unshaped"
     assert {kinds[k] for k in kinds if k != "unshaped"} == {"tvist", "ztdis", "mztdis"}
-    assert _demo_row_method("fd-tvist-identified-map") == "tvist"
+    assert demo_row_method("fd-tvist-identified-map") == "tvist"
     with pytest.raises(SystemExit):
         build_parser().parse_args(["demo", "--method", "bogus"])
 
@@ -56,7 +57,7 @@ def test_zero_delay_command_prints_the_benchmark_of_the_library(tmp_path, capsys
     """``tvist zero-delay``: the printed table is ``format_table(run_benchmark(...))`` and the
     plot is written; the benchmark's own numbers are checked against closed forms."""
     from tvist.cli import main
-    from tvist.ztdis_benchmark import format_table, run_benchmark
+    from tvist.demo.ztdis_benchmark import format_table, run_benchmark
 
     out = tmp_path / "zero_delay.png"
     assert main(["zero-delay", "--reference", "min_jerk", "--plot", str(out)]) == 0
@@ -87,7 +88,7 @@ def test_shape_with_the_paper_map_and_zero_delay_equals_zero_delay(move_file, tm
     the end pose's inertias."""
     from map_reference import PAPER_MODES, modes_reference
     from tvist.cli import main
-    from tvist.shape_command import read_joint_csv
+    from tvist.cli.shape import read_joint_csv
 
     path, q = move_file
     out = tmp_path / "zd.csv"
@@ -116,7 +117,7 @@ def test_shape_with_a_map_file_equals_the_map_driven_shaper(move_file, tmp_path,
     """``tvist shape --map FILE`` = ``TvShaper(MapDynamics(robot, map))`` on the input padded
     with its last sample for the end pose's ZV delay."""
     from tvist.cli import main
-    from tvist.shape_command import read_joint_csv
+    from tvist.cli.shape import read_joint_csv
 
     path, q = move_file
     map_path = tmp_path / "map.json"

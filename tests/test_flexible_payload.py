@@ -133,7 +133,8 @@ def test_figures_leave_the_global_matplotlib_backend_alone(tmp_path):
     code = (
         "import sys, numpy as np, matplotlib\n"
         "matplotlib.use('svg')\n"
-        "from tvist import plots, DynamicMap\n"
+        "from tvist import DynamicMap\n"
+        "from tvist.demo import plots\n"
         "from tvist.ident.plots import plot_prv_sensitivity\n"
         "t = np.linspace(0, 1, 50)\n"
         f"plots.plot_velocity_references(t, {{'a': np.sin(t)}}, 0.5, r'{tmp_path}/v.png',\n"

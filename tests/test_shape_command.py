@@ -9,7 +9,7 @@ from scipy.interpolate import make_interp_spline
 
 import tvist
 from tvist.cli import main
-from tvist.shape_command import parse_modes, read_joint_csv, read_trajectory_csv
+from tvist.cli.shape import parse_modes, read_joint_csv, read_trajectory_csv
 from tvist.trajectory import PAPER_POSES, double_s
 from tvist.trajectory.joint_names import UR_JOINT_NAMES
 

@@ -383,7 +383,7 @@ def _table(exp: PayloadExperiment) -> list[str]:
 
 def write_flexible_payload(exp: PayloadExperiment, out_dir: str | Path) -> dict[str, Path]:
     """Write ``results.json``, ``report.md`` and the figures to ``out_dir``."""
-    from tvist import plots
+    from tvist.demo import plots
     from tvist.demo.report import _json_safe
 
     out = Path(out_dir)

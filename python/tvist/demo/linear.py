@@ -89,7 +89,7 @@ def run_linear_demo(
             f"{r.reduction_percent:>11.1f}%{r.peak_jerk_rad_s3:>12.1f}"
         )
     (out / "results.json").write_text(json.dumps([asdict(r) for r in table], indent=2))
-    from tvist.plots import plot_traces
+    from tvist.demo.plots import plot_traces
 
     plot_traces(
         traj.t_s,

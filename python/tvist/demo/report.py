@@ -133,7 +133,7 @@ def print_table(result: DemoResult, console: Any = None) -> None:
 
 def make_figures(result: DemoResult, out: Path) -> dict[str, list[Path]]:
     """Write the figures; returns ``{"acceleration": [...], "spectra": [...], "modes": [...]}``."""
-    from tvist import plots
+    from tvist.demo import plots
 
     figures: dict[str, list[Path]] = {"acceleration": [], "spectra": [], "modes": []}
     panels = []

@@ -17,7 +17,7 @@ import importlib
 from typing import TYPE_CHECKING
 
 #: Public name -> the module that defines it. Each module loads on first access, so
-#: ``import tvist.ident.cli`` (every ``tvist`` command) does not pay for scipy.stats etc.
+#: ``import tvist.cli.ident`` (every ``tvist`` command) does not pay for scipy.stats etc.
 _EXPORTS: dict[str, str] = {
     "BangCoastBangMove": "tvist.ident.excitation",
     "CampaignPose": "tvist.ident.campaign",

@@ -2,6 +2,6 @@
 
 import sys
 
-from tvist.urserver.cli import main
+from tvist.cli.twin_server import main
 
 sys.exit(main())

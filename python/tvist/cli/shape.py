@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tvist.cli_args import add_robot_and_payload
+from tvist.cli.args import add_robot_and_payload
 from tvist.trajectory.joint_names import joint_order
 from tvist.trajectory.shaping import METHODS, shape_samples
 

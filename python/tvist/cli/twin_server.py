@@ -50,7 +50,7 @@ def add_twin_server_command(sub: argparse._SubParsersAction) -> None:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The twin server's options (shared by ``tvist twin-server`` and
     ``python -m tvist.urserver``)."""
-    from tvist.cli_args import add_robot_and_payload
+    from tvist.cli.args import add_robot_and_payload
 
     add_robot_and_payload(p, payload_help="mounted payload")
     p.add_argument("--host", default="127.0.0.1", help="address to listen on")

@@ -15,7 +15,7 @@ def _error(command: str, message: str) -> int:
 def _shaper(args: argparse.Namespace, n_dof: int):
     """The TvShaper of ``--modes`` / ``--map`` / ``--paper-map``, or None for ``--unshaped``."""
     import tvist
-    from tvist.shape_command import parse_modes
+    from tvist.cli.shape import parse_modes
 
     if args.unshaped:
         return None
@@ -36,8 +36,8 @@ def _shaper(args: argparse.Namespace, n_dof: int):
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    from tvist.cli.shape import read_joint_csv
     from tvist.live import residual_vibration, run_shaped_move
-    from tvist.shape_command import read_joint_csv
 
     if not (args.unshaped or args.modes or args.map or args.paper_map):
         return _error("run", "give the modes: --map FILE, --paper-map or --modes (or --unshaped)")
@@ -99,7 +99,7 @@ def _cmd_record(args: argparse.Namespace) -> int:
 
 
 def _add_payload(p: argparse.ArgumentParser) -> None:
-    from tvist.cli_args import add_robot_and_payload
+    from tvist.cli.args import add_robot_and_payload
 
     add_robot_and_payload(p)
 

@@ -29,7 +29,7 @@ def _error(command: str, message: str) -> int:
 
 
 def _add_payload_args(p: argparse.ArgumentParser) -> None:
-    from tvist.cli_args import add_robot_and_payload
+    from tvist.cli.args import add_robot_and_payload
 
     add_robot_and_payload(p)
 

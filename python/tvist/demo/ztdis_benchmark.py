@@ -22,7 +22,6 @@ control rate), and the number of velocity peaks.
 
 from __future__ import annotations
 
-import argparse
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -38,7 +37,6 @@ __all__ = [
     "MethodMetrics",
     "count_velocity_peaks",
     "format_table",
-    "main",
     "plot_benchmark",
     "reference_move",
     "run_benchmark",
@@ -306,7 +304,7 @@ def plot_benchmark(benches: list[Benchmark], path: str | Path) -> Path:
 
     Like the paper's Fig. 13, with the unshaped and conventionally shaped moves added.
     """
-    from tvist.plots import new_figure
+    from tvist.demo.plots import new_figure
 
     fig = new_figure(figsize=(6 * len(benches), 6), layout="tight")
     axes = fig.subplots(2, len(benches), sharex=True, squeeze=False)
@@ -332,49 +330,3 @@ def plot_benchmark(benches: list[Benchmark], path: str | Path) -> Path:
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=120)
     return out
-
-
-def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Options of the benchmark command (shared by ``tvist zero-delay`` and ``main``)."""
-    p.add_argument(
-        "--reference",
-        nargs="+",
-        default=["min_jerk", "trapezoid"],
-        choices=["min_jerk", "trapezoid"],
-        help="reference move(s) (default: both)",
-    )
-    p.add_argument("--dt", type=float, default=0.002, help="control period, s (default 0.002)")
-    p.add_argument(
-        "--rest-s",
-        type=float,
-        nargs=2,
-        default=(0.0, 0.0),
-        metavar=("BEFORE", "AFTER"),
-        help="pad the move with rest before and after it, s (zero-delay shaping compresses "
-        "only the move; default 0 0)",
-    )
-    p.add_argument("--plot", default=None, help="write the Fig. 13-style plot to this PNG path")
-
-
-def run_from_args(args: argparse.Namespace) -> int:
-    """Run the benchmark as described by parsed :func:`add_arguments` options; print tables."""
-    benches = [
-        run_benchmark(ref, dt_s=args.dt, rest_s=tuple(args.rest_s)) for ref in args.reference
-    ]
-    for bench in benches:
-        print(format_table(bench))
-        print()
-    if args.plot:
-        print(f"plot written to {plot_benchmark(benches, args.plot)}")
-    return 0
-
-
-def main(argv: list[str] | None = None) -> int:
-    """``python -m tvist.ztdis_benchmark [--reference ...] [--dt DT] [--plot PATH]``."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    add_arguments(parser)
-    return run_from_args(parser.parse_args(argv))
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -1,0 +1,98 @@
+"""The ``tvist`` command line: one module per group of commands (``demo``, ``ident``,
+``shape``, ``live``, ``twin_server``; shared options in ``args``), each registering its
+subparsers through an ``add_*_command`` listed in ``COMMANDS``. Heavy imports happen inside
+the command that needs them. :func:`main` turns user errors into one line and exit code 2."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from tvist.cli.demo import add_demo_command, add_zero_delay_command
+from tvist.cli.ident import (
+    add_campaign_command,
+    add_fit_map_command,
+    add_identify_command,
+    add_sensitivity_command,
+)
+from tvist.cli.live import add_record_command, add_run_command
+from tvist.cli.shape import add_shape_command
+from tvist.cli.twin_server import add_twin_server_command
+
+#: (name, adder) pairs; an adder registers one subparser and sets ``func``.
+COMMANDS = [("demo", add_demo_command), ("zero-delay", add_zero_delay_command)]
+COMMANDS += [
+    ("campaign", add_campaign_command),
+    ("identify", add_identify_command),
+    ("fit-map", add_fit_map_command),
+    ("sensitivity", add_sensitivity_command),
+    ("shape", add_shape_command),
+]
+COMMANDS += [
+    ("twin-server", add_twin_server_command),
+    ("run", add_run_command),
+    ("record", add_record_command),
+]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="tvist",
+        description="Vibration suppression for robot arms: shaping, identification, the "
+        "simulated twin and reports.",
+    )
+    parser.add_argument("--version", action="version", version=f"tvist {_version()}")
+    parser.add_argument(
+        "--debug",
+        action="store_true",
+        help="show the full traceback of an error (accepted anywhere on the command line)",
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+    for _, add in COMMANDS:
+        add(sub)
+    return parser
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("tvist")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+#: Exceptions that mean "the input or the environment is wrong", not "tvist is broken": the
+#: library raises ``ValueError`` (and its subclasses) for bad input and ``OSError`` for files
+#: and connections. They are reported in one line; anything else keeps its traceback.
+USER_ERRORS = (ValueError, OSError)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run one command; user errors print ``tvist <command>: error: ...`` and return 2."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv
+    args = build_parser().parse_args([a for a in argv if a != "--debug"])
+    where = f"tvist {args.command}"
+    try:
+        return int(args.func(args) or 0)
+    except KeyboardInterrupt:
+        if debug:
+            raise
+        print(f"{where}: interrupted", file=sys.stderr)
+        return 130
+    except USER_ERRORS as exc:
+        if debug:
+            raise
+        print(f"{where}: error: {_one_line(exc)}", file=sys.stderr)
+        return 2
+
+
+def _one_line(exc: BaseException) -> str:
+    """The exception's message on one line (file errors keep their path)."""
+    if isinstance(exc, OSError) and exc.strerror and exc.filename:
+        text = f"{exc.strerror}: {exc.filename}"
+    else:
+        text = " ".join(str(exc).split()) or type(exc).__name__
+    return f"{text} (--debug shows the traceback)"
+

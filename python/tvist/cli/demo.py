@@ -1,0 +1,153 @@
+"""``tvist demo`` and ``tvist zero-delay``: the papers' experiments and the zero-delay benchmark.
+
+Each ``add_*_command(sub)`` registers one subparser and sets ``func``; heavy imports happen
+inside the command.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from tvist.cli.shape import METHODS as SHAPING_METHODS
+
+__all__ = ["add_demo_command", "add_zero_delay_command", "demo_row_method"]
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    if args.experiment == "flexible-payload":
+        from tvist.demo.flexible_payload import run_from_args
+
+        return run_from_args(args)
+    if args.linear:
+        from tvist.demo.linear import run_linear_demo
+
+        run_linear_demo(out_dir=args.out or "out/demo-linear", quick=args.quick)
+        return 0
+    from tvist import DynamicMap
+    from tvist.demo import default_methods, fd_tvist_map, run_demo
+
+    chosen = set(args.method or SHAPING_METHODS)
+    methods = default_methods()
+    for i, path in enumerate(args.map or []):
+        methods.append(
+            fd_tvist_map(f"fd-tvist-map-{i + 1}", f"FD-TVIST ZV, map {path}", DynamicMap.load(path))
+        )
+    methods = [m for m in methods if demo_row_method(m.key) in chosen | {"unshaped"}]
+    run_demo(
+        out_dir=args.out or "out/demo",
+        quick=args.quick,
+        methods=methods,
+        identify=args.identify and "tvist" in chosen,
+    )
+    return 0
+
+
+def demo_row_method(key: str) -> str:
+    """Which ``--method`` a demo row belongs to (``"unshaped"`` for the baseline)."""
+    if key.startswith(("fd-tvist", "fixed-")):  # fixed shapers: FD-TVIST's baselines
+        return "tvist"
+    return {"zero-delay-ztdis": "ztdis", "zero-delay-modified": "mztdis"}.get(key, "unshaped")
+
+
+def add_demo_command(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "demo", help="the paper's UR5e experiment on the simulated arm: table, figures, report"
+    )
+    p.add_argument("--out", default=None, help="output folder (default out/demo)")
+    p.add_argument("--quick", action="store_true", help="shortened run (used by the tests)")
+    p.add_argument(
+        "--map",
+        action="append",
+        metavar="FILE",
+        help="add an FD-TVIST row driven by this dynamic map file (repeatable)",
+    )
+    p.add_argument(
+        "--method",
+        action="append",
+        choices=SHAPING_METHODS,
+        help="shaping method rows to run (repeatable; default all): tvist = FD-TVIST, "
+        "ztdis = zero-time-delay IS, mztdis = modified ZTDIS",
+    )
+    p.add_argument(
+        "--identify",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="identify a map on the twin first (reduced mapping campaign, 20-60 s, cached in "
+        "the output folder) and add its row (default); --no-identify skips it",
+    )
+    p.add_argument(
+        "--linear",
+        action="store_true",
+        help="run the small two-mode linear-plant example instead (default out/demo-linear)",
+    )
+    p.add_argument(
+        "--experiment",
+        choices=("ur5e-motions", "flexible-payload"),
+        default="ur5e-motions",
+        help="ur5e-motions: the FD-TVIST paper's three test motions (default); "
+        "flexible-payload: the zero-delay paper's experiment, a flexible payload on the twin "
+        "moved rapidly along X (default out/demo-payload)",
+    )
+    p.add_argument(
+        "--payload-hz",
+        type=float,
+        default=2.55,
+        help="flexible-payload: natural frequency of the payload mount, Hz (default 2.55)",
+    )
+    p.add_argument(
+        "--payload-zeta",
+        type=float,
+        default=0.04,
+        help="flexible-payload: damping ratio of the payload mount (default 0.04)",
+    )
+    p.set_defaults(func=_cmd_demo)
+
+
+def _cmd_zero_delay(args: argparse.Namespace) -> int:
+    return _run_zero_delay(args)
+
+
+def add_zero_delay_command(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "zero-delay",
+        help="benchmark unshaped / IS / ZTDIS / modified ZTDIS on the 2.55 Hz payload",
+    )
+    _zero_delay_arguments(p)
+    p.set_defaults(func=_cmd_zero_delay)
+
+
+def _zero_delay_arguments(p: argparse.ArgumentParser) -> None:
+    """Options of ``tvist zero-delay``."""
+    p.add_argument(
+        "--reference",
+        nargs="+",
+        default=["min_jerk", "trapezoid"],
+        choices=["min_jerk", "trapezoid"],
+        help="reference move(s) (default: both)",
+    )
+    p.add_argument("--dt", type=float, default=0.002, help="control period, s (default 0.002)")
+    p.add_argument(
+        "--rest-s",
+        type=float,
+        nargs=2,
+        default=(0.0, 0.0),
+        metavar=("BEFORE", "AFTER"),
+        help="pad the move with rest before and after it, s (zero-delay shaping compresses "
+        "only the move; default 0 0)",
+    )
+    p.add_argument("--plot", default=None, help="write the Fig. 13-style plot to this PNG path")
+
+
+def _run_zero_delay(args: argparse.Namespace) -> int:
+    """Run the benchmark as described by the parsed options; print tables."""
+    from tvist.demo.ztdis_benchmark import format_table, plot_benchmark, run_benchmark
+
+    benches = [
+        run_benchmark(ref, dt_s=args.dt, rest_s=tuple(args.rest_s)) for ref in args.reference
+    ]
+    for bench in benches:
+        print(format_table(bench))
+        print()
+    if args.plot:
+        print(f"plot written to {plot_benchmark(benches, args.plot)}")
+    return 0
