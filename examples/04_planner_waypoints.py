@@ -58,7 +58,7 @@ planned = shape_waypoints(times_s, waypoints, 0.002, provider).planned
 line = pose0[:3, 3] + np.outer([0.0, 0.3], [0.0, 1.0, 0.0])
 sag, _ = point_to_polyline_distance(robot.flange_pose_many(planned)[:, :3, 3], line)
 print(f"planned: the resampled waypoints stay within {1e3 * sag.max():.3f} mm of the line")
-for method in ("tvist", "mztdis"):
+for method in ("tvist", "modified"):
     out = shape_waypoints(times_s, waypoints, 0.002, provider, method=method)
     dev = path_deviation(robot, out.planned, out.q)
     print(

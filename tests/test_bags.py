@@ -137,11 +137,11 @@ def test_zero_delay_method_in_a_bag_ends_at_the_last_waypoint(tmp_path):
     src, dst = tmp_path / "in", tmp_path / "out"
     write_bag(src, StoragePlugin.MCAP)
     args = ["shape", "--bag", str(src), "--topic", "/joint_trajectory", "--out", str(dst)]
-    assert main([*args, "--modes", MODES_ARG, "--method", "mztdis"]) == 0
+    assert main([*args, "--modes", MODES_ARG, "--method", "modified"]) == 0
     shaped = [TS.deserialize_cdr(raw, JT) for topic, _, raw in read_bag(dst) if topic != "/note"]
     for msg, scale in zip(shaped, (1.0, 0.5), strict=True):
         t_wp, q, v = plan(scale)
-        ref = shape_waypoints(t_wp, q, DT, MODES, velocities=v, method="mztdis")
+        ref = shape_waypoints(t_wp, q, DT, MODES, velocities=v, method="modified")
         positions = np.array([p.positions for p in msg.points])
         np.testing.assert_allclose(positions, ref.q[:, MSG_ORDER], rtol=0, atol=1e-8)
         last = msg.points[-1].time_from_start

@@ -24,7 +24,7 @@ def test_every_command_parses_its_help():
 def test_demo_rows_belong_to_the_methods_a_user_can_choose():
     kinds = {m.key: demo_row_method(m.key) for m in default_methods()}
     assert kinds["unshaped"] == "unshaped"
-    assert {kinds[k] for k in kinds if k != "unshaped"} == {"tvist", "ztdis", "mztdis"}
+    assert {kinds[k] for k in kinds if k != "unshaped"} == {"tvist", "ztdis", "modified"}
     assert demo_row_method("fd-tvist-identified-map") == "tvist"
     with pytest.raises(SystemExit):
         build_parser().parse_args(["demo", "--method", "bogus"])
@@ -81,7 +81,7 @@ def move_file(tmp_path):
     return path, np.loadtxt(path, delimiter=",", skiprows=1)
 
 
-@pytest.mark.parametrize("method", ["mztdis", "ztdis"])
+@pytest.mark.parametrize("method", ["modified", "ztdis"])
 def test_shape_with_the_paper_map_and_zero_delay_equals_zero_delay(move_file, tmp_path, method):
     """``tvist shape --paper-map --method (m)ztdis`` = ``zero_delay()`` with the modes of the
     end pose, and those modes are the paper map's equations (independent transcription) at
@@ -104,7 +104,7 @@ def test_shape_with_the_paper_map_and_zero_delay_equals_zero_delay(move_file, tm
         DT_S,
         end_modes,
         shaper="zv",
-        method="modified" if method == "mztdis" else "ztdis",
+        method=method,
         interp="linear",
     )
     # 9 decimals in the file; the map evaluations agree to ~1e-15.

@@ -68,7 +68,7 @@ def test_tvist_method_equals_the_shaper_and_ends_at_the_end_pose(move_csv, tmp_p
     assert 0.0 <= (shaped.shape[0] - q.shape[0]) * DT - delay <= 2 * DT
 
 
-@pytest.mark.parametrize(("method", "zd_method"), [("mztdis", "modified"), ("ztdis", "ztdis")])
+@pytest.mark.parametrize(("method", "zd_method"), [("modified", "modified"), ("ztdis", "ztdis")])
 def test_map_source_zero_delay_equals_zero_delay_with_the_end_pose_modes(
     move_csv, tmp_path, method, zd_method
 ):
@@ -184,7 +184,7 @@ def test_padded_move_file_uses_the_motion_only_rule(tmp_path, capsys):
     np.savetxt(path, q[:, None], fmt="%.12f")
     out = tmp_path / "zd.csv"
     args = ["shape", str(path), "--out", str(out), "--modes", "2.55:0.04", "--shaper", "zvd"]
-    assert main([*args, "--method", "mztdis"]) == 0
+    assert main([*args, "--method", "modified"]) == 0
     assert "alpha 0.6516" in capsys.readouterr().out
     stored = np.loadtxt(path)
     mode = [(2 * np.pi * 2.55, 0.04)]

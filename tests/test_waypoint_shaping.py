@@ -70,7 +70,7 @@ def test_any_dynamics_provider_map_and_callable():
     np.testing.assert_allclose(by_callable.q, by_map.q, rtol=0, atol=1e-12)
 
 
-@pytest.mark.parametrize(("method", "zd_method"), [("ztdis", "ztdis"), ("mztdis", "modified")])
+@pytest.mark.parametrize(("method", "zd_method"), [("ztdis", "ztdis"), ("modified", "modified")])
 def test_zero_delay_methods_end_at_the_planned_end(method, zd_method):
     t_wp, q, v = planner_waypoints()
     out = shape_waypoints(t_wp, q, DT, MODES, velocities=v, method=method)

@@ -225,7 +225,7 @@ def _check_shaper_fits(
     w_slow = min(w for w, _ in modes)
     hint = "use conventional shaping (tvist.TvShaper) or lengthen the move"
     if method == "ztdis" and delay_s < MAX_DELAY_TO_MOVE * move_s:
-        hint = "use method 'modified' (mztdis), conventional shaping or a longer move"
+        hint = "use method 'modified', conventional shaping or a longer move"
     raise ValueError(
         f"{method}: the motion of T = {move_s:.4g} s is too short for the shaper, which lasts "
         f"{delay_s:.4g} s (slowest mode {w_slow:.4g} rad/s = {w_slow / (2 * np.pi):.4g} Hz); "

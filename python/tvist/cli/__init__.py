@@ -95,4 +95,3 @@ def _one_line(exc: BaseException) -> str:
     else:
         text = " ".join(str(exc).split()) or type(exc).__name__
     return f"{text} (--debug shows the traceback)"
-

@@ -46,7 +46,7 @@ def demo_row_method(key: str) -> str:
     """Which ``--method`` a demo row belongs to (``"unshaped"`` for the baseline)."""
     if key.startswith(("fd-tvist", "fixed-")):  # fixed shapers: FD-TVIST's baselines
         return "tvist"
-    return {"zero-delay-ztdis": "ztdis", "zero-delay-modified": "mztdis"}.get(key, "unshaped")
+    return key if key in ("ztdis", "modified") else "unshaped"
 
 
 def add_demo_command(sub: argparse._SubParsersAction) -> None:
@@ -66,7 +66,7 @@ def add_demo_command(sub: argparse._SubParsersAction) -> None:
         action="append",
         choices=SHAPING_METHODS,
         help="shaping method rows to run (repeatable; default all): tvist = FD-TVIST, "
-        "ztdis = zero-time-delay IS, mztdis = modified ZTDIS",
+        "ztdis = zero-time-delay IS, modified = modified ZTDIS",
     )
     p.add_argument(
         "--identify",

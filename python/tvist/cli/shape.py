@@ -15,7 +15,7 @@ ROS 2 bag input (``--bag IN --topic T``, needs ``pip install tvist[ros]``): ever
 bag; other topics are copied unchanged (:func:`tvist.trajectory.bags.shape_bag`).
 
 Methods: ``tvist`` (multi-mode FD-TVIST: the output is longer by the shaper delay at the end
-pose), ``ztdis`` / ``mztdis`` (zero added delay, same length; rest padding is kept and only
+pose), ``ztdis`` / ``modified`` (zero added delay, same length; rest padding is kept and only
 the motion is compressed). Modes come from ``--modes`` (fixed, ``FREQ_HZ:ZETA,...``) or from
 a map (``--map FILE``, paper10 or modal, or ``--paper-map``) with the robot model (``--robot``,
 ``--payload-kg``, ``--payload-com X Y Z``). The largest distance of the shaped tool path from

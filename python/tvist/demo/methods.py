@@ -244,12 +244,12 @@ def default_methods() -> list[Method]:
         Method("fd-tvist-truth", "FD-TVIST ZV, true modes", _fd_tvist_truth),
         fd_tvist_map("fd-tvist-paper-map", "FD-TVIST ZV, paper map", DynamicMap.paper_ur5e()),
         zero_delay_row(
-            "zero-delay-modified",
+            "modified",
             "Modified ZTDIS ZV, end-pose modes",
             "modified",
             ZERO_DELAY_MOTIONS,
         ),
-        zero_delay_row("zero-delay-ztdis", "ZTDIS ZV, end-pose modes", "ztdis", ZERO_DELAY_MOTIONS),
+        zero_delay_row("ztdis", "ZTDIS ZV, end-pose modes", "ztdis", ZERO_DELAY_MOTIONS),
         *_fixed_rows(),
     ]
 

@@ -24,7 +24,7 @@ from tvist.trajectory.resample import resample
 __all__ = ["METHODS", "ShapedTrajectory", "modes_at", "shape_samples", "shape_waypoints"]
 
 #: Shaping methods: FD-TVIST, ZTDIS and modified ZTDIS (the ``tvist shape --method`` names).
-METHODS: tuple[str, ...] = ("tvist", "ztdis", "mztdis")
+METHODS: tuple[str, ...] = ("tvist", "ztdis", "modified")
 
 #: Samples the interpolation stencil of the delay line reads after the delayed time: an output
 #: sample depends on input samples up to this many after ``t − delay`` (linear 1, cubic 2).
@@ -48,7 +48,7 @@ class ShapedTrajectory:
     dt_s
         Sample period, s.
     method
-        ``"tvist"``, ``"ztdis"`` or ``"mztdis"``.
+        ``"tvist"``, ``"ztdis"`` or ``"modified"``.
     planned_end_s
         Time of the last waypoint, s.
     added_delay_s
@@ -149,7 +149,7 @@ def shape_samples(
         dt_s,
         end_modes,
         shaper=shaper,
-        method="ztdis" if method == "ztdis" else "modified",
+        method=method,
         interp="cubic" if interp == "cubic" else "linear",
     )
     return np.asarray(result.Q), 0.0, end_modes, result.alpha, {}
@@ -183,7 +183,7 @@ def shape_waypoints(
         ``max_delay_s``).
     method
         ``"tvist"`` (FD-TVIST: ends ``added_delay_s`` after the last waypoint), ``"ztdis"``
-        or ``"mztdis"`` (zero added delay: ends at the last waypoint; the waypoints must start
+        or ``"modified"`` (zero added delay: ends at the last waypoint; the waypoints must start
         and end at rest).
     shaper
         Registry shaper (:data:`tvist.SHAPERS`).
