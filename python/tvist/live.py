@@ -259,7 +259,7 @@ def run_shaped_move(
     dt_s: float = 0.002,
     lookahead_s: float = SERVO_LOOKAHEAD_S,
     gain: float = SERVO_GAIN,
-    tail_s: float = 2.0,
+    tail_s: float = 3.0,
     max_settle_s: float = 5.0,
 ) -> LiveRun:
     """Run the joint trajectory ``Q`` on the robot with ``servoJ``, shaped live.

@@ -131,7 +131,7 @@ def add_run_command(sub: argparse._SubParsersAction) -> None:
         "--gain", type=float, default=SERVO_GAIN, help=f"servoJ gain (default {SERVO_GAIN:g})"
     )
     p.add_argument(
-        "--tail", type=float, default=2.0, help="recording after the last command, s (default 2)"
+        "--tail", type=float, default=3.0, help="recording after the last command, s (default 3)"
     )
     p.set_defaults(func=_cmd_run)
 
