@@ -236,6 +236,10 @@ class LiveRun:
         Controller timestamps (s, the log's ``timestamp``) of the first and the last servoJ.
     n_commands
         servoJ commands sent (one per period).
+    n_skipped
+        Periods the servo loop woke too late for: their samples were stepped through the
+        shaper but never sent, so the robot's target jumped over them (0 on a loop that kept
+        up; a jump excites the arm's modes).
     reference_end_s
         Controller time at which the unshaped reference ended (s).
     final_q
@@ -246,6 +250,7 @@ class LiveRun:
     stream_start_s: float
     stream_end_s: float
     n_commands: int
+    n_skipped: int
     reference_end_s: float
     final_q: np.ndarray
 
@@ -298,9 +303,14 @@ def run_shaped_move(
         raise ValueError("Q must be a finite array (n_samples >= 2, n_dof)")
     rtde_control = _rtde_control()
     path = Path(log_path)
+    # Real-time from before ur_rtde starts its receive thread, which inherits the policy: at
+    # normal priority that thread could be kept off the CPU while the real-time servo loop
+    # waits for the state it holds (servoJ reads it), and the loop would miss ticks.
+    previous = _realtime_priority()
     try:
         control = rtde_control.RTDEControlInterface(robot_ip)
     except RuntimeError as exc:  # ur_rtde reports a failed connection as RuntimeError
+        _restore_priority(previous)
         raise ConnectionError(f"cannot take control of {robot_ip}: {exc}") from exc
     try:
         if not control.moveJ(list(q_ref[0]), APPROACH_SPEED_RAD_S, APPROACH_ACCEL_RAD_S2):
@@ -314,49 +324,49 @@ def run_shaped_move(
             final_q = np.array(recorder.latest["actual_q"])
     finally:
         safe_stop(control)
+        _restore_priority(previous)
     return LiveRun(path, *run, final_q)
 
 
 def _stream(control, recorder, q_ref, shaper, dt_s, lookahead_s, gain, max_settle_s):
-    """The servo loop; ``(start_s, end_s, n_commands, reference_end_s)`` (controller time).
+    """The servo loop; ``(start_s, end_s, n_commands, n_skipped, reference_end_s)`` (times in
+    controller time, s).
 
     The loop is clocked by the controller: it waits for each RTDE data package (one per
     controller tick), then sends the sample due at that package's timestamp, so every
     command reaches the controller early in the tick it is meant for. If the loop wakes late
-    it steps the shaper over the missed samples and sends the one due now: the move is never
-    stretched in time.
+    it steps the shaper over the missed samples (counted in ``n_skipped``) and sends the one
+    due now: the move is never stretched in time, but the reference jumps.
     """
     n = q_ref.shape[0]
     end = q_ref[-1]
     limit = n + int(np.ceil(max_settle_s / dt_s))
-    previous = _realtime_priority()
-    try:
-        count = recorder.wait_newer(recorder.n_samples)
-        start_s = float(recorder.latest["timestamp"])
-        k = -1  # last sample stepped through the shaper
-        sent = 0
-        while True:
-            now_s = float(recorder.latest["timestamp"])
-            due = max(k + 1, int(round((now_s - start_s) / dt_s)))
-            while k < due:
-                k += 1
-                row = q_ref[min(k, n - 1)]
-                # ur_rtde takes lists; TvShaper.step takes a float64 array.
-                q = row if shaper is None else shaper.step(row)
-            if not control.servoJ([float(v) for v in q], 0.0, 0.0, dt_s, lookahead_s, gain):
-                raise RuntimeError(f"the robot refused servoJ at period {k}")
-            sent += 1
-            if k >= n - 1 and float(np.max(np.abs(q - end))) <= SETTLED_TOL_RAD:
-                break
-            if k >= limit:
-                raise RuntimeError(
-                    f"the shaped reference has not settled {max_settle_s:g} s after the move's end"
-                )
-            count = recorder.wait_newer(count)
-    finally:
-        _restore_priority(previous)
+    count = recorder.wait_newer(recorder.n_samples)
+    start_s = float(recorder.latest["timestamp"])
+    k = -1  # last sample stepped through the shaper
+    sent = skipped = 0
+    while True:
+        now_s = float(recorder.latest["timestamp"])
+        due = max(k + 1, int(round((now_s - start_s) / dt_s)))
+        skipped += due - k - 1
+        while k < due:
+            k += 1
+            row = q_ref[min(k, n - 1)]
+            # ur_rtde takes lists; TvShaper.step takes a float64 array.
+            q = row if shaper is None else shaper.step(row)
+        if not control.servoJ([float(v) for v in q], 0.0, 0.0, dt_s, lookahead_s, gain):
+            raise RuntimeError(f"the robot refused servoJ at period {k}")
+        sent += 1
+        if k >= n - 1 and float(np.max(np.abs(q - end))) <= SETTLED_TOL_RAD:
+            break
+        if k >= limit:
+            raise RuntimeError(
+                f"the shaped reference has not settled {max_settle_s:g} s after the move's end"
+            )
+        count = recorder.wait_newer(count)
     reference_end_s = start_s + (n - 1) * dt_s
-    return start_s, float(recorder.latest["timestamp"]), sent, reference_end_s
+    end_s = float(recorder.latest["timestamp"])
+    return start_s, end_s, sent, skipped, reference_end_s
 
 
 def _realtime_priority():

@@ -70,6 +70,13 @@ def _cmd_run(args: argparse.Namespace) -> int:
         f"sent {result.n_commands} servoJ commands over "
         f"{result.stream_end_s - result.stream_start_s:.3f} s; log {result.log_path}"
     )
+    if result.n_skipped:
+        print(
+            f"tvist run: warning: the servo loop woke too late for {result.n_skipped} periods and "
+            "the target jumped over their samples (run on a less loaded machine, with "
+            "real-time priority: root or CAP_SYS_NICE)",
+            file=sys.stderr,
+        )
     if args.tail >= 1.2:
         rms = residual_vibration(result.log_path)
         print(f"residual vibration (accelerometer RMS, 1 s after the move): {rms:.2e} m/s²")

@@ -35,10 +35,14 @@ MAX_FREQUENCY_HZ = 500.0
 #: FIFO priority of the tick thread where the OS allows it (Linux, privileged); the RTDE
 #: readers run just below it.
 TICK_PRIORITY = 20
-#: If the tick thread falls this far behind the wall clock (s), it does not catch up: the
-#: simulated time slips instead of running a burst of ticks (a burst would hand a streaming
-#: client several ticks without a new command).
-MAX_LAG_S = 0.004
+#: Time a client has from a tick's output package to the next tick's read of its registers
+#: (s), at least. A real controller's tick is never late; this one, in Python on a shared
+#: machine, sometimes is, and starting the next tick on the wall-clock deadline anyway would
+#: read the registers before a streaming client (servoJ every tick) could answer: the arm
+#: would hold the old target for a tick and then jump. A late tick therefore delays the next
+#: one and the simulated time slips behind the wall clock instead; the twin's physics and
+#: the published timestamps follow the simulated time.
+CLIENT_RESPONSE_S = 0.001
 
 
 @dataclass
@@ -117,7 +121,8 @@ class TwinServer:
         self._listeners: list[socket.socket] = []
         self._threads: list[threading.Thread] = []
         self._stop = threading.Event()
-        self.overruns = 0
+        #: Ticks that ran late and delayed the next one (the simulated time slipped).
+        self.late_ticks = 0
 
     # ------------------------------------------------------------------ lifecycle
 
@@ -197,13 +202,10 @@ class TwinServer:
                     for recipe in session.outputs:
                         if recipe.recipe_id:
                             session.publish(recipe.pack(values))
-            deadline += dt
-            delay = deadline - time.perf_counter()
-            if delay > 0.0:
-                time.sleep(delay)
-            elif delay < -MAX_LAG_S:
-                self.overruns += 1
-                deadline = time.perf_counter()
+            published = time.perf_counter()
+            deadline, late = next_tick_deadline(deadline, published, dt)
+            self.late_ticks += late
+            time.sleep(deadline - published)
 
     # ------------------------------------------------------------------ accepting
 
@@ -440,6 +442,16 @@ def _split_program(buffer: str) -> tuple[str | None, str]:
         return None, buffer
     line, rest = stripped.split("\n", 1)
     return line, rest
+
+
+def next_tick_deadline(deadline_s: float, published_s: float, dt_s: float) -> tuple[float, bool]:
+    """When the tick after the one due at ``deadline_s`` starts (wall clock, s), given that
+    this tick's output went out at ``published_s``: one period later, or
+    :data:`CLIENT_RESPONSE_S` after the output if that is later (then ``True``: this tick ran
+    late and the simulated time slips)."""
+    earliest = published_s + CLIENT_RESPONSE_S
+    following = deadline_s + dt_s
+    return (earliest, True) if following < earliest else (following, False)
 
 
 def _realtime(priority: int) -> bool:
