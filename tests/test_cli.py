@@ -113,6 +113,50 @@ def test_shape_with_the_paper_map_and_zero_delay_equals_zero_delay(move_file, tm
     np.testing.assert_allclose(shaped[-1], q[-1], atol=1e-6)
 
 
+def test_run_takes_a_modal_map_file_like_shape_does(move_file, tmp_path):
+    """``tvist run --map FILE`` reads either map kind (as ``tvist shape`` does): its live
+    shaper for a modal map file is ``TvShaper(MapDynamics(robot, ModalMap.load(FILE)))``,
+    step for step; a paper10 file gives the paper10 provider."""
+    from tvist.cli import build_parser
+    from tvist.cli.live import _shaper
+
+    path, q = move_file
+    entries = [
+        {
+            "joint": 0,
+            "stiffness_nm_per_rad": [22000.0, 0.0, 0.0],
+            "damping_nms_per_rad": [5.0, 0.0, 0.0],
+            "damping_load_joint": 1,
+        },
+        {
+            "joint": 1,
+            "stiffness_nm_per_rad": [18000.0, 0.0, 0.0],
+            "damping_nms_per_rad": [60.0, 0.0, 0.0],
+            "damping_load_joint": 1,
+        },
+    ]
+    modal_path = tmp_path / "modal.json"
+    tvist.ModalMap(entries, [0, 1], {"robot": "ur5e"}).save(modal_path)
+    paper_path = tmp_path / "paper.json"
+    tvist.DynamicMap.paper_ur5e().save(paper_path)
+    robot = tvist.robots.ur5e(5.0, (0.0, 0.0, 0.05))
+    for map_path, loaded in (
+        (modal_path, tvist.ModalMap.load(modal_path)),
+        (paper_path, tvist.DynamicMap.paper_ur5e()),
+    ):
+        args = build_parser().parse_args(
+            ["run", str(path), "--robot-ip", "127.0.0.1", "--map", str(map_path)]
+            + ["--payload-kg", "5", "--payload-com", "0", "0", "0.05"]
+        )
+        live = _shaper(args, n_dof=6)
+        expected = tvist.TvShaper(tvist.MapDynamics(robot, loaded), DT_S, 6, shaper="zv")
+        live.reset(q[0])
+        expected.reset(q[0])
+        got = np.array([live.step(row) for row in q])
+        np.testing.assert_array_equal(got, np.array([expected.step(row) for row in q]))
+        assert np.max(np.abs(got - q)) > 1e-3  # the map shaped the move (a delayed copy)
+
+
 def test_shape_with_a_map_file_equals_the_map_driven_shaper(move_file, tmp_path, capsys):
     """``tvist shape --map FILE`` = ``TvShaper(MapDynamics(robot, map))`` on the input padded
     with its last sample for the end pose's ZV delay."""

@@ -21,3 +21,20 @@ def add_robot_and_payload(p: argparse.ArgumentParser, payload_help: str = "paylo
         metavar=("X", "Y", "Z"),
         help="payload centre of mass in the flange frame, m (default 0 0 0.05)",
     )
+
+
+def robot_from_args(args: argparse.Namespace):
+    """The :class:`tvist.robots.Robot` named by ``--robot`` with ``--payload-kg/--payload-com``."""
+    import tvist
+
+    return tvist.robots.Robot(
+        tvist.robots.params(args.robot),
+        tvist.robots.Payload(args.payload_kg, tuple(args.payload_com)),
+    )
+
+
+def map_from_args(args: argparse.Namespace):
+    """The map of ``--paper-map`` or ``--map FILE`` (either kind, by the file's ``kind``)."""
+    import tvist
+
+    return tvist.DynamicMap.paper_ur5e() if args.paper_map else tvist.load_map(args.map)

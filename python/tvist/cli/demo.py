@@ -23,15 +23,16 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
         run_linear_demo(out_dir=args.out or "out/demo-linear", quick=args.quick)
         return 0
-    from tvist import DynamicMap
+    from tvist import ModalMap, load_map
     from tvist.demo import default_methods, fd_tvist_map, run_demo
+    from tvist.demo.modal_rows import fd_tvist_modal
 
     chosen = set(args.method or SHAPING_METHODS)
     methods = default_methods()
     for i, path in enumerate(args.map or []):
-        methods.append(
-            fd_tvist_map(f"fd-tvist-map-{i + 1}", f"FD-TVIST ZV, map {path}", DynamicMap.load(path))
-        )
+        dynmap = load_map(path)
+        row = fd_tvist_modal if isinstance(dynmap, ModalMap) else fd_tvist_map
+        methods.append(row(f"fd-tvist-map-{i + 1}", f"FD-TVIST ZV, map {path}", dynmap))
     methods = [m for m in methods if demo_row_method(m.key) in chosen | {"unshaped"}]
     run_demo(
         out_dir=args.out or "out/demo",
@@ -59,7 +60,7 @@ def add_demo_command(sub: argparse._SubParsersAction) -> None:
         "--map",
         action="append",
         metavar="FILE",
-        help="add an FD-TVIST row driven by this dynamic map file (repeatable)",
+        help="add an FD-TVIST row driven by this map file, paper10 or modal (repeatable)",
     )
     p.add_argument(
         "--method",

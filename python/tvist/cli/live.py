@@ -15,6 +15,7 @@ def _error(command: str, message: str) -> int:
 def _shaper(args: argparse.Namespace, n_dof: int):
     """The TvShaper of ``--modes`` / ``--map`` / ``--paper-map``, or None for ``--unshaped``."""
     import tvist
+    from tvist.cli.args import map_from_args, robot_from_args
     from tvist.cli.shape import parse_modes
 
     if args.unshaped:
@@ -22,16 +23,10 @@ def _shaper(args: argparse.Namespace, n_dof: int):
     if args.modes:
         provider = tvist.ConstantModes(parse_modes(args.modes))
     else:
-        dynmap = (
-            tvist.DynamicMap.paper_ur5e() if args.paper_map else tvist.DynamicMap.load(args.map)
-        )
-        robot = tvist.robots.Robot(
-            tvist.robots.params(args.robot),
-            tvist.robots.Payload(args.payload_kg, tuple(args.payload_com)),
-        )
+        robot = robot_from_args(args)
         if robot.n_dof != n_dof:
             raise ValueError(f"the file has {n_dof} joints, the {args.robot} has {robot.n_dof}")
-        provider = tvist.MapDynamics(robot, dynmap)
+        provider = tvist.MapDynamics(robot, map_from_args(args))
     return tvist.TvShaper(provider, dt_s=args.dt, n_dof=n_dof, shaper=args.shaper)
 
 
@@ -120,7 +115,7 @@ def add_run_command(sub: argparse._SubParsersAction) -> None:
     p.add_argument("move", help="CSV of joint positions (rad), one row per control period")
     p.add_argument("--robot-ip", required=True, help="robot (or twin server) address")
     modes = p.add_mutually_exclusive_group()
-    modes.add_argument("--map", help="dynamic map file (tvist fit-map)")
+    modes.add_argument("--map", help="map file, paper10 or modal (tvist fit-map)")
     modes.add_argument("--paper-map", action="store_true", help="the paper's UR5e map")
     modes.add_argument("--modes", help="fixed modes FREQ_HZ:ZETA,...")
     modes.add_argument("--unshaped", action="store_true", help="stream the reference unshaped")

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tvist.cli.args import add_robot_and_payload
+from tvist.cli.args import add_robot_and_payload, map_from_args, robot_from_args
 from tvist.trajectory.joint_names import joint_order
 from tvist.trajectory.shaping import METHODS, shape_samples
 
@@ -185,15 +185,6 @@ def shape_file(
     return ShapedFile(out, added, end_modes, counts, alpha)
 
 
-def _robot(args: argparse.Namespace):
-    import tvist
-
-    return tvist.robots.Robot(
-        tvist.robots.params(args.robot),
-        tvist.robots.Payload(args.payload_kg, tuple(args.payload_com)),
-    )
-
-
 def _dynamics(args: argparse.Namespace, robot):
     """Fixed modes or the map provider for ``robot``."""
     import tvist
@@ -202,8 +193,7 @@ def _dynamics(args: argparse.Namespace, robot):
         return parse_modes(args.modes)
     if not (args.map or args.paper_map):
         raise ValueError("give --modes, --map FILE or --paper-map")
-    dynmap = tvist.DynamicMap.paper_ur5e() if args.paper_map else tvist.load_map(args.map)
-    return tvist.MapDynamics(robot, dynmap)
+    return tvist.MapDynamics(robot, map_from_args(args))
 
 
 def _describe_modes(end_modes: list[tuple[float, float]]) -> str:
@@ -311,7 +301,7 @@ def _cmd_shape(args: argparse.Namespace) -> int:
         raise ValueError("give a CSV file or --bag BAG (one of them)")
     if not (np.isfinite(args.dt_s) and args.dt_s > 0):
         raise ValueError(f"--dt-s must be > 0; got {args.dt_s}")
-    robot = _robot(args)
+    robot = robot_from_args(args)
     dynamics = _dynamics(args, robot)
     if args.bag is not None:
         return _cmd_shape_bag(args, robot, dynamics)
