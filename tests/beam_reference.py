@@ -20,14 +20,17 @@ from tvist.robots import Payload, RobotParams
 
 
 def _element_stiffness(h: float) -> np.ndarray:
-    return np.array(
-        [
-            [12.0, 6.0 * h, -12.0, 6.0 * h],
-            [6.0 * h, 4.0 * h * h, -6.0 * h, 2.0 * h * h],
-            [-12.0, -6.0 * h, 12.0, -6.0 * h],
-            [6.0 * h, 2.0 * h * h, -6.0 * h, 4.0 * h * h],
-        ]
-    ) / h**3
+    return (
+        np.array(
+            [
+                [12.0, 6.0 * h, -12.0, 6.0 * h],
+                [6.0 * h, 4.0 * h * h, -6.0 * h, 2.0 * h * h],
+                [-12.0, -6.0 * h, 12.0, -6.0 * h],
+                [6.0 * h, 2.0 * h * h, -6.0 * h, 4.0 * h * h],
+            ]
+        )
+        / h**3
+    )
 
 
 def _element_mass(h: float) -> np.ndarray:

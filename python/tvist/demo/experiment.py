@@ -397,9 +397,7 @@ def run_experiment(
     chosen = list(motions) if motions is not None else list(MOTIONS[:1] if quick else MOTIONS)
     tail_s = QUICK_TAIL_S if quick else TAIL_S
     window_s = QUICK_SPECTRUM_WINDOW_S if quick else SPECTRUM_WINDOW_S
-    twin = Twin(
-        "ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M, flex=flex, beams=beams
-    )
+    twin = Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M, flex=flex, beams=beams)
     robot = robots.ur5e(payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M)
     runs = [
         run_motion(motion, rows, twin, robot, tail_s=tail_s, spectrum_window_s=window_s, log=log)

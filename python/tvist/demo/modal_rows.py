@@ -93,9 +93,7 @@ def compare_on_variant(variant: str, records_path: str | Path) -> list[tuple[str
         fd_tvist_map("fd-tvist-identified-map", "identified published map", fit_map(records))
     )
     rows.append(fd_tvist_modal(KEY, "identified modal map", fit_modal_map(records, "ur5e")))
-    result = run_experiment(
-        methods=rows, flex=variant_flex(variant), beams=variant_beams(variant)
-    )
+    result = run_experiment(methods=rows, flex=variant_flex(variant), beams=variant_beams(variant))
     return [
         (m.motion.name, run.method.label, float(run.to_json()["reduction_percent"]))
         for m in result.motions

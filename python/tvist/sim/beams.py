@@ -86,7 +86,9 @@ class LinkBeams:
     def validate(self, n_dof: int) -> None:
         """Raise ValueError naming the field that is impossible for an arm of ``n_dof``."""
         if not self.links or any(not 0 <= i < n_dof for i in self.links):
-            raise ValueError(f"LinkBeams.links must be link indices in [0, {n_dof}), got {self.links}")
+            raise ValueError(
+                f"LinkBeams.links must be link indices in [0, {n_dof}), got {self.links}"
+            )
         if len(set(self.links)) != len(self.links):
             raise ValueError(f"LinkBeams.links has duplicates: {self.links}")
         if not (0.0 < self.wall_m < self.outer_diameter_m / 2.0):

@@ -141,7 +141,9 @@ def _beam_link(
                     damping=damping,
                 )
         _inertial(body, segment.mass_kg, segment.com_m - origin, segment.inertia_kg_m2)
-    ET.SubElement(body, "geom", type="capsule", size="0.03", fromto=_fmt([0, 0, 0, *(offset - origin)]))
+    ET.SubElement(
+        body, "geom", type="capsule", size="0.03", fromto=_fmt([0, 0, 0, *(offset - origin)])
+    )
     return body, offset - origin
 
 
