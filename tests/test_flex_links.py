@@ -195,3 +195,49 @@ def test_true_modes_of_the_variant_are_its_own(twin: Twin) -> None:
     for q in (Q1, Q3):
         for (wn, _), (wn_rigid, _) in zip(twin.modes(q), rigid.modes(q), strict=True):
             assert 0.7 * wn_rigid < wn < 0.98 * wn_rigid
+
+
+@pytest.mark.parametrize("inertia_scale", [1.0, 1e-3])
+def test_segments_add_up_to_the_link(inertia_scale: float) -> None:
+    """The segments of a link, lumped by the parallel-axis theorem (written out here), are the
+    link: mass, centre of mass and inertia to rounding. With a link inertia far too small for
+    the length-proportional spread (``inertia_scale`` 1e-3) the spread is shrunk and every
+    segment still has a physical inertia."""
+    from tvist.sim.beams import split_link
+
+    offset = np.array([-0.425, 0.0, 0.0])
+    mass, com = 8.058, np.array([-0.2125, 0.0, 0.11336])
+    inertia = inertia_scale * (
+        np.diag([0.0145, 0.1285, 0.1285])
+        + 1e-3 * np.array([[0.0, 0.3, 0.1], [0.3, 0.0, -0.2], [0.1, -0.2, 0.0]])
+    )
+    segments, axes = split_link(offset, mass, com, inertia, 2)
+    np.testing.assert_allclose(axes @ offset, 0.0, atol=1e-15)  # bending axes ⟂ the link
+    total = sum(s.mass_kg for s in segments)
+    centre = sum(s.mass_kg * s.com_m for s in segments) / total
+    lumped = sum(
+        s.inertia_kg_m2
+        + s.mass_kg
+        * (
+            np.dot(s.com_m - centre, s.com_m - centre) * np.eye(3)
+            - np.outer(s.com_m - centre, s.com_m - centre)
+        )
+        for s in segments
+    )
+    assert total == pytest.approx(mass, rel=1e-15)
+    np.testing.assert_allclose(centre, com, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(lumped, inertia, rtol=0, atol=1e-15)
+    for s in segments:
+        moments = np.linalg.eigvalsh(s.inertia_kg_m2)
+        assert moments[0] > 0.0 and moments[2] <= moments[0] + moments[1]
+
+
+def test_impossible_tube_is_refused() -> None:
+    from tvist.sim.beams import LinkBeams, split_link
+
+    with pytest.raises(ValueError, match="wall_m"):
+        Twin("ur5e", beams=LinkBeams(links=(1,), outer_diameter_m=0.08, wall_m=0.05))
+    with pytest.raises(ValueError, match="links"):
+        Twin("ur5e", beams=LinkBeams(links=(6,), outer_diameter_m=0.08, wall_m=0.003))
+    with pytest.raises(ValueError, match="too short"):
+        split_link(np.array([0.0, 0.0, 0.03]), 1.0, np.zeros(3), 1e-3 * np.eye(3), 2)

@@ -124,6 +124,7 @@ def _beam_link(
     stiffness = repr(beams.hinge_stiffness_nm_per_rad(length))
     damping = repr(beams.hinge_damping_nms_per_rad(length))
     origin = np.zeros(3)  # the current segment body's origin in the link body's frame
+    ends = [seg.hinge_m for seg in segments[1:]] + [offset]
     for s, segment in enumerate(segments):
         if segment.hinge_m is not None:
             body = ET.SubElement(
@@ -141,9 +142,10 @@ def _beam_link(
                     damping=damping,
                 )
         _inertial(body, segment.mass_kg, segment.com_m - origin, segment.inertia_kg_m2)
-    ET.SubElement(
-        body, "geom", type="capsule", size="0.03", fromto=_fmt([0, 0, 0, *(offset - origin)])
-    )
+        # Visual segment to the next hinge or joint (no mass, no contact).
+        ET.SubElement(
+            body, "geom", type="capsule", size="0.03", fromto=_fmt([0, 0, 0, *(ends[s] - origin)])
+        )
     return body, offset - origin
 
 
