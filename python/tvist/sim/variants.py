@@ -22,16 +22,16 @@ by construction. A variant changes the plant, not the map:
     (``I = 5.39e-7 m⁴``, ``E I = 37 200 N m²``) along the link's length (0.425 m and
     0.392 m), cut into three rigid segments joined by two bending hinges, each about both axes
     perpendicular to the link, ``k = 2 E I / L`` (174 900 and 189 500 N m/rad), with
-    structural damping of loss factor 0.02 (viscous equivalent at 35 Hz). The section is a design
-    choice, not a measured UR5e link: it puts link bending among the modes that matter: with every joint held and
-    the 5 kg payload, the upper arm, carrying the forearm, wrists and payload, bends at
-    21.4 Hz stretched out (Q1) and 45.7 Hz folded (Q3), the forearm at 46.2 Hz (a continuous
-    Euler-Bernoulli beam with the carried links as a rigid tip body: 21.3, 45.5 and 45.9 Hz,
-    ``tests/test_flex_links.py``). No joint-spring model contains these degrees of freedom:
-    at stretched poses the links' bending adds compliance in series with the gears (base and
-    shoulder modes at Q1 7.45 and 7.21 Hz instead of 7.90 and 7.67), at folded poses it couples
-    with them (Q3 18.21 and 18.15 Hz instead of 20.16 and 19.22), by amounts that depend on the
-    pose.
+    structural damping of loss factor 0.02 (viscous equivalent at 35 Hz). The section is a
+    design choice, not a measured UR5e link: it puts link bending among the modes that
+    matter. With every joint held and the 5 kg payload, the upper arm, carrying the forearm,
+    wrists and payload, bends at 21.4 Hz stretched out (Q1) and 45.7 Hz folded (Q3), the
+    forearm at 46.2 Hz (a continuous Euler-Bernoulli beam with the carried links as a rigid
+    tip body: 21.3, 45.5 and 45.9 Hz, ``tests/test_flex_links.py``). No joint-spring model
+    contains these degrees of freedom: at stretched poses the links' bending adds compliance
+    in series with the gears (base and shoulder modes at Q1 7.45 and 7.21 Hz instead of 7.90
+    and 7.67), at folded poses it couples with them (Q3 18.21 and 18.15 Hz instead of 20.16
+    and 19.22), by amounts that depend on the pose.
 
 Run a campaign on a variant with :func:`run_variant_campaign` (the twin campaign's records,
 with ``true_modes`` from the variant's own eigen-analysis), or build the twin directly:
