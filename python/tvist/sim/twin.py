@@ -17,6 +17,10 @@ spring torque (:meth:`~tvist.sim.FlexParams.damping_nms_per_rad`; for the base, 
 i.e. the arm's tilting moment on the base bearing). Rotor inertia does not enter: the motor's
 motion is prescribed.
 
+With bending links (``beams``, :mod:`tvist.sim.beams`) the link side also has the links'
+bending hinges, whose springs and dampers MuJoCo applies itself (MJCF ``stiffness`` and
+``damping``); the gear law acts on the arm's joints only.
+
 Integration: semi-implicit Euler of MuJoCo's ``implicitfast`` integrator. The spring torque is
 explicit (no numerical damping of the modes); the damping of the link velocity is half explicit,
 half implicit (MuJoCo dof damping), i.e. trapezoidal, and ``+c q_motor'`` is an applied force.
