@@ -368,6 +368,7 @@ def run_experiment(
     motions: Sequence[Motion] | None = None,
     log: Any = None,
     flex: Any = None,
+    beams: Any = None,
 ) -> DemoResult:
     """Run the experiment without writing anything.
 
@@ -385,6 +386,8 @@ def run_experiment(
     flex
         The twin's :class:`~tvist.sim.FlexParams` (default: the UR5e's; e.g. a variant of
         :mod:`tvist.sim.variants`).
+    beams
+        The twin's bending links (:class:`~tvist.sim.beams.LinkBeams`, default none).
     """
     start = time.perf_counter()
     rows = list(default_methods() if methods is None else methods)
@@ -394,7 +397,7 @@ def run_experiment(
     chosen = list(motions) if motions is not None else list(MOTIONS[:1] if quick else MOTIONS)
     tail_s = QUICK_TAIL_S if quick else TAIL_S
     window_s = QUICK_SPECTRUM_WINDOW_S if quick else SPECTRUM_WINDOW_S
-    twin = Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M, flex=flex)
+    twin = Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M, flex=flex, beams=beams)
     robot = robots.ur5e(payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M)
     runs = [
         run_motion(motion, rows, twin, robot, tail_s=tail_s, spectrum_window_s=window_s, log=log)

@@ -85,7 +85,7 @@ def compare_on_variant(variant: str, records_path: str | Path) -> list[tuple[str
     from tvist.ident.campaign import load_results
     from tvist.ident.map_fit import fit_map
     from tvist.ident.modal_fit import fit_modal_map
-    from tvist.sim.variants import variant_flex
+    from tvist.sim.variants import variant_beams, variant_flex
 
     records = load_results(records_path)
     rows = [m for m in default_methods() if m.key == "unshaped"]
@@ -93,7 +93,7 @@ def compare_on_variant(variant: str, records_path: str | Path) -> list[tuple[str
         fd_tvist_map("fd-tvist-identified-map", "identified published map", fit_map(records))
     )
     rows.append(fd_tvist_modal(KEY, "identified modal map", fit_modal_map(records, "ur5e")))
-    result = run_experiment(methods=rows, flex=variant_flex(variant))
+    result = run_experiment(methods=rows, flex=variant_flex(variant), beams=variant_beams(variant))
     return [
         (m.motion.name, run.method.label, float(run.to_json()["reduction_percent"]))
         for m in result.motions

@@ -13,6 +13,7 @@ Examples
 
 from __future__ import annotations
 
+from tvist.sim.beams import LinkBeams
 from tvist.sim.flex import UR5E_FLEX, FlexParams, default_flex
 from tvist.sim.mjcf import GRAVITY_M_S2, build_mjcf
 from tvist.sim.modal import ModalAnalysis, modal_analysis
@@ -25,6 +26,7 @@ __all__ = [
     "RTDE_FIELDS",
     "UR5E_FLEX",
     "FlexParams",
+    "LinkBeams",
     "ModalAnalysis",
     "SimRecord",
     "SimulationDiverged",

@@ -29,6 +29,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from tvist.robots import Payload, RobotParams, inertia_tensor
+from tvist.sim.beams import LinkBeams, split_link
 
 #: Gravity along -z of the base frame (m/s²); the same value as :class:`tvist.robots.Robot`.
 GRAVITY_M_S2 = 9.81
@@ -105,11 +106,55 @@ def _lump(first: Inertial, second: Inertial) -> Inertial:
     return mass, com, i1 + shifted(m1, c1) + i2 + shifted(m2, c2)
 
 
+def _beam_link(
+    body: ET.Element,
+    i: int,
+    offset: np.ndarray,
+    mass: float,
+    com: np.ndarray,
+    inertia: np.ndarray,
+    beams: LinkBeams,
+) -> tuple[ET.Element, np.ndarray]:
+    """Cut link ``i`` (body ``body``, inertial data in its frame) into hinged segments.
+
+    Returns the last segment's body and the next link's position in it.
+    """
+    length = float(np.linalg.norm(offset))
+    segments, axes = split_link(offset, mass, com, inertia, beams.hinges_per_link)
+    stiffness = repr(beams.hinge_stiffness_nm_per_rad(length))
+    damping = repr(beams.hinge_damping_nms_per_rad(length))
+    origin = np.zeros(3)  # the current segment body's origin in the link body's frame
+    ends = [seg.hinge_m for seg in segments[1:]] + [offset]
+    for s, segment in enumerate(segments):
+        if segment.hinge_m is not None:
+            body = ET.SubElement(
+                body, "body", name=f"link{i + 1}_seg{s}", pos=_fmt(segment.hinge_m - origin)
+            )
+            origin = segment.hinge_m
+            for tag, axis in zip("ab", axes, strict=True):
+                ET.SubElement(
+                    body,
+                    "joint",
+                    name=f"link{i + 1}_bend{s}{tag}",
+                    type="hinge",
+                    axis=_fmt(axis),
+                    stiffness=stiffness,
+                    damping=damping,
+                )
+        _inertial(body, segment.mass_kg, segment.com_m - origin, segment.inertia_kg_m2)
+        # Visual segment to the next hinge or joint (no mass, no contact).
+        ET.SubElement(
+            body, "geom", type="capsule", size="0.03", fromto=_fmt([0, 0, 0, *(ends[s] - origin)])
+        )
+    return body, offset - origin
+
+
 def build_mjcf(
     params: RobotParams,
     payload: Payload | None = None,
     *,
     physics_dt_s: float = 0.0005,
+    beams: LinkBeams | None = None,
 ) -> str:
     """MJCF text of the rigid arm ``params`` with ``payload`` on the flange.
 
@@ -121,6 +166,11 @@ def build_mjcf(
         Payload fixed to the flange (DH frame ``n``); ``None`` or zero mass means none.
     physics_dt_s
         Integration time step (s).
+    beams
+        Links that bend (:mod:`tvist.sim.beams`): each is cut into rigid segments, bodies
+        ``link{i}_seg{s}`` (``s = 1 .. n``) with the hinge joints ``link{i}_bend{s}a`` and
+        ``link{i}_bend{s}b`` carrying the beam's spring and damper (MJCF ``stiffness`` and
+        ``damping``, ``springref`` 0: straight). ``None``: rigid links.
 
     Returns
     -------
@@ -131,6 +181,8 @@ def build_mjcf(
     if not (math.isfinite(physics_dt_s) and physics_dt_s > 0.0):
         raise ValueError(f"physics_dt_s must be finite and > 0, got {physics_dt_s!r}")
     n = params.n_dof
+    if beams is not None:
+        beams.validate(n)
     root = ET.Element("mujoco", model=params.name)
     ET.SubElement(root, "compiler", angle="radian", inertiafromgeom="false", autolimits="true")
     option = ET.SubElement(
@@ -172,16 +224,19 @@ def build_mjcf(
             mass, com_frame_i, inertia_frame_i = _lump(
                 (mass, com_frame_i, inertia_frame_i), _payload_inertial(payload)
             )
-        if mass > _NEGLIGIBLE:
-            com_body = offset + rotation @ com_frame_i
-            inertia_body = rotation @ inertia_frame_i @ rotation.T
-            _inertial(body, mass, com_body, inertia_body)
-        # Visual segment from the joint axis to the next frame origin (no mass, no contact).
-        if np.linalg.norm(offset) > 1e-6:
-            ET.SubElement(
-                body, "geom", type="capsule", size="0.03", fromto=_fmt([0, 0, 0, *offset])
-            )
-        pos_in_parent = offset
+        com_body = offset + rotation @ com_frame_i
+        inertia_body = rotation @ inertia_frame_i @ rotation.T
+        if beams is not None and i in beams.links:
+            body, pos_in_parent = _beam_link(body, i, offset, mass, com_body, inertia_body, beams)
+        else:
+            if mass > _NEGLIGIBLE:
+                _inertial(body, mass, com_body, inertia_body)
+            # Visual segment from the joint axis to the next frame origin (no mass, no contact).
+            if np.linalg.norm(offset) > 1e-6:
+                ET.SubElement(
+                    body, "geom", type="capsule", size="0.03", fromto=_fmt([0, 0, 0, *offset])
+                )
+            pos_in_parent = offset
         quat_in_parent = _quat_x(float(params.alpha_rad[i]))
         parent = body
 

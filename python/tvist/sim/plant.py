@@ -37,6 +37,10 @@ class FlexIntegrator:
         Control period (s), a whole multiple of the model's time step.
     flange, accel_slice
         Site id of the flange and the accelerometer's slice of ``sensordata``.
+    arm
+        The arm's joints among the model's degrees of freedom: ``slice(0, n_dof)`` when they
+        are all of them, else their indices (the other dofs, beam hinges, carry their own
+        springs and dampers in the model and are left to MuJoCo).
     """
 
     def __init__(
@@ -48,6 +52,7 @@ class FlexIntegrator:
         dt_s: float,
         flange: int,
         accel_slice: slice,
+        arm: slice | np.ndarray | None = None,
     ) -> None:
         self._mujoco = mujoco
         self.model, self.data = model, data
@@ -65,8 +70,11 @@ class FlexIntegrator:
         self.max_deflection_rad = flex.max_deflection_rad
         self._flange = flange
         self._accel_slice = accel_slice
+        self._arm = slice(0, model.nv) if arm is None else arm
+        # A slice gives views of qpos and qvel that follow the state in place; indices do not.
+        self._views = isinstance(self._arm, slice)
         self._bad_qacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
-        n = model.nv
+        n = len(self._k1)
         self._theta = np.empty(n)
         self._delta = np.empty(n)
         self._tau = np.empty(n)
@@ -75,7 +83,8 @@ class FlexIntegrator:
         self._force = np.empty(n)
 
     def reset(self, q_link: np.ndarray, qd_link: np.ndarray) -> None:
-        """Start from link angles ``q_link`` (rad) and velocities ``qd_link`` (rad/s)."""
+        """Start from the link-side state ``q_link`` (rad) and velocities ``qd_link`` (rad/s),
+        ``(model.nv,)``: joints and any beam hinges."""
         self._mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[:] = q_link
         self.data.qvel[:] = qd_link
@@ -98,8 +107,8 @@ class FlexIntegrator:
         model, data = self.model, self.data
         k1, k3, c0, c_load, c_load2 = self._k1, self._k3, self._c0, self._c_load, self._c_load2
         quadratic, load_index = self._quadratic, self._load_index
-        qpos, qvel, applied = data.qpos, data.qvel, data.qfrc_applied
-        dof_damping = model.dof_damping
+        arm, views = self._arm, self._views
+        qpos, qvel = data.qpos[arm], data.qvel[arm]
         step = self._mujoco.mj_step
         smoothing = self._smoothing
         smoothing_sq = smoothing * smoothing
@@ -107,6 +116,8 @@ class FlexIntegrator:
         damp, growth, force = self._damp, self._growth, self._force
         dt = self.dt_s
         for s in range(self.n_sub):
+            if not views:
+                qpos, qvel = data.qpos[arm], data.qvel[arm]
             np.multiply(vel_ref, self._fractions[s] * dt, out=theta)
             theta += base_ref
             np.subtract(theta, qpos, out=delta)
@@ -143,8 +154,8 @@ class FlexIntegrator:
             force *= damp
             force += tau
             damp *= 0.5
-            dof_damping[:] = damp
-            applied[:] = force
+            model.dof_damping[arm] = damp
+            data.qfrc_applied[arm] = force
             step(model, data)
             if s == 0:
                 # mj_step evaluated sensors and kinematics before integrating, so these
@@ -165,7 +176,7 @@ class FlexIntegrator:
             or not np.all(np.isfinite(data.qvel))
         ):
             return "non-finite state"
-        worst = float(np.max(np.abs(q_motor_end - data.qpos)))
+        worst = float(np.max(np.abs(q_motor_end - data.qpos[self._arm])))
         if worst > self.max_deflection_rad:
             return f"gear deflection {worst:.3g} rad exceeds {self.max_deflection_rad:g} rad"
         return None
@@ -254,7 +265,7 @@ class TwinPlant:
         self._twin = twin
         self._integrator = twin.integrator(dt_s)
         q0 = twin.check_pose(np.asarray(q0, dtype=float), "q0")
-        self._integrator.reset(twin.equilibrium(q0), np.zeros(twin.n_dof))
+        self._integrator.reset(twin.equilibrium_state(q0), np.zeros(twin.n_state))
         self._q_motor = q0.copy()
         self._k = 0
         self._accel = np.empty(3)
@@ -293,7 +304,9 @@ class TwinPlant:
         dt = self._integrator.dt_s
         base = self._q_motor
         data = self._integrator.data
-        q_link, qd_link = data.qpos.copy(), data.qvel.copy()
+        twin = self._twin
+        arm = twin.arm_dofs if twin.n_state > twin.n_dof else slice(None)
+        q_link, qd_link = data.qpos[arm].copy(), data.qvel[arm].copy()
         self._integrator.advance(base, (target - base) / dt, self._accel, self._pos, self._rot)
         reason = self._integrator.divergence(target)
         time_s = self._k * dt

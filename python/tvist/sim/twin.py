@@ -17,6 +17,10 @@ spring torque (:meth:`~tvist.sim.FlexParams.damping_nms_per_rad`; for the base, 
 i.e. the arm's tilting moment on the base bearing). Rotor inertia does not enter: the motor's
 motion is prescribed.
 
+With bending links (``beams``, :mod:`tvist.sim.beams`) the link side also has the links'
+bending hinges, whose springs and dampers MuJoCo applies itself (MJCF ``stiffness`` and
+``damping``); the gear law acts on the arm's joints only.
+
 Integration: semi-implicit Euler of MuJoCo's ``implicitfast`` integrator. The spring torque is
 explicit (no numerical damping of the modes); the damping of the link velocity is half explicit,
 half implicit (MuJoCo dof damping), i.e. trapezoidal, and ``+c q_motor'`` is an applied force.
@@ -31,6 +35,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from tvist import robots
+from tvist.sim.beams import LinkBeams
 from tvist.sim.flex import FlexParams, default_flex
 from tvist.sim.mjcf import GRAVITY_M_S2, build_mjcf
 from tvist.sim.modal import ModalAnalysis, modal_analysis
@@ -92,6 +97,8 @@ class Twin:
         Gear springs and dampers; ``None`` takes :func:`~tvist.sim.default_flex` of the robot.
     physics_dt_s
         Physics time step (s); must divide the control period given to :meth:`run`.
+        ``None``: 0.5 ms, or the ``physics_dt_s`` of ``beams`` (bending links have faster
+        modes).
     accel_noise_std
         Standard deviation of white noise added to each accelerometer axis (m/s²).
     seed
@@ -99,6 +106,12 @@ class Twin:
     payload_inertia_kg_m2
         ``[ixx, iyy, izz, ixy, ixz, iyz]`` about the payload's centre of mass, flange axes;
         ``None`` is a point mass.
+    beams
+        Links that bend (:class:`~tvist.sim.beams.LinkBeams`): their bending hinges are extra
+        degrees of freedom of the link side, with their own springs and dampers. ``None``:
+        rigid links. The arm's joint angles (``actual_q``, :meth:`equilibrium`) are those of
+        the joints ``joint1 .. joint{n}``; the full state (joints and hinges) is
+        :meth:`equilibrium_state`.
 
     Raises
     ------
@@ -112,10 +125,11 @@ class Twin:
         payload_kg: float = 5.0,
         payload_com_m: Sequence[float] = (0.0, 0.0, 0.05),
         flex: FlexParams | None = None,
-        physics_dt_s: float = 0.0005,
+        physics_dt_s: float | None = None,
         accel_noise_std: float = 0.0,
         seed: int = 0,
         payload_inertia_kg_m2: Sequence[float] | None = None,
+        beams: LinkBeams | None = None,
     ) -> None:
         import mujoco
 
@@ -130,6 +144,8 @@ class Twin:
         self._payload = robots.Payload(mass_kg, tuple(payload_com_m), payload_inertia_kg_m2)
         self._flex = default_flex(robot_name) if flex is None else flex
         self._flex.validate(self._params.n_dof)
+        if physics_dt_s is None:
+            physics_dt_s = 0.0005 if beams is None else beams.physics_dt_s
         dt = _finite_float(physics_dt_s, "physics_dt_s")
         if not 0.0 < dt <= 0.0005:
             raise ValueError(f"physics_dt_s must be in (0, 0.0005] s, got {dt:g}")
@@ -140,10 +156,20 @@ class Twin:
         self._rng = np.random.default_rng(seed)
 
         self._mujoco = mujoco
+        self._beams = beams
         self._model = mujoco.MjModel.from_xml_string(
-            build_mjcf(self._params, self._payload, physics_dt_s=dt)
+            build_mjcf(self._params, self._payload, physics_dt_s=dt, beams=beams)
         )
         self._data = mujoco.MjData(self._model)
+        # The arm's joints among the model's degrees of freedom (hinge joints: one qpos and one
+        # dof each, at the same address). Without beams they are all of them, in order.
+        arm = [int(self._model.joint(f"joint{i + 1}").dofadr[0]) for i in range(self.n_dof)]
+        self._arm_dofs = np.array(arm)
+        self._arm: slice | np.ndarray = (
+            slice(0, self.n_dof) if arm == list(range(self._model.nv)) else self._arm_dofs
+        )
+        # Spring stiffness and damping of every dof that is not an arm joint (beam hinges).
+        self._passive = np.setdiff1d(np.arange(self._model.nv), self._arm_dofs)
         self._flange = self._model.site("flange").id
         accel = self._model.sensor("accelerometer")
         self._accel_slice = slice(int(accel.adr[0]), int(accel.adr[0]) + 3)
@@ -171,6 +197,21 @@ class Twin:
         return self._params.n_dof
 
     @property
+    def beams(self) -> LinkBeams | None:
+        """The bending links, if any."""
+        return self._beams
+
+    @property
+    def n_state(self) -> int:
+        """Degrees of freedom of the link side: the joints plus any beam hinges."""
+        return int(self._model.nv)
+
+    @property
+    def arm_dofs(self) -> np.ndarray:
+        """Indices of the arm's joints in the link-side state ``(n_dof,)``."""
+        return self._arm_dofs.copy()
+
+    @property
     def physics_dt_s(self) -> float:
         """Physics time step (s)."""
         return float(self._model.opt.timestep)
@@ -182,11 +223,13 @@ class Twin:
 
     @property
     def mjcf(self) -> str:
-        """MJCF text of the rigid link-side arm (for inspection or rendering)."""
-        return build_mjcf(self._params, self._payload, physics_dt_s=self.physics_dt_s)
+        """MJCF text of the link-side arm (for inspection or rendering)."""
+        return build_mjcf(
+            self._params, self._payload, physics_dt_s=self.physics_dt_s, beams=self._beams
+        )
 
     def rigid_model(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
-        """A fresh ``(mujoco.MjModel, mujoco.MjData)`` pair of the rigid link-side arm."""
+        """A fresh ``(mujoco.MjModel, mujoco.MjData)`` pair of the link-side arm."""
         model = self._mujoco.MjModel.from_xml_string(self.mjcf)
         return model, self._mujoco.MjData(model)
 
@@ -229,6 +272,7 @@ class Twin:
             dt,
             self._flange,
             self._accel_slice,
+            self._arm,
         )
 
     # ------------------------------------------------------------------ statics
@@ -252,7 +296,8 @@ class Twin:
         return arr
 
     def _gravity_torque(self, q_link: np.ndarray) -> np.ndarray:
-        """Generalized gravity force ``G(q)`` of the link side at rest (N m)."""
+        """Generalized gravity force ``G(q)`` of the link side at rest (N m), ``(n_state,)``;
+        ``q_link`` is the full link-side state."""
         d = self._data
         d.qpos[:] = q_link
         d.qvel[:] = 0.0
@@ -260,13 +305,13 @@ class Twin:
         return d.qfrc_bias.copy()
 
     def _gravity_stiffness(self, q_link: np.ndarray, step_rad: float = 1e-6) -> np.ndarray:
-        """``dG/dq`` by central differences (N m/rad), ``(n_dof, n_dof)``.
+        """``dG/dq`` by central differences (N m/rad), ``(n_state, n_state)``.
 
         ``G`` is smooth (trigonometric) with second derivatives of order ``|G| ~ 1e2 N m``,
         so the truncation error ``~ step² |G'''|`` is ~1e-10 N m/rad and rounding
         ``~ eps |G| / step`` ~1e-8 N m/rad, far below gear stiffnesses of ~1e3 N m/rad.
         """
-        n = self.n_dof
+        n = self.n_state
         out = np.empty((n, n))
         for j in range(n):
             dq = np.zeros(n)
@@ -277,25 +322,47 @@ class Twin:
         return out
 
     def equilibrium(self, q_motor: Sequence[float] | np.ndarray) -> np.ndarray:
-        """Link-side angles at rest under gravity with the motors held at ``q_motor`` (rad).
+        """Link-side joint angles at rest under gravity with the motors held at ``q_motor``
+        (rad), ``(n_dof,)``: the arm-joint part of :meth:`equilibrium_state`."""
+        return self.equilibrium_state(q_motor)[self._arm]
 
-        Solves ``k1 delta + k3 delta³ = G(q_motor - delta)`` by Newton's method.
+    def equilibrium_state(self, q_motor: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Full link-side state at rest under gravity with the motors at ``q_motor`` (rad),
+        ``(n_state,)``: joint angles and beam hinge angles.
+
+        Solves ``k1 delta + k3 delta³ = G_joint(q)`` (``delta = q_motor - q_joint``) and
+        ``k_h q_h = -G_hinge(q)`` by Newton's method.
         """
         theta = self.check_pose(np.asarray(q_motor, dtype=float), "q_motor")
-        delta = self._flex.deflection_rad(self._gravity_torque(theta))
+        arm, passive = self._arm, self._passive
+        k_passive = self._model.jnt_stiffness[self._model.dof_jntid[passive]]
+        # Newton in the small offsets from (motor angles, straight links): the joints' -delta
+        # and the hinge angles, so that rounding of the state (~1e-16 rad of angles ~3 rad,
+        # ~1e-11 N m through the stiffest gear) does not enter the unknowns.
+        origin = np.zeros(self.n_state)
+        origin[arm] = theta
+        offset = np.zeros(self.n_state)
+        gravity = self._gravity_torque(origin)
+        offset[arm] = -self._flex.deflection_rad(gravity[arm])
+        offset[passive] = -gravity[passive] / k_passive
+        residual = np.empty(self.n_state)
+        spring = np.empty(self.n_state)
+        spring[passive] = k_passive
         for _ in range(50):
-            q_link = theta - delta
-            residual = self._flex.spring_torque_nm(delta) - self._gravity_torque(q_link)
+            state = origin + offset
+            gravity = self._gravity_torque(state)
+            delta = -offset[arm]
+            residual[arm] = self._flex.spring_torque_nm(delta) - gravity[arm]
+            residual[passive] = -k_passive * offset[passive] - gravity[passive]
             if np.max(np.abs(residual)) < 1e-11:
                 break
-            # d(residual)/d(delta) = K_gear + dG/dq (since q_link = theta - delta).
-            jac = np.diag(self._flex.tangent_stiffness_nm_per_rad(delta)) + self._gravity_stiffness(
-                q_link
-            )
-            delta = delta - np.linalg.solve(jac, residual)
+            # d(residual)/d(offset) = -(K_spring + dG/dq).
+            spring[arm] = self._flex.tangent_stiffness_nm_per_rad(delta)
+            jac = np.diag(spring) + self._gravity_stiffness(state)
+            offset = offset + np.linalg.solve(jac, residual)
         else:
             raise SimulationDiverged(0.0, "no static equilibrium under gravity at this pose")
-        return theta - delta
+        return origin + offset
 
     # ------------------------------------------------------------------ modes
 
@@ -303,22 +370,29 @@ class Twin:
         """All vibration modes at rest with the motors held at ``q`` (linearized).
 
         The arm is linearized about its static equilibrium under gravity:
-        ``M dq'' + C dq' + (K_gear + dG/dq) dq = 0`` with the mass matrix ``M`` of the link
+        ``M dq'' + C dq' + (K_spring + dG/dq) dq = 0`` with the mass matrix ``M`` of the link
         side, the tangent gear stiffness ``K_gear = diag(k1 + 3 k3 delta_g²)`` at the gravity
         deflection ``delta_g``, the gravity stiffness ``dG/dq`` and the gear damping at the
         static load ``C = diag(c(tau_g))`` of :meth:`~tvist.sim.FlexParams.damping_nms_per_rad`
         with the gravity spring torques ``tau_g`` (the damping force ``c(tau) (d/dt)delta``
         has no first-order term in the load: it is multiplied by a velocity that is zero at
-        rest).
+        rest). With bending links the state also holds the beam hinges, with their linear
+        springs and dampers in ``K_spring`` and ``C``; the mode shapes and strain energies
+        are then ``(n_state, n_modes)``, the joints at :attr:`arm_dofs`.
         """
         theta = self.check_pose(np.asarray(q, dtype=float), "q")
-        q_link = self.equilibrium(theta)
-        delta = theta - q_link
+        state = self.equilibrium_state(theta)
+        arm, passive = self._arm, self._passive
+        delta = theta - state[arm]
         tau = self._flex.spring_torque_nm(delta)
-        gear = self._flex.tangent_stiffness_nm_per_rad(delta)
-        stiffness = np.diag(gear) + self._gravity_stiffness(q_link)
-        damping = np.diag(self._flex.damping_nms_per_rad(tau))
-        return modal_analysis(self.mass_matrix(q_link), damping, stiffness, gear)
+        spring = np.empty(self.n_state)
+        spring[arm] = self._flex.tangent_stiffness_nm_per_rad(delta)
+        spring[passive] = self._model.jnt_stiffness[self._model.dof_jntid[passive]]
+        damping = np.empty(self.n_state)
+        damping[arm] = self._flex.damping_nms_per_rad(tau)
+        damping[passive] = self._model.dof_damping[passive]
+        stiffness = np.diag(spring) + self._gravity_stiffness(state)
+        return modal_analysis(self.state_mass_matrix(state), np.diag(damping), stiffness, spring)
 
     def modes(self, q: Sequence[float] | np.ndarray) -> list[tuple[float, float]]:
         """Ground-truth ``[(wn_rad_s, zeta) base, (wn_rad_s, zeta) shoulder]`` at pose ``q``.
@@ -327,19 +401,27 @@ class Twin:
         energy in the base (shoulder) joint; see :meth:`modal_analysis`.
         """
         analysis = self.modal_analysis(q)
-        base = analysis.dominant_mode(BASE_JOINT)
-        shoulder = analysis.dominant_mode(SHOULDER_JOINT, exclude=(base,))
+        base = analysis.dominant_mode(int(self._arm_dofs[BASE_JOINT]))
+        shoulder = analysis.dominant_mode(int(self._arm_dofs[SHOULDER_JOINT]), exclude=(base,))
         return [
             (float(analysis.wn_rad_s[base]), float(analysis.zeta[base])),
             (float(analysis.wn_rad_s[shoulder]), float(analysis.zeta[shoulder])),
         ]
 
     def mass_matrix(self, q_link: Sequence[float] | np.ndarray) -> np.ndarray:
-        """Link-side joint-space inertia matrix of the MuJoCo model (kg m²), ``(n, n)``."""
+        """Joint-space inertia matrix of the arm with straight links (kg m²), ``(n, n)``:
+        the rigid link-side ``M(q)`` at joint angles ``q_link``."""
+        state = np.zeros(self.n_state)
+        state[self._arm] = np.asarray(q_link, dtype=float)
+        return self.state_mass_matrix(state)[np.ix_(self._arm_dofs, self._arm_dofs)]
+
+    def state_mass_matrix(self, state: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Inertia matrix of the full link-side state (joints and beam hinges) of the MuJoCo
+        model (kg m², kg m² per rad), ``(n_state, n_state)``."""
         d = self._data
-        d.qpos[:] = np.asarray(q_link, dtype=float)
+        d.qpos[:] = np.asarray(state, dtype=float)
         self._mujoco.mj_forward(self._model, d)
-        out = np.zeros((self.n_dof, self.n_dof))
+        out = np.zeros((self.n_state, self.n_state))
         self._mujoco.mj_fullM(self._model, d, out)
         return out
 
@@ -404,7 +486,8 @@ class Twin:
             Show a progress bar.
         initial_dq_rad, initial_qd_rad_s
             Optional link-side offsets from the rest state at ``t = 0`` (rad, rad/s), for
-            free-decay experiments; ``(n_dof,)``.
+            free-decay experiments; ``(n_dof,)`` (the joints) or ``(n_state,)`` (joints and
+            beam hinges, in the order of :meth:`equilibrium_state`).
         noise_seed
             Seed of this run's accelerometer noise (an integer or a sequence of integers);
             ``None`` continues the twin's own generator (seeded by ``seed``), so the noise
@@ -438,15 +521,21 @@ class Twin:
         n_samples, n = q_ref.shape
         offsets = []
         for value, what in ((initial_dq_rad, "initial_dq_rad"), (initial_qd_rad_s, "initial_qd")):
-            arr = np.zeros(n) if value is None else np.asarray(value, dtype=float)
-            if arr.shape != (n,) or not np.all(np.isfinite(arr)):
-                raise ValueError(f"{what} must be {n} finite values")
+            arr = np.zeros(self.n_state)
+            if value is not None:
+                given = np.asarray(value, dtype=float)
+                if given.shape not in ((n,), (self.n_state,)) or not np.all(np.isfinite(given)):
+                    raise ValueError(f"{what} must be {n} (or {self.n_state}) finite values")
+                if given.shape == (n,):
+                    arr[self._arm] = given
+                else:
+                    arr[:] = given
             offsets.append(arr)
 
-        q_start = self.equilibrium(q_ref[0])
+        q_start = self.equilibrium_state(q_ref[0])
         integrator = self.integrator(dt)
         integrator.reset(q_start + offsets[0], offsets[1])
-        qpos, qvel = integrator.data.qpos, integrator.data.qvel
+        qpos, qvel, arm = integrator.data.qpos, integrator.data.qvel, self._arm
 
         # Motor reference: linear interpolation within each control period.
         q_next = np.vstack([q_ref[1:], q_ref[-1:]])
@@ -462,9 +551,9 @@ class Twin:
         bar = _ProgressBar(n_samples, dt) if progress else None
         try:
             for k in range(n_samples):
-                actual_q[k] = qpos
-                actual_qd[k] = qvel
-                deflection[k] = q_ref[k] - qpos
+                actual_q[k] = qpos[arm]
+                actual_qd[k] = qvel[arm]
+                deflection[k] = q_ref[k] - actual_q[k]
                 integrator.advance(q_ref[k], slope[k], accel[k], flange_pos[k], flange_rot[k])
                 reason = integrator.divergence(q_next[k])
                 if reason is not None:

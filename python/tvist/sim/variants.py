@@ -16,13 +16,29 @@ by construction. A variant changes the plant, not the map:
     shoulder modes by a pose-dependent amount the map has to absorb in its base, shoulder
     and elbow laws.
 
+``"ur5e-flex-links"``
+    The default gears, and an upper arm and forearm that bend (:mod:`tvist.sim.beams`): each
+    is an aluminium tube (E = 69 GPa) of 80 mm outer diameter and 3 mm wall
+    (``I = 5.39e-7 m⁴``, ``E I = 37 200 N m²``) along the link's length (0.425 m and
+    0.392 m), cut into three rigid segments joined by two bending hinges, each about both axes
+    perpendicular to the link, ``k = 2 E I / L`` (174 900 and 189 500 N m/rad), with
+    structural damping of loss factor 0.02 (viscous equivalent at 35 Hz). The section is a
+    design choice, not a measured UR5e link: it puts link bending among the modes that
+    matter. With every joint held and the 5 kg payload, the upper arm, carrying the forearm,
+    wrists and payload, bends at 21.4 Hz stretched out (Q1) and 45.7 Hz folded (Q3), the
+    forearm at 46.2 Hz (a continuous Euler-Bernoulli beam with the carried links as a rigid
+    tip body: 21.3, 45.5 and 45.9 Hz, ``tests/test_flex_links.py``). No joint-spring model
+    contains these degrees of freedom: at stretched poses the links' bending adds compliance
+    in series with the gears (base and shoulder modes at Q1 7.45 and 7.21 Hz instead of 7.90
+    and 7.67), at folded poses it couples with them (Q3 18.21 and 18.15 Hz instead of 20.16
+    and 19.22), by amounts that depend on the pose.
+
 Run a campaign on a variant with :func:`run_variant_campaign` (the twin campaign's records,
 with ``true_modes`` from the variant's own eigen-analysis), or build the twin directly:
-``Twin("ur5e", flex=variant_flex("ur5e-soft-gears"))``.
+``Twin("ur5e", flex=variant_flex(name), beams=variant_beams(name))``.
 
-Not expressible as a variant of the gear laws: flexible links (extra bending degrees of
-freedom) and gear hysteresis (a stiffness that depends on the loading history); both need the
-twin's time-stepping loop to carry extra state.
+Not a variant yet: gear hysteresis (a stiffness that depends on the loading history), which
+needs the twin's time-stepping loop to carry extra state.
 """
 
 from __future__ import annotations
@@ -31,9 +47,16 @@ from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
+from tvist.sim.beams import LinkBeams
 from tvist.sim.flex import UR5E_FLEX, FlexParams
 
-__all__ = ["VARIANTS", "VariantTwinRobot", "run_variant_campaign", "variant_flex"]
+__all__ = [
+    "VARIANTS",
+    "VariantTwinRobot",
+    "run_variant_campaign",
+    "variant_beams",
+    "variant_flex",
+]
 
 
 def _stiffening(k1: float, rated_nm: float, growth: float) -> float:
@@ -60,7 +83,25 @@ VARIANTS: dict[str, tuple[str, FlexParams]] = {
             ),
         ),
     ),
+    "ur5e-flex-links": ("ur5e", UR5E_FLEX),
 }
+
+#: The bending links of the variants that have them (see :data:`VARIANTS`).
+_BEAMS: dict[str, LinkBeams] = {
+    "ur5e-flex-links": LinkBeams(links=(1, 2), outer_diameter_m=0.080, wall_m=0.003),
+}
+
+
+def variant_beams(name: str) -> LinkBeams | None:
+    """The bending links of variant ``name``, ``None`` if its links are rigid.
+
+    Raises
+    ------
+    ValueError
+        Unknown variant.
+    """
+    variant_flex(name)
+    return _BEAMS.get(name)
 
 
 def variant_flex(name: str) -> FlexParams:
@@ -90,6 +131,7 @@ class VariantTwinRobot:
 
     def __init__(self, variant: str, accel_noise_std: float = 0.05, seed: int = 0) -> None:
         self.robot_name, self.flex = VARIANTS[variant][0], variant_flex(variant)
+        self.beams = variant_beams(variant)
         self.variant = variant
         self.accel_noise_std = float(accel_noise_std)
         self.seed = int(seed)
@@ -107,6 +149,7 @@ class VariantTwinRobot:
             payload_kg=key[0],
             payload_com_m=key[1],
             flex=self.flex,
+            beams=self.beams,
             accel_noise_std=self.accel_noise_std,
             seed=self.seed,
         )
