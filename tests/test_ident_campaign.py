@@ -248,3 +248,40 @@ def test_ctrl_c_is_one_line_and_the_file_resumes(tmp_path, capsys, monkeypatch):
         "command to resume"
     ]
     assert len(load_results(out)) == 1
+
+
+def test_a_twin_variant_campaign_records_the_variants_modes_in_its_own_file(tmp_path, capsys):
+    """``tvist campaign --sim --variant NAME``: the records' true modes are those of the
+    variant's twin built directly (bending links: a few % below the standard twin's), the
+    file is not shared with a standard-twin campaign, and misuse is one line naming the flag."""
+    from tvist.cli import main
+    from tvist.sim import Twin
+    from tvist.sim.variants import variant_beams, variant_flex
+
+    pose = next(p for p in campaign_poses(payloads_kg=(5.0,)) if p.q is not None)
+    variant = "ur5e-flex-links"
+    out = tmp_path / "variant.jsonl"
+    args = ["campaign", "--sim", "--out", str(out), "--payloads", "5", "--duration", "1"]
+    record = run_campaign([pose], out, variant=variant, progress=False, duration_s=1.0)[0]
+    twin = Twin(
+        "ur5e", 5.0, pose.payload_com_m, flex=variant_flex(variant), beams=variant_beams(variant)
+    )
+    want = twin.modes(np.array(record["q"]))
+    got = [(m["wn_rad_s"], m["zeta"]) for m in record["true_modes"]]
+    np.testing.assert_allclose(got, want, rtol=1e-9)
+    standard = Twin("ur5e", 5.0, pose.payload_com_m).modes(np.array(record["q"]))
+    assert all(v[0] < 0.99 * s[0] for v, s in zip(want, standard, strict=True))
+    # The standard twin's campaign must not resume (or append to) the variant's file.
+    with pytest.raises(ValueError, match="other settings"):
+        run_campaign([pose], out, progress=False, duration_s=1.0)
+    capsys.readouterr()
+    for extra, message in (
+        (["--variant", "nope"], "--variant: unknown, known: ur5e-soft-gears, ur5e-flex-links"),
+        (["--variant", variant, "--robot", "ur10e"], "add --robot ur5e"),
+    ):
+        assert main([*args, *extra]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and message in err[0], err
+    bad = ["campaign", "--robot-ip", "127.0.0.1", "--variant", variant]
+    assert main(bad) == 2
+    assert "use it with --sim" in capsys.readouterr().err

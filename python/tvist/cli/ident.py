@@ -41,6 +41,18 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     from tvist.ident.campaign import URRobot, campaign_poses, run_campaign
     from tvist.ident.results_store import SettingsMismatch
 
+    if args.variant:
+        from tvist.sim.variants import VARIANTS
+
+        if args.robot_ip:
+            return _error("campaign", "--variant selects a twin: use it with --sim")
+        if args.variant not in VARIANTS:
+            return _error("campaign", f"--variant: unknown, known: {', '.join(VARIANTS)}")
+        if VARIANTS[args.variant][0] != args.robot:
+            robot_of = VARIANTS[args.variant][0]
+            return _error(
+                "campaign", f"--variant {args.variant} is a {robot_of}: add --robot {robot_of}"
+            )
     poses = campaign_poses(
         args.robot, payloads_kg=args.payloads, payload_com_m=args.payload_com, seed=args.seed
     )
@@ -60,6 +72,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
             duration_s=args.duration,
             separate_modes=not args.single_mode,
             overwrite=args.overwrite,
+            variant=args.variant,
         )
     except KeyboardInterrupt:
         from tvist.ident.results_store import load_results
@@ -115,6 +128,11 @@ def add_campaign_command(sub: argparse._SubParsersAction) -> None:
     target.add_argument("--robot-ip", help="use a real UR at this address (needs ur-rtde)")
     p.add_argument("--out", default="out/campaign.jsonl", help="results file (JSON lines)")
     p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
+    p.add_argument(
+        "--variant",
+        help="with --sim: a twin variant whose flexibility the maps do not model exactly "
+        "(ur5e-soft-gears, ur5e-flex-links)",
+    )
     p.add_argument(
         "--payloads", type=float, nargs="+", default=[0.0, 1.0, 3.0, 5.0], help="payloads (kg)"
     )

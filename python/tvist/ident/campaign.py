@@ -63,6 +63,7 @@ class _Settings:
     duration_s: float
     options: FitOptions = field(default_factory=FitOptions)
     separate_modes: bool = True
+    variant: str | None = None
 
 
 def run_pose(robot: CampaignRobot, pose: CampaignPose, settings: _Settings) -> dict:
@@ -128,7 +129,10 @@ def _twin_worker(pose: CampaignPose, settings: _Settings) -> dict:
     global _WORKER_ROBOT
     if _WORKER_ROBOT is None:
         _WORKER_ROBOT = TwinRobot(
-            settings.robot_name, settings.accel_noise_std, seed=settings.noise_seed
+            settings.robot_name,
+            settings.accel_noise_std,
+            seed=settings.noise_seed,
+            variant=settings.variant,
         )
     return run_pose(_WORKER_ROBOT, pose, settings)
 
@@ -147,6 +151,7 @@ def run_campaign(
     separate_modes: bool = True,
     progress: bool = True,
     overwrite: bool = False,
+    variant: str | None = None,
 ) -> list[dict]:
     """Run (or resume) a campaign and return every pose record in ``results_path``.
 
@@ -179,6 +184,10 @@ def run_campaign(
     overwrite
         Empty ``results_path`` first. Without it, a file written with other settings is
         refused (:class:`~tvist.ident.results_store.SettingsMismatch`).
+    variant
+        Run a twin variant (:data:`tvist.sim.variants.VARIANTS`) instead of the standard
+        twin (for a given ``robot``: that robot's ``variant``, if it has one); its records
+        are not mixed with the standard twin's in one file.
 
     Raises
     ------
@@ -192,6 +201,7 @@ def run_campaign(
         duration_s=duration_s,
         options=options or FitOptions(),
         separate_modes=separate_modes,
+        variant=getattr(robot, "variant", None) if robot is not None else variant,
     )
     poses = list(poses)
     coms = sorted({tuple(p.payload_com_m) for p in poses})
@@ -205,6 +215,8 @@ def run_campaign(
             "duration_s": duration_s,
             "options": asdict(settings.options),
             "separate_modes": separate_modes,
+            # Only when set, so files of the standard twin keep their fingerprint.
+            **({"variant": settings.variant} if settings.variant else {}),
         }
     )
     with ResultsStore(results_path, key, overwrite=overwrite) as store:
@@ -212,7 +224,9 @@ def run_campaign(
         bar = _Progress(len(todo), len(store.done)) if progress and todo else None
         try:
             if robot is not None or workers <= 1:
-                runner = robot or TwinRobot(robot_name, accel_noise_std, seed=noise_seed)
+                runner = robot or TwinRobot(
+                    robot_name, accel_noise_std, seed=noise_seed, variant=settings.variant
+                )
                 # Payload by payload keeps manual payload changes on a real robot to a minimum.
                 for pose in sorted(todo, key=lambda p: p.payload_kg):
                     store.append(run_pose(runner, pose, settings))

@@ -58,12 +58,36 @@ class TwinRobot:
     seed
         Seed of the accelerometer noise; combined with each excitation's seed (if it has
         one), so each excitation's noise is reproducible on its own.
+    variant
+        A twin variant of :data:`tvist.sim.variants.VARIANTS` (its gears and bending links;
+        its robot must be ``robot_name``), or ``None`` for the standard twin.
+
+    Raises
+    ------
+    ValueError
+        An unknown variant, or one of another robot.
     """
 
-    def __init__(self, robot_name: str = "ur5e", accel_noise_std: float = 0.05, seed: int = 0):
+    def __init__(
+        self,
+        robot_name: str = "ur5e",
+        accel_noise_std: float = 0.05,
+        seed: int = 0,
+        variant: str | None = None,
+    ):
         self.robot_name = robot_name
         self.accel_noise_std = float(accel_noise_std)
         self.seed = int(seed)
+        self.variant = variant
+        self._flex = self._beams = None
+        if variant is not None:
+            from tvist.sim.variants import VARIANTS, variant_beams, variant_flex
+
+            self._flex, self._beams = variant_flex(variant), variant_beams(variant)
+            if VARIANTS[variant][0] != robot_name:
+                raise ValueError(
+                    f"twin variant {variant!r} is a {VARIANTS[variant][0]}, not a {robot_name}"
+                )
         self._twin = None
         self._payload: tuple[float, tuple[float, ...]] | None = None
 
@@ -77,6 +101,8 @@ class TwinRobot:
             self.robot_name,
             payload_kg=key[0],
             payload_com_m=key[1],
+            flex=self._flex,
+            beams=self._beams,
             accel_noise_std=self.accel_noise_std,
             seed=self.seed,
         )

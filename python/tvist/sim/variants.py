@@ -43,7 +43,6 @@ needs the twin's time-stepping loop to carry extra state.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
@@ -52,7 +51,6 @@ from tvist.sim.flex import UR5E_FLEX, FlexParams
 
 __all__ = [
     "VARIANTS",
-    "VariantTwinRobot",
     "run_variant_campaign",
     "variant_beams",
     "variant_flex",
@@ -118,59 +116,6 @@ def variant_flex(name: str) -> FlexParams:
         raise ValueError(f"unknown twin variant {name!r}; known: {', '.join(VARIANTS)}") from None
 
 
-class VariantTwinRobot:
-    """A campaign robot (:class:`tvist.ident.campaign.CampaignRobot`) on a twin variant.
-
-    Parameters
-    ----------
-    variant
-        A name of :data:`VARIANTS`.
-    accel_noise_std, seed
-        As for :class:`tvist.ident.campaign.TwinRobot`.
-    """
-
-    def __init__(self, variant: str, accel_noise_std: float = 0.05, seed: int = 0) -> None:
-        self.robot_name, self.flex = VARIANTS[variant][0], variant_flex(variant)
-        self.beams = variant_beams(variant)
-        self.variant = variant
-        self.accel_noise_std = float(accel_noise_std)
-        self.seed = int(seed)
-        self._twin = None
-        self._payload: tuple | None = None
-
-    def set_payload(self, payload_kg: float, payload_com_m: Sequence[float]) -> None:
-        key = (float(payload_kg), tuple(float(v) for v in payload_com_m))
-        if key == self._payload:
-            return
-        from tvist.sim.twin import Twin
-
-        self._twin = Twin(
-            self.robot_name,
-            payload_kg=key[0],
-            payload_com_m=key[1],
-            flex=self.flex,
-            beams=self.beams,
-            accel_noise_std=self.accel_noise_std,
-            seed=self.seed,
-        )
-        self._payload = key
-
-    def _require_twin(self):
-        if self._twin is None:
-            raise RuntimeError("call set_payload() before running excitations")
-        return self._twin
-
-    def record_excitation(self, excitation):
-        from tvist.ident.logs import Record
-
-        noise_seed = None if excitation.seed is None else [self.seed, excitation.seed]
-        sim = self._require_twin().run(excitation.q, dt_s=excitation.dt_s, noise_seed=noise_seed)
-        return Record.from_rtde_fields(sim)
-
-    def true_modes(self, q):
-        return self._require_twin().modes(q)
-
-
 def run_variant_campaign(
     variant: str,
     results_path: str | Path,
@@ -178,17 +123,26 @@ def run_variant_campaign(
     every: int = 1,
     part: tuple[int, int] = (0, 1),
     seed: int = 0,
+    workers: int = 1,
     progress: bool = False,
 ) -> list[dict]:
-    """Algorithm 1's campaign (every ``every``-th pose) on a twin variant, in this process.
+    """Algorithm 1's campaign (every ``every``-th pose) on a twin variant: ``tvist campaign
+    --sim --variant NAME --every N``.
 
     ``part = (i, n)`` runs only poses ``i, i + n, ...`` of those (to split a campaign over
     processes that write separate files).
     """
     from tvist.ident.campaign import campaign_poses, run_campaign
 
-    robot = VariantTwinRobot(variant, seed=seed)
-    poses = campaign_poses(robot.robot_name, seed=seed)[::every]
+    variant_flex(variant)  # an unknown name is refused here, naming the known ones
+    robot_name = VARIANTS[variant][0]
+    poses = campaign_poses(robot_name, seed=seed)[::every]
     return run_campaign(
-        poses[part[0] :: part[1]], results_path, robot=robot, noise_seed=seed, progress=progress
+        poses[part[0] :: part[1]],
+        results_path,
+        robot_name=robot_name,
+        variant=variant,
+        workers=workers,
+        noise_seed=seed,
+        progress=progress,
     )
