@@ -34,7 +34,7 @@ def run_demo(
     identify
         Identify a map on the twin first: a reduced mapping campaign
         (:func:`~tvist.demo.identified.identify_map`, :data:`~tvist.demo.identified.DEMO_PLAN`,
-        20-60 s on two cores; its records are cached in ``out_dir`` and reused by the next
+        30-90 s on two cores; its records are cached in ``out_dir`` and reused by the next
         run) and the map fit; its FD-TVIST row joins the map rows. ``False`` skips it.
     verbose
         Print progress lines and the table.
