@@ -8,6 +8,7 @@ model than the modal map's), with noise of the size of the local identification'
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
 import pytest
@@ -52,6 +53,9 @@ def _plan_records(plan: CampaignPlan, seed: int = 4) -> list[dict]:
                 "zeta": z * (1 + NOISE_ZETA * rng.standard_normal()),
             }
             for j, (wn, z) in enumerate(truth)
+            # With the arm pointing up the base mode is a torsion of the wrists that the
+            # campaign's base excitation does not identify (flagged low-confidence, unused).
+            if not (j == 0 and math.isclose(p.angle_rad, math.pi / 2))
         ]
         records.append(
             {
