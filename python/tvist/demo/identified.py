@@ -97,8 +97,8 @@ class CampaignPlan:
 #: The demo's campaign: 36 poses, two payloads (none and the experiment's 5 kg), radii covering
 #: the test motions' Q3 ... Q1, three angles. Two payloads because at one payload the gravity
 #: load and the inertia of a joint grow together with the reach, so the modal map's load laws
-#: and the elbow's stiffness cannot be told apart (a 5 kg-only campaign puts the modal map's
-#: shoulder mode 3-4 % low at the stretched pose); no pose at V = π/2 (arm pointing up),
+#: and the elbow's stiffness cannot be told apart (from the former 5 kg-only, 24-pose campaign
+#: the modal fit makes the elbow rigid); no pose at V = π/2 (arm pointing up),
 #: where the base mode is a torsion of the wrists that the base excitation does not identify
 #: (every such base identification is flagged low-confidence).
 DEMO_PLAN = CampaignPlan(
