@@ -34,8 +34,9 @@ def run_demo(
     identify
         Identify a map on the twin first: a reduced mapping campaign
         (:func:`~tvist.demo.identified.identify_map`, :data:`~tvist.demo.identified.DEMO_PLAN`,
-        20-60 s on two cores; its records are cached in ``out_dir`` and reused by the next
-        run) and the map fit; its FD-TVIST row joins the map rows. ``False`` skips it.
+        1-3 min on two cores, depending on their load; its records are cached in ``out_dir``
+        and reused by the next run) and the map fit; its FD-TVIST row joins the map rows.
+        ``False`` skips it.
     verbose
         Print progress lines and the table.
     """
