@@ -248,7 +248,7 @@ impl DelayLine {
     }
 
     /// Prepares the reads of a whole impulse sequence (`weights[i] · x(n − delays[i])`,
-    /// `delays[i] = times_s[i] · rate_hz` in samples, each clamped as in [`Self::tap`]) into
+    /// `delays[i] = times[i] · scale` in samples, each clamped as in [`Self::tap`]) into
     /// `reads`, for
     /// [`Self::push_and_read`]. Returns `true` if any delay had to be clamped.
     ///
@@ -258,34 +258,28 @@ impl DelayLine {
     /// no read waits for the store of the same cycle. A stencil whose stored weight is zero
     /// (a whole-sample delay below one sample) is left out.
     #[inline(always)]
-    pub fn prepare(
-        &self,
-        times_s: &[f64],
-        rate_hz: f64,
-        weights: &[f64],
-        reads: &mut Reads,
-    ) -> bool {
+    pub fn prepare(&self, times: &[f64], scale: f64, weights: &[f64], reads: &mut Reads) -> bool {
         let mut clamped = false;
         let mut len = 0;
         match self.interp {
             Interpolation::Linear => {
                 let max = self.max_delay;
                 let mut now = 0.0;
-                for (&t, &w) in times_s.iter().zip(weights) {
+                for (&t, &w) in times.iter().zip(weights) {
                     if t == 0.0 {
                         // No delay (every shaper's first impulse): the input itself.
                         now += w;
                         continue;
                     }
-                    let delay = t * rate_hz;
+                    let delay = t * scale;
                     // NaN and delays beyond `max` read at `max`, negative ones at 0.
                     let within = delay <= max;
                     clamped |= !within;
                     let d = if within { delay } else { max };
                     let d = if d > 0.0 { d } else { 0.0 };
                     // d ∈ [0, max] with max < 1e7 (capacity_for): truncation is the floor.
-                    let k = d as i32;
-                    let mu = d - f64::from(k);
+                    let k = d as i64;
+                    let mu = d - k as f64;
                     let (w_old, w_new) = (w * mu, w * (1.0 - mu));
                     // Ages k + 1 and k now are ages k and k − 1 before the push; age 0 now is
                     // the input.
@@ -315,8 +309,8 @@ impl DelayLine {
                 reads.now = now;
             }
             Interpolation::Cubic => {
-                for ((&t, &w), tap) in times_s.iter().zip(weights).zip(&mut reads.taps) {
-                    let (prepared, over) = self.tap(t * rate_hz, w);
+                for ((&t, &w), tap) in times.iter().zip(weights).zip(&mut reads.taps) {
+                    let (prepared, over) = self.tap(t * scale, w);
                     *tap = prepared;
                     clamped |= over;
                     len += 1;

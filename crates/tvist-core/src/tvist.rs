@@ -13,7 +13,7 @@
 use crate::delay_line::{DelayLine, Interpolation, Reads};
 use crate::ei::EiTable;
 use crate::error::{Error, Status};
-use crate::shaper::{DampedShape, ImpulseArray, Mode, ShaperKind};
+use crate::shaper::{DampedShape, ImpulseArray, Mode, ShaperKind, MAX_IMPULSES};
 
 /// One time-varying shaper for one mode, applied to all channels.
 #[derive(Debug, Clone)]
@@ -32,6 +32,9 @@ pub struct ModeFilter {
     shape_zeta: f64,
     /// The sequence for `shape_zeta`, times as phases `ω_n t`.
     shape: DampedShape,
+    /// The phases of `shape` times `rate_hz`: its delays in samples for `ω_n = 1` rad/s
+    /// (divided by `ω_n` for a mode).
+    shape_samples: [f64; MAX_IMPULSES],
     /// The sequence used in the latest cycle, designed for `held`.
     impulses: ImpulseArray,
     /// The reads of `impulses`, prepared for `line`.
@@ -75,6 +78,7 @@ impl ModeFilter {
             shaping: false,
             shape_zeta: f64::NAN,
             shape: DampedShape::IDENTITY,
+            shape_samples: [0.0; MAX_IMPULSES],
             impulses: ImpulseArray::IDENTITY,
             reads: Reads::NONE,
             zeta_status: Status::OK,
@@ -99,13 +103,13 @@ impl ModeFilter {
         self.held = Mode::new(f64::NAN, f64::NAN);
         self.shaping = false;
         self.shape_zeta = f64::NAN;
-        self.shape = DampedShape::IDENTITY;
+        self.set_shape(DampedShape::IDENTITY);
         self.impulses = ImpulseArray::IDENTITY;
-        let identity = &self.impulses;
+        // One impulse at delay 0: the reads pass the input through.
         self.line.prepare(
-            identity.times_s(),
-            self.rate_hz,
-            identity.amplitudes(),
+            &self.shape_samples[..1],
+            1.0,
+            self.shape.amplitudes(),
             &mut self.reads,
         );
         self.zeta_status = Status::OK;
@@ -121,25 +125,30 @@ impl ModeFilter {
     /// ([`Status::MODE_ABOVE_NYQUIST`]).
     #[inline]
     pub fn step(&mut self, input: &[f64], mode: Mode) -> Status {
-        let status = self.status_for(mode);
+        let status = self.take(mode);
         self.line
             .push_and_read(input, &self.reads, &mut self.output);
         status
     }
 
-    /// [`Self::step`] for exactly `N` channels (the filter's channel count), returning the
-    /// output too.
+    /// The design part of [`Self::step`]: takes `mode` (or holds the last valid one) and
+    /// returns the cycle's status; [`Self::step_held_fixed`] then shapes the cycle's sample.
     #[inline(always)]
-    pub(crate) fn step_fixed<const N: usize>(
-        &mut self,
-        input: &[f64; N],
-        mode: Mode,
-    ) -> (Status, [f64; N]) {
-        let status = self.status_for(mode);
-        (status, self.read_fixed(input))
+    pub(crate) fn take(&mut self, mode: Mode) -> Status {
+        if self.held.zeta == mode.zeta {
+            if self.held.wn_rad_s == mode.wn_rad_s {
+                return self.design_status;
+            }
+            // Only ω_n changed (a valid held ζ): rescale the delays if ω_n is valid.
+            if (f64::MIN_POSITIVE..=f64::MAX).contains(&mode.wn_rad_s) {
+                return self.take_wn(mode.wn_rad_s);
+            }
+        }
+        self.take_mode(mode)
     }
 
-    /// [`Self::step_fixed`] with the held mode (the caller knows the mode is unchanged).
+    /// [`Self::step`] for exactly `N` channels (the filter's channel count) with the held
+    /// design ([`Self::take`] first if the mode may have changed), returning the output too.
     #[inline(always)]
     pub(crate) fn step_held_fixed<const N: usize>(
         &mut self,
@@ -164,21 +173,6 @@ impl ModeFilter {
             *output = y;
         }
         y
-    }
-
-    /// The cycle's status for `mode`, designing for it first if it is not the held mode.
-    #[inline(always)]
-    fn status_for(&mut self, mode: Mode) -> Status {
-        if self.held.zeta == mode.zeta {
-            if self.held.wn_rad_s == mode.wn_rad_s {
-                return self.design_status;
-            }
-            // Only ω_n changed (a valid held ζ): rescale the delays if ω_n is valid.
-            if (f64::MIN_POSITIVE..=f64::MAX).contains(&mode.wn_rad_s) {
-                return self.take_wn(mode.wn_rad_s);
-            }
-        }
-        self.take_mode(mode)
     }
 
     /// A new natural frequency for the held shape: the delays scale by `1/ω_n` (the shape
@@ -219,15 +213,27 @@ impl ModeFilter {
         if self.held.wn_rad_s * self.dt_s >= core::f64::consts::PI {
             status |= Status::MODE_ABOVE_NYQUIST;
         }
-        let (amplitudes, times_s) = (self.impulses.amplitudes(), self.impulses.times_s());
-        if self
-            .line
-            .prepare(times_s, self.rate_hz, amplitudes, &mut self.reads)
-        {
+        let n = self.shape.len().min(MAX_IMPULSES);
+        let per_rad = 1.0 / self.held.wn_rad_s; // the same division as `impulses`' times
+        if self.line.prepare(
+            &self.shape_samples[..n],
+            per_rad,
+            self.shape.amplitudes(),
+            &mut self.reads,
+        ) {
             status |= Status::DELAY_CLAMPED;
         }
         self.design_status = status;
         status
+    }
+
+    /// Makes `shape` the current shape.
+    fn set_shape(&mut self, shape: DampedShape) {
+        self.shape = shape;
+        self.shape_samples = [0.0; MAX_IMPULSES];
+        for (d, p) in self.shape_samples.iter_mut().zip(shape.phases_rad()) {
+            *d = p * self.rate_hz;
+        }
     }
 
     /// Designs the shape for the damping ratio of a valid mode (limited to the shaper's
@@ -236,7 +242,7 @@ impl ModeFilter {
         let (design_mode, limited) = self.kind.within_range(mode);
         let design_zeta = design_mode.zeta;
         if design_zeta != self.shape_zeta {
-            self.shape = match &self.ei_table {
+            let shape = match &self.ei_table {
                 // A change of ζ while shaping: the tabulated exact solution. The first design
                 // (after construction or a reset) is solved, so constant modes get exactly
                 // the offline design.
@@ -246,6 +252,7 @@ impl ModeFilter {
                 }
                 _ => self.kind.damped_shape(design_zeta),
             };
+            self.set_shape(shape);
             self.shape_zeta = design_zeta;
         }
         self.zeta_status = if limited {
