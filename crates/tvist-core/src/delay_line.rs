@@ -4,6 +4,7 @@
 //! and every read index is reduced modulo the capacity, so no read can leave the buffer.
 
 use crate::error::Error;
+use crate::shaper::MAX_IMPULSES;
 
 /// Fractional-delay interpolation: Lagrange order 1 (`Linear`, default) or 3 (`Cubic`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -33,7 +34,7 @@ impl Interpolation {
 
 /// A fractional read prepared once for a delay that stays fixed over many cycles: the
 /// stencil's position relative to the newest sample and its weights, oldest sample first.
-/// Made by [`DelayLine::tap`]; read by [`DelayLine::read_taps`].
+/// Made by [`DelayLine::tap`]; read by [`DelayLine::read_taps`] (the cubic form of [`Reads`]).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Tap {
     /// `capacity − age of the oldest stencil sample`, in `[1, capacity]`: the stencil's first
@@ -41,6 +42,57 @@ pub struct Tap {
     lag: usize,
     /// Weights of the stencil's samples, oldest first (linear: the first two are used).
     weights: [f64; 4],
+}
+
+/// The prepared reads of one impulse sequence for one line ([`DelayLine::prepare`]): what a
+/// cycle whose sequence is unchanged reads, with no per-impulse arithmetic left.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reads {
+    /// Linear: the weight of the newest sample (applied to the input). Cubic: 0.
+    now: f64,
+    /// Entries of `pairs` (linear) or `taps` (cubic) in use, `<= MAX_IMPULSES`.
+    len: usize,
+    /// Linear: two-sample stencils of the samples stored before the cycle's push.
+    pairs: [Pair; MAX_IMPULSES],
+    /// Cubic: four-sample stencils of the samples stored after the push.
+    taps: [Tap; MAX_IMPULSES],
+}
+
+/// A linear stencil read before the push: `w_old · x(age j) + w_new · x(age j − 1)` in ages
+/// before the push, `j = capacity − lag`, `lag ∈ [1, capacity − 1]` (so `j >= 1`): the two
+/// samples are slots `head + lag` and `head + lag + 1` of the mirrored buffer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Pair {
+    lag: usize,
+    w_old: f64,
+    w_new: f64,
+}
+
+impl Reads {
+    /// No reads: a line read through them gives zeros.
+    pub const NONE: Reads = Reads {
+        now: 0.0,
+        len: 0,
+        pairs: [Pair {
+            lag: 1,
+            w_old: 0.0,
+            w_new: 0.0,
+        }; MAX_IMPULSES],
+        taps: [Tap {
+            lag: 1,
+            weights: [0.0; 4],
+        }; MAX_IMPULSES],
+    };
+
+    #[inline]
+    fn pairs(&self) -> &[Pair] {
+        self.pairs.get(..self.len).unwrap_or(&[])
+    }
+
+    #[inline]
+    fn taps(&self) -> &[Tap] {
+        self.taps.get(..self.len).unwrap_or(&[])
+    }
 }
 
 /// Circular buffer of the last `capacity` samples of `n_channels` signals.
@@ -195,56 +247,157 @@ impl DelayLine {
         (tap, clamped)
     }
 
-    /// [`Self::push`] then [`Self::read_taps`], with the channel loops unrolled for linear
-    /// reads of up to 8 channels (the arithmetic is the same; only the loop shape differs).
-    #[inline]
-    pub fn push_and_read(&mut self, x: &[f64], taps: &[Tap], out: &mut [f64]) {
-        if self.interp == Interpolation::Linear {
-            let done = match self.n_channels {
-                1 => self.push_read_linear::<1>(x, taps, out),
-                2 => self.push_read_linear::<2>(x, taps, out),
-                3 => self.push_read_linear::<3>(x, taps, out),
-                4 => self.push_read_linear::<4>(x, taps, out),
-                5 => self.push_read_linear::<5>(x, taps, out),
-                6 => self.push_read_linear::<6>(x, taps, out),
-                7 => self.push_read_linear::<7>(x, taps, out),
-                8 => self.push_read_linear::<8>(x, taps, out),
-                _ => false,
-            };
-            if done {
-                return;
+    /// Prepares the reads of a whole impulse sequence (`weights[i] · x(n − delays[i])`,
+    /// `delays[i] = times[i] · scale` in samples, each clamped as in [`Self::tap`]) into
+    /// `reads`, for
+    /// [`Self::push_and_read`]. Returns `true` if any delay had to be clamped.
+    ///
+    /// Linear reads are split by the samples they need: the weight of the newest sample (a
+    /// stencil ending at age 0, such as every shaper's first impulse at delay 0) is applied
+    /// to the input itself, and the other stencils read samples stored before the push, so
+    /// no read waits for the store of the same cycle. A stencil whose stored weight is zero
+    /// (a whole-sample delay below one sample) is left out.
+    #[inline(always)]
+    pub fn prepare(&self, times: &[f64], scale: f64, weights: &[f64], reads: &mut Reads) -> bool {
+        let mut clamped = false;
+        let mut len = 0;
+        match self.interp {
+            Interpolation::Linear => {
+                let max = self.max_delay;
+                let mut now = 0.0;
+                for (&t, &w) in times.iter().zip(weights) {
+                    if t == 0.0 {
+                        // No delay (every shaper's first impulse): the input itself.
+                        now += w;
+                        continue;
+                    }
+                    let delay = t * scale;
+                    // NaN and delays beyond `max` read at `max`, negative ones at 0.
+                    let within = delay <= max;
+                    clamped |= !within;
+                    let d = if within { delay } else { max };
+                    let d = if d > 0.0 { d } else { 0.0 };
+                    // d ∈ [0, max] with max < 1e7 (capacity_for): truncation is the floor.
+                    let k = d as i64;
+                    let mu = d - k as f64;
+                    let (w_old, w_new) = (w * mu, w * (1.0 - mu));
+                    // Ages k + 1 and k now are ages k and k − 1 before the push; age 0 now is
+                    // the input.
+                    let pair = if k == 0 {
+                        now += w_new;
+                        if w_old == 0.0 {
+                            continue;
+                        }
+                        Pair {
+                            lag: self.capacity - 1,
+                            w_old: 0.0,
+                            w_new: w_old,
+                        }
+                    } else {
+                        // k <= floor(max) = capacity − 2.
+                        Pair {
+                            lag: self.capacity - k as usize,
+                            w_old,
+                            w_new,
+                        }
+                    };
+                    if let Some(slot) = reads.pairs.get_mut(len) {
+                        *slot = pair;
+                        len += 1;
+                    }
+                }
+                reads.now = now;
+            }
+            Interpolation::Cubic => {
+                for ((&t, &w), tap) in times.iter().zip(weights).zip(&mut reads.taps) {
+                    let (prepared, over) = self.tap(t * scale, w);
+                    *tap = prepared;
+                    clamped |= over;
+                    len += 1;
+                }
+                reads.now = 0.0;
             }
         }
-        self.push(x);
-        self.read_taps(taps, out);
+        reads.len = len;
+        clamped
     }
 
-    /// [`Self::push_and_read`] for exactly `N` channels.
+    /// Appends `x` and writes `out = Σ reads(x)` (all channels; `reads` from [`Self::prepare`]
+    /// of this line). The common channel counts with linear reads run with fixed-size rows;
+    /// the arithmetic is the same for every count.
+    #[inline]
+    pub fn push_and_read(&mut self, x: &[f64], reads: &Reads, out: &mut [f64]) {
+        if self.interp == Interpolation::Linear {
+            macro_rules! fixed {
+                ($n:literal) => {
+                    if let (Ok(x), Ok(out)) = (
+                        <&[f64; $n]>::try_from(x),
+                        <&mut [f64; $n]>::try_from(&mut *out),
+                    ) {
+                        *out = self.push_read_linear::<$n>(x, reads);
+                        return;
+                    }
+                };
+            }
+            match self.n_channels {
+                1 => fixed!(1),
+                2 => fixed!(2),
+                3 => fixed!(3),
+                4 => fixed!(4),
+                5 => fixed!(5),
+                6 => fixed!(6),
+                7 => fixed!(7),
+                8 => fixed!(8),
+                _ => {}
+            }
+            self.read_linear_before_push(x, reads, out);
+            self.push(x);
+        } else {
+            self.push(x);
+            self.read_taps(reads.taps(), out);
+        }
+    }
+
+    /// [`Self::push_and_read`] for exactly `N` channels (the line's count; another count
+    /// reads nothing and returns zeros).
     #[inline(always)]
     pub(crate) fn push_and_read_fixed<const N: usize>(
         &mut self,
         x: &[f64; N],
-        taps: &[Tap],
-        out: &mut [f64],
-    ) {
-        if !(self.interp == Interpolation::Linear && self.push_read_linear::<N>(x, taps, out)) {
+        reads: &Reads,
+    ) -> [f64; N] {
+        if self.interp == Interpolation::Linear {
+            self.push_read_linear::<N>(x, reads)
+        } else {
+            let mut out = [0.0; N];
             self.push(x);
-            self.read_taps(taps, out);
+            self.read_taps(reads.taps(), &mut out);
+            out
         }
     }
 
-    /// The linear push-and-read for exactly `N` channels; `false` (nothing done) if a length
-    /// differs from `N`.
+    /// Linear reads of exactly `N` channels, then the push. Stencils read samples stored
+    /// before this cycle (see [`Self::prepare`]).
     #[inline(always)]
-    fn push_read_linear<const N: usize>(
-        &mut self,
-        x: &[f64],
-        taps: &[Tap],
-        out: &mut [f64],
-    ) -> bool {
-        let (Ok(x), Ok(out)) = (<&[f64; N]>::try_from(x), <&mut [f64; N]>::try_from(out)) else {
-            return false;
-        };
+    fn push_read_linear<const N: usize>(&mut self, x: &[f64; N], reads: &Reads) -> [f64; N] {
+        let mut acc = [0.0; N];
+        for c in 0..N {
+            acc[c] = reads.now * x[c];
+        }
+        for pair in reads.pairs() {
+            let start = (self.head + pair.lag) * N;
+            let Some(block) = self.buf.get(start..start + 2 * N) else {
+                continue;
+            };
+            let (r0, r1) = block.split_at(N);
+            let (Ok(r0), Ok(r1)) = (<&[f64; N]>::try_from(r0), <&[f64; N]>::try_from(r1)) else {
+                continue;
+            };
+            let (w0, w1) = (pair.w_old, pair.w_new);
+            for c in 0..N {
+                acc[c] += w0 * r0[c] + w1 * r1[c];
+            }
+        }
         self.head = if self.head + 1 >= self.capacity {
             0
         } else {
@@ -255,27 +408,22 @@ impl DelayLine {
                 row.copy_from_slice(x);
             }
         }
-        let mut acc = [0.0; N];
-        for tap in taps {
-            let start = (self.head + tap.lag) * N;
-            let Some(block) = self.buf.get(start..start + 2 * N) else {
-                continue;
-            };
-            let (r0, r1) = block.split_at(N);
-            let (Ok(r0), Ok(r1)) = (<&[f64; N]>::try_from(r0), <&[f64; N]>::try_from(r1)) else {
-                continue;
-            };
-            // A stencil ending at age 0 (a delay below one sample, such as every shaper's
-            // first impulse) takes the newest sample from `x` rather than reading back the
-            // store just made (a wide load of a fresh narrow store stalls).
-            let r1 = if tap.lag + 1 == self.capacity { x } else { r1 };
-            let [w0, w1, ..] = tap.weights;
-            for c in 0..N {
-                acc[c] += w0 * r0[c] + w1 * r1[c];
+        acc
+    }
+
+    /// The linear reads of [`Self::push_and_read`] for any channel count (before the push).
+    fn read_linear_before_push(&self, x: &[f64], reads: &Reads, out: &mut [f64]) {
+        let n = self.n_channels;
+        for (o, &v) in out.iter_mut().take(n).zip(x) {
+            *o = reads.now * v;
+        }
+        for pair in reads.pairs() {
+            let (w0, w1) = (pair.w_old, pair.w_new);
+            let (r0, r1) = self.rows2(pair.lag);
+            for ((o, a), b) in out.iter_mut().zip(r0).zip(r1) {
+                *o += w0 * a + w1 * b;
             }
         }
-        *out = acc;
-        true
     }
 
     /// `out = Σ_taps tap(x)` over all channels (`out` is overwritten; no taps give zeros).

@@ -26,6 +26,12 @@ pub trait Dynamics {
     fn n_dof(&self) -> Option<usize> {
         None
     }
+
+    /// `true` if [`Self::modes`] writes the same valid modes every call, whatever `q`, and
+    /// reports no status: a shaper then asks once after each start or reset and reuses them.
+    fn modes_are_constant(&self) -> bool {
+        false
+    }
 }
 
 /// Fixed modes, independent of the configuration (time-invariant multi-mode shaping).
@@ -68,6 +74,10 @@ impl Dynamics for ConstantModes {
     fn slowest_mode(&self, index: usize) -> Option<Mode> {
         self.modes.get(index).copied()
     }
+
+    fn modes_are_constant(&self) -> bool {
+        true // validated in `new` and never changed
+    }
 }
 
 impl<D: Dynamics + ?Sized> Dynamics for Box<D> {
@@ -82,6 +92,9 @@ impl<D: Dynamics + ?Sized> Dynamics for Box<D> {
     }
     fn n_dof(&self) -> Option<usize> {
         (**self).n_dof()
+    }
+    fn modes_are_constant(&self) -> bool {
+        (**self).modes_are_constant()
     }
 }
 
@@ -145,6 +158,15 @@ impl<C: Dynamics> Dynamics for Provider<C> {
             Provider::Map(p) => p.n_dof(),
             Provider::Modal(p) => p.n_dof(),
             Provider::Callback(p) => p.n_dof(),
+        }
+    }
+    #[inline]
+    fn modes_are_constant(&self) -> bool {
+        match self {
+            Provider::Constant(p) => p.modes_are_constant(),
+            Provider::Map(p) => p.modes_are_constant(),
+            Provider::Modal(p) => p.modes_are_constant(),
+            Provider::Callback(p) => p.modes_are_constant(),
         }
     }
 }

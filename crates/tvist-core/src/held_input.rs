@@ -36,26 +36,30 @@ impl HeldInput {
         (status, first)
     }
 
-    /// [`Self::accept`] for exactly `N` channels (a held sample of another length is kept).
+    /// [`Self::accept`] for exactly `N` channels, also returning the held sample after it (a
+    /// held sample of another length is kept, and zeros are returned).
     #[inline]
-    pub fn accept_fixed<const N: usize>(&mut self, input: &[f64; N]) -> (Status, bool) {
-        let status = if input.iter().all(|v| v.is_finite()) {
-            if let Ok(value) = <&mut [f64; N]>::try_from(self.value.as_mut_slice()) {
-                *value = *input;
-            }
+    pub fn accept_fixed<const N: usize>(&mut self, input: &[f64; N]) -> ([f64; N], Status, bool) {
+        // Every value is checked (no early exit), so the check runs on whole vectors.
+        let finite = input.iter().fold(true, |all, v| all & v.is_finite());
+        let held = <&mut [f64; N]>::try_from(self.value.as_mut_slice());
+        let status = if finite {
             Status::OK
         } else {
             Status::INPUT_HELD
         };
+        let value = match held {
+            Ok(value) => {
+                if finite {
+                    *value = *input;
+                }
+                *value
+            }
+            Err(_) => [0.0; N],
+        };
         let first = !self.started;
         self.started = true;
-        (status, first)
-    }
-
-    /// The held sample as `N` values (zeros if it has another length).
-    #[inline]
-    pub fn value_fixed<const N: usize>(&self) -> [f64; N] {
-        <[f64; N]>::try_from(self.value.as_slice()).unwrap_or([0.0; N])
+        (value, status, first)
     }
 
     /// Sets the held sample to `x0` (non-finite entries taken as 0) and marks the filter

@@ -52,6 +52,10 @@ pub struct TvShaper<D: Dynamics> {
     modes: Vec<Mode>,
     /// Last valid input sample (held when a non-finite sample arrives).
     input: HeldInput,
+    /// Every filter holds the design for the provider's modes of a previous cycle (set by a
+    /// step, cleared by a start or reset and by [`Self::dynamics_mut`]). With a provider whose
+    /// modes are constant the step then neither asks for modes nor compares them.
+    designed: bool,
     n_dof: usize,
     dt_s: f64,
 }
@@ -141,6 +145,7 @@ impl<D: Dynamics> TvShaper<D> {
             filters,
             modes: vec![Mode::new(f64::NAN, f64::NAN); n_modes],
             input: HeldInput::new(n_dof),
+            designed: false,
             n_dof,
             dt_s,
         })
@@ -154,6 +159,7 @@ impl<D: Dynamics> TvShaper<D> {
         for f in &mut self.filters {
             f.forget_mode();
         }
+        self.designed = false;
     }
 
     /// Forgets all history: the next `step` starts at rest on its input.
@@ -162,6 +168,7 @@ impl<D: Dynamics> TvShaper<D> {
         for f in &mut self.filters {
             f.forget_mode();
         }
+        self.designed = false;
     }
 
     /// One control cycle: shapes `input` (length `n_dof`) into `output` (length `n_dof`).
@@ -193,19 +200,29 @@ impl<D: Dynamics> TvShaper<D> {
         ) else {
             return Status::BAD_LENGTH;
         };
-        let (mut status, first) = self.input.accept_fixed(input);
+        let (mut stage, mut status, first) = self.input.accept_fixed(input);
         if first {
             self.start_at_input();
         }
-        let previous_output = match self.filters.last() {
-            Some(last) => last.output(),
-            None => self.input.value(),
-        };
-        status |= self.dynamics.modes(previous_output, &mut self.modes);
-        let mut stage: [f64; N] = self.input.value_fixed();
-        for (filter, &mode) in self.filters.iter_mut().zip(&self.modes) {
-            status |= filter.step_fixed(&stage, mode);
-            stage = filter.output_fixed();
+        if self.designed && self.dynamics.modes_are_constant() {
+            for filter in &mut self.filters {
+                let (filter_status, filtered) = filter.step_held_fixed(&stage);
+                status |= filter_status;
+                stage = filtered;
+            }
+        } else {
+            status |= self.ask_modes();
+            // Every filter takes its mode first (a design never depends on the signal), then
+            // the signal runs through the cascade with no call in between.
+            for (filter, &mode) in self.filters.iter_mut().zip(&self.modes) {
+                status |= filter.take(mode);
+            }
+            for filter in &mut self.filters {
+                let (filter_status, filtered) = filter.step_held_fixed(&stage);
+                status |= filter_status;
+                stage = filtered;
+            }
+            self.designed = true;
         }
         *output = stage;
         status
@@ -220,22 +237,35 @@ impl<D: Dynamics> TvShaper<D> {
         if first {
             self.start_at_input();
         }
-        // q**_{n−1}: the previous final output, kept by the last filter (at rest on the input
-        // after a start or reset).
+        let constant = self.designed && self.dynamics.modes_are_constant();
+        if !constant {
+            status |= self.ask_modes();
+        }
+        // Filter m shapes the output of filter m − 1 (the held input for the first).
+        let mut stage: &[f64] = self.input.value();
+        for (filter, &mode) in self.filters.iter_mut().zip(&self.modes) {
+            status |= if constant {
+                filter.step_held(stage)
+            } else {
+                filter.step(stage, mode)
+            };
+            let done: &ModeFilter = filter;
+            stage = done.output();
+        }
+        self.designed = true;
+        output.copy_from_slice(stage);
+        status
+    }
+
+    /// The provider's modes at `q**_{n−1}`, the previous final output, kept by the last filter
+    /// (at rest on the input after a start or reset), into `modes`.
+    #[inline]
+    fn ask_modes(&mut self) -> Status {
         let previous_output = match self.filters.last() {
             Some(last) => last.output(),
             None => self.input.value(),
         };
-        status |= self.dynamics.modes(previous_output, &mut self.modes);
-        // Filter m shapes the output of filter m − 1 (the held input for the first).
-        let mut stage: &[f64] = self.input.value();
-        for (filter, &mode) in self.filters.iter_mut().zip(&self.modes) {
-            status |= filter.step(stage, mode);
-            let done: &ModeFilter = filter;
-            stage = done.output();
-        }
-        output.copy_from_slice(stage);
-        status
+        self.dynamics.modes(previous_output, &mut self.modes)
     }
 
     /// At rest on the held input: history and outputs (so the previous output) equal it.
@@ -279,7 +309,9 @@ impl<D: Dynamics> TvShaper<D> {
         &self.dynamics
     }
 
+    /// The provider, to change it: the next step asks it for modes again.
     pub fn dynamics_mut(&mut self) -> &mut D {
+        self.designed = false;
         &mut self.dynamics
     }
 

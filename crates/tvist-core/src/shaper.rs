@@ -121,6 +121,17 @@ impl ImpulseArray {
         &self.times_s[..self.len]
     }
 
+    /// Sets the times to those of `shape` at natural frequency `wn_rad_s` (`t_i = phase_i /
+    /// ω_n`); `shape` is the one the sequence was made from ([`DampedShape::at`]), so only
+    /// `ω_n` changes.
+    #[inline]
+    pub(crate) fn retime(&mut self, shape: &DampedShape, wn_rad_s: f64) {
+        let period = 1.0 / wn_rad_s; // s per rad of ω_n t
+        for (t, p) in self.times_s.iter_mut().zip(shape.phases_rad()) {
+            *t = p * period;
+        }
+    }
+
     /// Time of the last impulse: the delay this sequence adds, in seconds.
     #[inline]
     pub fn duration_s(&self) -> f64 {
@@ -366,16 +377,13 @@ impl DampedShape {
     /// The sequence for the mode of natural frequency `wn_rad_s`: `t_i = phase_i / ω_n`.
     #[inline]
     pub fn at(&self, wn_rad_s: f64) -> ImpulseArray {
-        let period = 1.0 / wn_rad_s; // s per rad of ω_n t
-        let mut times_s = [0.0; MAX_IMPULSES];
-        for (t, p) in times_s.iter_mut().zip(self.phases_rad()) {
-            *t = p * period;
-        }
-        ImpulseArray {
+        let mut impulses = ImpulseArray {
             len: self.len,
             amplitudes: self.amplitudes,
-            times_s,
-        }
+            times_s: [0.0; MAX_IMPULSES],
+        };
+        impulses.retime(self, wn_rad_s);
+        impulses
     }
 }
 

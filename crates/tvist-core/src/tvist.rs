@@ -5,12 +5,12 @@
 //! varying output (no whole-sample jumps, no buffer resets).
 //!
 //! Cost structure: a cycle whose mode equals the held one reads prepared taps (position and
-//! weights per impulse, [`Tap`]) and returns the status stored with them. A new `ω_n` only
-//! rescales the delays; a new `ζ` also redesigns the shape ([`DampedShape`]: amplitudes and
+//! weights per impulse, [`Reads`]) and returns the status stored with them. A new `ω_n` only
+//! rescales the delays (one division per mode, one fractional split per impulse); a new `ζ` also redesigns the shape ([`DampedShape`]: amplitudes and
 //! phases depend on `ζ` alone); for the exact EI shaper a change of `ζ` interpolates its
 //! tabulated solution ([`EiTable`], within 1e-9 of the Newton solve) instead of solving.
 
-use crate::delay_line::{DelayLine, Interpolation, Tap};
+use crate::delay_line::{DelayLine, Interpolation, Reads};
 use crate::ei::EiTable;
 use crate::error::{Error, Status};
 use crate::shaper::{DampedShape, ImpulseArray, Mode, ShaperKind, MAX_IMPULSES};
@@ -23,16 +23,24 @@ pub struct ModeFilter {
     rate_hz: f64,
     dt_s: f64,
     line: DelayLine,
-    /// Last valid mode seen; `None` until the first one (the filter then passes through).
-    held: Option<Mode>,
+    /// Last valid mode seen; NaN until the first one (the filter then passes through), so
+    /// that it compares unequal to every mode.
+    held: Mode,
+    /// Whether a valid mode has been seen (`held` is a mode).
+    shaping: bool,
     /// Damping ratio `shape` was designed for (after limiting); NaN before the first design.
     shape_zeta: f64,
     /// The sequence for `shape_zeta`, times as phases `ω_n t`.
     shape: DampedShape,
+    /// The phases of `shape` times `rate_hz`: its delays in samples for `ω_n = 1` rad/s
+    /// (divided by `ω_n` for a mode).
+    shape_samples: [f64; MAX_IMPULSES],
     /// The sequence used in the latest cycle, designed for `held`.
     impulses: ImpulseArray,
-    /// One prepared read per impulse of `impulses` (the first `impulses.len()` are used).
-    taps: [Tap; MAX_IMPULSES],
+    /// The reads of `impulses`, prepared for `line`.
+    reads: Reads,
+    /// [`Status::ZETA_CLAMPED`] if the held mode's `ζ` was limited to the shaper's range.
+    zeta_status: Status,
     /// What the current design reports every cycle: [`Status::ZETA_CLAMPED`] if `ζ` was
     /// limited to the shaper's range, [`Status::DELAY_CLAMPED`] if a delay exceeds the line.
     design_status: Status,
@@ -66,11 +74,14 @@ impl ModeFilter {
             rate_hz: 1.0 / dt_s,
             dt_s,
             line: DelayLine::new(n_channels, max_delay_s / dt_s, interp)?,
-            held: None,
+            held: Mode::new(f64::NAN, f64::NAN),
+            shaping: false,
             shape_zeta: f64::NAN,
             shape: DampedShape::IDENTITY,
+            shape_samples: [0.0; MAX_IMPULSES],
             impulses: ImpulseArray::IDENTITY,
-            taps: [Tap::default(); MAX_IMPULSES],
+            reads: Reads::NONE,
+            zeta_status: Status::OK,
             design_status: Status::OK,
             ei_table: kind.ei_tolerance().map(EiTable::new),
             output: vec![0.0; n_channels],
@@ -89,11 +100,19 @@ impl ModeFilter {
 
     /// Forgets the held mode (used when a shaper is reset).
     pub fn forget_mode(&mut self) {
-        self.held = None;
+        self.held = Mode::new(f64::NAN, f64::NAN);
+        self.shaping = false;
         self.shape_zeta = f64::NAN;
-        self.shape = DampedShape::IDENTITY;
+        self.set_shape(DampedShape::IDENTITY);
         self.impulses = ImpulseArray::IDENTITY;
-        self.taps[0] = self.line.tap(0.0, 1.0).0;
+        // One impulse at delay 0: the reads pass the input through.
+        self.line.prepare(
+            &self.shape_samples[..1],
+            1.0,
+            self.shape.amplitudes(),
+            &mut self.reads,
+        );
+        self.zeta_status = Status::OK;
         self.design_status = Status::OK;
     }
 
@@ -106,84 +125,141 @@ impl ModeFilter {
     /// ([`Status::MODE_ABOVE_NYQUIST`]).
     #[inline]
     pub fn step(&mut self, input: &[f64], mode: Mode) -> Status {
-        let status = match self.held {
-            Some(h) if h.wn_rad_s == mode.wn_rad_s && h.zeta == mode.zeta => self.design_status,
-            _ => self.take_mode(mode),
-        };
-        let n = self.impulses.len().min(MAX_IMPULSES);
+        let status = self.take(mode);
         self.line
-            .push_and_read(input, &self.taps[..n], &mut self.output);
+            .push_and_read(input, &self.reads, &mut self.output);
         status
     }
 
-    /// [`Self::step`] for exactly `N` channels (the filter's channel count).
+    /// The design part of [`Self::step`]: takes `mode` (or holds the last valid one) and
+    /// returns the cycle's status; [`Self::step_held_fixed`] then shapes the cycle's sample.
     #[inline(always)]
-    pub(crate) fn step_fixed<const N: usize>(&mut self, input: &[f64; N], mode: Mode) -> Status {
-        let status = match self.held {
-            Some(h) if h.wn_rad_s == mode.wn_rad_s && h.zeta == mode.zeta => self.design_status,
-            _ => self.take_mode(mode),
-        };
-        let n = self.impulses.len().min(MAX_IMPULSES);
-        self.line
-            .push_and_read_fixed(input, &self.taps[..n], &mut self.output);
-        status
+    pub(crate) fn take(&mut self, mode: Mode) -> Status {
+        if self.held.zeta == mode.zeta {
+            if self.held.wn_rad_s == mode.wn_rad_s {
+                return self.design_status;
+            }
+            // Only ω_n changed (a valid held ζ): rescale the delays if ω_n is valid.
+            if (f64::MIN_POSITIVE..=f64::MAX).contains(&mode.wn_rad_s) {
+                return self.take_wn(mode.wn_rad_s);
+            }
+        }
+        self.take_mode(mode)
     }
 
-    /// The output of the latest cycle as `N` values (zeros if the filter has another count).
+    /// [`Self::step`] for exactly `N` channels (the filter's channel count) with the held
+    /// design ([`Self::take`] first if the mode may have changed), returning the output too.
+    #[inline(always)]
+    pub(crate) fn step_held_fixed<const N: usize>(
+        &mut self,
+        input: &[f64; N],
+    ) -> (Status, [f64; N]) {
+        (self.design_status, self.read_fixed(input))
+    }
+
+    /// [`Self::step`] with the held mode (the caller knows the mode is unchanged).
     #[inline]
-    pub(crate) fn output_fixed<const N: usize>(&self) -> [f64; N] {
-        <[f64; N]>::try_from(self.output.as_slice()).unwrap_or([0.0; N])
+    pub(crate) fn step_held(&mut self, input: &[f64]) -> Status {
+        self.line
+            .push_and_read(input, &self.reads, &mut self.output);
+        self.design_status
+    }
+
+    /// Pushes `input`, reads the current design and keeps the output.
+    #[inline(always)]
+    fn read_fixed<const N: usize>(&mut self, input: &[f64; N]) -> [f64; N] {
+        let y = self.line.push_and_read_fixed(input, &self.reads);
+        if let Ok(output) = <&mut [f64; N]>::try_from(self.output.as_mut_slice()) {
+            *output = y;
+        }
+        y
+    }
+
+    /// A new natural frequency for the held shape: the delays scale by `1/ω_n` (the shape
+    /// and its `ζ` status stay). Returns the cycle's status.
+    #[inline]
+    fn take_wn(&mut self, wn_rad_s: f64) -> Status {
+        self.held.wn_rad_s = wn_rad_s;
+        self.impulses.retime(&self.shape, wn_rad_s);
+        self.prepare_reads()
     }
 
     /// A mode other than the held one: redesign for it if valid, hold otherwise. Returns the
     /// cycle's status.
+    #[inline(never)]
     fn take_mode(&mut self, mode: Mode) -> Status {
         if !mode.is_valid() {
-            let unshaped = if self.held.is_none() {
+            let unshaped = if !self.shaping {
                 Status::UNSHAPED
             } else {
                 Status::OK
             };
             return Status::MODES_HELD | unshaped | self.design_status;
         }
+        self.take_zeta(mode);
+        self.held = mode;
+        self.shaping = true;
+        self.impulses = self.shape.at(mode.wn_rad_s);
+        self.prepare_reads()
+    }
+
+    /// Prepares the reads of `impulses` (designed for `held`) and returns the status they
+    /// report every cycle ([`Self::step`]).
+    #[inline(always)]
+    fn prepare_reads(&mut self) -> Status {
+        let mut status = self.zeta_status;
+        // A mode at or above the Nyquist frequency π/dt_s is shaped as given (its impulses
+        // fall within about one sample) and reported every cycle it is held.
+        if self.held.wn_rad_s * self.dt_s >= core::f64::consts::PI {
+            status |= Status::MODE_ABOVE_NYQUIST;
+        }
+        let n = self.shape.len().min(MAX_IMPULSES);
+        let per_rad = 1.0 / self.held.wn_rad_s; // the same division as `impulses`' times
+        if self.line.prepare(
+            &self.shape_samples[..n],
+            per_rad,
+            self.shape.amplitudes(),
+            &mut self.reads,
+        ) {
+            status |= Status::DELAY_CLAMPED;
+        }
+        self.design_status = status;
+        status
+    }
+
+    /// Makes `shape` the current shape.
+    fn set_shape(&mut self, shape: DampedShape) {
+        self.shape = shape;
+        self.shape_samples = [0.0; MAX_IMPULSES];
+        for (d, p) in self.shape_samples.iter_mut().zip(shape.phases_rad()) {
+            *d = p * self.rate_hz;
+        }
+    }
+
+    /// Designs the shape for the damping ratio of a valid mode (limited to the shaper's
+    /// range, [`Status::ZETA_CLAMPED`]) unless it is the current one.
+    fn take_zeta(&mut self, mode: Mode) {
         let (design_mode, limited) = self.kind.within_range(mode);
-        if design_mode.zeta != self.shape_zeta {
-            self.shape = match &self.ei_table {
+        let design_zeta = design_mode.zeta;
+        if design_zeta != self.shape_zeta {
+            let shape = match &self.ei_table {
                 // A change of ζ while shaping: the tabulated exact solution. The first design
                 // (after construction or a reset) is solved, so constant modes get exactly
                 // the offline design.
-                Some(table) if self.held.is_some() => {
-                    let (amplitudes, phases_rad) = table.shape(design_mode.zeta);
+                Some(table) if self.shaping => {
+                    let (amplitudes, phases_rad) = table.shape(design_zeta);
                     DampedShape::three(&amplitudes, &phases_rad)
                 }
-                _ => self.kind.damped_shape(design_mode.zeta),
+                _ => self.kind.damped_shape(design_zeta),
             };
-            self.shape_zeta = design_mode.zeta;
+            self.set_shape(shape);
+            self.shape_zeta = design_zeta;
         }
-        self.held = Some(mode);
-        self.impulses = self.shape.at(design_mode.wn_rad_s);
-        let mut status = if limited {
+        self.zeta_status = if limited {
             Status::ZETA_CLAMPED
         } else {
             Status::OK
         };
-        // A mode at or above the Nyquist frequency π/dt_s is shaped as given (its impulses
-        // fall within about one sample) and reported every cycle it is held.
-        if mode.wn_rad_s * self.dt_s >= core::f64::consts::PI {
-            status |= Status::MODE_ABOVE_NYQUIST;
-        }
-        let (amplitudes, times_s) = (self.impulses.amplitudes(), self.impulses.times_s());
-        for ((tap, a), t) in self.taps.iter_mut().zip(amplitudes).zip(times_s) {
-            let (prepared, clamped) = self.line.tap(t * self.rate_hz, *a);
-            *tap = prepared;
-            status |= if clamped {
-                Status::DELAY_CLAMPED
-            } else {
-                Status::OK
-            };
-        }
-        self.design_status = status;
-        status
     }
 
     /// The output of the latest cycle.

@@ -49,43 +49,65 @@ impl Dynamics for Sweep {
 }
 
 fn tv_shaper_step_never_allocates() {
-    for name in SHAPER_NAMES {
-        let kind = ShaperKind::from_name(name, None).expect("registry");
-        for interp in [Interpolation::Linear, Interpolation::Cubic] {
-            // Time-varying provider, with delays that sometimes exceed the buffer.
-            let mut cfg = TvShaperConfig::new(0.002, 6, kind);
-            cfg.interp = interp;
-            cfg.max_delay_s = Some(0.12);
-            let mut shaper = TvShaper::new(Sweep { k: 0 }, &cfg).expect("valid");
-            let mut y = [0.0; 6];
-            let n = allocations_in(|| {
-                for i in 0..2000 {
-                    let v = (i as f64 * 0.01).sin();
-                    let x = if i % 333 == 7 { [f64::NAN; 6] } else { [v; 6] };
-                    let _ = shaper.step(&x, &mut y);
-                }
-                let _ = shaper.step(&[0.0; 5], &mut y); // BAD_LENGTH path
-                shaper.reset(&[0.1; 6]);
-                let _ = shaper.step(&[0.2; 6], &mut y);
-                shaper.clear();
-                let _ = shaper.step(&[0.3; 6], &mut y);
-            });
-            assert_eq!(n, 0, "{name} {interp:?}: {n} allocations");
-
-            // Constant modes, block API.
-            let modes = ConstantModes::new(vec![Mode::new(50.0, 0.15), Mode::new(43.0, 0.1)])
-                .expect("valid");
-            let mut cfg = TvShaperConfig::new(0.002, 6, kind);
-            cfg.interp = interp;
-            let mut shaper = TvShaper::new(modes, &cfg).expect("valid");
-            let x: Vec<f64> = (0..6000).map(|i| (i as f64 * 1e-3).cos()).collect();
-            let mut out = vec![0.0; x.len()];
-            let n = allocations_in(|| {
-                let _ = shaper.shape_into(&x, &mut out);
-            });
-            assert_eq!(n, 0, "{name} {interp:?} shape_into: {n} allocations");
+    // 1 and 6 channels run with fixed-size rows, 9 with slices.
+    for n_dof in [1, 6, 9] {
+        for name in SHAPER_NAMES {
+            for interp in [Interpolation::Linear, Interpolation::Cubic] {
+                tv_shaper_never_allocates(n_dof, name, interp);
+            }
         }
     }
+}
+
+fn tv_shaper_never_allocates(n_dof: usize, name: &str, interp: Interpolation) {
+    let kind = ShaperKind::from_name(name, None).expect("registry");
+    // Time-varying provider, with delays that sometimes exceed the buffer.
+    let mut cfg = TvShaperConfig::new(0.002, n_dof, kind);
+    cfg.interp = interp;
+    cfg.max_delay_s = Some(0.12);
+    let mut shaper = TvShaper::new(Sweep { k: 0 }, &cfg).expect("valid");
+    let mut y = vec![0.0; n_dof];
+    let (bad_in, reset, next, cleared) = (
+        vec![0.0; n_dof + 1],
+        vec![0.1; n_dof],
+        vec![0.2; n_dof],
+        vec![0.3; n_dof],
+    );
+    let n = allocations_in(|| {
+        for i in 0..2000 {
+            let v = (i as f64 * 0.01).sin();
+            let x = if i % 333 == 7 { [f64::NAN; 9] } else { [v; 9] };
+            let _ = shaper.step(&x[..n_dof], &mut y);
+        }
+        let _ = shaper.step(&bad_in, &mut y); // BAD_LENGTH path
+        shaper.reset(&reset);
+        let _ = shaper.step(&next, &mut y);
+        shaper.clear();
+        let _ = shaper.step(&cleared, &mut y);
+    });
+    assert_eq!(n, 0, "{name} {interp:?} {n_dof}: {n} allocations");
+
+    // Constant modes (asked once per start), stepping and the block API.
+    let modes =
+        ConstantModes::new(vec![Mode::new(50.0, 0.15), Mode::new(43.0, 0.1)]).expect("valid");
+    let mut cfg = TvShaperConfig::new(0.002, n_dof, kind);
+    cfg.interp = interp;
+    let mut shaper = TvShaper::new(modes, &cfg).expect("valid");
+    let x: Vec<f64> = (0..1000 * n_dof).map(|i| (i as f64 * 1e-3).cos()).collect();
+    let mut out = vec![0.0; x.len()];
+    let n = allocations_in(|| {
+        let _ = shaper.shape_into(&x, &mut out);
+        shaper.reset(&reset);
+        for row in x.chunks_exact(n_dof) {
+            let _ = shaper.step(row, &mut y);
+        }
+        let _ = shaper.dynamics_mut();
+        let _ = shaper.shape_into(&x, &mut out);
+    });
+    assert_eq!(
+        n, 0,
+        "{name} {interp:?} {n_dof} constant modes: {n} allocations"
+    );
 }
 
 fn mode_filter_delay_line_and_design_never_allocate() {
