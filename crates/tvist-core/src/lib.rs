@@ -41,6 +41,7 @@ pub mod robot;
 pub mod robot_data;
 pub mod shaper;
 pub mod sym_eigen;
+mod trig;
 pub mod tvist;
 pub mod ztdis;
 

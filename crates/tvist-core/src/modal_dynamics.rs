@@ -4,7 +4,7 @@
 
 use crate::dynamics::Dynamics;
 use crate::error::{Error, Status};
-use crate::map_dynamics::{halton_pose, VALIDATION_POSES};
+use crate::map_dynamics::{halton_pose, LastCall, VALIDATION_POSES};
 use crate::modal_map::ModalMap;
 use crate::robot::Robot;
 use crate::shaper::Mode;
@@ -17,6 +17,7 @@ pub struct ModalDynamics {
     mass: Vec<f64>,
     tau_g: Vec<f64>,
     slowest: Vec<Mode>,
+    last: LastCall,
 }
 
 impl ModalDynamics {
@@ -56,6 +57,7 @@ impl ModalDynamics {
             mass: vec![0.0; n * n],
             tau_g: vec![0.0; n],
             slowest: vec![Mode::new(f64::INFINITY, 0.0); map.n_modes()],
+            last: LastCall::new(n, map.n_modes()),
             robot,
             map,
         };
@@ -112,7 +114,8 @@ impl ModalDynamics {
         &self.map
     }
 
-    /// Mass matrix of the latest [`Dynamics::modes`] call, row-major `n × n`, kg m².
+    /// Mass matrix of the latest [`Dynamics::modes`] call, row-major `n × n`, kg m² (only the
+    /// leading block of the joints the map reads is evaluated; other entries stay 0).
     pub fn last_mass_matrix(&self) -> &[f64] {
         &self.mass
     }
@@ -129,17 +132,31 @@ impl Dynamics for ModalDynamics {
     }
 
     fn modes(&mut self, q: &[f64], out: &mut [Mode]) -> Status {
-        let mut status = self.robot.mass_matrix(q, &mut self.mass);
-        if status.is_ok() && self.map.uses_gravity() {
-            status = self.robot.gravity_torque(q, &mut self.tau_g);
+        if let Some(status) = self.last.repeat(q, out) {
+            return status;
         }
+        // One pass, only the block and the torques of the joints the map reads.
+        let tau = if self.map.uses_gravity() {
+            Some(self.tau_g.as_mut_slice())
+        } else {
+            None
+        };
+        let status = self.robot.leading_mass_matrix_and_gravity(
+            q,
+            self.map.required_joints(),
+            &mut self.mass,
+            tau,
+        );
         if !status.is_ok() {
             out.fill(Mode::new(f64::NAN, f64::NAN));
             return status;
         }
         let n = self.robot.n_dof();
-        self.map
-            .modes_from_mass_matrix(&self.mass, n, &self.tau_g, out)
+        let status = self
+            .map
+            .modes_from_mass_matrix(&self.mass, n, &self.tau_g, out);
+        self.last.record(q, out, status);
+        status
     }
 
     /// Lowest `ω_n` (sampled minimum, lowered to the Rayleigh bound) with the highest sampled
