@@ -9,6 +9,7 @@ use tvist_core::{Dynamics, Mode};
 
 use crate::convert::{self, rows, value_error};
 use crate::robot::PyRobot;
+use crate::robot_modes;
 
 use tvist_core::map_file::FLEX_JOINT_FIELDS;
 
@@ -200,38 +201,19 @@ impl PyModalDynamics {
         allow_other_robot: bool,
     ) -> PyResult<Self> {
         let (robot, map) = (robot.inner.clone(), modal_map.inner.clone());
-        let inner = if allow_other_robot {
-            core::ModalDynamics::new_allowing_other_robot(robot, map)
-        } else {
-            core::ModalDynamics::new(robot, map)
-        }
-        .map_err(value_error)?;
+        let inner = robot_modes::new_provider(robot, map, allow_other_robot)?;
         Ok(PyModalDynamics { inner })
     }
 
     /// Modes [(wn_rad_s, zeta), ...] at configuration q (invalid ones as NaN).
     fn modes(&mut self, q: PyReadonlyArray1<'_, f64>) -> PyResult<Vec<(f64, f64)>> {
-        let q = q.as_slice()?;
-        let n = self.inner.robot().n_dof();
-        if q.len() != n {
-            return Err(PyValueError::new_err(format!(
-                "q has {} values, expected {n}",
-                q.len()
-            )));
-        }
-        let mut out = vec![Mode::new(0.0, 0.0); self.inner.n_modes()];
-        self.inner.modes(q, &mut out);
-        Ok(out.iter().map(|m| (m.wn_rad_s, m.zeta)).collect())
+        robot_modes::modes_at(&mut self.inner, q)
     }
 
     /// Per-mode (wn_rad_s, zeta) bounds used to size the delay lines.
     #[getter]
     fn slowest_modes(&self) -> Vec<(f64, f64)> {
-        self.inner
-            .slowest_modes()
-            .iter()
-            .map(|m| (m.wn_rad_s, m.zeta))
-            .collect()
+        robot_modes::pairs(self.inner.slowest_modes())
     }
 
     /// Number of configurations checked at construction.

@@ -9,11 +9,12 @@ use tvist_core::{Dynamics, Mode, Status};
 use crate::convert::{self, rows, value_error};
 use crate::json::{self, NonFinite};
 use crate::modal::PyModalMap;
+use crate::robot_modes;
 use pyo3::types::PyDict;
 use tvist_core::map_file::{self, MapFile, MapForm};
 use tvist_core::robot_data;
 
-fn check_len(what: &str, got: usize, expected: usize) -> PyResult<()> {
+pub(crate) fn check_len(what: &str, got: usize, expected: usize) -> PyResult<()> {
     if got == expected {
         Ok(())
     } else {
@@ -511,32 +512,19 @@ impl PyMapDynamics {
         allow_other_robot: bool,
     ) -> PyResult<Self> {
         let (robot, map) = (robot.inner.clone(), dynmap.inner.clone());
-        let inner = if allow_other_robot {
-            core::MapDynamics::new_allowing_other_robot(robot, map)
-        } else {
-            core::MapDynamics::new(robot, map)
-        }
-        .map_err(value_error)?;
+        let inner = robot_modes::new_provider(robot, map, allow_other_robot)?;
         Ok(PyMapDynamics { inner })
     }
 
     /// Modes [(wn_rad_s, zeta), ...] at configuration q (invalid ones as NaN).
     fn modes(&mut self, q: PyReadonlyArray1<'_, f64>) -> PyResult<Vec<(f64, f64)>> {
-        let q = q.as_slice()?;
-        check_len("q", q.len(), self.inner.robot().n_dof())?;
-        let mut out = vec![Mode::new(0.0, 0.0); self.inner.n_modes()];
-        self.inner.modes(q, &mut out);
-        Ok(out.iter().map(|m| (m.wn_rad_s, m.zeta)).collect())
+        robot_modes::modes_at(&mut self.inner, q)
     }
 
     /// Per-mode (wn_rad_s, zeta) bounds used to size the delay lines.
     #[getter]
     fn slowest_modes(&self) -> Vec<(f64, f64)> {
-        self.inner
-            .slowest_modes()
-            .iter()
-            .map(|m| (m.wn_rad_s, m.zeta))
-            .collect()
+        robot_modes::pairs(self.inner.slowest_modes())
     }
 
     /// Number of configurations checked at construction.
