@@ -1,10 +1,10 @@
 //! Bindings of the robot model, the dynamic map and the map-driven dynamics provider.
 
-use numpy::{PyArrayDyn, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{PyArrayDyn, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use tvist_core as core;
-use tvist_core::{Dynamics, Mode, Status};
+use tvist_core::{Mode, Status};
 
 use crate::convert::{self, rows, value_error};
 use crate::json::{self, NonFinite};
@@ -501,48 +501,7 @@ pub struct PyMapDynamics {
     pub inner: core::MapDynamics,
 }
 
-#[pymethods]
-impl PyMapDynamics {
-    /// `allow_other_robot`: accept a map identified on another robot (research use).
-    #[new]
-    #[pyo3(signature = (robot, dynmap, allow_other_robot=false))]
-    fn new(
-        robot: PyRef<'_, PyRobot>,
-        dynmap: PyRef<'_, PyDynamicMap>,
-        allow_other_robot: bool,
-    ) -> PyResult<Self> {
-        let (robot, map) = (robot.inner.clone(), dynmap.inner.clone());
-        let inner = robot_modes::new_provider(robot, map, allow_other_robot)?;
-        Ok(PyMapDynamics { inner })
-    }
-
-    /// Modes [(wn_rad_s, zeta), ...] at configuration q (invalid ones as NaN).
-    fn modes(&mut self, q: PyReadonlyArray1<'_, f64>) -> PyResult<Vec<(f64, f64)>> {
-        robot_modes::modes_at(&mut self.inner, q)
-    }
-
-    /// Per-mode (wn_rad_s, zeta) bounds used to size the delay lines.
-    #[getter]
-    fn slowest_modes(&self) -> Vec<(f64, f64)> {
-        robot_modes::pairs(self.inner.slowest_modes())
-    }
-
-    /// Number of configurations checked at construction.
-    #[classattr]
-    fn validation_poses() -> usize {
-        core::map_dynamics::VALIDATION_POSES
-    }
-
-    #[getter]
-    fn n_dof(&self) -> usize {
-        self.inner.robot().n_dof()
-    }
-
-    #[getter]
-    fn n_modes(&self) -> usize {
-        self.inner.n_modes()
-    }
-}
+robot_modes::robot_modes_class!(PyMapDynamics, dynmap, PyDynamicMap);
 
 /// Registers the classes of this module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -1,6 +1,6 @@
 //! What the Python classes of the two robot-driven providers (`MapDynamics`, `ModalDynamics`)
 //! share: construction, per-pose evaluation and the delay-sizing bounds of a
-//! [`core::RobotModes`], whatever its mode law.
+//! [`core::RobotModes`], whatever its mode law, and their methods ([`robot_modes_class`]).
 
 use numpy::PyReadonlyArray1;
 use pyo3::prelude::*;
@@ -41,3 +41,53 @@ pub fn modes_at<L: ModeLaw>(
 pub fn pairs(modes: &[Mode]) -> Vec<(f64, f64)> {
     modes.iter().map(|m| (m.wn_rad_s, m.zeta)).collect()
 }
+
+/// The methods of a provider class `$class` (a `#[pyclass]` with `inner: RobotModes<_>`)
+/// whose constructor takes `(robot, $map_arg: $map_class, allow_other_robot=False)`.
+macro_rules! robot_modes_class {
+    ($class:ident, $map_arg:ident, $map_class:ty) => {
+        #[pymethods]
+        impl $class {
+            /// `allow_other_robot`: accept a map identified on another robot (research use).
+            #[new]
+            #[pyo3(signature = (robot, $map_arg, allow_other_robot=false))]
+            fn new(
+                robot: PyRef<'_, PyRobot>,
+                $map_arg: PyRef<'_, $map_class>,
+                allow_other_robot: bool,
+            ) -> PyResult<Self> {
+                let (robot, map) = (robot.inner.clone(), $map_arg.inner.clone());
+                let inner = $crate::robot_modes::new_provider(robot, map, allow_other_robot)?;
+                Ok($class { inner })
+            }
+
+            /// Modes [(wn_rad_s, zeta), ...] at configuration q (invalid ones as NaN).
+            fn modes(&mut self, q: numpy::PyReadonlyArray1<'_, f64>) -> PyResult<Vec<(f64, f64)>> {
+                $crate::robot_modes::modes_at(&mut self.inner, q)
+            }
+
+            /// Per-mode (wn_rad_s, zeta) bounds used to size the delay lines.
+            #[getter]
+            fn slowest_modes(&self) -> Vec<(f64, f64)> {
+                $crate::robot_modes::pairs(self.inner.slowest_modes())
+            }
+
+            /// Number of configurations checked at construction.
+            #[classattr]
+            fn validation_poses() -> usize {
+                tvist_core::robot_modes::VALIDATION_POSES
+            }
+
+            #[getter]
+            fn n_dof(&self) -> usize {
+                self.inner.robot().n_dof()
+            }
+
+            #[getter]
+            fn n_modes(&self) -> usize {
+                tvist_core::Dynamics::n_modes(&self.inner)
+            }
+        }
+    };
+}
+pub(crate) use robot_modes_class;
