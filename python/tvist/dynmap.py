@@ -53,13 +53,13 @@ The range fields are optional, so files written before they existed load unchang
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from tvist import _core
-from tvist.robots import Payload, Robot
+from tvist.map_files import MapDocument, RobotModesMixin, plain_metadata
+from tvist.robots import Robot
 
 SCHEMA_VERSION: int = _core.MAP_SCHEMA_VERSION
 #: ``kind`` of the ten-coefficient map written by this version.
@@ -68,18 +68,6 @@ KIND: str = _core.MAP_KIND_PAPER10
 MODE_FIELDS: tuple[str, ...] = tuple(_core.MODE_MAP_FIELDS)
 #: Optional fields of one mode: ``[J_min, J_max]`` (kg m²) of ``J_f`` and of ``J_d``.
 RANGE_FIELDS: tuple[str, ...] = tuple(_core.MODE_MAP_RANGE_FIELDS)
-
-
-def _plain_metadata(metadata: Mapping[str, Any] | None) -> dict[str, Any] | None:
-    """``metadata`` with a :class:`~tvist.robots.Payload` written as its dict."""
-    if metadata is None:
-        return None
-    if not isinstance(metadata, Mapping):
-        raise ValueError("metadata: must be an object")
-    out = dict(metadata)
-    if isinstance(out.get("payload"), Payload):
-        out["payload"] = out["payload"].to_dict()
-    return out
 
 
 def general_mode(
@@ -109,7 +97,7 @@ def general_mode(
     return mode
 
 
-class DynamicMap:
+class DynamicMap(MapDocument):
     """A dynamic map: modes ``(ω_n, ζ)`` of the arm as functions of its joint inertias.
 
     Parameters
@@ -137,22 +125,16 @@ class DynamicMap:
         document = {
             "schema_version": SCHEMA_VERSION,
             "kind": KIND,
-            "metadata": _plain_metadata(metadata),
+            "metadata": plain_metadata(metadata),
             "modes": [dict(m) if isinstance(m, Mapping) else m for m in modes],
         }
         core, self.metadata = _core.map_from_document(document)
         self._core: _core.DynamicMap = core
 
-    @classmethod
-    def _from_core(cls, core: Any, metadata: dict[str, Any]) -> DynamicMap:
-        if not isinstance(core, _core.DynamicMap):
-            raise ValueError(
-                "kind: a modal map, not a paper10 map: read it with tvist.ModalMap.load or "
-                "tvist.load_map"
-            )
-        out = cls.__new__(cls)
-        out._core, out.metadata = core, metadata
-        return out
+    _core_type = _core.DynamicMap
+    _other_kind = (
+        "kind: a modal map, not a paper10 map: read it with tvist.ModalMap.load or tvist.load_map"
+    )
 
     @classmethod
     def paper_ur5e(cls) -> DynamicMap:
@@ -176,11 +158,6 @@ class DynamicMap:
         return self._core
 
     @property
-    def n_modes(self) -> int:
-        """Number of modes (shaper filters in cascade)."""
-        return self._core.n_modes
-
-    @property
     def mode_maps(self) -> list[dict[str, Any]]:
         """The coefficients of every mode, with its inertia ranges (``None``: unbounded)."""
         return self._core.modes
@@ -198,11 +175,6 @@ class DynamicMap:
                     ranges[int(mode[joint_key])] = (mode[range_key][0], mode[range_key][1])
             out.append(ranges)
         return out
-
-    @property
-    def uses_gravity(self) -> bool:
-        """True if any mode has a gravity-torque term (``k_g != 0``)."""
-        return self._core.uses_gravity
 
     def modes_from_inertia(
         self,
@@ -254,41 +226,11 @@ class DynamicMap:
         """The robot the map was identified on (``metadata["robot"]``), or ``None``."""
         return self.metadata.get("robot")
 
-    def to_dict(self) -> dict[str, Any]:
-        """The JSON document of this map (as the core writes it)."""
-        return _core.map_document(self._core, _plain_metadata(self.metadata))
-
-    def to_json(self) -> str:
-        """The map file's text: strict JSON (no NaN or Infinity; see the module docstring)."""
-        return _core.write_map(self._core, _plain_metadata(self.metadata))
-
-    def save(self, path: str | Path) -> None:
-        """Write the map file (see the module docstring for the format)."""
-        Path(path).write_text(self.to_json(), encoding="utf-8")
-
-    @classmethod
-    def from_dict(cls, doc: Any) -> DynamicMap:
-        """Validate and build from a parsed map document."""
-        return cls._from_core(*_core.map_from_document(doc))
-
-    @classmethod
-    def load(cls, path: str | Path) -> DynamicMap:
-        """Read and validate a map file; malformed files raise ValueError naming the file and
-        the field (overflowing numbers, NaN tokens and deep nesting included). A modal map
-        file is refused (:func:`tvist.load_map` reads either kind)."""
-        from tvist.map_files import parse_map_file
-
-        core, metadata = parse_map_file(path)
-        try:
-            return cls._from_core(core, metadata)
-        except ValueError as exc:
-            raise ValueError(f"{path}: {exc}") from None
-
     def __repr__(self) -> str:
         return f"DynamicMap(n_modes={self.n_modes}, robot={self.metadata.get('robot')!r})"
 
 
-class MapDynamics(_core.MapDynamics):
+class MapDynamics(RobotModesMixin, _core.MapDynamics):
     """Per-cycle dynamics provider for :class:`tvist.TvShaper`: robot inertia + dynamic map.
 
     Every cycle the joint inertias of ``robot`` are evaluated at the previous shaped output
@@ -318,17 +260,5 @@ class MapDynamics(_core.MapDynamics):
             return ModalDynamics(  # type: ignore[return-value]
                 robot, dynmap, allow_other_robot=allow_other_robot
             )
-        if not isinstance(robot, Robot):
-            raise TypeError(f"robot must be a tvist.robots.Robot, got {type(robot).__name__}")
-        if not isinstance(dynmap, DynamicMap):
-            raise TypeError(f"dynmap must be a tvist.DynamicMap, got {type(dynmap).__name__}")
+        cls._check(robot, dynmap, DynamicMap, "dynmap")
         return super().__new__(cls, robot.core, dynmap.core, bool(allow_other_robot))
-
-    def __init__(
-        self, robot: Robot, dynmap: DynamicMap, *, allow_other_robot: bool = False
-    ) -> None:
-        self.robot = robot
-        self.dynmap = dynmap
-
-    def __repr__(self) -> str:
-        return f"MapDynamics({self.robot!r}, {self.dynmap!r})"

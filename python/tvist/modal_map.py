@@ -31,12 +31,12 @@ kind.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from tvist import _core
+from tvist.map_files import MapDocument, RobotModesMixin
 from tvist.robots import Robot
 
 __all__ = ["KIND", "SCHEMA_VERSION", "ModalDynamics", "ModalMap", "modal_map_from_flex"]
@@ -62,7 +62,7 @@ def _plain(value: Any) -> Any:
     return value
 
 
-class ModalMap:
+class ModalMap(MapDocument):
     """Modes from the mass matrix and identified joint flexibility.
 
     Parameters
@@ -106,16 +106,10 @@ class ModalMap:
         core, self.metadata = _core.map_from_document(document)
         self._core: _core.ModalMap = core
 
-    @classmethod
-    def _from_core(cls, core: Any, metadata: dict[str, Any]) -> ModalMap:
-        if not isinstance(core, _core.ModalMap):
-            raise ValueError(
-                "kind: a paper10 map, not a modal map: read it with tvist.DynamicMap.load or "
-                "tvist.load_map"
-            )
-        out = cls.__new__(cls)
-        out._core, out.metadata = core, metadata
-        return out
+    _core_type = _core.ModalMap
+    _other_kind = (
+        "kind: a paper10 map, not a modal map: read it with tvist.DynamicMap.load or tvist.load_map"
+    )
 
     @property
     def core(self) -> _core.ModalMap:
@@ -131,15 +125,6 @@ class ModalMap:
     def mode_joints(self) -> list[int]:
         """The joints naming the shaped modes, in cascade order."""
         return self._core.mode_joints
-
-    @property
-    def n_modes(self) -> int:
-        return self._core.n_modes
-
-    @property
-    def uses_gravity(self) -> bool:
-        """True if a stiffness or damping law reads a gravity torque."""
-        return self._core.uses_gravity
 
     def modes_from_mass_matrix_many(
         self, mass_kg_m2: np.ndarray, gravity_torque_nm: np.ndarray | None = None
@@ -181,36 +166,6 @@ class ModalMap:
         """The robot the map was identified on (``metadata["robot"]``), or ``None``."""
         return self._core.robot
 
-    def to_dict(self) -> dict[str, Any]:
-        """The JSON document of this map (as the core writes it)."""
-        return _core.map_document(self._core, self.metadata)
-
-    def to_json(self) -> str:
-        """The map file's text: strict JSON (see the module docstring)."""
-        return _core.write_map(self._core, self.metadata)
-
-    def save(self, path: str | Path) -> None:
-        """Write the map file (see the module docstring for the format)."""
-        Path(path).write_text(self.to_json(), encoding="utf-8")
-
-    @classmethod
-    def from_dict(cls, doc: Any) -> ModalMap:
-        """Validate and build from a parsed map document."""
-        return cls._from_core(*_core.map_from_document(doc))
-
-    @classmethod
-    def load(cls, path: str | Path) -> ModalMap:
-        """Read and validate a modal map file; malformed files raise ValueError naming the
-        file and the field. A paper10 map file is refused (:func:`tvist.load_map` reads
-        either kind)."""
-        from tvist.map_files import parse_map_file
-
-        core, metadata = parse_map_file(path)
-        try:
-            return cls._from_core(core, metadata)
-        except ValueError as exc:
-            raise ValueError(f"{path}: {exc}") from None
-
     def __repr__(self) -> str:
         joints = [f["joint"] for f in self.flex_joints]
         return (
@@ -219,7 +174,7 @@ class ModalMap:
         )
 
 
-class ModalDynamics(_core.ModalDynamics):
+class ModalDynamics(RobotModesMixin, _core.ModalDynamics):
     """Per-cycle dynamics provider for :class:`tvist.TvShaper`: robot mass matrix + modal map.
 
     Every cycle the mass matrix (and the gravity torques, if the map's laws read them) of
@@ -235,20 +190,8 @@ class ModalDynamics(_core.ModalDynamics):
     def __new__(
         cls, robot: Robot, modal_map: ModalMap, *, allow_other_robot: bool = False
     ) -> ModalDynamics:
-        if not isinstance(robot, Robot):
-            raise TypeError(f"robot must be a tvist.robots.Robot, got {type(robot).__name__}")
-        if not isinstance(modal_map, ModalMap):
-            raise TypeError(f"modal_map must be a tvist.ModalMap, got {type(modal_map).__name__}")
+        cls._check(robot, modal_map, ModalMap, "modal_map")
         return super().__new__(cls, robot.core, modal_map.core, bool(allow_other_robot))
-
-    def __init__(
-        self, robot: Robot, modal_map: ModalMap, *, allow_other_robot: bool = False
-    ) -> None:
-        self.robot = robot
-        self.dynmap = modal_map
-
-    def __repr__(self) -> str:
-        return f"ModalDynamics({self.robot!r}, {self.dynmap!r})"
 
 
 def modal_map_from_flex(

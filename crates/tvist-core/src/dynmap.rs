@@ -352,35 +352,51 @@ impl ModeMap {
             0.0
         };
         let stiffness = c.k_0 + c.k_j * j_f + gravity;
-        let gain_f = 1.0 + c.k_p / j_f;
-        let gain_d = 1.0 + c.k_p / j_d;
+        let inv_j_f = 1.0 / j_f;
+        let gain_f = 1.0 + c.k_p * inv_j_f;
+        // One joint in both roles (the general map): one division.
+        let gain_d = if j_d == j_f {
+            gain_f
+        } else {
+            1.0 + c.k_p / j_d
+        };
         // Written as positive tests so that NaN inputs fail them.
         if !(j_f > 0.0 && j_d > 0.0 && stiffness > 0.0 && gain_f > 0.0 && gain_d > 0.0) {
             return invalid;
         }
-        let wn_rad_s = (gain_f * stiffness / j_f).sqrt();
-        let numerator = (c.c_0 + c.c_1 * j_d.sqrt() + c.c_2 * j_d) * (1.0 + c.c_tau * j_d);
-        let zeta = power(gain_d, self.damping_gain_exponent)
-            * power(gain_f, self.frequency_gain_exponent)
-            * numerator
-            / (2.0 * (stiffness * j_f).sqrt());
+        let wn_rad_s = (gain_f * stiffness * inv_j_f).sqrt();
+        // The square root only where it is read (c_1 = 0 in the reduced and published maps).
+        let root_term = if c.c_1 != 0.0 {
+            c.c_1 * j_d.sqrt()
+        } else {
+            0.0
+        };
+        let numerator = (c.c_0 + root_term + c.c_2 * j_d) * (1.0 + c.c_tau * j_d);
+        // ζ = g_d^e_d g_f^e_f num / (2 √(K J_f)) = (num / 2) √(g_d^2e_d g_f^2e_f / (K J_f)):
+        // one square root and one division for any pair of exponents.
+        let (up_d, down_d) = squared_power(gain_d, self.damping_gain_exponent);
+        let (up_f, down_f) = squared_power(gain_f, self.frequency_gain_exponent);
+        let zeta = 0.5 * numerator * (up_d * up_f / (down_d * down_f * stiffness * j_f)).sqrt();
         Mode::new(wn_rad_s, zeta)
     }
 }
 
-/// `x^e` for `x > 0`, with exact fast paths for the exponents the published forms use.
+/// `x^(2e)` for `x > 0` as a fraction `(numerator, denominator)`, exact (no `powf`) for the
+/// exponents the published forms use (`e` = 0, ±½, ±1).
 #[inline]
-fn power(x: f64, e: f64) -> f64 {
+fn squared_power(x: f64, e: f64) -> (f64, f64) {
     if e == 0.0 {
-        1.0
-    } else if e == 1.0 {
-        x
+        (1.0, 1.0)
     } else if e == 0.5 {
-        x.sqrt()
+        (x, 1.0)
+    } else if e == 1.0 {
+        (x * x, 1.0)
     } else if e == -0.5 {
-        1.0 / x.sqrt()
+        (1.0, x)
+    } else if e == -1.0 {
+        (1.0, x * x)
     } else {
-        x.powf(e)
+        (x.powf(2.0 * e), 1.0)
     }
 }
 
@@ -393,6 +409,9 @@ pub const PAPER_MAP_ROBOT: &str = "ur5e";
 pub struct DynamicMap {
     modes: Vec<ModeMap>,
     robot: Option<String>,
+    /// [`Self::required_joints`] and [`Self::uses_gravity`], fixed by the modes.
+    required_joints: usize,
+    uses_gravity: bool,
 }
 
 impl DynamicMap {
@@ -446,7 +465,7 @@ impl DynamicMap {
                 )));
             }
         }
-        Ok(DynamicMap { modes, robot: None })
+        Ok(DynamicMap::of(modes, None))
     }
 
     /// The same map, marked as identified on robot `name` (for example `"ur5e"`).
@@ -466,12 +485,26 @@ impl DynamicMap {
     pub fn paper_ur5e() -> DynamicMap {
         let base = MapCoefficients::reduced(10_000.0, 1060.0, 2.54, 1.53, 0.39, 3.81);
         let shoulder = MapCoefficients::reduced(10_000.0, 763.0, 1.73, 0.27, 0.038, 47.2);
-        DynamicMap {
-            modes: vec![
+        DynamicMap::of(
+            vec![
                 ModeMap::base_from_shoulder(base, 0, 1),
                 ModeMap::general(shoulder, 1),
             ],
-            robot: Some(PAPER_MAP_ROBOT.to_string()),
+            Some(PAPER_MAP_ROBOT.to_string()),
+        )
+    }
+
+    /// The map of checked `modes` (what it reads is derived once, here).
+    fn of(modes: Vec<ModeMap>, robot: Option<String>) -> DynamicMap {
+        DynamicMap {
+            required_joints: modes
+                .iter()
+                .map(ModeMap::required_joints)
+                .max()
+                .unwrap_or(0),
+            uses_gravity: modes.iter().any(ModeMap::uses_gravity),
+            modes,
+            robot,
         }
     }
 
@@ -485,16 +518,12 @@ impl DynamicMap {
 
     /// Number of joint inertias the map reads (largest index plus one).
     pub fn required_joints(&self) -> usize {
-        self.modes
-            .iter()
-            .map(ModeMap::required_joints)
-            .max()
-            .unwrap_or(0)
+        self.required_joints
     }
 
     /// True if any mode uses the gravity-torque term.
     pub fn uses_gravity(&self) -> bool {
-        self.modes.iter().any(ModeMap::uses_gravity)
+        self.uses_gravity
     }
 
     /// Modes from joint inertias `j` (kg m²) and gravity torques `tau_g` (N m; may be empty

@@ -9,9 +9,10 @@
 //! - [`robot`]: serial revolute chains from DH parameters: flange pose, Jacobian, joint-space
 //!   inertia (composite rigid body) and gravity torques, allocation-free per call.
 //! - [`dynmap`]: the dynamic map from joint-axis inertias to modes (eqs. 42–51).
-//! - [`map_dynamics`]: the provider that evaluates robot inertia and map every cycle.
+//! - [`robot_modes`]: the provider that evaluates the robot and a mode law every cycle;
+//!   [`map_dynamics`]: with the dynamic map (joint inertias).
 //! - [`modal_map`]: modes from the mass matrix and joint flexibility (generalized eigenproblem,
-//!   [`sym_eigen`]); [`modal_dynamics`]: its per-cycle provider.
+//!   [`sym_eigen`]); [`modal_dynamics`]: the provider with the modal map.
 //! - `robot_data` (feature `json`): the UR e-series parameter file (`data/`), embedded and
 //!   parsed once.
 //! - `map_file` (feature `json`): the map file format: parse, validate, write.
@@ -39,8 +40,10 @@ pub mod prv;
 pub mod robot;
 #[cfg(feature = "json")]
 pub mod robot_data;
+pub mod robot_modes;
 pub mod shaper;
 pub mod sym_eigen;
+mod trig;
 pub mod tvist;
 pub mod ztdis;
 
@@ -54,6 +57,7 @@ pub use modal_map::{FlexJoint, LoadLaw, ModalMap};
 pub use multimode::{TvShaper, TvShaperConfig};
 pub use prv::prv;
 pub use robot::{DhJoint, RigidBody, Robot};
+pub use robot_modes::{ModeLaw, RobotModes};
 pub use shaper::{ImpulseArray, Impulses, Mode, ShaperKind, SHAPER_NAMES};
 pub use tvist::ModeFilter;
 pub use ztdis::{Compensator, Discretization};

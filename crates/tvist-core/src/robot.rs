@@ -136,19 +136,16 @@ impl RigidBody {
 /// Per-call scratch, sized once for `n` joints.
 #[derive(Debug, Clone)]
 struct Workspace {
-    /// World rotation (row-major 3×3) and origin of frames `0..=n`.
+    /// World rotation (row-major 3×3) and origin of frames `0..=n` (flange pose, Jacobian).
     rot: Vec<[f64; 9]>,
     pos: Vec<[f64; 3]>,
-    /// Composite body `i` (links `i..n`): mass, first moment `Σ m c` and inertia about the
-    /// world origin (row-major 3×3), all in world coordinates.
-    comp_mass: Vec<f64>,
-    comp_moment: Vec<[f64; 3]>,
-    comp_inertia: Vec<[f64; 9]>,
-    /// Joint `i` as a spatial motion about the world origin: `ω = z_i`, `v_O = p_i × z_i`.
-    axis_w: Vec<[f64; 3]>,
-    axis_v: Vec<[f64; 3]>,
-    /// World position of each body's centre of mass.
-    com: Vec<[f64; 3]>,
+    /// `(sin q_k, cos q_k)` of the current pose (entry 0 unused: nothing depends on `q_0`).
+    sin_cos: Vec<(f64, f64)>,
+    /// The base's `+z` (up) in the coordinates of frame `k`: `R_kᵀ e_z`.
+    up: Vec<[f64; 3]>,
+    /// Momentum of composite `j` moving with joint `j` at unit rate, carried down the chain
+    /// to read `M[k, j]`, `k < j`.
+    force: Vec<Momentum>,
 }
 
 impl Workspace {
@@ -156,12 +153,228 @@ impl Workspace {
         Workspace {
             rot: vec![[0.0; 9]; n + 1],
             pos: vec![[0.0; 3]; n + 1],
-            comp_mass: vec![0.0; n],
-            comp_moment: vec![[0.0; 3]; n],
-            comp_inertia: vec![[0.0; 9]; n],
-            axis_w: vec![[0.0; 3]; n],
-            axis_v: vec![[0.0; 3]; n],
-            com: vec![[0.0; 3]; n],
+            sin_cos: vec![(0.0, 1.0); n],
+            up: vec![[0.0, 0.0, 1.0]; n],
+            force: vec![Momentum::ZERO; n],
+        }
+    }
+}
+
+/// Mass moments of one body about the origin of the frame it is fixed to, in that frame:
+/// mass, first moment `h = m c` and second moment `E = ∫ r rᵀ dm` as `[xx, yy, zz, xy, xz,
+/// yz]`. The inertia tensor about the origin is `tr(E) 1 − E`, so the inertia about the frame's
+/// `z` axis is `E_xx + E_yy`. Moments of rigidly joined bodies add; a frame change transforms
+/// them exactly ([`Moments::move_to_parent`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Moments {
+    mass_kg: f64,
+    first_kg_m: [f64; 3],
+    second_kg_m2: [f64; 6],
+}
+
+impl Moments {
+    const ZERO: Moments = Moments {
+        mass_kg: 0.0,
+        first_kg_m: [0.0; 3],
+        second_kg_m2: [0.0; 6],
+    };
+
+    /// `E = m c cᵀ + ½ tr(I_c) 1 − I_c` from the inertia `I_c` about the centre of mass.
+    fn of(body: &RigidBody) -> Moments {
+        let m = body.mass_kg;
+        let c = body.com_m;
+        let [ixx, iyy, izz, ixy, ixz, iyz] = body.inertia_kg_m2;
+        let half_trace = 0.5 * (ixx + iyy + izz);
+        Moments {
+            mass_kg: m,
+            first_kg_m: [m * c[0], m * c[1], m * c[2]],
+            second_kg_m2: [
+                m * c[0] * c[0] + half_trace - ixx,
+                m * c[1] * c[1] + half_trace - iyy,
+                m * c[2] * c[2] + half_trace - izz,
+                m * c[0] * c[1] - ixy,
+                m * c[0] * c[2] - ixz,
+                m * c[1] * c[2] - iyz,
+            ],
+        }
+    }
+
+    #[inline]
+    fn add(&mut self, other: &Moments) {
+        self.mass_kg += other.mass_kg;
+        for (a, b) in self.first_kg_m.iter_mut().zip(&other.first_kg_m) {
+            *a += b;
+        }
+        for (a, b) in self.second_kg_m2.iter_mut().zip(&other.second_kg_m2) {
+            *a += b;
+        }
+    }
+
+    /// From DH frame `k + 1` to frame `k` up to the final turn about `z`: `r ↦ (a, 0, d) +
+    /// Rx(α) r`. The turn `Rz(q_k)` follows in [`Self::turn_z`]; it leaves the inertia about
+    /// `z` (`E_xx + E_yy`) unchanged.
+    #[inline]
+    fn move_to_parent(&mut self, dh: &DhConstants) {
+        let (m, h, e) = (self.mass_kg, &mut self.first_kg_m, &mut self.second_kg_m2);
+        // Rx(α): the (y, z) plane turns.
+        match dh.twist {
+            Twist::None => {}
+            Twist::Quarter(s) => {
+                (e[1], e[2], e[5]) = (e[2], e[1], -e[5]);
+                (e[3], e[4]) = (-s * e[4], s * e[3]);
+                (h[1], h[2]) = (-s * h[2], s * h[1]);
+            }
+            Twist::General => {
+                rotate_sym_plane(e, 1, 2, 5, dh.cos_2alpha, dh.sin_2alpha);
+                (e[3], e[4]) = rotate_pair(e[3], e[4], dh.cos_alpha, dh.sin_alpha);
+                (h[1], h[2]) = rotate_pair(h[1], h[2], dh.cos_alpha, dh.sin_alpha);
+            }
+        }
+        // Shift by p = (a, 0, d), along x then along z (zero offsets are common and skipped):
+        // E += h pᵀ + p hᵀ + m p pᵀ, h += m p.
+        let (a, d) = (dh.a_m, dh.d_m);
+        if a != 0.0 {
+            e[0] += a * (2.0 * h[0] + m * a);
+            e[3] += a * h[1];
+            e[4] += a * h[2];
+            h[0] += m * a;
+        }
+        if d != 0.0 {
+            e[2] += d * (2.0 * h[2] + m * d);
+            e[4] += d * h[0];
+            e[5] += d * h[1];
+            h[2] += m * d;
+        }
+    }
+
+    /// `Rz(θ)` with `sin_cos = (sin θ, cos θ)`.
+    #[inline]
+    fn turn_z(&mut self, (s, c): (f64, f64)) {
+        let (h, e) = (&mut self.first_kg_m, &mut self.second_kg_m2);
+        rotate_sym_plane(e, 0, 1, 3, c * c - s * s, 2.0 * c * s);
+        (e[4], e[5]) = rotate_pair(e[4], e[5], c, s);
+        (h[0], h[1]) = rotate_pair(h[0], h[1], c, s);
+    }
+}
+
+/// A spatial momentum (or force): `moment` about the frame origin and `linear`, in frame
+/// coordinates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Momentum {
+    moment: [f64; 3],
+    linear: [f64; 3],
+}
+
+impl Momentum {
+    const ZERO: Momentum = Momentum {
+        moment: [0.0; 3],
+        linear: [0.0; 3],
+    };
+
+    /// Of a composite turning about the frame's `z` axis at unit rate: `ω = e_z` through the
+    /// origin, so `(I_O e_z, e_z × h)` with `I_O = tr(E) 1 − E`.
+    #[inline]
+    fn of_joint(composite: &Moments) -> Momentum {
+        let (e, h) = (&composite.second_kg_m2, &composite.first_kg_m);
+        Momentum {
+            moment: [-e[4], -e[5], e[0] + e[1]],
+            linear: [-h[1], h[0], 0.0],
+        }
+    }
+
+    /// As [`Moments::move_to_parent`]: `Rx(α)`, then the moment about the new origin gains
+    /// `(a, 0, d) × linear`.
+    #[inline]
+    fn move_to_parent(&mut self, dh: &DhConstants) {
+        let (n, f) = (&mut self.moment, &mut self.linear);
+        match dh.twist {
+            Twist::None => {}
+            Twist::Quarter(s) => {
+                (n[1], n[2]) = (-s * n[2], s * n[1]);
+                (f[1], f[2]) = (-s * f[2], s * f[1]);
+            }
+            Twist::General => {
+                (n[1], n[2]) = rotate_pair(n[1], n[2], dh.cos_alpha, dh.sin_alpha);
+                (f[1], f[2]) = rotate_pair(f[1], f[2], dh.cos_alpha, dh.sin_alpha);
+            }
+        }
+        let (a, d) = (dh.a_m, dh.d_m);
+        n[0] -= d * f[1];
+        n[1] += d * f[0] - a * f[2];
+        n[2] += a * f[1];
+    }
+
+    /// `Rz(θ)` with `sin_cos = (sin θ, cos θ)`.
+    #[inline]
+    fn turn_z(&mut self, (s, c): (f64, f64)) {
+        let (n, f) = (&mut self.moment, &mut self.linear);
+        (n[0], n[1]) = rotate_pair(n[0], n[1], c, s);
+        (f[0], f[1]) = rotate_pair(f[0], f[1], c, s);
+    }
+}
+
+/// `(u, v) ↦ (c u − s v, s u + c v)`: a vector's components in a plane turned by `(s, c)`.
+#[inline]
+fn rotate_pair(u: f64, v: f64, c: f64, s: f64) -> (f64, f64) {
+    (c * u - s * v, s * u + c * v)
+}
+
+/// The `(u, v)` block of the symmetric `e` (entries `uu`, `vv`, `uv`) turned by `(s, c)`,
+/// with `c2 = cos 2θ`, `s2 = sin 2θ`: the mean of the diagonal is invariant, the half
+/// difference and the off-diagonal entry turn by `2θ`.
+#[inline]
+fn rotate_sym_plane(e: &mut [f64; 6], uu: usize, vv: usize, uv: usize, c2: f64, s2: f64) {
+    let mean = 0.5 * (e[uu] + e[vv]);
+    let half_diff = 0.5 * (e[uu] - e[vv]);
+    let off = e[uv];
+    let diff_turned = c2 * half_diff - s2 * off;
+    e[uv] = s2 * half_diff + c2 * off;
+    e[uu] = mean + diff_turned;
+    e[vv] = mean - diff_turned;
+}
+
+/// The twist `Rx(α)` of a DH step, by kind: most arms use only `α ∈ {0, ±π/2}`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Twist {
+    /// `α = 0`: nothing turns.
+    None,
+    /// `α = ±π/2` (to within 1e-15 rad, below the rounding of `π/2` itself): `(y, z) ↦
+    /// (−s z, s y)` with `s = sin α = ±1`, exact swaps.
+    Quarter(f64),
+    /// Any other angle.
+    General,
+}
+
+/// Per-joint constants of the DH step `Tz(d) Tx(a) Rx(α)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct DhConstants {
+    twist: Twist,
+    a_m: f64,
+    d_m: f64,
+    cos_alpha: f64,
+    sin_alpha: f64,
+    cos_2alpha: f64,
+    sin_2alpha: f64,
+}
+
+impl DhConstants {
+    fn of(joint: &DhJoint) -> DhConstants {
+        let (s, c) = joint.alpha_rad.sin_cos();
+        let twist = if joint.alpha_rad == 0.0 {
+            Twist::None
+        } else if (joint.alpha_rad.abs() - core::f64::consts::FRAC_PI_2).abs() <= 1e-15 {
+            Twist::Quarter(joint.alpha_rad.signum())
+        } else {
+            Twist::General
+        };
+        DhConstants {
+            twist,
+            a_m: joint.a_m,
+            d_m: joint.d_m,
+            cos_alpha: c,
+            sin_alpha: s,
+            cos_2alpha: c * c - s * s,
+            sin_2alpha: 2.0 * c * s,
         }
     }
 }
@@ -170,12 +383,13 @@ impl Workspace {
 #[derive(Debug, Clone)]
 pub struct Robot {
     joints: Vec<DhJoint>,
-    cos_alpha: Vec<f64>,
-    sin_alpha: Vec<f64>,
+    dh: Vec<DhConstants>,
     links: Vec<RigidBody>,
     payload: RigidBody,
     /// `links` with the payload merged into the last one: what the dynamics use.
     bodies: Vec<RigidBody>,
+    /// [`Moments`] of `bodies[k]` in its own frame `k + 1`.
+    moments: Vec<Moments>,
     ws: Workspace,
     /// The robot's name (for example `"ur5e"`), if it has one: dynamic maps are checked
     /// against it.
@@ -215,9 +429,9 @@ impl Robot {
         }
         payload.validate("payload")?;
         let mut robot = Robot {
-            cos_alpha: joints.iter().map(|j| j.alpha_rad.cos()).collect(),
-            sin_alpha: joints.iter().map(|j| j.alpha_rad.sin()).collect(),
+            dh: joints.iter().map(DhConstants::of).collect(),
             bodies: links.clone(),
+            moments: vec![Moments::ZERO; n],
             joints,
             links,
             payload,
@@ -260,6 +474,9 @@ impl Robot {
         let n = self.joints.len();
         self.bodies.copy_from_slice(&self.links);
         self.bodies[n - 1] = self.links[n - 1].combined(&self.payload);
+        for (m, b) in self.moments.iter_mut().zip(&self.bodies) {
+            *m = Moments::of(b);
+        }
     }
 
     /// Replaces the payload (setup-time call: validates).
@@ -298,15 +515,7 @@ impl Robot {
     /// and `v = −sin q R e_x + cos q R e_y`, the new columns are `u`, `cos α v + sin α R e_z`
     /// and `−sin α v + cos α R e_z`; the origin moves by `a u + d R e_z`.
     fn forward(&mut self, q: &[f64]) -> bool {
-        self.forward_turned(q, true)
-    }
-
-    /// [`Self::forward`]; with `turn_base == false` joint 0 is taken at angle 0. Joint 0 turns
-    /// the whole arm about the base `z` axis, the gravity axis, so joint-axis inertias and
-    /// gravity torques do not depend on it (its sine and cosine are then not needed).
-    fn forward_turned(&mut self, q: &[f64], turn_base: bool) -> bool {
-        let n = self.joints.len();
-        if q.len() != n {
+        if q.len() != self.joints.len() {
             return false;
         }
         let ws = &mut self.ws;
@@ -315,21 +524,16 @@ impl Robot {
         ws.rot[0] = r;
         ws.pos[0] = p;
         let frames = ws.rot[1..].iter_mut().zip(&mut ws.pos[1..]);
-        let dh = self.joints.iter().zip(&self.cos_alpha).zip(&self.sin_alpha);
-        for (k, ((qk, ((joint, &ca), &sa)), (rot, pos))) in q.iter().zip(dh).zip(frames).enumerate()
-        {
-            let (st, ct) = if k == 0 && !turn_base {
-                (0.0, 1.0)
-            } else {
-                qk.sin_cos()
-            };
+        for ((qk, dh), (rot, pos)) in q.iter().zip(&self.dh).zip(frames) {
+            let (st, ct) = crate::trig::sin_cos(*qk);
+            let (ca, sa) = (dh.cos_alpha, dh.sin_alpha);
             let mut u = [0.0; 3];
             let mut v = [0.0; 3];
             for row in 0..3 {
                 let (x, y, z) = (r[3 * row], r[3 * row + 1], r[3 * row + 2]);
                 u[row] = ct * x + st * y;
                 v[row] = ct * y - st * x;
-                p[row] += joint.a_m * u[row] + joint.d_m * z;
+                p[row] += dh.a_m * u[row] + dh.d_m * z;
                 r[3 * row] = u[row];
                 r[3 * row + 1] = ca * v[row] + sa * z;
                 r[3 * row + 2] = ca * z - sa * v[row];
@@ -340,69 +544,89 @@ impl Robot {
         true
     }
 
-    /// World centres of mass of every body (needs [`Self::forward`] first).
-    fn centres_of_mass(&mut self) {
-        let ws = &mut self.ws;
-        for (((c, body), r), p) in ws
-            .com
-            .iter_mut()
-            .zip(&self.bodies)
-            .zip(&ws.rot[1..])
-            .zip(&ws.pos[1..])
-        {
-            *c = add3(p, &mat_vec(r, &body.com_m));
-        }
-    }
-
-    /// Joint axes and composite-body inertias (needs [`Self::forward`] first).
-    fn composites(&mut self) {
+    /// The joint-space pass: for joints `k < joints`, the inertia `M[k, k]` into `inertia[k]`
+    /// (or, with `mass`, the leading `joints × joints` block of the row-major `n × n` mass
+    /// matrix) and the gravity torque into `tau_g[k]`. Caller checks lengths: `q`, `inertia`
+    /// and `tau_g` have `n` entries, `mass` `n²`, `joints <= n`.
+    ///
+    /// The composite rigid body algorithm in link coordinates: from the flange inwards, the
+    /// mass moments ([`Moments`]) of bodies `k..n` are carried from frame `k + 1` into frame
+    /// `k` (`Rz(q_k) Tz(d_k) Tx(a_k) Rx(α_k)`), where joint `k` is the `z` axis through the
+    /// origin, so `M[k, k] = E_xx + E_yy` and `τ_g,k = g (u_y h_x − u_x h_y)` with `u` the
+    /// base's up direction in frame `k` (`∂V/∂q_k = g e_z · (z_k × h)`). Off the diagonal,
+    /// `M[k, j]` is the `z` moment about joint `k` of the spatial momentum of composite `j`
+    /// turning about joint `j` at unit rate, carried down with the composite. Nothing depends
+    /// on `q_0` (joint 0 turns the arm about the gravity axis), so its sine is never taken:
+    /// one `sin_cos` per joint `1..n`, no world transforms.
+    fn joint_space_pass(
+        &mut self,
+        q: &[f64],
+        joints: usize,
+        mut inertia: Option<&mut [f64]>,
+        mut mass: Option<&mut [f64]>,
+        mut tau_g: Option<&mut [f64]>,
+    ) {
         let n = self.joints.len();
         let ws = &mut self.ws;
-        let mut mass = 0.0;
-        let mut moment = [0.0; 3];
-        let mut inertia = [0.0; 9];
-        for i in (0..n).rev() {
-            let body = &self.bodies[i];
-            let r = &ws.rot[i + 1];
-            let c = add3(&ws.pos[i + 1], &mat_vec(r, &body.com_m));
-            let ic = rotate_sym(r, &sym_from_six(&body.inertia_kg_m2));
-            let m = body.mass_kg;
-            let cc = dot3(&c, &c);
-            mass += m;
-            for k in 0..3 {
-                moment[k] += m * c[k];
+        for (sc, &qk) in ws.sin_cos[1..].iter_mut().zip(&q[1..]) {
+            *sc = crate::trig::sin_cos(qk);
+        }
+        if tau_g.is_some() {
+            // u_{k+1} = Rx(α_k)ᵀ Rz(q_k)ᵀ u_k from u_0 = e_z (Rz(q_0) leaves e_z as it is).
+            let mut u = [0.0, 0.0, 1.0];
+            for k in 1..joints {
+                if k > 1 {
+                    let (s, c) = ws.sin_cos[k - 1];
+                    (u[0], u[1]) = rotate_pair(u[0], u[1], c, -s);
+                }
+                let dh = &self.dh[k - 1];
+                (u[1], u[2]) = rotate_pair(u[1], u[2], dh.cos_alpha, -dh.sin_alpha);
+                ws.up[k] = u;
             }
-            for a in 0..3 {
-                for b in 0..3 {
-                    let delta = if a == b { cc } else { 0.0 };
-                    inertia[3 * a + b] += ic[3 * a + b] + m * (delta - c[a] * c[b]);
+        }
+        let mut composite = Moments::ZERO;
+        let steps = self.moments.iter().zip(&self.dh).zip(&ws.sin_cos);
+        for (k, ((body, dh), &sc)) in steps.enumerate().rev() {
+            composite.add(body);
+            composite.move_to_parent(dh);
+            if k >= joints {
+                composite.turn_z(sc);
+                continue;
+            }
+            let e = &composite.second_kg_m2;
+            let diagonal = e[0] + e[1];
+            if let Some(out) = inertia.as_deref_mut() {
+                out[k] = diagonal;
+            }
+            if let Some(m) = mass.as_deref_mut() {
+                m[k * n + k] = diagonal;
+                // M[k, j], j > k: the momenta of the composites beyond, carried into frame k.
+                for (j, f) in ws.force.iter_mut().enumerate().take(joints).skip(k + 1) {
+                    f.move_to_parent(dh);
+                    m[k * n + j] = f.moment[2];
+                    m[j * n + k] = f.moment[2];
                 }
             }
-            ws.comp_mass[i] = mass;
-            ws.comp_moment[i] = moment;
-            ws.comp_inertia[i] = inertia;
-            let rj = &ws.rot[i];
-            let z = [rj[2], rj[5], rj[8]];
-            ws.axis_w[i] = z;
-            ws.axis_v[i] = cross3(&ws.pos[i], &z);
+            if k == 0 {
+                if let Some(t) = tau_g.as_deref_mut() {
+                    // Joint 0 turns about the gravity axis.
+                    t[0] = 0.0;
+                }
+                break;
+            }
+            composite.turn_z(sc);
+            let h = &composite.first_kg_m;
+            if let Some(t) = tau_g.as_deref_mut() {
+                let u = &ws.up[k];
+                t[k] = GRAVITY_M_S2 * (u[1] * h[0] - u[0] * h[1]);
+            }
+            if mass.is_some() {
+                for f in &mut ws.force[k + 1..joints] {
+                    f.turn_z(sc);
+                }
+                ws.force[k] = Momentum::of_joint(&composite);
+            }
         }
-    }
-
-    /// `S_row · (I^C_col S_col)`: one entry of the mass matrix (`row <= col`).
-    #[inline]
-    fn crba_entry(&self, row: usize, col: usize) -> f64 {
-        let ws = &self.ws;
-        let (w, v) = (&ws.axis_w[col], &ws.axis_v[col]);
-        let (m, h, io) = (
-            ws.comp_mass[col],
-            &ws.comp_moment[col],
-            &ws.comp_inertia[col],
-        );
-        // Spatial momentum of composite `col` moving with joint `col` at unit rate.
-        let angular = add3(&mat_vec(io, w), &cross3(h, v));
-        let hw = cross3(h, w);
-        let linear = [m * v[0] - hw[0], m * v[1] - hw[1], m * v[2] - hw[2]];
-        dot3(&ws.axis_w[row], &angular) + dot3(&ws.axis_v[row], &linear)
     }
 
     /// Homogeneous transform of the flange in the base frame, row-major 4×4.
@@ -442,18 +666,7 @@ impl Robot {
     /// Joint-space inertia matrix `M(q)` (composite rigid body algorithm), row-major `n × n`.
     pub fn mass_matrix(&mut self, q: &[f64], out: &mut [f64]) -> Status {
         let n = self.joints.len();
-        if out.len() != n * n || !self.forward(q) {
-            return Status::BAD_LENGTH;
-        }
-        self.composites();
-        for col in 0..n {
-            for row in 0..=col {
-                let v = self.crba_entry(row, col);
-                out[row * n + col] = v;
-                out[col * n + row] = v;
-            }
-        }
-        Status::OK
+        self.leading_mass_matrix_and_gravity(q, n, out, None)
     }
 
     /// Diagonal of `M(q)`: `J_i = M[i, i]`, the inertia about joint `i` of everything
@@ -465,17 +678,15 @@ impl Robot {
     /// Gravity torques `τ_g(q) = ∂V/∂q` (the torques that hold the arm still), N m.
     pub fn gravity_torque(&mut self, q: &[f64], out: &mut [f64]) -> Status {
         let n = self.joints.len();
-        if out.len() != n || !self.forward(q) {
+        if out.len() != n || q.len() != n {
             return Status::BAD_LENGTH;
         }
-        self.composites();
-        self.fill_gravity(out);
+        self.joint_space_pass(q, n, None, None, Some(out));
         Status::OK
     }
 
-    /// Joint inertias and, if `tau_g` is given, gravity torques from one kinematics pass
-    /// (the composite rigid body algorithm: the inertias are exactly the diagonal of
-    /// [`Self::mass_matrix`]).
+    /// Joint inertias and, if `tau_g` is given, gravity torques from one pass (the composite
+    /// rigid body algorithm: the inertias are exactly the diagonal of [`Self::mass_matrix`]).
     pub fn joint_inertia_and_gravity(
         &mut self,
         q: &[f64],
@@ -483,29 +694,13 @@ impl Robot {
         tau_g: Option<&mut [f64]>,
     ) -> Status {
         let n = self.joints.len();
-        let tau_ok = tau_g.as_ref().is_none_or(|t| t.len() == n);
-        if inertia.len() != n || !tau_ok || !self.forward(q) {
-            return Status::BAD_LENGTH;
-        }
-        self.composites();
-        for (i, j) in inertia.iter_mut().enumerate() {
-            *j = self.crba_entry(i, i);
-        }
-        if let Some(t) = tau_g {
-            self.fill_gravity(t);
-        }
-        Status::OK
+        self.leading_joint_inertia_and_gravity(q, n, inertia, tau_g)
     }
 
     /// [`Self::joint_inertia_and_gravity`] for joints `0..joints` only (for example the
-    /// joints a dynamic map reads), at a fraction of the cost: entries from `joints` on are
-    /// left untouched. Slices have length `n_dof`; `joints <= n_dof`. Equal to the full
-    /// evaluation to rounding (different arithmetic).
-    ///
-    /// `J_i = Σ_{k≥i} (a_kᵀ I_k a_k + m_k |a_i × (c_k − p_i)|²)`: the rotational inertia of
-    /// body `k` about joint `i`'s axis (`a_k`: that axis in body `k`'s frame) plus the
-    /// parallel-axis term of its centre of mass `c_k`. The diagonal of the composite rigid
-    /// body algorithm, without forming the composite inertias.
+    /// joints a dynamic map reads): entries from `joints` on are left untouched. Slices have
+    /// length `n_dof`; `joints <= n_dof`. The same arithmetic as the full evaluation (the
+    /// composites beyond the last joint read are still formed, but nothing is read from them).
     pub fn leading_joint_inertia_and_gravity(
         &mut self,
         q: &[f64],
@@ -515,66 +710,31 @@ impl Robot {
     ) -> Status {
         let n = self.joints.len();
         let tau_ok = tau_g.as_ref().is_none_or(|t| t.len() == n);
-        if inertia.len() != n || joints > n || !tau_ok || !self.forward_turned(q, false) {
+        if inertia.len() != n || q.len() != n || joints > n || !tau_ok {
             return Status::BAD_LENGTH;
         }
-        self.centres_of_mass();
-        let ws = &self.ws;
-        let bodies = self.bodies.iter().zip(&ws.com).zip(&ws.rot[1..]);
-        for (i, j) in inertia.iter_mut().enumerate().take(joints) {
-            let r = &ws.rot[i];
-            let axis = [r[2], r[5], r[8]];
-            let origin = &ws.pos[i];
-            let mut sum = 0.0;
-            for ((body, c), rk) in bodies.clone().skip(i) {
-                // The axis in body k's frame: R_kᵀ a (for joint 0, a = e_z: R_k's last row).
-                let u = if i == 0 {
-                    [rk[6], rk[7], rk[8]]
-                } else {
-                    [
-                        rk[0] * axis[0] + rk[3] * axis[1] + rk[6] * axis[2],
-                        rk[1] * axis[0] + rk[4] * axis[1] + rk[7] * axis[2],
-                        rk[2] * axis[0] + rk[5] * axis[1] + rk[8] * axis[2],
-                    ]
-                };
-                let [xx, yy, zz, xy, xz, yz] = body.inertia_kg_m2;
-                let rotational = xx * u[0] * u[0]
-                    + yy * u[1] * u[1]
-                    + zz * u[2] * u[2]
-                    + 2.0 * (xy * u[0] * u[1] + xz * u[0] * u[2] + yz * u[1] * u[2]);
-                let d = sub3(c, origin);
-                let along = dot3(&d, &axis);
-                sum += rotational + body.mass_kg * (dot3(&d, &d) - along * along);
-            }
-            *j = sum;
-        }
-        if let Some(t) = tau_g {
-            for (i, ti) in t.iter_mut().enumerate().take(joints) {
-                let r = &ws.rot[i];
-                let origin = &ws.pos[i];
-                // ∂V/∂q_i = g · e_z · (z_i × Σ_{k≥i} m_k (c_k − p_i)).
-                let mut arm = [0.0; 3];
-                for (body, c) in self.bodies.iter().zip(&ws.com).skip(i) {
-                    for ((a, ck), pk) in arm.iter_mut().zip(c).zip(origin) {
-                        *a += body.mass_kg * (ck - pk);
-                    }
-                }
-                *ti = GRAVITY_M_S2 * (r[2] * arm[1] - r[5] * arm[0]);
-            }
-        }
+        self.joint_space_pass(q, joints, Some(inertia), None, tau_g);
         Status::OK
     }
 
-    fn fill_gravity(&self, out: &mut [f64]) {
-        let ws = &self.ws;
-        for (i, t) in out.iter_mut().enumerate() {
-            // ∂V/∂q_i = g · e_z · (z_i × (Σ m c − M p_i)) over the composite beyond joint i.
-            let m = ws.comp_mass[i];
-            let p = &ws.pos[i];
-            let h = &ws.comp_moment[i];
-            let arm = [h[0] - m * p[0], h[1] - m * p[1], h[2] - m * p[2]];
-            *t = GRAVITY_M_S2 * cross3(&ws.axis_w[i], &arm)[2];
+    /// The leading `joints × joints` block of `M(q)` into the row-major `n × n` `mass`
+    /// (other entries untouched) and, if `tau_g` is given, gravity torques of joints
+    /// `0..joints` (others untouched), from one pass: what a map reading the first `joints`
+    /// joints needs. `joints <= n_dof`.
+    pub fn leading_mass_matrix_and_gravity(
+        &mut self,
+        q: &[f64],
+        joints: usize,
+        mass: &mut [f64],
+        tau_g: Option<&mut [f64]>,
+    ) -> Status {
+        let n = self.joints.len();
+        let tau_ok = tau_g.as_ref().is_none_or(|t| t.len() == n);
+        if mass.len() != n * n || q.len() != n || joints > n || !tau_ok {
+            return Status::BAD_LENGTH;
         }
+        self.joint_space_pass(q, joints, None, Some(mass), tau_g);
+        Status::OK
     }
 
     /// An upper bound of `J_i` over all configurations, kg m², for every joint.
@@ -629,11 +789,6 @@ fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 }
 
 #[inline]
-fn add3(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-#[inline]
 fn sub3(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
@@ -645,40 +800,6 @@ fn cross3(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
         a[2] * b[0] - a[0] * b[2],
         a[0] * b[1] - a[1] * b[0],
     ]
-}
-
-#[inline]
-fn mat_vec(m: &[f64; 9], v: &[f64; 3]) -> [f64; 3] {
-    [
-        m[0] * v[0] + m[1] * v[1] + m[2] * v[2],
-        m[3] * v[0] + m[4] * v[1] + m[5] * v[2],
-        m[6] * v[0] + m[7] * v[1] + m[8] * v[2],
-    ]
-}
-
-#[inline]
-fn mat_mul(a: &[f64; 9], b: &[f64; 9]) -> [f64; 9] {
-    let mut out = [0.0; 9];
-    for r in 0..3 {
-        for c in 0..3 {
-            out[3 * r + c] = a[3 * r] * b[c] + a[3 * r + 1] * b[3 + c] + a[3 * r + 2] * b[6 + c];
-        }
-    }
-    out
-}
-
-/// `R S Rᵀ` for a symmetric `S`.
-#[inline]
-fn rotate_sym(r: &[f64; 9], s: &[f64; 9]) -> [f64; 9] {
-    let rs = mat_mul(r, s);
-    let mut out = [0.0; 9];
-    for a in 0..3 {
-        for b in 0..3 {
-            out[3 * a + b] =
-                rs[3 * a] * r[3 * b] + rs[3 * a + 1] * r[3 * b + 1] + rs[3 * a + 2] * r[3 * b + 2];
-        }
-    }
-    out
 }
 
 /// Row-major symmetric 3×3 from `[xx, yy, zz, xy, xz, yz]`.

@@ -75,6 +75,8 @@ fn modal_map_provider_and_shaper_never_allocate() {
     let n = allocations_in(|| {
         for q in &poses {
             provider.modes(q, &mut modes);
+            // The same pose again: the stored result.
+            provider.modes(q, &mut modes);
         }
         provider.modes(&[0.0; 4], &mut modes);
     });

@@ -30,6 +30,8 @@ fn robot_map_and_map_shaper_never_allocate() {
             robot.gravity_torque(q, &mut tau);
             robot.flange_pose(q, &mut pose);
             robot.joint_inertia_and_gravity(q, &mut j, Some(&mut tau));
+            robot.leading_joint_inertia_and_gravity(q, 2, &mut j, Some(&mut tau));
+            robot.leading_mass_matrix_and_gravity(q, 3, &mut m, Some(&mut tau));
         }
         // Wrong lengths and NaN poses take the same allocation-free path.
         robot.mass_matrix(&[0.0; 5], &mut m);
@@ -53,6 +55,8 @@ fn robot_map_and_map_shaper_never_allocate() {
     .expect("valid map");
     let n = allocations_in(|| {
         for q in &poses {
+            provider.modes(q, &mut modes);
+            // The same pose again: the stored result.
             provider.modes(q, &mut modes);
         }
         provider.modes(&[0.0; 4], &mut modes);

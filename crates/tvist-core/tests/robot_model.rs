@@ -532,5 +532,46 @@ fn shaper_with_map_has_the_map_delay_at_rest() {
         "{} vs {want}",
         shaper.delay_s()
     );
-    assert_eq!(out, q);
+    // At rest the output is the input times the sum of the impulse weights, 1 up to the
+    // rounding of the weights designed from these modes: within 2 ulp of each joint value.
+    for (o, x) in out.iter().zip(&q) {
+        assert!(
+            (o - x).abs() <= 2.0 * f64::EPSILON * x.abs(),
+            "{out:?} vs {q:?}"
+        );
+    }
+}
+
+/// A pose bit-identical to the previous one returns the stored modes: the same modes and
+/// status as a fresh evaluation; any other pose (one ulp away, or a NaN) is evaluated.
+#[test]
+fn a_repeated_pose_gives_the_modes_of_a_fresh_evaluation() {
+    let make = || MapDynamics::new(ur_robot("ur5e", 5.0), DynamicMap::paper_ur5e()).expect("valid");
+    let mut provider = make();
+    let mut rng = Rng(99);
+    let (mut got, mut again, mut fresh) = (
+        [Mode::new(0.0, 0.0); 2],
+        [Mode::new(0.0, 0.0); 2],
+        [Mode::new(0.0, 0.0); 2],
+    );
+    for _ in 0..50 {
+        let q = rng.pose(6);
+        let status = provider.modes(&q, &mut got);
+        assert_eq!(provider.modes(&q, &mut again), status);
+        assert_eq!(again, got);
+        assert_eq!(make().modes(&q, &mut fresh), status);
+        assert_eq!(fresh, got);
+        // One ulp away in the last joint: evaluated anew, equal to a fresh evaluation.
+        let mut near = q.clone();
+        near[5] = f64::from_bits(near[5].to_bits() + 1);
+        provider.modes(&near, &mut again);
+        make().modes(&near, &mut fresh);
+        assert_eq!(again, fresh);
+    }
+    let mut bad = vec![0.3; 6];
+    bad[2] = f64::NAN;
+    provider.modes(&bad, &mut got);
+    assert!(got.iter().all(|m| !m.is_valid()));
+    provider.modes(&bad, &mut again);
+    assert!(again.iter().all(|m| !m.is_valid()));
 }

@@ -14,6 +14,7 @@ mod convert;
 mod json;
 mod modal;
 mod robot;
+mod robot_modes;
 mod ztdis;
 
 use convert::value_error;

@@ -1,14 +1,15 @@
 //! Bindings of the modal map and its per-cycle provider.
 
-use numpy::{PyArrayDyn, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{PyArrayDyn, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use tvist_core as core;
-use tvist_core::{Dynamics, Mode};
+use tvist_core::Mode;
 
 use crate::convert::{self, rows, value_error};
 use crate::robot::PyRobot;
+use crate::robot_modes;
 
 use tvist_core::map_file::FLEX_JOINT_FIELDS;
 
@@ -189,67 +190,7 @@ pub struct PyModalDynamics {
     pub inner: core::ModalDynamics,
 }
 
-#[pymethods]
-impl PyModalDynamics {
-    /// `allow_other_robot`: accept a map identified on another robot (research use).
-    #[new]
-    #[pyo3(signature = (robot, modal_map, allow_other_robot=false))]
-    fn new(
-        robot: PyRef<'_, PyRobot>,
-        modal_map: PyRef<'_, PyModalMap>,
-        allow_other_robot: bool,
-    ) -> PyResult<Self> {
-        let (robot, map) = (robot.inner.clone(), modal_map.inner.clone());
-        let inner = if allow_other_robot {
-            core::ModalDynamics::new_allowing_other_robot(robot, map)
-        } else {
-            core::ModalDynamics::new(robot, map)
-        }
-        .map_err(value_error)?;
-        Ok(PyModalDynamics { inner })
-    }
-
-    /// Modes [(wn_rad_s, zeta), ...] at configuration q (invalid ones as NaN).
-    fn modes(&mut self, q: PyReadonlyArray1<'_, f64>) -> PyResult<Vec<(f64, f64)>> {
-        let q = q.as_slice()?;
-        let n = self.inner.robot().n_dof();
-        if q.len() != n {
-            return Err(PyValueError::new_err(format!(
-                "q has {} values, expected {n}",
-                q.len()
-            )));
-        }
-        let mut out = vec![Mode::new(0.0, 0.0); self.inner.n_modes()];
-        self.inner.modes(q, &mut out);
-        Ok(out.iter().map(|m| (m.wn_rad_s, m.zeta)).collect())
-    }
-
-    /// Per-mode (wn_rad_s, zeta) bounds used to size the delay lines.
-    #[getter]
-    fn slowest_modes(&self) -> Vec<(f64, f64)> {
-        self.inner
-            .slowest_modes()
-            .iter()
-            .map(|m| (m.wn_rad_s, m.zeta))
-            .collect()
-    }
-
-    /// Number of configurations checked at construction.
-    #[classattr]
-    fn validation_poses() -> usize {
-        core::map_dynamics::VALIDATION_POSES
-    }
-
-    #[getter]
-    fn n_dof(&self) -> usize {
-        self.inner.robot().n_dof()
-    }
-
-    #[getter]
-    fn n_modes(&self) -> usize {
-        self.inner.n_modes()
-    }
-}
+robot_modes::robot_modes_class!(PyModalDynamics, modal_map, PyModalMap);
 
 /// Registers the classes of this module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -1,19 +1,20 @@
 //! Bindings of the robot model, the dynamic map and the map-driven dynamics provider.
 
-use numpy::{PyArrayDyn, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{PyArrayDyn, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use tvist_core as core;
-use tvist_core::{Dynamics, Mode, Status};
+use tvist_core::{Mode, Status};
 
 use crate::convert::{self, rows, value_error};
 use crate::json::{self, NonFinite};
 use crate::modal::PyModalMap;
+use crate::robot_modes;
 use pyo3::types::PyDict;
 use tvist_core::map_file::{self, MapFile, MapForm};
 use tvist_core::robot_data;
 
-fn check_len(what: &str, got: usize, expected: usize) -> PyResult<()> {
+pub(crate) fn check_len(what: &str, got: usize, expected: usize) -> PyResult<()> {
     if got == expected {
         Ok(())
     } else {
@@ -500,61 +501,7 @@ pub struct PyMapDynamics {
     pub inner: core::MapDynamics,
 }
 
-#[pymethods]
-impl PyMapDynamics {
-    /// `allow_other_robot`: accept a map identified on another robot (research use).
-    #[new]
-    #[pyo3(signature = (robot, dynmap, allow_other_robot=false))]
-    fn new(
-        robot: PyRef<'_, PyRobot>,
-        dynmap: PyRef<'_, PyDynamicMap>,
-        allow_other_robot: bool,
-    ) -> PyResult<Self> {
-        let (robot, map) = (robot.inner.clone(), dynmap.inner.clone());
-        let inner = if allow_other_robot {
-            core::MapDynamics::new_allowing_other_robot(robot, map)
-        } else {
-            core::MapDynamics::new(robot, map)
-        }
-        .map_err(value_error)?;
-        Ok(PyMapDynamics { inner })
-    }
-
-    /// Modes [(wn_rad_s, zeta), ...] at configuration q (invalid ones as NaN).
-    fn modes(&mut self, q: PyReadonlyArray1<'_, f64>) -> PyResult<Vec<(f64, f64)>> {
-        let q = q.as_slice()?;
-        check_len("q", q.len(), self.inner.robot().n_dof())?;
-        let mut out = vec![Mode::new(0.0, 0.0); self.inner.n_modes()];
-        self.inner.modes(q, &mut out);
-        Ok(out.iter().map(|m| (m.wn_rad_s, m.zeta)).collect())
-    }
-
-    /// Per-mode (wn_rad_s, zeta) bounds used to size the delay lines.
-    #[getter]
-    fn slowest_modes(&self) -> Vec<(f64, f64)> {
-        self.inner
-            .slowest_modes()
-            .iter()
-            .map(|m| (m.wn_rad_s, m.zeta))
-            .collect()
-    }
-
-    /// Number of configurations checked at construction.
-    #[classattr]
-    fn validation_poses() -> usize {
-        core::map_dynamics::VALIDATION_POSES
-    }
-
-    #[getter]
-    fn n_dof(&self) -> usize {
-        self.inner.robot().n_dof()
-    }
-
-    #[getter]
-    fn n_modes(&self) -> usize {
-        self.inner.n_modes()
-    }
-}
+robot_modes::robot_modes_class!(PyMapDynamics, dynmap, PyDynamicMap);
 
 /// Registers the classes of this module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

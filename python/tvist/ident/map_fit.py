@@ -229,7 +229,7 @@ def _covariance_se(
     """Standard errors ``√diag(σ² (JᵀJ)⁻¹)``; infinite (or an error) for a singular ``J``."""
     n, p = jac.shape
     sigma2 = float(residual @ residual) / max(n - p, 1)
-    sv = np.linalg.svd(jac, compute_uv=False)
+    _, sv, vt = np.linalg.svd(jac, full_matrices=False)
     if sv[-1] <= 1e-10 * sv[0]:
         if raise_if_singular:
             raise ValueError(
@@ -237,7 +237,10 @@ def _covariance_se(
                 "these poses (too little variation in inertia?)"
             )
         return {name: math.inf for name in names}
-    cov = np.linalg.inv(jac.T @ jac) * sigma2
+    # (JᵀJ)⁻¹ = V diag(1/s²) Vᵀ from the SVD: forming JᵀJ would square the condition number,
+    # and a Jacobian that passes the 1e-10 test above can still give a JᵀJ that inv() finds
+    # singular in floating point.
+    cov = (vt.T / sv**2) @ vt * sigma2
     return {name: float(math.sqrt(max(cov[i, i], 0.0))) for i, name in enumerate(names)}
 
 

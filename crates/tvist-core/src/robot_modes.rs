@@ -1,0 +1,291 @@
+//! [`RobotModes`]: a [`Dynamics`] provider that evaluates a [`Robot`] at the previous shaped
+//! output and turns what it reads of it into modes with a [`ModeLaw`], every cycle. The two
+//! laws are the published ten-coefficient map ([`crate::MapDynamics`]: joint inertias) and
+//! the modal map ([`crate::ModalDynamics`]: a mass-matrix block and its eigenproblem).
+//!
+//! The provider owns everything the laws share: the robot-name check, the check of the law
+//! over the configuration space at construction (and the delay bound it gives), the one-pass
+//! robot evaluation of only the joints the law reads, and the reuse of the previous modes for
+//! a bit-identical pose. Allocation-free after construction.
+
+use crate::dynamics::Dynamics;
+use crate::error::{Error, Status};
+use crate::robot::Robot;
+use crate::shaper::Mode;
+
+/// Number of configurations checked at construction (and used for the delay bound).
+///
+/// The poses are a Halton sequence over `[−π, π]` per joint. Inertias and gravity torques are
+/// 2π-periodic in every joint angle, so this box is the whole configuration space of any
+/// revolute chain, whatever its joint limits. A Halton sequence is low-discrepancy: every
+/// joint angle takes 4096 distinct values and pairs of joints are covered at a spacing of
+/// roughly 2π/64. The check costs a few milliseconds at construction.
+pub const VALIDATION_POSES: usize = 4096;
+
+/// How modes follow from the robot at a pose: what the law reads, and the law itself.
+pub trait ModeLaw {
+    /// True if the law reads the mass-matrix block of its joints (row-major `n × n`), false if
+    /// only the joint inertias (its diagonal, `n` values).
+    const READS_MASS_MATRIX: bool;
+
+    fn n_modes(&self) -> usize;
+    /// The robot the law was identified on, if known.
+    fn robot(&self) -> Option<&str>;
+    /// Number of joints read (largest index + 1): only these are evaluated.
+    fn required_joints(&self) -> usize;
+    /// Whether the law reads gravity torques.
+    fn uses_gravity(&self) -> bool;
+    /// Modes from the robot's inertias (or mass matrix) and gravity torques at one pose.
+    /// Allocation-free; invalid modes for input that gives none.
+    fn modes_from_robot(
+        &self,
+        inertia: &[f64],
+        n_dof: usize,
+        tau_g: &[f64],
+        out: &mut [Mode],
+    ) -> Status;
+    /// The setup error for mode `m`, invalid at pose `q` where the robot gave `inertia`.
+    fn invalid_mode_message(&self, m: usize, q: &[f64], inertia: &[f64], mode: Mode) -> String;
+    /// Lowers the sampled `slowest[m].wn_rad_s` to an analytic bound valid at every pose, where
+    /// the law has one. `inertia` is the latest evaluation (a template for the joints the
+    /// bound does not set).
+    fn lower_frequency_bound(&self, robot: &Robot, inertia: &[f64], slowest: &mut [Mode]);
+}
+
+/// Per-cycle modes from `robot` and a mode law. Allocation-free after construction.
+#[derive(Debug, Clone)]
+pub struct RobotModes<L> {
+    robot: Robot,
+    law: L,
+    /// Joint inertias (`n`) or mass matrix (`n × n`) of the latest evaluation, kg m² (only
+    /// the joints the law reads are evaluated; other entries stay 0).
+    inertia: Vec<f64>,
+    tau_g: Vec<f64>,
+    slowest: Vec<Mode>,
+    last: LastCall,
+}
+
+impl<L: ModeLaw> RobotModes<L> {
+    /// Builds the provider and checks the law against the robot.
+    ///
+    /// Rejected: a law reading joints the robot does not have, or one that gives an invalid
+    /// mode at any of the [`VALIDATION_POSES`] sampled configurations (evaluated exactly as
+    /// every cycle does).
+    ///
+    /// A law identified on another robot than `robot` (both names known and different) is
+    /// refused with [`Error::RobotMismatch`]; [`Self::new_allowing_other_robot`] skips that
+    /// check.
+    pub fn new(robot: Robot, law: L) -> Result<RobotModes<L>, Error> {
+        if let (Some(law_robot), Some(name)) = (law.robot(), robot.name()) {
+            if law_robot != name {
+                return Err(Error::RobotMismatch {
+                    map_robot: law_robot.to_string(),
+                    robot: name.to_string(),
+                });
+            }
+        }
+        Self::new_allowing_other_robot(robot, law)
+    }
+
+    /// As [`Self::new`] without the robot-name check: for research, e.g. trying one robot's
+    /// map on another. Every other check applies.
+    pub fn new_allowing_other_robot(robot: Robot, law: L) -> Result<RobotModes<L>, Error> {
+        let n = robot.n_dof();
+        if law.required_joints() > n {
+            return Err(Error::DimensionMismatch {
+                what: if L::READS_MASS_MATRIX {
+                    "joints read by the modal map (largest joint index + 1)"
+                } else {
+                    "joints read by the dynamic map (largest joint index + 1)"
+                },
+                expected: n,
+                got: law.required_joints(),
+            });
+        }
+        let mut provider = RobotModes {
+            inertia: vec![0.0; if L::READS_MASS_MATRIX { n * n } else { n }],
+            tau_g: vec![0.0; n],
+            slowest: vec![Mode::new(f64::INFINITY, 0.0); law.n_modes()],
+            last: LastCall::new(n, law.n_modes()),
+            robot,
+            law,
+        };
+        provider.check_workspace()?;
+        Ok(provider)
+    }
+
+    /// Samples the configuration space: rejects invalid modes and records per mode the lowest
+    /// `ω_n` and the highest `ζ`; then lowers `ω_n` to the law's analytic bound.
+    fn check_workspace(&mut self) -> Result<(), Error> {
+        let n = self.robot.n_dof();
+        let primes = first_primes(n);
+        let mut q = vec![0.0; n];
+        let mut modes = vec![Mode::new(0.0, 0.0); self.law.n_modes()];
+        for k in 1..=VALIDATION_POSES {
+            halton_pose_with(k, &primes, &mut q);
+            self.modes(&q, &mut modes);
+            for (m, mode) in modes.iter().enumerate() {
+                if !mode.is_valid() {
+                    let message = self.law.invalid_mode_message(m, &q, &self.inertia, *mode);
+                    return Err(Error::InvalidParameter(message));
+                }
+                let s = &mut self.slowest[m];
+                *s = Mode::new(s.wn_rad_s.min(mode.wn_rad_s), s.zeta.max(mode.zeta));
+            }
+        }
+        self.law
+            .lower_frequency_bound(&self.robot, &self.inertia, &mut self.slowest);
+        Ok(())
+    }
+
+    pub fn robot(&self) -> &Robot {
+        &self.robot
+    }
+
+    /// The mode law (the dynamic map or the modal map).
+    pub fn map(&self) -> &L {
+        &self.law
+    }
+
+    /// The per-mode bounds used for delay-line sizing, see [`Dynamics::slowest_mode`].
+    pub fn slowest_modes(&self) -> &[Mode] {
+        &self.slowest
+    }
+
+    /// What the latest [`Dynamics::modes`] call read of the robot (see the aliases'
+    /// `last_inertia` and `last_mass_matrix`).
+    pub(crate) fn last_evaluation(&self) -> &[f64] {
+        &self.inertia
+    }
+}
+
+impl<L: ModeLaw> Dynamics for RobotModes<L> {
+    fn n_modes(&self) -> usize {
+        self.law.n_modes()
+    }
+
+    fn modes(&mut self, q: &[f64], out: &mut [Mode]) -> Status {
+        if let Some(status) = self.last.repeat(q, out) {
+            return status;
+        }
+        // One pass, only the joints (and torques) the law reads.
+        let tau = if self.law.uses_gravity() {
+            Some(self.tau_g.as_mut_slice())
+        } else {
+            None
+        };
+        let joints = self.law.required_joints();
+        let status = if L::READS_MASS_MATRIX {
+            self.robot
+                .leading_mass_matrix_and_gravity(q, joints, &mut self.inertia, tau)
+        } else {
+            self.robot
+                .leading_joint_inertia_and_gravity(q, joints, &mut self.inertia, tau)
+        };
+        if !status.is_ok() {
+            out.fill(Mode::new(f64::NAN, f64::NAN));
+            return status;
+        }
+        let n = self.robot.n_dof();
+        let status = self
+            .law
+            .modes_from_robot(&self.inertia, n, &self.tau_g, out);
+        self.last.record(q, out, status);
+        status
+    }
+
+    /// Lowest `ω_n` (sampled minimum, lowered to the law's analytic bound) paired with the
+    /// highest sampled `ζ`. Pairing the two extremes gives the longest shaper a sampled pose
+    /// can need; the shaper's safety factor covers `ζ` between samples, and any excess is
+    /// clamped and reported as [`Status::DELAY_CLAMPED`].
+    fn slowest_mode(&self, index: usize) -> Option<Mode> {
+        self.slowest.get(index).copied()
+    }
+
+    fn n_dof(&self) -> Option<usize> {
+        Some(self.robot.n_dof())
+    }
+}
+
+/// The pose and result of a provider's latest evaluation: modes are a function of the pose
+/// alone, so a pose bit-identical to the previous one (an arm at rest: the shaped output
+/// settles to a fixed value) returns the stored modes without evaluating anything.
+#[derive(Debug, Clone)]
+struct LastCall {
+    q: Vec<f64>,
+    modes: Vec<Mode>,
+    status: Status,
+    /// False until a result is recorded.
+    valid: bool,
+}
+
+impl LastCall {
+    fn new(n_dof: usize, n_modes: usize) -> LastCall {
+        LastCall {
+            q: vec![0.0; n_dof],
+            modes: vec![Mode::new(f64::NAN, f64::NAN); n_modes],
+            status: Status::OK,
+            valid: false,
+        }
+    }
+
+    /// The stored status (and the stored modes in `out`) if `q` is the recorded pose bit for
+    /// bit and `out` has the recorded length.
+    #[inline]
+    fn repeat(&self, q: &[f64], out: &mut [Mode]) -> Option<Status> {
+        let same = self.valid
+            && q.len() == self.q.len()
+            && out.len() == self.modes.len()
+            && q.iter()
+                .zip(&self.q)
+                .all(|(a, b)| a.to_bits() == b.to_bits());
+        if !same {
+            return None;
+        }
+        out.copy_from_slice(&self.modes);
+        Some(self.status)
+    }
+
+    /// Records a full evaluation (lengths as at construction; others are not recorded).
+    #[inline]
+    fn record(&mut self, q: &[f64], out: &[Mode], status: Status) {
+        self.valid = q.len() == self.q.len() && out.len() == self.modes.len();
+        if self.valid {
+            self.q.copy_from_slice(q);
+            self.modes.copy_from_slice(out);
+            self.status = status;
+        }
+    }
+}
+
+/// Halton configuration `k` (`1..=VALIDATION_POSES`): joint `i` at `π (2 r(k, p_i) − 1)`
+/// with `p_i` the `i`-th prime.
+fn halton_pose_with(k: usize, primes: &[usize], q: &mut [f64]) {
+    for (qi, &p) in q.iter_mut().zip(primes) {
+        *qi = core::f64::consts::PI * (2.0 * radical_inverse(k, p) - 1.0);
+    }
+}
+
+/// Van der Corput radical inverse of `k` in base `base`, in `[0, 1)`.
+fn radical_inverse(mut k: usize, base: usize) -> f64 {
+    let inv = 1.0 / base as f64;
+    let (mut value, mut scale) = (0.0, inv);
+    while k > 0 {
+        value += (k % base) as f64 * scale;
+        k /= base;
+        scale *= inv;
+    }
+    value
+}
+
+fn first_primes(count: usize) -> Vec<usize> {
+    let mut primes: Vec<usize> = Vec::with_capacity(count);
+    let mut candidate = 2;
+    while primes.len() < count {
+        if primes.iter().all(|p| candidate % p != 0) {
+            primes.push(candidate);
+        }
+        candidate += 1;
+    }
+    primes
+}
