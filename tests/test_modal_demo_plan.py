@@ -16,7 +16,6 @@ import pytest
 from tvist.demo.identified import DEMO_PLAN, CampaignPlan
 from tvist.demo.modal_rows import DEMO_FLEX_JOINTS
 from tvist.demo.motions import PAYLOAD_COM_M, PAYLOAD_KG
-from tvist.ident.campaign import campaign_poses
 from tvist.ident.modal_fit import fit_modal_map
 from tvist.sim import Twin, default_flex
 
@@ -33,14 +32,7 @@ def _twin(payload_kg: float) -> Twin:
 def _plan_records(plan: CampaignPlan, seed: int = 4) -> list[dict]:
     """Campaign-format records at ``plan``'s poses with the twin's true modes plus noise."""
     rng = np.random.default_rng(seed)
-    poses = campaign_poses(
-        "ur5e",
-        payloads_kg=plan.payloads_kg,
-        payload_com_m=PAYLOAD_COM_M,
-        angles_rad=plan.angles_rad,
-        radii_m=plan.radii_m,
-        seed=plan.seed,
-    )
+    poses = plan.poses()
     records = []
     for p in poses:
         if p.q is None:

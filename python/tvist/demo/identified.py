@@ -89,6 +89,19 @@ class CampaignPlan:
     accel_noise_std_m_s2: float = 0.05
     seed: int = 1
 
+    def poses(self) -> list:
+        """The plan's campaign poses (:func:`tvist.ident.campaign.campaign_poses`)."""
+        from tvist.ident.campaign import campaign_poses
+
+        return campaign_poses(
+            "ur5e",
+            payloads_kg=self.payloads_kg,
+            payload_com_m=PAYLOAD_COM_M,
+            angles_rad=self.angles_rad,
+            radii_m=self.radii_m,
+            seed=self.seed,
+        )
+
     @property
     def n_poses(self) -> int:
         return len(self.payloads_kg) * len(self.radii_m) * len(self.angles_rad)
@@ -230,7 +243,7 @@ def identify_map(
     same fingerprint are reused. Any failure of the identification is reported in ``summary``
     (``{"error": ...}``) instead of raised, so the rest of the experiment still runs.
     """
-    from tvist.ident.campaign import campaign_poses, run_campaign
+    from tvist.ident.campaign import run_campaign
     from tvist.ident.map_fit import fit_map
 
     out = Path(out_dir)
@@ -239,14 +252,7 @@ def identify_map(
     n_workers = workers if workers is not None else min(2, os.cpu_count() or 1)
     records: list[dict] = []
     try:
-        poses = campaign_poses(
-            "ur5e",
-            payloads_kg=plan.payloads_kg,
-            payload_com_m=PAYLOAD_COM_M,
-            angles_rad=plan.angles_rad,
-            radii_m=plan.radii_m,
-            seed=plan.seed,
-        )
+        poses = plan.poses()
         reused = _prepare_cache(out, _fingerprint(plan, poses))
         records = run_campaign(
             poses,
