@@ -276,15 +276,23 @@ def test_run_shaped_move_cuts_residual_vibration(server, twin, tmp_path) -> None
     move = tmp_path / "q1q2.csv"
     np.savetxt(move, motion.reference(0.0).q, delimiter=",", fmt="%.12f")
     modes = ",".join(f"{wn / (2 * np.pi):.6f}:{zeta:.6f}" for wn, zeta in twin.modes(motion.q_end))
-    logs, outputs = {}, {}
-    for name, extra in (("unshaped", ["--unshaped"]), ("shaped", ["--modes", modes])):
-        logs[name] = tmp_path / f"{name}.csv"
-        done = _tvist("run", str(move), "--robot-ip", HOST, "--log", str(logs[name]), *extra)
+
+    def run(name: str, *extra: str) -> tuple[float, np.ndarray, np.ndarray, str]:
+        log = tmp_path / f"{name}.csv"
+        done = _tvist("run", str(move), "--robot-ip", HOST, "--log", str(log), *extra)
         assert done.returncode == 0, done.stdout + done.stderr
-        outputs[name] = done.stdout + done.stderr  # names any periods the loop skipped
-    unshaped, _, _ = _residual_rms(logs["unshaped"])
-    shaped, target_end, actual_end = _residual_rms(logs["shaped"])
-    assert shaped <= 0.1 * unshaped, (shaped, unshaped, outputs)
+        return (*_residual_rms(log), done.stdout + done.stderr)
+
+    unshaped, _, _, _ = run("unshaped", "--unshaped")
+    # The client's servo loop and the server's tick are Python threads on a shared machine:
+    # a loop that woke too late jumps over samples (tvist run warns and names how many), and
+    # the jumps excite the arm. Such a run does not measure the shaping; it is run again (at
+    # most twice). A run without skipped periods is judged at once.
+    for attempt in range(3):
+        shaped, target_end, actual_end, output = run(f"shaped{attempt}", "--modes", modes)
+        if shaped <= 0.1 * unshaped or "woke too late" not in output:
+            break
+    assert shaped <= 0.1 * unshaped, (shaped, unshaped, output)
     np.testing.assert_allclose(target_end, motion.q_end, atol=1e-4)
     np.testing.assert_allclose(actual_end, twin.equilibrium(motion.q_end), atol=1e-4)
 
