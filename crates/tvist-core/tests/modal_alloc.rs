@@ -7,10 +7,7 @@ mod robot_support;
 mod alloc_support;
 
 use alloc_support::{allocations_in, the_counter_sees_this_thread_only};
-use tvist_core::{
-    Dynamics, FlexJoint, LoadLaw, ModalDynamics, ModalMap, Mode, ShaperKind, Status, TvShaper,
-    TvShaperConfig,
-};
+use tvist_core::{FlexJoint, LoadLaw, ModalDynamics, ModalMap, Mode, ShaperKind};
 
 fn ur5e_like_map() -> ModalMap {
     let law = |v0: f64, v1: f64, v2: f64| LoadLaw {
@@ -68,33 +65,14 @@ fn modal_map_provider_and_shaper_never_allocate() {
     });
     assert_eq!(n, 0, "ModalMap evaluation allocated {n} times");
 
-    let mut provider =
+    let provider =
         ModalDynamics::new(robot_support::ur_robot("ur5e", 5.0), map).expect("valid map");
     let mut rng = robot_support::Rng(11);
     let poses: Vec<Vec<f64>> = (0..200).map(|_| rng.pose(6)).collect();
-    let n = allocations_in(|| {
-        for q in &poses {
-            provider.modes(q, &mut modes);
-            // The same pose again: the stored result.
-            provider.modes(q, &mut modes);
-        }
-        provider.modes(&[0.0; 4], &mut modes);
-    });
-    assert_eq!(n, 0, "ModalDynamics::modes allocated {n} times");
-
-    let config = TvShaperConfig::new(0.002, 6, ShaperKind::Zv);
-    let mut shaper = TvShaper::new(provider, &config).expect("valid config");
-    let mut out = [0.0; 6];
-    let mut statuses = Status::OK;
-    let n = allocations_in(|| {
-        for q in &poses {
-            statuses |= shaper.step(q, &mut out);
-        }
-        let mut bad = [0.0; 6];
-        bad[2] = f64::NAN;
-        statuses |= shaper.step(&bad, &mut out);
-        statuses |= shaper.step(&[0.0; 3], &mut out);
-    });
-    assert_eq!(n, 0, "TvShaper<ModalDynamics>::step allocated {n} times");
-    assert!(statuses.contains(Status::INPUT_HELD) && statuses.contains(Status::BAD_LENGTH));
+    alloc_support::assert_robot_provider_never_allocates(
+        provider,
+        ShaperKind::Zv,
+        &poses,
+        "ModalDynamics",
+    );
 }

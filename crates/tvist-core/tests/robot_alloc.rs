@@ -9,9 +9,7 @@ mod robot_support;
 mod alloc_support;
 
 use alloc_support::{allocations_in, the_counter_sees_this_thread_only};
-use tvist_core::{
-    DynamicMap, Dynamics, MapDynamics, Mode, ShaperKind, Status, TvShaper, TvShaperConfig,
-};
+use tvist_core::{DynamicMap, MapDynamics, Mode, ShaperKind};
 
 #[test]
 fn robot_map_and_map_shaper_never_allocate() {
@@ -48,35 +46,15 @@ fn robot_map_and_map_shaper_never_allocate() {
     });
     assert_eq!(n, 0, "dynamic map allocated {n} times");
 
-    let mut provider = MapDynamics::new(
+    let provider = MapDynamics::new(
         robot_support::ur_robot("ur5e", 5.0),
         DynamicMap::paper_ur5e(),
     )
     .expect("valid map");
-    let n = allocations_in(|| {
-        for q in &poses {
-            provider.modes(q, &mut modes);
-            // The same pose again: the stored result.
-            provider.modes(q, &mut modes);
-        }
-        provider.modes(&[0.0; 4], &mut modes);
-    });
-    assert_eq!(n, 0, "MapDynamics::modes allocated {n} times");
-
-    let config = TvShaperConfig::new(0.002, 6, ShaperKind::Zvd);
-    let mut shaper = TvShaper::new(provider, &config).expect("valid config");
-    let mut out = [0.0; 6];
-    let mut statuses = Status::OK;
-    let n = allocations_in(|| {
-        for q in &poses {
-            // Large jumps between random poses make the modes change every cycle.
-            statuses |= shaper.step(q, &mut out);
-        }
-        let mut bad = [0.0; 6];
-        bad[2] = f64::NAN;
-        statuses |= shaper.step(&bad, &mut out);
-        statuses |= shaper.step(&[0.0; 3], &mut out);
-    });
-    assert_eq!(n, 0, "TvShaper<MapDynamics>::step allocated {n} times");
-    assert!(statuses.contains(Status::INPUT_HELD) && statuses.contains(Status::BAD_LENGTH));
+    alloc_support::assert_robot_provider_never_allocates(
+        provider,
+        ShaperKind::Zvd,
+        &poses,
+        "MapDynamics",
+    );
 }

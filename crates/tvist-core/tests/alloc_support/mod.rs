@@ -87,3 +87,45 @@ pub fn the_counter_sees_this_thread_only() {
     worker.join().expect("worker thread");
     assert_eq!(n, 0, "another thread's allocations were counted");
 }
+
+/// Asserts that a robot-driven provider (two modes, 6 DOF) and a `kind` shaper driven by it
+/// never allocate: per pose of `poses` (twice, so a repeated pose takes the stored result), on
+/// a too-short pose, and through the shaper with a NaN pose and a too-short row, which must
+/// report [`Status::INPUT_HELD`] and [`Status::BAD_LENGTH`]. `name` labels the messages.
+#[allow(dead_code)] // not every allocation test has a robot-driven provider
+pub fn assert_robot_provider_never_allocates<D: tvist_core::Dynamics>(
+    mut provider: D,
+    kind: tvist_core::ShaperKind,
+    poses: &[Vec<f64>],
+    name: &str,
+) {
+    use tvist_core::{Mode, Status, TvShaper, TvShaperConfig};
+
+    let mut modes = [Mode::new(0.0, 0.0); 2];
+    let n = allocations_in(|| {
+        for q in poses {
+            provider.modes(q, &mut modes);
+            // The same pose again: the stored result.
+            provider.modes(q, &mut modes);
+        }
+        provider.modes(&[0.0; 4], &mut modes);
+    });
+    assert_eq!(n, 0, "{name}::modes allocated {n} times");
+
+    let config = TvShaperConfig::new(0.002, 6, kind);
+    let mut shaper = TvShaper::new(provider, &config).expect("valid config");
+    let mut out = [0.0; 6];
+    let mut statuses = Status::OK;
+    let n = allocations_in(|| {
+        for q in poses {
+            // Large jumps between random poses make the modes change every cycle.
+            statuses |= shaper.step(q, &mut out);
+        }
+        let mut bad = [0.0; 6];
+        bad[2] = f64::NAN;
+        statuses |= shaper.step(&bad, &mut out);
+        statuses |= shaper.step(&[0.0; 3], &mut out);
+    });
+    assert_eq!(n, 0, "TvShaper<{name}>::step allocated {n} times");
+    assert!(statuses.contains(Status::INPUT_HELD) && statuses.contains(Status::BAD_LENGTH));
+}
