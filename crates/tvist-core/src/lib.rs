@@ -11,8 +11,9 @@
 //! - [`dynmap`]: the dynamic map from joint-axis inertias to modes (eqs. 42–51).
 //! - [`robot_modes`]: the provider that evaluates the robot and a mode law every cycle;
 //!   [`map_dynamics`]: with the dynamic map (joint inertias).
-//! - [`modal_map`]: modes from the mass matrix and joint flexibility (generalized eigenproblem,
-//!   [`sym_eigen`]); [`modal_dynamics`]: the provider with the modal map.
+//! - [`modal_map`]: modes from the mass matrix and joint flexibility (the damped eigenproblem:
+//!   [`sym_eigen`] for the undamped modes, [`damped_modes`] for the exact damped ones);
+//!   [`modal_dynamics`]: the provider with the modal map.
 //! - `robot_data` (feature `json`): the UR e-series parameter file (`data/`), embedded and
 //!   parsed once.
 //! - `map_file` (feature `json`): the map file format: parse, validate, write.
@@ -23,6 +24,7 @@
 //! row-major `(n_samples, n_dof)`. Setup returns `Result<_, Error>`; per-step calls return a
 //! [`Status`] and never allocate, lock or panic.
 
+pub mod damped_modes;
 pub mod delay_line;
 pub mod dynamics;
 pub mod dynmap;

@@ -15,21 +15,30 @@
 //! included) on the flexible joints. Gravity stiffness `∂τ_g/∂q` (below 1 % of the gear
 //! stiffness on UR arms) and the flexibility of joints left out are neglected.
 //!
-//! **Modes.** The undamped modes solve the generalized symmetric eigenproblem
-//! `K φ = ω² M_ff φ`. With `K` diagonal and positive it becomes the standard symmetric
-//! problem `B v = μ v`, `B = K^{-1/2} M_ff K^{-1/2}`, `μ = 1/ω²`, `φ = K^{-1/2} v`, solved by
-//! Jacobi ([`crate::sym_eigen`]). Because `v` is unit-length, `v_j²` is the share of the
-//! mode's gear strain energy stored in joint `j`.
+//! **Modes: the exact damped eigenproblem.** The modes are the roots `λ` of
+//! `det(λ² M_ff + λ C + K) = 0` with `ω_n = |λ|` and `ζ = −Re λ / |λ|` (the natural frequency
+//! and damping ratio of each damped mode, as a free-decay fit measures them). Two steps:
 //!
-//! **Damping: modal (diagonal) projection.** `ζ_i = φ_iᵀ C φ_i / (2 ω_i φ_iᵀ M φ_i)
-//! = (ω_i/2) Σ_j c_j v_ij² / k_j`. Joint dampers are not proportional to `M` and `K`, so the
-//! projected damping matrix `Φᵀ C Φ` has off-diagonal terms; they are neglected. That is
-//! accurate when they are small against the modes' frequency separation (the coupling
-//! shifts the eigenvalues at second order in `c_ik / (ω_i² − ω_k²)`): joint dampers couple
-//! two modes only through the joints both move, and the UR arms' base and shoulder modes
-//! share little motion (the off-diagonal inertia `M_01` comes from the small out-of-plane
-//! offsets). Solving the exact damped problem (a non-symmetric 2n × 2n eigenproblem) every
-//! cycle would cost several times more for a sub-percent change there.
+//! 1. The undamped problem `K φ = ω² M_ff φ`: with `K` diagonal and positive it becomes the
+//!    standard symmetric problem `B v = μ v`, `B = K^{-1/2} M_ff K^{-1/2}`, `μ = 1/ω²`,
+//!    `φ = K^{-1/2} v`, brought to nearly diagonal form by a few Jacobi sweeps
+//!    ([`crate::sym_eigen::sym_diagonalize`], [`JACOBI_TOLERANCE`]).
+//! 2. In those coordinates `(λ² VᵀBV + λ Vᵀ(C/K)V + I) z = 0`, solved exactly by Aberth's
+//!    iteration ([`crate::damped_modes`]) from the modal-damping estimates
+//!    `ζ_i = (ω_i/2) Σ_j c_j v_ij² / k_j` (the damping projected on the undamped modes, its
+//!    off-diagonal part neglected).
+//!
+//! Joint dampers are not proportional to `M` and `K`, so the projection alone is only
+//! approximate: it neglects the damping coupling of the modes, which is small against their
+//! frequency separation for most poses but not where two modes with very different damping
+//! come close (the UR5e's base and shoulder at folded poses: 20.2 and 19.2 Hz with ζ 0.05 and
+//! 0.22, where the projection puts the base mode several per cent off). `y = V z` is the mode in `K^{1/2}`-scaled joint coordinates:
+//! `|y_j|² / |y|²` is the share of the mode's gear strain energy stored in joint `j`.
+//!
+//! **Overdamped modes.** A mode at or beyond critical damping has no oscillating root; the
+//! exact solve then fails and the modes fall back to the projection (undamped frequencies,
+//! projected damping): the overdamped mode comes out with `ζ ≥ 1`, which the shaper treats
+//! as invalid (it holds its last valid modes and reports it), while the others stay usable.
 //!
 //! **Load dependence.** Gears stiffen and damp more under load. Both laws are
 //! `v(L) = v_0 + v_1 |L|_s + v_2 L²` with `L` a static gravity torque (N m): for the
@@ -39,7 +48,7 @@
 //! non-negative and `k_0 > 0`, so stiffness is positive everywhere.
 //!
 //! **Mode assignment.** The modes to shape are named by a joint each (`mode_joints`, e.g.
-//! `[0, 1]` for base then shoulder): mode `m` is the eigenmode that stores the largest share
+//! `[0, 1]` for base then shoulder): mode `m` is the (damped) eigenmode that stores the largest share
 //! of its strain energy in joint `mode_joints[m]`, so "base" and "shoulder" keep their
 //! meaning when the frequencies cross. Precisely, a share-weighted average (weights
 //! `share^4`) of the eigenmodes: the dominant one where one dominates, a continuous blend
@@ -48,10 +57,12 @@
 //! Evaluation ([`ModalMap::modes_from_mass_matrix`]) uses fixed-size arrays only: no
 //! allocation, no panic.
 
+use crate::damped_modes::damped_modes;
 use crate::dynmap::smooth_abs_torque_nm;
 use crate::error::{Error, Status};
 use crate::shaper::Mode;
-use crate::sym_eigen::{sym_eigen, MAX_DIM};
+use crate::sym_eigen::{sym_diagonalize, MAX_DIM};
+use num_complex::Complex64;
 
 /// Largest number of flexible joints.
 pub const MAX_FLEX_JOINTS: usize = MAX_DIM;
@@ -131,9 +142,9 @@ pub struct FlexJoint {
 pub struct ModalSolution {
     /// Number of modes (= number of flexible joints).
     pub n: usize,
-    /// Undamped natural frequencies, rad/s.
+    /// Natural frequencies `|λ|` of the damped modes, rad/s.
     pub wn_rad_s: [f64; MAX_FLEX_JOINTS],
-    /// Modal damping ratios.
+    /// Damping ratios `−Re λ / |λ|`.
     pub zeta: [f64; MAX_FLEX_JOINTS],
     /// `strain_share[i][f]`: share of mode `i`'s strain energy in flexible joint `f` (the
     /// `f`-th entry of [`ModalMap::flex_joints`]); each row sums to 1.
@@ -249,6 +260,7 @@ impl ModalMap {
     /// `n_dof × n_dof`, kg m²) and gravity torques `tau_g` (`n_dof` values, N m; may be empty
     /// when [`Self::uses_gravity`] is false). `None` on wrong lengths, non-finite input or a
     /// mass block that is not positive definite.
+    #[allow(clippy::needless_range_loop)] // index loops mirror the matrix formulas
     pub fn solve(&self, mass: &[f64], n_dof: usize, tau_g: &[f64]) -> Option<ModalSolution> {
         let nf = self.flex.len();
         let need = self.required_joints();
@@ -277,13 +289,18 @@ impl ModalMap {
                 b[r][s] = mass[fr.joint * n_dof + fs.joint] * inv_sqrt_k[r] * inv_sqrt_k[s];
             }
         }
-        let (mu, v) = sym_eigen(&b, nf)?;
+        // Nearly diagonal (module docs): the damped solve works with the rotated matrix as it is.
+        let (rotated, v) = sym_diagonalize(&b, nf, JACOBI_TOLERANCE)?;
+        let mu: [f64; MAX_DIM] = std::array::from_fn(|i| rotated[i][i]);
         let mut out = ModalSolution {
             n: nf,
             wn_rad_s: [0.0; MAX_FLEX_JOINTS],
             zeta: [0.0; MAX_FLEX_JOINTS],
             strain_share: [[0.0; MAX_FLEX_JOINTS]; MAX_FLEX_JOINTS],
         };
+        // Undamped modes and their projected damping: the start of the damped solve, and the
+        // answer where it fails (module docs).
+        let mut start = [Complex64::new(0.0, 0.0); MAX_FLEX_JOINTS];
         for i in 0..nf {
             if mu[i].is_nan() || mu[i] <= 0.0 {
                 return None;
@@ -297,6 +314,31 @@ impl ModalMap {
             }
             out.wn_rad_s[i] = wn;
             out.zeta[i] = 0.5 * wn * modal_c;
+            let zeta = out.zeta[i].min(0.9);
+            start[i] = Complex64::new(-zeta * wn, wn * (1.0 - zeta * zeta).sqrt());
+        }
+        // In the undamped modal coordinates `y = V z`: `(λ² diag(μ) + λ G + I) z = 0` with
+        // `G = Vᵀ diag(c/k) V`.
+        let mut g = [[0.0; MAX_DIM]; MAX_DIM];
+        for i in 0..nf {
+            for j in i..nf {
+                let gij: f64 = (0..nf).map(|f| v[f][i] * c_over_k[f] * v[f][j]).sum();
+                g[i][j] = gij;
+                g[j][i] = gij;
+            }
+        }
+        if let Some(damped) = damped_modes(&rotated, &g, nf, &start) {
+            for i in 0..nf {
+                let root = damped.roots[i];
+                let wn = root.norm_sqr().sqrt();
+                out.wn_rad_s[i] = wn;
+                out.zeta[i] = -root.re / wn;
+                // Strain shares |y_f|² of the unit vector y = V z.
+                for f in 0..nf {
+                    let y: Complex64 = (0..nf).map(|j| v[f][j] * damped.vectors[j][i]).sum();
+                    out.strain_share[i][f] = y.norm_sqr();
+                }
+            }
         }
         Some(out)
     }
@@ -351,6 +393,12 @@ impl ModalMap {
         }
     }
 }
+
+/// Off-diagonal tolerance (relative) of the Jacobi rotation into undamped modal coordinates.
+/// The damped solve takes the rotated mass matrix as it is, so the tolerance does not limit
+/// its accuracy; the start values and the projected modes (the fallback) neglect the
+/// off-diagonal part, an error second order in it: about `1e-8` relative.
+pub const JACOBI_TOLERANCE: f64 = 1e-4;
 
 /// Exponent of the strain-energy shares that weigh the eigenmodes of one shaped mode.
 pub const ASSIGNMENT_POWER: i32 = 4;

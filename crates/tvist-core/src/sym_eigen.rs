@@ -10,6 +10,9 @@
 /// Largest matrix dimension handled.
 pub const MAX_DIM: usize = 6;
 
+/// A `MAX_DIM × MAX_DIM` matrix whose leading block is used.
+pub type Matrix = [[f64; MAX_DIM]; MAX_DIM];
+
 /// Upper bound on the number of sweeps. Quadratic convergence needs far fewer (about 6 for
 /// n = 6 to double precision); the bound only guarantees termination for any input.
 pub const MAX_SWEEPS: usize = 50;
@@ -22,16 +25,57 @@ pub const MAX_SWEEPS: usize = 50;
 /// one is overwritten from it). `None` if `n` is 0 or larger than [`MAX_DIM`], if an entry is
 /// not finite, or (never seen in practice) if the off-diagonal norm did not fall below
 /// `1e-12` of the matrix norm within [`MAX_SWEEPS`] sweeps.
-#[allow(clippy::needless_range_loop)] // index loops mirror the textbook rotation formulas
 pub fn sym_eigen(
     a: &[[f64; MAX_DIM]; MAX_DIM],
     n: usize,
 ) -> Option<([f64; MAX_DIM], [[f64; MAX_DIM]; MAX_DIM])> {
-    if n == 0 || n > MAX_DIM {
-        return None;
+    let (rotated, vectors) = sym_diagonalize(a, n, FULL_PRECISION)?;
+    let mut values = [0.0; MAX_DIM];
+    for (i, value) in values.iter_mut().enumerate().take(n) {
+        *value = rotated[i][i];
     }
-    let mut m = [[0.0; MAX_DIM]; MAX_DIM];
-    let mut v = [[0.0; MAX_DIM]; MAX_DIM];
+    Some((values, vectors))
+}
+
+/// Off-diagonal tolerance of [`sym_eigen`]: the eigenvalues then carry a relative error of
+/// order `1e-24` (second order in the off-diagonal part) and the eigenvectors one of order
+/// `1e-12`; one sweep short of full rounding precision.
+pub const FULL_PRECISION: f64 = 1e-12;
+
+/// Jacobi rotations of the leading `n × n` block of symmetric `a` until the off-diagonal norm
+/// of the rotated matrix is at most `off_tolerance` times the norm of `a`.
+///
+/// Returns `(Vᵀ A V, V)`: the rotated matrix (symmetric, entries beyond `n` zero) and the
+/// orthonormal rotation, column `i` its `i`-th vector. With `off_tolerance` [`FULL_PRECISION`]
+/// the diagonal holds the eigenvalues ([`sym_eigen`]); a looser tolerance gives a nearly
+/// diagonal form for fewer sweeps, exact as a change of coordinates (the rotation is
+/// orthonormal to rounding whatever the tolerance). `None` as for [`sym_eigen`].
+pub fn sym_diagonalize(
+    a: &[[f64; MAX_DIM]; MAX_DIM],
+    n: usize,
+    off_tolerance: f64,
+) -> Option<(Matrix, Matrix)> {
+    // One instance per size: fixed-size loops the compiler unrolls.
+    match n {
+        1 => jacobi::<1>(a, off_tolerance),
+        2 => jacobi::<2>(a, off_tolerance),
+        3 => jacobi::<3>(a, off_tolerance),
+        4 => jacobi::<4>(a, off_tolerance),
+        5 => jacobi::<5>(a, off_tolerance),
+        6 => jacobi::<6>(a, off_tolerance),
+        _ => None,
+    }
+}
+
+/// [`sym_diagonalize`] at a compile-time size `N ≤ MAX_DIM`.
+#[allow(clippy::needless_range_loop)] // index loops mirror the textbook rotation formulas
+fn jacobi<const N: usize>(
+    a: &[[f64; MAX_DIM]; MAX_DIM],
+    off_tolerance: f64,
+) -> Option<(Matrix, Matrix)> {
+    let n = N;
+    let mut m = [[0.0; N]; N];
+    let mut v = [[0.0; N]; N];
     let mut norm2 = 0.0;
     for p in 0..n {
         v[p][p] = 1.0;
@@ -53,10 +97,8 @@ pub fn sym_eigen(
                 off2 += m[p][q] * m[p][q];
             }
         }
-        // Squared norms: off-diagonal below 1e-12 of the norm. The eigenvalues then carry a
-        // relative error of order (1e-12)² (second order in the off-diagonal part) and the
-        // eigenvectors one of order 1e-12; one sweep fewer than full rounding precision.
-        if off2 <= 1e-24 * norm2 {
+        // Squared norms; off2 counts each symmetric pair once.
+        if off2 <= off_tolerance * off_tolerance * norm2 {
             converged = true;
             break;
         }
@@ -97,11 +139,13 @@ pub fn sym_eigen(
     if !converged {
         return None;
     }
-    let mut values = [0.0; MAX_DIM];
-    for (i, value) in values.iter_mut().enumerate().take(n) {
-        *value = m[i][i];
+    let mut rotated = [[0.0; MAX_DIM]; MAX_DIM];
+    let mut vectors = [[0.0; MAX_DIM]; MAX_DIM];
+    for i in 0..n {
+        rotated[i][..n].copy_from_slice(&m[i]);
+        vectors[i][..n].copy_from_slice(&v[i]);
     }
-    Some((values, v))
+    Some((rotated, vectors))
 }
 
 #[cfg(test)]

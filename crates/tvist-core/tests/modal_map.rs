@@ -1,5 +1,6 @@
 //! The modal map against closed forms: two coupled joints (the quadratic characteristic
-//! equation), mode assignment through a frequency crossing, and the UR5e provider.
+//! equation), the overdamped fallback, mode assignment through a frequency crossing, and the
+//! UR5e provider. (The damped modes against LAPACK: tests/test_modal_map.py.)
 
 mod robot_support;
 
@@ -67,6 +68,24 @@ fn modal_damping_of_a_single_joint_is_exact() {
     assert!(map.modes_from_mass_matrix(&mass, 2, &[], &mut out).is_ok());
     assert!((out[0].wn_rad_s - (2.0e4f64 / 5.0).sqrt()).abs() < 1e-12);
     assert!((out[0].zeta - 300.0 / (2.0 * (2.0e4f64 * 5.0).sqrt())).abs() < 1e-15);
+}
+
+#[test]
+fn an_overdamped_mode_falls_back_to_the_projected_damping() {
+    // Joint 1 at ζ = 1.5 has no oscillating mode, so the damped solve fails; the modes are
+    // then the undamped ones with projected damping, exact for uncoupled joints:
+    // ω = √(k/J), ζ = c / (2 √(k J)), whatever the (valid) joint 0 does.
+    let (k0, j0, c0) = (2.0e4, 4.0, 0.1 * 2.0 * (2.0e4f64 * 4.0).sqrt());
+    let (k1, j1, c1) = (1.8e4, 9.0, 1.5 * 2.0 * (1.8e4f64 * 9.0).sqrt());
+    let map = ModalMap::new(vec![joint(0, k0, c0), joint(1, k1, c1)], &[0, 1]).expect("valid");
+    let mut out = [Mode::new(0.0, 0.0); 2];
+    assert!(map
+        .modes_from_mass_matrix(&[j0, 0.0, 0.0, j1], 2, &[], &mut out)
+        .is_ok());
+    assert!((out[0].wn_rad_s / (k0 / j0).sqrt() - 1.0).abs() < 1e-12);
+    assert!((out[0].zeta - 0.1).abs() < 1e-12);
+    assert!((out[1].wn_rad_s / (k1 / j1).sqrt() - 1.0).abs() < 1e-12);
+    assert!((out[1].zeta - 1.5).abs() < 1e-12);
 }
 
 #[test]
