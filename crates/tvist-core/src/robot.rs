@@ -247,6 +247,38 @@ impl Moments {
         }
     }
 
+    /// `E_xx + E_yy` after [`Self::move_to_parent`] (the inertia about the parent's `z` axis,
+    /// which the turn about that axis leaves unchanged), without forming the other entries:
+    /// `Rx(α)` keeps `E_xx` and turns the `(y, z)` block; of the shift only `x` moves `E_xx`.
+    #[inline]
+    fn z_inertia_in_parent(&self, dh: &DhConstants) -> f64 {
+        let (m, h, e) = (self.mass_kg, &self.first_kg_m, &self.second_kg_m2);
+        let e_yy = match dh.twist {
+            Twist::None => e[1],
+            Twist::Quarter(_) => e[2],
+            Twist::General => {
+                let mean = 0.5 * (e[1] + e[2]);
+                let half_diff = 0.5 * (e[1] - e[2]);
+                mean + (dh.cos_2alpha * half_diff - dh.sin_2alpha * e[5])
+            }
+        };
+        let a = dh.a_m;
+        let shift = if a != 0.0 {
+            a * (2.0 * h[0] + m * a)
+        } else {
+            0.0
+        };
+        (e[0] + shift) + e_yy
+    }
+
+    /// True if every turn about `z` leaves these moments exactly as they are: the centre of
+    /// mass on the axis and the `(x, y)` block of `E` isotropic with no products involving
+    /// `x` or `y` (a body symmetric about `z`, such as a flange with a payload on its axis).
+    fn is_turn_invariant(&self) -> bool {
+        let (h, e) = (&self.first_kg_m, &self.second_kg_m2);
+        h[0] == 0.0 && h[1] == 0.0 && e[0] == e[1] && e[3] == 0.0 && e[4] == 0.0 && e[5] == 0.0
+    }
+
     /// `Rz(θ)` with `sin_cos = (sin θ, cos θ)`.
     #[inline]
     fn turn_z(&mut self, (s, c): (f64, f64)) {
@@ -390,6 +422,13 @@ pub struct Robot {
     bodies: Vec<RigidBody>,
     /// [`Moments`] of `bodies[k]` in its own frame `k + 1`.
     moments: Vec<Moments>,
+    /// The first joint `f >= 1` from which on the composite of bodies `f..n` in frame `f` is
+    /// the same at every pose: each of the joints `f..n` turns a composite that is symmetric
+    /// about its axis ([`Moments::is_turn_invariant`], for example the last wrist with a
+    /// payload on the flange axis). `n` if the last joint's turn matters already.
+    fixed_from: usize,
+    /// That composite (bodies `fixed_from..n` in frame `fixed_from`; zero if `fixed_from == n`).
+    fixed_composite: Moments,
     ws: Workspace,
     /// The robot's name (for example `"ur5e"`), if it has one: dynamic maps are checked
     /// against it.
@@ -432,6 +471,8 @@ impl Robot {
             dh: joints.iter().map(DhConstants::of).collect(),
             bodies: links.clone(),
             moments: vec![Moments::ZERO; n],
+            fixed_from: n,
+            fixed_composite: Moments::ZERO,
             joints,
             links,
             payload,
@@ -476,6 +517,20 @@ impl Robot {
         self.bodies[n - 1] = self.links[n - 1].combined(&self.payload);
         for (m, b) in self.moments.iter_mut().zip(&self.bodies) {
             *m = Moments::of(b);
+        }
+        // The composite pass from the flange inwards, as long as no turn changes anything
+        // (joint 0 is never turned; it is not folded in).
+        self.fixed_from = n;
+        self.fixed_composite = Moments::ZERO;
+        let mut composite = Moments::ZERO;
+        for k in (1..n).rev() {
+            composite.add(&self.moments[k]);
+            composite.move_to_parent(&self.dh[k]);
+            if !composite.is_turn_invariant() {
+                break;
+            }
+            self.fixed_from = k;
+            self.fixed_composite = composite;
         }
     }
 
@@ -556,8 +611,12 @@ impl Robot {
     /// base's up direction in frame `k` (`∂V/∂q_k = g e_z · (z_k × h)`). Off the diagonal,
     /// `M[k, j]` is the `z` moment about joint `k` of the spatial momentum of composite `j`
     /// turning about joint `j` at unit rate, carried down with the composite. Nothing depends
-    /// on `q_0` (joint 0 turns the arm about the gravity axis), so its sine is never taken:
-    /// one `sin_cos` per joint `1..n`, no world transforms.
+    /// on `q_0` (joint 0 turns the arm about the gravity axis), so its sine is never taken;
+    /// the composite of the bodies beyond [`Robot::fixed_from`] is a constant formed at setup
+    /// (their joints turn nothing that matters), so their sines are not taken either: one
+    /// `sin_cos` per joint `1..fixed_from`, no world transforms.
+    ///
+    /// A non-finite angle in `q` (any joint, read or not) gives NaN for every entry evaluated.
     fn joint_space_pass(
         &mut self,
         q: &[f64],
@@ -567,8 +626,31 @@ impl Robot {
         mut tau_g: Option<&mut [f64]>,
     ) {
         let n = self.joints.len();
+        if !q.iter().all(|v| v.is_finite()) {
+            let nan = f64::NAN;
+            for k in 0..joints {
+                if let Some(out) = inertia.as_deref_mut() {
+                    out[k] = nan;
+                }
+                if let Some(m) = mass.as_deref_mut() {
+                    m[k * n..k * n + joints].fill(nan);
+                }
+                if let Some(t) = tau_g.as_deref_mut() {
+                    t[k] = nan;
+                }
+            }
+            return;
+        }
+        // The joints beyond `start` are folded into the constant composite of setup; the
+        // mass-matrix entries and torques of joints read there would need their own terms, so
+        // a pass reading them starts at the flange.
+        let (start, mut composite) = if joints <= self.fixed_from {
+            (self.fixed_from, self.fixed_composite)
+        } else {
+            (n, Moments::ZERO)
+        };
         let ws = &mut self.ws;
-        for (sc, &qk) in ws.sin_cos[1..].iter_mut().zip(&q[1..]) {
+        for (sc, &qk) in ws.sin_cos[1..start].iter_mut().zip(&q[1..start]) {
             *sc = crate::trig::sin_cos(qk);
         }
         if tau_g.is_some() {
@@ -584,15 +666,33 @@ impl Robot {
                 ws.up[k] = u;
             }
         }
-        let mut composite = Moments::ZERO;
-        let steps = self.moments.iter().zip(&self.dh).zip(&ws.sin_cos);
-        for (k, ((body, dh), &sc)) in steps.enumerate().rev() {
+        // Joints nothing is read of: the composite alone, carried inwards.
+        let beyond = self.moments[joints..start]
+            .iter()
+            .zip(&self.dh[joints..start])
+            .zip(&ws.sin_cos[joints..start]);
+        for ((body, dh), &sc) in beyond.rev() {
             composite.add(body);
             composite.move_to_parent(dh);
-            if k >= joints {
-                composite.turn_z(sc);
-                continue;
+            composite.turn_z(sc);
+        }
+        let read = self.moments[..joints]
+            .iter()
+            .zip(&self.dh[..joints])
+            .zip(&ws.sin_cos[..joints]);
+        for (k, ((body, dh), &sc)) in read.enumerate().rev() {
+            composite.add(body);
+            if k == 0 && mass.is_none() {
+                // Joint 0's inertia alone (its gravity torque is 0): no full frame change.
+                if let Some(out) = inertia.as_deref_mut() {
+                    out[0] = composite.z_inertia_in_parent(dh);
+                }
+                if let Some(t) = tau_g.as_deref_mut() {
+                    t[0] = 0.0;
+                }
+                break;
             }
+            composite.move_to_parent(dh);
             let e = &composite.second_kg_m2;
             let diagonal = e[0] + e[1];
             if let Some(out) = inertia.as_deref_mut() {
