@@ -650,9 +650,7 @@ impl Robot {
             (n, Moments::ZERO)
         };
         let ws = &mut self.ws;
-        for (sc, &qk) in ws.sin_cos[1..start].iter_mut().zip(&q[1..start]) {
-            *sc = crate::trig::sin_cos(qk);
-        }
+        crate::trig::sin_cos_each(&q[1..start], &mut ws.sin_cos[1..start]);
         if tau_g.is_some() {
             // u_{k+1} = Rx(α_k)ᵀ Rz(q_k)ᵀ u_k from u_0 = e_z (Rz(q_0) leaves e_z as it is).
             let mut u = [0.0, 0.0, 1.0];
