@@ -906,34 +906,50 @@ fn sym_from_six(s: &[f64; 6]) -> [f64; 9] {
     [s[0], s[3], s[4], s[3], s[1], s[5], s[4], s[5], s[2]]
 }
 
-/// Eigenvalues of a symmetric 3×3 matrix in ascending order (closed form).
+/// Eigenvalues of a symmetric 3×3 matrix in ascending order (cyclic Jacobi rotations).
+///
+/// Each eigenvalue is within a few ulp of the matrix's largest entry of the exact one, also
+/// for equal or nearly equal eigenvalues (a thin rod's two equal moments, a disc's `k, k, 2k`),
+/// where the trigonometric closed form loses half the digits (`acos` near ±1). Setup-time only.
 fn sym_eigenvalues(m: &[f64; 9]) -> [f64; 3] {
-    let off = m[1] * m[1] + m[2] * m[2] + m[5] * m[5];
-    if off == 0.0 {
-        let mut d = [m[0], m[4], m[8]];
-        d.sort_by(f64::total_cmp);
-        return d;
+    let mut a = [[m[0], m[1], m[2]], [m[3], m[4], m[5]], [m[6], m[7], m[8]]];
+    // Quadratic convergence: a handful of sweeps reach an off-diagonal part below the
+    // rounding of the diagonal; the bound only guards non-finite input.
+    for _sweep in 0..50 {
+        let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+        let diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
+        if !(off > (f64::EPSILON * f64::EPSILON / 16.0) * diag) {
+            break;
+        }
+        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+            let apq = a[p][q];
+            if apq == 0.0 {
+                continue;
+            }
+            // The rotation that zeroes a[p][q]: t = tan of its angle, the smaller root.
+            let theta = (a[q][q] - a[p][p]) / (2.0 * apq);
+            let t = if theta.abs() > 1e150 {
+                0.5 / theta
+            } else {
+                theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt())
+            };
+            let c = 1.0 / (t * t + 1.0).sqrt();
+            let s = t * c;
+            a[p][p] -= t * apq;
+            a[q][q] += t * apq;
+            a[p][q] = 0.0;
+            a[q][p] = 0.0;
+            let r = 3 - p - q;
+            let (arp, arq) = (a[r][p], a[r][q]);
+            a[r][p] = c * arp - s * arq;
+            a[r][q] = s * arp + c * arq;
+            a[p][r] = a[r][p];
+            a[q][r] = a[r][q];
+        }
     }
-    let q = (m[0] + m[4] + m[8]) / 3.0;
-    let p2 = (m[0] - q).powi(2) + (m[4] - q).powi(2) + (m[8] - q).powi(2) + 2.0 * off;
-    let p = (p2 / 6.0).sqrt();
-    let b = [
-        (m[0] - q) / p,
-        m[1] / p,
-        m[2] / p,
-        m[3] / p,
-        (m[4] - q) / p,
-        m[5] / p,
-        m[6] / p,
-        m[7] / p,
-        (m[8] - q) / p,
-    ];
-    let det = b[0] * (b[4] * b[8] - b[5] * b[7]) - b[1] * (b[3] * b[8] - b[5] * b[6])
-        + b[2] * (b[3] * b[7] - b[4] * b[6]);
-    let phi = (det / 2.0).clamp(-1.0, 1.0).acos() / 3.0;
-    let largest = q + 2.0 * p * phi.cos();
-    let smallest = q + 2.0 * p * (phi + 2.0 * core::f64::consts::PI / 3.0).cos();
-    [smallest, 3.0 * q - largest - smallest, largest]
+    let mut d = [a[0][0], a[1][1], a[2][2]];
+    d.sort_by(f64::total_cmp);
+    d
 }
 
 #[cfg(test)]
@@ -947,6 +963,135 @@ mod tests {
         for (got, want) in e.iter().zip([1.0, 3.0, 5.0]) {
             assert!((got - want).abs() < 1e-12, "{e:?}");
         }
+    }
+
+    /// `k (1 − u uᵀ) + l u uᵀ` for a unit `u`, as `[xx, yy, zz, xy, xz, yz]`: principal
+    /// moments `l` about `u` and `k` (twice) across it, exactly.
+    fn axisymmetric(u: [f64; 3], k: f64, l: f64) -> [f64; 6] {
+        let w = l - k;
+        [
+            k + w * u[0] * u[0],
+            k + w * u[1] * u[1],
+            k + w * u[2] * u[2],
+            w * u[0] * u[1],
+            w * u[0] * u[2],
+            w * u[1] * u[2],
+        ]
+    }
+
+    /// Unit directions spread over the sphere (a spiral), and the coordinate axes.
+    fn directions() -> Vec<[f64; 3]> {
+        let mut dirs: Vec<[f64; 3]> = (0..2000)
+            .map(|i| {
+                let t = i as f64 * 0.37;
+                let (st, ct) = t.sin_cos();
+                let (sp, cp) = (0.3 * t).sin_cos();
+                [ct * sp, st * sp, cp]
+            })
+            .collect();
+        dirs.extend([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
+        dirs
+    }
+
+    #[test]
+    fn equal_principal_moments_are_found_to_rounding() {
+        // A thin rod of mass m and length L along u: m L²/12 across it (twice), 0 along it. A
+        // thin disc of radius R with normal u: m R²/4 across (twice), m R²/2 about u (the
+        // triangle inequality holds with equality). A sphere: three equal moments. The
+        // tensors are exact up to the rounding of their entries (a few ulp of k), so the
+        // eigenvalues are too: 1e-14 of the largest moment is 50 ulp.
+        let (m, length, radius) = (1.7, 0.6, 0.05);
+        let rod = m * length * length / 12.0;
+        let disc = m * radius * radius / 4.0;
+        for u in directions() {
+            for (six, want) in [
+                (axisymmetric(u, rod, 0.0), [0.0, rod, rod]),
+                (axisymmetric(u, disc, 2.0 * disc), [disc, disc, 2.0 * disc]),
+                (axisymmetric(u, rod, rod), [rod, rod, rod]),
+                (axisymmetric(u, rod, 1.0001 * rod), [rod, rod, 1.0001 * rod]),
+            ] {
+                let e = sym_eigenvalues(&sym_from_six(&six));
+                for (got, w) in e.iter().zip(want) {
+                    assert!(
+                        (got - w).abs() <= 1e-14 * want[2],
+                        "u = {u:?}: {e:?} vs {want:?}"
+                    );
+                }
+                let body = RigidBody {
+                    mass_kg: m,
+                    com_m: [0.1, -0.2, 0.3],
+                    inertia_kg_m2: six,
+                };
+                assert!(body.validate("body").is_ok(), "u = {u:?}: {six:?}");
+            }
+        }
+        // Just outside the triangle inequality (1e-6 of the largest moment, far above the
+        // validation's 1e-9 round-off allowance) is still refused, in any orientation.
+        for u in directions().into_iter().step_by(97) {
+            let six = axisymmetric(u, disc, 2.0 * disc * (1.0 + 1e-6));
+            let body = RigidBody {
+                mass_kg: m,
+                com_m: [0.0; 3],
+                inertia_kg_m2: six,
+            };
+            let err = body
+                .validate("disc")
+                .expect_err("violates the triangle inequality");
+            assert!(err.to_string().contains("triangle"), "{err}");
+        }
+    }
+
+    #[test]
+    fn eigenvalues_of_a_rotated_diagonal_matrix() {
+        // R diag(1, 2, 3) Rᵀ with R = Rz(0.7) Ry(−1.1) Rx(2.3): eigenvalues 1, 2, 3.
+        let rx = |a: f64| {
+            [
+                [1.0, 0.0, 0.0],
+                [0.0, a.cos(), -a.sin()],
+                [0.0, a.sin(), a.cos()],
+            ]
+        };
+        let ry = |a: f64| {
+            [
+                [a.cos(), 0.0, a.sin()],
+                [0.0, 1.0, 0.0],
+                [-a.sin(), 0.0, a.cos()],
+            ]
+        };
+        let rz = |a: f64| {
+            [
+                [a.cos(), -a.sin(), 0.0],
+                [a.sin(), a.cos(), 0.0],
+                [0.0, 0.0, 1.0],
+            ]
+        };
+        let mul = |a: [[f64; 3]; 3], b: [[f64; 3]; 3]| {
+            let mut c = [[0.0; 3]; 3];
+            for i in 0..3 {
+                for j in 0..3 {
+                    c[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+                }
+            }
+            c
+        };
+        let r = mul(mul(rz(0.7), ry(-1.1)), rx(2.3));
+        let d = [1.0, 2.0, 3.0];
+        let mut m = [0.0; 9];
+        for i in 0..3 {
+            for j in 0..3 {
+                m[3 * i + j] = (0..3).map(|k| r[i][k] * d[k] * r[j][k]).sum();
+            }
+        }
+        let e = sym_eigenvalues(&m);
+        for (got, want) in e.iter().zip(d) {
+            assert!((got - want).abs() < 1e-14 * 3.0, "{e:?}");
+        }
+        // Diagonal input (no rotation needed) and the zero matrix.
+        assert_eq!(
+            sym_eigenvalues(&[5.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 2.0]),
+            [-1.0, 2.0, 5.0]
+        );
+        assert_eq!(sym_eigenvalues(&[0.0; 9]), [0.0; 3]);
     }
 
     #[test]
