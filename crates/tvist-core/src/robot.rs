@@ -429,6 +429,10 @@ pub struct Robot {
     fixed_from: usize,
     /// That composite (bodies `fixed_from..n` in frame `fixed_from`; zero if `fixed_from == n`).
     fixed_composite: Moments,
+    /// Bodies `fixed_from − 1..n` in frame `fixed_from − 1` before its joint's turn (also the
+    /// same at every pose): where a pass that reads none of the joints from `fixed_from − 1`
+    /// on starts.
+    fixed_before_turn: Moments,
     ws: Workspace,
     /// The robot's name (for example `"ur5e"`), if it has one: dynamic maps are checked
     /// against it.
@@ -473,6 +477,7 @@ impl Robot {
             moments: vec![Moments::ZERO; n],
             fixed_from: n,
             fixed_composite: Moments::ZERO,
+            fixed_before_turn: Moments::ZERO,
             joints,
             links,
             payload,
@@ -532,6 +537,10 @@ impl Robot {
             self.fixed_from = k;
             self.fixed_composite = composite;
         }
+        let last = self.fixed_from - 1;
+        self.fixed_before_turn = self.fixed_composite;
+        self.fixed_before_turn.add(&self.moments[last]);
+        self.fixed_before_turn.move_to_parent(&self.dh[last]);
     }
 
     /// Replaces the payload (setup-time call: validates).
@@ -612,7 +621,7 @@ impl Robot {
     /// `M[k, j]` is the `z` moment about joint `k` of the spatial momentum of composite `j`
     /// turning about joint `j` at unit rate, carried down with the composite. Nothing depends
     /// on `q_0` (joint 0 turns the arm about the gravity axis), so its sine is never taken;
-    /// the composite of the bodies beyond [`Robot::fixed_from`] is a constant formed at setup
+    /// the composite of the bodies beyond `fixed_from` is a constant formed at setup
     /// (their joints turn nothing that matters), so their sines are not taken either: one
     /// `sin_cos` per joint `1..fixed_from`, no world transforms.
     ///
@@ -664,11 +673,18 @@ impl Robot {
                 ws.up[k] = u;
             }
         }
-        // Joints nothing is read of: the composite alone, carried inwards.
-        let beyond = self.moments[joints..start]
+        // Joints nothing is read of: the composite alone, carried inwards (from setup's
+        // composite before the first turn that matters, if none of those joints is read).
+        let mut end = start;
+        if joints < start && start == self.fixed_from {
+            composite = self.fixed_before_turn;
+            composite.turn_z(ws.sin_cos[start - 1]);
+            end = start - 1;
+        }
+        let beyond = self.moments[joints..end]
             .iter()
-            .zip(&self.dh[joints..start])
-            .zip(&ws.sin_cos[joints..start]);
+            .zip(&self.dh[joints..end])
+            .zip(&ws.sin_cos[joints..end]);
         for ((body, dh), &sc) in beyond.rev() {
             composite.add(body);
             composite.move_to_parent(dh);
