@@ -934,7 +934,8 @@ fn sym_eigenvalues(m: &[f64; 9]) -> [f64; 3] {
     for _sweep in 0..50 {
         let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
         let diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
-        if !(off > (f64::EPSILON * f64::EPSILON / 16.0) * diag) {
+        let converged = off <= (f64::EPSILON * f64::EPSILON / 16.0) * diag;
+        if converged || off.is_nan() || diag.is_nan() {
             break;
         }
         for (p, q) in [(0, 1), (0, 2), (1, 2)] {
