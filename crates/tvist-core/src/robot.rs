@@ -8,6 +8,7 @@
 //! All per-call methods are allocation-free: they work in a workspace preallocated by
 //! [`Robot::new`] and write into caller buffers. A buffer of the wrong length returns
 //! [`Status::BAD_LENGTH`] and leaves the output untouched; they never panic.
+//! A non-finite joint angle (in any joint, also one nothing depends on) gives NaN entries.
 
 use crate::error::{Error, Status};
 
