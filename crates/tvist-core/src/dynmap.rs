@@ -372,31 +372,31 @@ impl ModeMap {
             0.0
         };
         let numerator = (c.c_0 + root_term + c.c_2 * j_d) * (1.0 + c.c_tau * j_d);
-        // ζ = g_d^e_d g_f^e_f num / (2 √(K J_f)) = (num / 2) √(g_d^2e_d g_f^2e_f / (K J_f)):
-        // one square root and one division for any pair of exponents.
-        let (up_d, down_d) = squared_power(gain_d, self.damping_gain_exponent);
-        let (up_f, down_f) = squared_power(gain_f, self.frequency_gain_exponent);
-        let zeta = 0.5 * numerator * (up_d * up_f / (down_d * down_f * stiffness * j_f)).sqrt();
+        // 2 √(K J_f) = 2 ω_n J_f / √g_f, so ζ = g_d^e_d g_f^(e_f + ½) num / (2 ω_n J_f): the
+        // frequency's square root serves both, one division.
+        let gains = self.gain_product(gain_d, gain_f, j_d == j_f);
+        let zeta = 0.5 * numerator * gains / (wn_rad_s * j_f);
         Mode::new(wn_rad_s, zeta)
     }
-}
 
-/// `x^(2e)` for `x > 0` as a fraction `(numerator, denominator)`, exact (no `powf`) for the
-/// exponents the published forms use (`e` = 0, ±½, ±1).
-#[inline]
-fn squared_power(x: f64, e: f64) -> (f64, f64) {
-    if e == 0.0 {
-        (1.0, 1.0)
-    } else if e == 0.5 {
-        (x, 1.0)
-    } else if e == 1.0 {
-        (x * x, 1.0)
-    } else if e == -0.5 {
-        (1.0, x)
-    } else if e == -1.0 {
-        (1.0, x * x)
-    } else {
-        (x.powf(2.0 * e), 1.0)
+    /// `g_d^e_d · g_f^(e_f + ½)` for `g_d, g_f > 0` (`same`: one joint in both roles, so
+    /// `g_d == g_f`), without `powf` for the published forms: the general map (`e_d = ½`,
+    /// `e_f = 0`: `g` for one joint, `√(g_d g_f)` for two) and the UR5e base form (`e_d = 1`,
+    /// `e_f = −½`: `g_d`).
+    #[inline]
+    fn gain_product(&self, gain_d: f64, gain_f: f64, same: bool) -> f64 {
+        let (e_d, e_f) = (self.damping_gain_exponent, self.frequency_gain_exponent);
+        if e_d == 0.5 && e_f == 0.0 {
+            if same {
+                gain_f
+            } else {
+                (gain_d * gain_f).sqrt()
+            }
+        } else if e_d == 1.0 && e_f == -0.5 {
+            gain_d
+        } else {
+            gain_d.powf(e_d) * gain_f.powf(e_f + 0.5)
+        }
     }
 }
 

@@ -8,6 +8,7 @@
 //! All per-call methods are allocation-free: they work in a workspace preallocated by
 //! [`Robot::new`] and write into caller buffers. A buffer of the wrong length returns
 //! [`Status::BAD_LENGTH`] and leaves the output untouched; they never panic.
+//! A non-finite joint angle (in any joint, also one nothing depends on) gives NaN entries.
 
 use crate::error::{Error, Status};
 
@@ -247,6 +248,38 @@ impl Moments {
         }
     }
 
+    /// `E_xx + E_yy` after [`Self::move_to_parent`] (the inertia about the parent's `z` axis,
+    /// which the turn about that axis leaves unchanged), without forming the other entries:
+    /// `Rx(α)` keeps `E_xx` and turns the `(y, z)` block; of the shift only `x` moves `E_xx`.
+    #[inline]
+    fn z_inertia_in_parent(&self, dh: &DhConstants) -> f64 {
+        let (m, h, e) = (self.mass_kg, &self.first_kg_m, &self.second_kg_m2);
+        let e_yy = match dh.twist {
+            Twist::None => e[1],
+            Twist::Quarter(_) => e[2],
+            Twist::General => {
+                let mean = 0.5 * (e[1] + e[2]);
+                let half_diff = 0.5 * (e[1] - e[2]);
+                mean + (dh.cos_2alpha * half_diff - dh.sin_2alpha * e[5])
+            }
+        };
+        let a = dh.a_m;
+        let shift = if a != 0.0 {
+            a * (2.0 * h[0] + m * a)
+        } else {
+            0.0
+        };
+        (e[0] + shift) + e_yy
+    }
+
+    /// True if every turn about `z` leaves these moments exactly as they are: the centre of
+    /// mass on the axis and the `(x, y)` block of `E` isotropic with no products involving
+    /// `x` or `y` (a body symmetric about `z`, such as a flange with a payload on its axis).
+    fn is_turn_invariant(&self) -> bool {
+        let (h, e) = (&self.first_kg_m, &self.second_kg_m2);
+        h[0] == 0.0 && h[1] == 0.0 && e[0] == e[1] && e[3] == 0.0 && e[4] == 0.0 && e[5] == 0.0
+    }
+
     /// `Rz(θ)` with `sin_cos = (sin θ, cos θ)`.
     #[inline]
     fn turn_z(&mut self, (s, c): (f64, f64)) {
@@ -390,6 +423,17 @@ pub struct Robot {
     bodies: Vec<RigidBody>,
     /// [`Moments`] of `bodies[k]` in its own frame `k + 1`.
     moments: Vec<Moments>,
+    /// The first joint `f >= 1` from which on the composite of bodies `f..n` in frame `f` is
+    /// the same at every pose: each of the joints `f..n` turns a composite that is symmetric
+    /// about its axis ([`Moments::is_turn_invariant`], for example the last wrist with a
+    /// payload on the flange axis). `n` if the last joint's turn matters already.
+    fixed_from: usize,
+    /// That composite (bodies `fixed_from..n` in frame `fixed_from`; zero if `fixed_from == n`).
+    fixed_composite: Moments,
+    /// Bodies `fixed_from − 1..n` in frame `fixed_from − 1` before its joint's turn (also the
+    /// same at every pose): where a pass that reads none of the joints from `fixed_from − 1`
+    /// on starts.
+    fixed_before_turn: Moments,
     ws: Workspace,
     /// The robot's name (for example `"ur5e"`), if it has one: dynamic maps are checked
     /// against it.
@@ -432,6 +476,9 @@ impl Robot {
             dh: joints.iter().map(DhConstants::of).collect(),
             bodies: links.clone(),
             moments: vec![Moments::ZERO; n],
+            fixed_from: n,
+            fixed_composite: Moments::ZERO,
+            fixed_before_turn: Moments::ZERO,
             joints,
             links,
             payload,
@@ -477,6 +524,24 @@ impl Robot {
         for (m, b) in self.moments.iter_mut().zip(&self.bodies) {
             *m = Moments::of(b);
         }
+        // The composite pass from the flange inwards, as long as no turn changes anything
+        // (joint 0 is never turned; it is not folded in).
+        self.fixed_from = n;
+        self.fixed_composite = Moments::ZERO;
+        let mut composite = Moments::ZERO;
+        for k in (1..n).rev() {
+            composite.add(&self.moments[k]);
+            composite.move_to_parent(&self.dh[k]);
+            if !composite.is_turn_invariant() {
+                break;
+            }
+            self.fixed_from = k;
+            self.fixed_composite = composite;
+        }
+        let last = self.fixed_from - 1;
+        self.fixed_before_turn = self.fixed_composite;
+        self.fixed_before_turn.add(&self.moments[last]);
+        self.fixed_before_turn.move_to_parent(&self.dh[last]);
     }
 
     /// Replaces the payload (setup-time call: validates).
@@ -556,8 +621,12 @@ impl Robot {
     /// base's up direction in frame `k` (`∂V/∂q_k = g e_z · (z_k × h)`). Off the diagonal,
     /// `M[k, j]` is the `z` moment about joint `k` of the spatial momentum of composite `j`
     /// turning about joint `j` at unit rate, carried down with the composite. Nothing depends
-    /// on `q_0` (joint 0 turns the arm about the gravity axis), so its sine is never taken:
-    /// one `sin_cos` per joint `1..n`, no world transforms.
+    /// on `q_0` (joint 0 turns the arm about the gravity axis), so its sine is never taken;
+    /// the composite of the bodies beyond `fixed_from` is a constant formed at setup
+    /// (their joints turn nothing that matters), so their sines are not taken either: one
+    /// `sin_cos` per joint `1..fixed_from`, no world transforms.
+    ///
+    /// A non-finite angle in `q` (any joint, read or not) gives NaN for every entry evaluated.
     fn joint_space_pass(
         &mut self,
         q: &[f64],
@@ -567,10 +636,31 @@ impl Robot {
         mut tau_g: Option<&mut [f64]>,
     ) {
         let n = self.joints.len();
-        let ws = &mut self.ws;
-        for (sc, &qk) in ws.sin_cos[1..].iter_mut().zip(&q[1..]) {
-            *sc = crate::trig::sin_cos(qk);
+        if !q.iter().all(|v| v.is_finite()) {
+            let nan = f64::NAN;
+            for k in 0..joints {
+                if let Some(out) = inertia.as_deref_mut() {
+                    out[k] = nan;
+                }
+                if let Some(m) = mass.as_deref_mut() {
+                    m[k * n..k * n + joints].fill(nan);
+                }
+                if let Some(t) = tau_g.as_deref_mut() {
+                    t[k] = nan;
+                }
+            }
+            return;
         }
+        // The joints beyond `start` are folded into the constant composite of setup; the
+        // mass-matrix entries and torques of joints read there would need their own terms, so
+        // a pass reading them starts at the flange.
+        let (start, mut composite) = if joints <= self.fixed_from {
+            (self.fixed_from, self.fixed_composite)
+        } else {
+            (n, Moments::ZERO)
+        };
+        let ws = &mut self.ws;
+        crate::trig::sin_cos_each(&q[1..start], &mut ws.sin_cos[1..start]);
         if tau_g.is_some() {
             // u_{k+1} = Rx(α_k)ᵀ Rz(q_k)ᵀ u_k from u_0 = e_z (Rz(q_0) leaves e_z as it is).
             let mut u = [0.0, 0.0, 1.0];
@@ -584,15 +674,40 @@ impl Robot {
                 ws.up[k] = u;
             }
         }
-        let mut composite = Moments::ZERO;
-        let steps = self.moments.iter().zip(&self.dh).zip(&ws.sin_cos);
-        for (k, ((body, dh), &sc)) in steps.enumerate().rev() {
+        // Joints nothing is read of: the composite alone, carried inwards (from setup's
+        // composite before the first turn that matters, if none of those joints is read).
+        let mut end = start;
+        if joints < start && start == self.fixed_from {
+            composite = self.fixed_before_turn;
+            composite.turn_z(ws.sin_cos[start - 1]);
+            end = start - 1;
+        }
+        let beyond = self.moments[joints..end]
+            .iter()
+            .zip(&self.dh[joints..end])
+            .zip(&ws.sin_cos[joints..end]);
+        for ((body, dh), &sc) in beyond.rev() {
             composite.add(body);
             composite.move_to_parent(dh);
-            if k >= joints {
-                composite.turn_z(sc);
-                continue;
+            composite.turn_z(sc);
+        }
+        let read = self.moments[..joints]
+            .iter()
+            .zip(&self.dh[..joints])
+            .zip(&ws.sin_cos[..joints]);
+        for (k, ((body, dh), &sc)) in read.enumerate().rev() {
+            composite.add(body);
+            if k == 0 && mass.is_none() {
+                // Joint 0's inertia alone (its gravity torque is 0): no full frame change.
+                if let Some(out) = inertia.as_deref_mut() {
+                    out[0] = composite.z_inertia_in_parent(dh);
+                }
+                if let Some(t) = tau_g.as_deref_mut() {
+                    t[0] = 0.0;
+                }
+                break;
             }
+            composite.move_to_parent(dh);
             let e = &composite.second_kg_m2;
             let diagonal = e[0] + e[1];
             if let Some(out) = inertia.as_deref_mut() {
@@ -808,34 +923,51 @@ fn sym_from_six(s: &[f64; 6]) -> [f64; 9] {
     [s[0], s[3], s[4], s[3], s[1], s[5], s[4], s[5], s[2]]
 }
 
-/// Eigenvalues of a symmetric 3×3 matrix in ascending order (closed form).
+/// Eigenvalues of a symmetric 3×3 matrix in ascending order (cyclic Jacobi rotations).
+///
+/// Each eigenvalue is within a few ulp of the matrix's largest entry of the exact one, also
+/// for equal or nearly equal eigenvalues (a thin rod's two equal moments, a disc's `k, k, 2k`),
+/// where the trigonometric closed form loses half the digits (`acos` near ±1). Setup-time only.
 fn sym_eigenvalues(m: &[f64; 9]) -> [f64; 3] {
-    let off = m[1] * m[1] + m[2] * m[2] + m[5] * m[5];
-    if off == 0.0 {
-        let mut d = [m[0], m[4], m[8]];
-        d.sort_by(f64::total_cmp);
-        return d;
+    let mut a = [[m[0], m[1], m[2]], [m[3], m[4], m[5]], [m[6], m[7], m[8]]];
+    // Quadratic convergence: a handful of sweeps reach an off-diagonal part below the
+    // rounding of the diagonal; the bound only guards non-finite input.
+    for _sweep in 0..50 {
+        let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+        let diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
+        let converged = off <= (f64::EPSILON * f64::EPSILON / 16.0) * diag;
+        if converged || off.is_nan() || diag.is_nan() {
+            break;
+        }
+        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+            let apq = a[p][q];
+            if apq == 0.0 {
+                continue;
+            }
+            // The rotation that zeroes a[p][q]: t = tan of its angle, the smaller root.
+            let theta = (a[q][q] - a[p][p]) / (2.0 * apq);
+            let t = if theta.abs() > 1e150 {
+                0.5 / theta
+            } else {
+                theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt())
+            };
+            let c = 1.0 / (t * t + 1.0).sqrt();
+            let s = t * c;
+            a[p][p] -= t * apq;
+            a[q][q] += t * apq;
+            a[p][q] = 0.0;
+            a[q][p] = 0.0;
+            let r = 3 - p - q;
+            let (arp, arq) = (a[r][p], a[r][q]);
+            a[r][p] = c * arp - s * arq;
+            a[r][q] = s * arp + c * arq;
+            a[p][r] = a[r][p];
+            a[q][r] = a[r][q];
+        }
     }
-    let q = (m[0] + m[4] + m[8]) / 3.0;
-    let p2 = (m[0] - q).powi(2) + (m[4] - q).powi(2) + (m[8] - q).powi(2) + 2.0 * off;
-    let p = (p2 / 6.0).sqrt();
-    let b = [
-        (m[0] - q) / p,
-        m[1] / p,
-        m[2] / p,
-        m[3] / p,
-        (m[4] - q) / p,
-        m[5] / p,
-        m[6] / p,
-        m[7] / p,
-        (m[8] - q) / p,
-    ];
-    let det = b[0] * (b[4] * b[8] - b[5] * b[7]) - b[1] * (b[3] * b[8] - b[5] * b[6])
-        + b[2] * (b[3] * b[7] - b[4] * b[6]);
-    let phi = (det / 2.0).clamp(-1.0, 1.0).acos() / 3.0;
-    let largest = q + 2.0 * p * phi.cos();
-    let smallest = q + 2.0 * p * (phi + 2.0 * core::f64::consts::PI / 3.0).cos();
-    [smallest, 3.0 * q - largest - smallest, largest]
+    let mut d = [a[0][0], a[1][1], a[2][2]];
+    d.sort_by(f64::total_cmp);
+    d
 }
 
 #[cfg(test)]
@@ -849,6 +981,135 @@ mod tests {
         for (got, want) in e.iter().zip([1.0, 3.0, 5.0]) {
             assert!((got - want).abs() < 1e-12, "{e:?}");
         }
+    }
+
+    /// `k (1 − u uᵀ) + l u uᵀ` for a unit `u`, as `[xx, yy, zz, xy, xz, yz]`: principal
+    /// moments `l` about `u` and `k` (twice) across it, exactly.
+    fn axisymmetric(u: [f64; 3], k: f64, l: f64) -> [f64; 6] {
+        let w = l - k;
+        [
+            k + w * u[0] * u[0],
+            k + w * u[1] * u[1],
+            k + w * u[2] * u[2],
+            w * u[0] * u[1],
+            w * u[0] * u[2],
+            w * u[1] * u[2],
+        ]
+    }
+
+    /// Unit directions spread over the sphere (a spiral), and the coordinate axes.
+    fn directions() -> Vec<[f64; 3]> {
+        let mut dirs: Vec<[f64; 3]> = (0..2000)
+            .map(|i| {
+                let t = i as f64 * 0.37;
+                let (st, ct) = t.sin_cos();
+                let (sp, cp) = (0.3 * t).sin_cos();
+                [ct * sp, st * sp, cp]
+            })
+            .collect();
+        dirs.extend([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
+        dirs
+    }
+
+    #[test]
+    fn equal_principal_moments_are_found_to_rounding() {
+        // A thin rod of mass m and length L along u: m L²/12 across it (twice), 0 along it. A
+        // thin disc of radius R with normal u: m R²/4 across (twice), m R²/2 about u (the
+        // triangle inequality holds with equality). A sphere: three equal moments. The
+        // tensors are exact up to the rounding of their entries (a few ulp of k), so the
+        // eigenvalues are too: 1e-14 of the largest moment is 50 ulp.
+        let (m, length, radius) = (1.7, 0.6, 0.05);
+        let rod = m * length * length / 12.0;
+        let disc = m * radius * radius / 4.0;
+        for u in directions() {
+            for (six, want) in [
+                (axisymmetric(u, rod, 0.0), [0.0, rod, rod]),
+                (axisymmetric(u, disc, 2.0 * disc), [disc, disc, 2.0 * disc]),
+                (axisymmetric(u, rod, rod), [rod, rod, rod]),
+                (axisymmetric(u, rod, 1.0001 * rod), [rod, rod, 1.0001 * rod]),
+            ] {
+                let e = sym_eigenvalues(&sym_from_six(&six));
+                for (got, w) in e.iter().zip(want) {
+                    assert!(
+                        (got - w).abs() <= 1e-14 * want[2],
+                        "u = {u:?}: {e:?} vs {want:?}"
+                    );
+                }
+                let body = RigidBody {
+                    mass_kg: m,
+                    com_m: [0.1, -0.2, 0.3],
+                    inertia_kg_m2: six,
+                };
+                assert!(body.validate("body").is_ok(), "u = {u:?}: {six:?}");
+            }
+        }
+        // Just outside the triangle inequality (1e-6 of the largest moment, far above the
+        // validation's 1e-9 round-off allowance) is still refused, in any orientation.
+        for u in directions().into_iter().step_by(97) {
+            let six = axisymmetric(u, disc, 2.0 * disc * (1.0 + 1e-6));
+            let body = RigidBody {
+                mass_kg: m,
+                com_m: [0.0; 3],
+                inertia_kg_m2: six,
+            };
+            let err = body
+                .validate("disc")
+                .expect_err("violates the triangle inequality");
+            assert!(err.to_string().contains("triangle"), "{err}");
+        }
+    }
+
+    #[test]
+    fn eigenvalues_of_a_rotated_diagonal_matrix() {
+        // R diag(1, 2, 3) Rᵀ with R = Rz(0.7) Ry(−1.1) Rx(2.3): eigenvalues 1, 2, 3.
+        let rx = |a: f64| {
+            [
+                [1.0, 0.0, 0.0],
+                [0.0, a.cos(), -a.sin()],
+                [0.0, a.sin(), a.cos()],
+            ]
+        };
+        let ry = |a: f64| {
+            [
+                [a.cos(), 0.0, a.sin()],
+                [0.0, 1.0, 0.0],
+                [-a.sin(), 0.0, a.cos()],
+            ]
+        };
+        let rz = |a: f64| {
+            [
+                [a.cos(), -a.sin(), 0.0],
+                [a.sin(), a.cos(), 0.0],
+                [0.0, 0.0, 1.0],
+            ]
+        };
+        let mul = |a: [[f64; 3]; 3], b: [[f64; 3]; 3]| {
+            let mut c = [[0.0; 3]; 3];
+            for i in 0..3 {
+                for j in 0..3 {
+                    c[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+                }
+            }
+            c
+        };
+        let r = mul(mul(rz(0.7), ry(-1.1)), rx(2.3));
+        let d = [1.0, 2.0, 3.0];
+        let mut m = [0.0; 9];
+        for i in 0..3 {
+            for j in 0..3 {
+                m[3 * i + j] = (0..3).map(|k| r[i][k] * d[k] * r[j][k]).sum();
+            }
+        }
+        let e = sym_eigenvalues(&m);
+        for (got, want) in e.iter().zip(d) {
+            assert!((got - want).abs() < 1e-14 * 3.0, "{e:?}");
+        }
+        // Diagonal input (no rotation needed) and the zero matrix.
+        assert_eq!(
+            sym_eigenvalues(&[5.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 2.0]),
+            [-1.0, 2.0, 5.0]
+        );
+        assert_eq!(sym_eigenvalues(&[0.0; 9]), [0.0; 3]);
     }
 
     #[test]

@@ -42,9 +42,35 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     if !fast {
         return x.sin_cos();
     }
+    sin_cos_reduced(x)
+}
+
+/// `(sin x, cos x)` of every `x[k]` into `out[k]` (the shorter length counts), as
+/// [`sin_cos`] does for each: the same arithmetic, written without branches for the usual
+/// case so that the angles are evaluated side by side.
+#[inline]
+pub fn sin_cos_each(x: &[f64], out: &mut [(f64, f64)]) {
+    if x.iter().all(|v| v.abs() <= FAST_RANGE_RAD) {
+        for (o, &v) in out.iter_mut().zip(x) {
+            *o = sin_cos_reduced(v);
+        }
+    } else {
+        for (o, &v) in out.iter_mut().zip(x) {
+            *o = sin_cos(v);
+        }
+    }
+}
+
+/// The reduction and polynomials for `|x| <= FAST_RANGE_RAD`, branch-free.
+#[inline(always)]
+fn sin_cos_reduced(x: f64) -> (f64, f64) {
     // Round to nearest by adding and removing 1.5 · 2^52 (|x · 2/π| < 2^51): no libm call.
+    // The sum's lowest mantissa bits are `j` modulo 4 (its unit in the last place is 1 and
+    // 2^51 is a multiple of 4).
     const ROUND: f64 = 6_755_399_441_055_744.0;
-    let j = (x * core::f64::consts::FRAC_2_PI + ROUND) - ROUND;
+    let shifted = x * core::f64::consts::FRAC_2_PI + ROUND;
+    let quadrant = shifted.to_bits() & 3;
+    let j = shifted - ROUND;
     let r = (x - j * PIO2_HI) - j * PIO2_LO;
     let z = r * r;
     let sin_r = r + z * r * (S1 + z * (S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)))));
@@ -52,18 +78,15 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     let half_z = 0.5 * z;
     let w = 1.0 - half_z;
     let cos_r = w + (((1.0 - w) - half_z) + tail);
-    // Quadrant j mod 4: (sin, cos) = (s, c), (c, −s), (−s, −c), (−c, s).
-    let quadrant = (j as i64) & 3;
-    let (s, c) = if quadrant & 1 == 0 {
-        (sin_r, cos_r)
-    } else {
-        (cos_r, -sin_r)
-    };
-    if quadrant & 2 == 0 {
-        (s, c)
-    } else {
-        (-s, -c)
-    }
+    // Quadrant j mod 4: (sin, cos) = (s, c), (c, −s), (−s, −c), (−c, s): odd quadrants swap
+    // the two, sin is negated in quadrants 2 and 3, cos in 1 and 2 (bit masks, no branches).
+    let swap = 0u64.wrapping_sub(quadrant & 1);
+    let (sb, cb) = (sin_r.to_bits(), cos_r.to_bits());
+    let s = (sb & !swap) | (cb & swap);
+    let c = (cb & !swap) | (sb & swap);
+    let sin_sign = (quadrant & 2) << 62;
+    let cos_sign = ((quadrant + 1) & 2) << 62;
+    (f64::from_bits(s ^ sin_sign), f64::from_bits(c ^ cos_sign))
 }
 
 #[cfg(test)]
@@ -100,5 +123,29 @@ mod tests {
         }
         assert!(sin_cos(f64::NAN).0.is_nan() && sin_cos(f64::INFINITY).1.is_nan());
         assert_eq!(sin_cos(2.0e5), 2.0e5f64.sin_cos());
+    }
+
+    #[test]
+    fn each_angle_of_a_batch_is_the_single_evaluation_bit_for_bit() {
+        // Every quadrant, signed zeros, tiny angles, and a batch with one angle beyond the
+        // fast range (the whole batch then takes the per-angle path) or a NaN.
+        let mut angles: Vec<f64> = (-400..=400)
+            .map(|k| k as f64 * 0.0137 * core::f64::consts::PI)
+            .collect();
+        angles.extend([0.0, -0.0, 1e-300, -2.5e-5, FAST_RANGE_RAD, -FAST_RANGE_RAD]);
+        let bits = |(s, c): (f64, f64)| (s.to_bits(), c.to_bits());
+        let mut out = vec![(0.0, 0.0); angles.len()];
+        sin_cos_each(&angles, &mut out);
+        for (x, got) in angles.iter().zip(&out) {
+            assert_eq!(bits(*got), bits(sin_cos(*x)), "{x}");
+        }
+        for odd in [3.0e5, f64::NAN] {
+            let batch = [0.5, odd, -1.0];
+            let mut out = [(0.0, 0.0); 3];
+            sin_cos_each(&batch, &mut out);
+            assert_eq!(bits(out[0]), bits(sin_cos(0.5)));
+            assert_eq!(bits(out[2]), bits(sin_cos(-1.0)));
+            assert_eq!(out[1].0.to_bits(), odd.sin().to_bits());
+        }
     }
 }
