@@ -11,6 +11,7 @@
 //! A non-finite joint angle (in any joint, also one nothing depends on) gives NaN entries.
 
 use crate::error::{Error, Status};
+use crate::sym_eigen::{sym_eigen, Matrix, MAX_DIM};
 
 /// Standard gravity used for gravity torques, m/s².
 pub const GRAVITY_M_S2: f64 = 9.81;
@@ -923,51 +924,24 @@ fn sym_from_six(s: &[f64; 6]) -> [f64; 9] {
     [s[0], s[3], s[4], s[3], s[1], s[5], s[4], s[5], s[2]]
 }
 
-/// Eigenvalues of a symmetric 3×3 matrix in ascending order (cyclic Jacobi rotations).
-///
-/// Each eigenvalue is within a few ulp of the matrix's largest entry of the exact one, also
-/// for equal or nearly equal eigenvalues (a thin rod's two equal moments, a disc's `k, k, 2k`),
-/// where the trigonometric closed form loses half the digits (`acos` near ±1). Setup-time only.
+/// Eigenvalues of a symmetric 3×3 matrix in ascending order, by the cyclic Jacobi method of
+/// [`crate::sym_eigen`]: each within a few ulp of the matrix's largest entry of the exact one,
+/// also for equal or nearly equal eigenvalues (a thin rod's two equal moments, a disc's
+/// `k, k, 2k`), where the trigonometric closed form loses half the digits (`acos` near ±1).
+/// NaN for non-finite input. Setup-time only.
 fn sym_eigenvalues(m: &[f64; 9]) -> [f64; 3] {
-    let mut a = [[m[0], m[1], m[2]], [m[3], m[4], m[5]], [m[6], m[7], m[8]]];
-    // Quadratic convergence: a handful of sweeps reach an off-diagonal part below the
-    // rounding of the diagonal; the bound only guards non-finite input.
-    for _sweep in 0..50 {
-        let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
-        let diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
-        let converged = off <= (f64::EPSILON * f64::EPSILON / 16.0) * diag;
-        if converged || off.is_nan() || diag.is_nan() {
-            break;
-        }
-        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
-            let apq = a[p][q];
-            if apq == 0.0 {
-                continue;
-            }
-            // The rotation that zeroes a[p][q]: t = tan of its angle, the smaller root.
-            let theta = (a[q][q] - a[p][p]) / (2.0 * apq);
-            let t = if theta.abs() > 1e150 {
-                0.5 / theta
-            } else {
-                theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt())
-            };
-            let c = 1.0 / (t * t + 1.0).sqrt();
-            let s = t * c;
-            a[p][p] -= t * apq;
-            a[q][q] += t * apq;
-            a[p][q] = 0.0;
-            a[q][p] = 0.0;
-            let r = 3 - p - q;
-            let (arp, arq) = (a[r][p], a[r][q]);
-            a[r][p] = c * arp - s * arq;
-            a[r][q] = s * arp + c * arq;
-            a[p][r] = a[r][p];
-            a[q][r] = a[r][q];
-        }
+    let mut a: Matrix = [[0.0; MAX_DIM]; MAX_DIM];
+    for (r, row) in a.iter_mut().take(3).enumerate() {
+        row[..3].copy_from_slice(&m[3 * r..3 * r + 3]);
     }
-    let mut d = [a[0][0], a[1][1], a[2][2]];
-    d.sort_by(f64::total_cmp);
-    d
+    match sym_eigen(&a, 3) {
+        Some((values, _)) => {
+            let mut d = [values[0], values[1], values[2]];
+            d.sort_by(f64::total_cmp);
+            d
+        }
+        None => [f64::NAN; 3],
+    }
 }
 
 #[cfg(test)]
