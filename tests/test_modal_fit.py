@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from modal_fit_reference import exact_records, law, write_jsonl
+from modal_fit_reference import LAWS_UR5E, exact_records, law, write_jsonl
 from tvist.demo.identified import DEMO_PLAN
 from tvist.demo.motions import PAYLOAD_COM_M
 from tvist.ident.campaign import load_results
@@ -20,30 +20,8 @@ from tvist.modal_map import ModalMap
 from tvist.trajectory.poses import PAPER_POSES
 
 FLEX = (0, 1, 2)
-#: The generating map: base, shoulder and elbow gears of the UR5e twin's size, the base damper
-#: loaded by the shoulder's gravity torque. Over the poses below the base mode has ζ 0.05-0.13,
-#: the shoulder's 0.12-0.28 (moderate, very different damping), and at Q3 with 5 kg the two
-#: modes lie 9 % apart (21.3 and 19.4 Hz), 1.2 % at the closest pose.
-LAWS = (
-    {
-        "joint": 0,
-        "stiffness_nm_per_rad": [22000.0, 0.0, 0.0],
-        "damping_nms_per_rad": [5.0, 0.56, 0.0],
-        "damping_load_joint": 1,
-    },
-    {
-        "joint": 1,
-        "stiffness_nm_per_rad": [18000.0, 0.0, 0.234],
-        "damping_nms_per_rad": [60.0, 0.6, 0.0],
-        "damping_load_joint": 1,
-    },
-    {
-        "joint": 2,
-        "stiffness_nm_per_rad": [120000.0, 0.0, 0.0],
-        "damping_nms_per_rad": [40.0, 0.0, 0.0],
-        "damping_load_joint": 2,
-    },
-)
+#: The generating map (see modal_fit_reference.LAWS_UR5E).
+LAWS = LAWS_UR5E
 #: Noise of the size of the local identification's errors, stated in each record as the mode's
 #: standard error: 0.3 % on ω, 3 % on ζ.
 NOISE_WN, NOISE_ZETA = 0.003, 0.03
