@@ -439,6 +439,14 @@ def add_fit_map_command(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--include-low-confidence", action="store_true", help="also use flagged identifications"
     )
+    p.add_argument(
+        "--select-folds",
+        type=int,
+        default=None,
+        metavar="K",
+        help="modal: keep a wrist joint or stiffness load term only if it lowers the K-fold "
+        "held-out frequency error (default: significance only)",
+    )
     p.set_defaults(func=_cmd_fit_map)
 
 
