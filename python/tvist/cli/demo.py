@@ -24,13 +24,14 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         run_linear_demo(out_dir=args.out or "out/demo-linear", quick=args.quick)
         return 0
     from tvist import ModalMap, load_map
+    from tvist.cli.args import existing_file
     from tvist.demo import default_methods, fd_tvist_map, run_demo
     from tvist.demo.modal_rows import fd_tvist_modal
 
     chosen = set(args.method or SHAPING_METHODS)
     methods = default_methods()
     for i, path in enumerate(args.map or []):
-        dynmap = load_map(path)
+        dynmap = load_map(existing_file(path, "--map"))
         row = fd_tvist_modal if isinstance(dynmap, ModalMap) else fd_tvist_map
         methods.append(row(f"fd-tvist-map-{i + 1}", f"FD-TVIST ZV, map {path}", dynmap))
     methods = [m for m in methods if demo_row_method(m.key) in chosen | {"unshaped"}]

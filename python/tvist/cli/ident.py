@@ -8,11 +8,18 @@ which reports them on one line; usage problems found here are reported by :func:
 from __future__ import annotations
 
 import argparse
-import errno
 import json
 import math
 import sys
 from pathlib import Path
+
+from tvist.cli.args import (
+    add_robot_and_payload,
+    existing_file,
+    map_from_args,
+    output_file,
+    robot_from_args,
+)
 
 __all__ = [
     "add_campaign_command",
@@ -53,6 +60,9 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
             return _error(
                 "campaign", f"--variant {args.variant} is a {robot_of}: add --robot {robot_of}"
             )
+    output_file(args.out, "--out")
+    if args.map:
+        output_file(args.map, "--map")
     poses = campaign_poses(
         args.robot, payloads_kg=args.payloads, payload_com_m=args.payload_com, seed=args.seed
     )
@@ -171,7 +181,12 @@ def add_campaign_command(sub: argparse._SubParsersAction) -> None:
 def _cmd_identify(args: argparse.Namespace) -> int:
     from tvist.ident.batch import expand_logs
 
-    paths = expand_logs(args.logs)
+    try:
+        paths = expand_logs(args.logs)
+    except FileNotFoundError as exc:
+        raise ValueError(
+            f"logs {exc.filename}: no such file (give files, globs or folders)"
+        ) from exc
     if args.out or len(paths) > 1:
         if not args.out:
             return _error("identify", f"{len(paths)} logs: name the results file with --out")
@@ -355,9 +370,8 @@ def _cmd_fit_map(args: argparse.Namespace) -> int:
     from tvist.ident.map_fit import fit_map
     from tvist.ident.results_store import load_results
 
-    if not Path(args.results).is_file():
-        raise FileNotFoundError(errno.ENOENT, "No such file or directory", args.results)
-    results = load_results(args.results)
+    results = load_results(existing_file(args.results, "results"))
+    output_file(args.out, "--out")
     if not results:
         return _error("fit-map", f"{args.results}: no pose records")
     if args.kind == "modal":
@@ -425,6 +439,14 @@ def add_fit_map_command(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--include-low-confidence", action="store_true", help="also use flagged identifications"
     )
+    p.add_argument(
+        "--select-folds",
+        type=int,
+        default=None,
+        metavar="K",
+        help="modal: keep a wrist joint or stiffness load term only if it lowers the K-fold "
+        "held-out frequency error (default: significance only)",
+    )
     p.set_defaults(func=_cmd_fit_map)
 
 
@@ -432,24 +454,43 @@ def add_fit_map_command(sub: argparse._SubParsersAction) -> None:
 
 
 def _cmd_sensitivity(args: argparse.Namespace) -> int:
-    import tvist
+    from tvist import ModalMap
     from tvist.ident import plots
     from tvist.ident.results_store import load_results
     from tvist.ident.robustness import evaluate_map, summarize
 
-    dynmap = tvist.DynamicMap.load(args.map) if args.map else tvist.DynamicMap.paper_ur5e()
-    results = load_results(args.results) if args.results else []
+    args.paper_map = not args.map
+    dynmap = map_from_args(args)
+    # A modal map's modes come from the robot model's mass matrix: --robot (the map's own
+    # robot by default), with --payload-kg/--payload-com for the PRV panels at Q1 and Q3;
+    # at campaign poses the record's payload.
+    map_robot = getattr(dynmap, "robot", None)
+    if args.robot is None:
+        args.robot = map_robot or "ur5e"
+    elif isinstance(dynmap, ModalMap) and map_robot and map_robot != args.robot:
+        raise ValueError(
+            f"--map {args.map}: a modal map identified on {map_robot}, not on {args.robot} "
+            "(--robot)"
+        )
+    robot = robot_from_args(args)
+    results = load_results(existing_file(args.results, "--results")) if args.results else []
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     written = [
-        plots.plot_prv_sensitivity(dynmap, out / "prv_sensitivity.png"),
-        plots.plot_frequency_robustness(dynmap, results, out / "base_frequency.png", mode=0),
-        plots.plot_frequency_robustness(dynmap, results, out / "shoulder_frequency.png", mode=1),
-        plots.plot_damping_robustness(dynmap, results, out / "shoulder_damping.png", mode=1),
+        plots.plot_prv_sensitivity(dynmap, out / "prv_sensitivity.png", robot=robot),
+        plots.plot_frequency_robustness(
+            dynmap, results, out / "base_frequency.png", mode=0, robot=robot
+        ),
+        plots.plot_frequency_robustness(
+            dynmap, results, out / "shoulder_frequency.png", mode=1, robot=robot
+        ),
+        plots.plot_damping_robustness(
+            dynmap, results, out / "shoulder_damping.png", mode=1, robot=robot
+        ),
     ]
     if results:
-        written.append(plots.plot_map_fit(dynmap, results, out / "map_fit.png"))
-        summary = summarize(evaluate_map(results, dynmap))
+        written.append(plots.plot_map_fit(dynmap, results, out / "map_fit.png", robot=robot))
+        summary = summarize(evaluate_map(results, dynmap, robot=robot))
         (out / "robustness.json").write_text(json.dumps(summary, indent=2) + "\n")
         if summary["n_poses"]:
             print(
@@ -469,7 +510,12 @@ def add_sensitivity_command(sub: argparse._SubParsersAction) -> None:
         description="Plot the two-mode ZV shaper's PRV around the map's modes and, with "
         "--results, the identified modes against the map's 10 % PRV band.",
     )
-    p.add_argument("--map", help="map file (default: the paper's UR5e map)")
+    p.add_argument("--map", help="map file, paper10 or modal (default: the paper's UR5e map)")
     p.add_argument("--results", help="campaign results (JSON lines) to overlay and judge")
     p.add_argument("--out", default="out/sensitivity", help="output folder")
+    add_robot_and_payload(p, "payload of a modal map's PRV panels at Q1 and Q3")
+    p.set_defaults(robot=None)
+    for action in p._actions:
+        if action.dest == "robot":
+            action.help = "robot model of a modal map (default: the map's robot, else ur5e)"
     p.set_defaults(func=_cmd_sensitivity)

@@ -36,12 +36,17 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     if not (args.unshaped or args.modes or args.map or args.paper_map):
         return _error("run", "give the modes: --map FILE, --paper-map or --modes (or --unshaped)")
+    from tvist.cli.args import existing_file, output_file
+
     try:
-        Q, _ = read_joint_csv(args.move)
+        Q, _ = read_joint_csv(existing_file(args.move, "move"))
         shaper = _shaper(args, Q.shape[1])
     except (OSError, ValueError) as exc:
         return _error("run", str(exc))
-    log_path = Path(args.log or Path(args.move).with_suffix(".rtde.csv"))
+    try:
+        log_path = output_file(args.log or Path(args.move).with_suffix(".rtde.csv"), "--log")
+    except ValueError as exc:
+        return _error("run", str(exc))
     try:
         result = run_shaped_move(
             args.robot_ip,
@@ -79,10 +84,16 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_record(args: argparse.Namespace) -> int:
+    from tvist.cli.args import output_file
     from tvist.live import record
 
     def started() -> None:
         print(f"recording {args.robot_ip} to {args.out}; Ctrl-C stops", flush=True)
+
+    try:
+        output_file(args.out, "--out")
+    except ValueError as exc:
+        return _error("record", str(exc))
 
     try:
         record(

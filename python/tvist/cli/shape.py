@@ -32,7 +32,14 @@ from pathlib import Path
 
 import numpy as np
 
-from tvist.cli.args import add_robot_and_payload, map_from_args, robot_from_args
+from tvist.cli.args import (
+    add_robot_and_payload,
+    existing_dir,
+    existing_file,
+    map_from_args,
+    output_file,
+    robot_from_args,
+)
 from tvist.trajectory.joint_names import joint_order
 from tvist.trajectory.shaping import METHODS, shape_samples
 
@@ -206,7 +213,8 @@ def _cmd_shape_csv(args: argparse.Namespace, robot, dynamics) -> int:
     from tvist.analysis.path import path_deviation
     from tvist.trajectory import resample
 
-    f = read_trajectory_csv(args.input)
+    f = read_trajectory_csv(existing_file(args.input, "input"))
+    output_file(args.out, "--out")
     n_joints = f.Q.shape[1]
     uses_map = not args.modes
     if uses_map and n_joints != robot.n_dof:
@@ -276,7 +284,7 @@ def _cmd_shape_bag(args: argparse.Namespace, robot, dynamics) -> int:
     if not args.topic:
         raise ValueError("--bag needs --topic (the JointTrajectory topic, e.g. /joint_trajectory)")
     reports = shape_bag(
-        args.bag,
+        existing_dir(args.bag, "--bag"),
         args.out,
         args.topic,
         args.dt_s,

@@ -15,7 +15,20 @@ mass matrix and the gravity torques. Two steps, like the published map's fit:
    Rust core).
 
 A term whose estimate is below ``drop_t`` standard errors is dropped and the step refitted.
-Standard errors are ``√diag(σ² (JᵀJ)⁻¹)`` at the solution, in physical units.
+
+3. **Joint refinement** (default): every kept stiffness and damping coefficient together, robust
+   least squares on the relative errors of ω and ζ, each in units of its scatter (the records'
+   stated standard errors weigh the poses, the residuals set each quantity's scale), from the
+   two-step solution. The prediction is the core map's: where the core's natural frequencies
+   depend on the damping (the exact damped eigenproblem), steps 1 and 2 are only a start; with
+   undamped modes and projected damping the refinement stays within about a standard error
+   of them.
+
+Standard errors are ``√diag(σ² (JᵀJ)⁻¹)`` at the solution (through the SVD of ``J``, residuals
+beyond ``OUTLIER_SIGMAS`` robust standard deviations left out), in physical units.
+
+:func:`select_terms` (``select_folds``) chooses the stiffness model by held-out frequency error
+instead of significance alone.
 
 :func:`cross_validate` compares this form with the published 10-coefficient form on held-out
 poses (k-fold over poses), against the identified modes and, for a twin's campaign, against
@@ -26,7 +39,7 @@ from __future__ import annotations
 
 import math
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -41,8 +54,10 @@ __all__ = [
     "ModalPoses",
     "cross_validate",
     "fit_modal_map",
+    "held_out_frequency_error",
     "modal_poses",
     "relative_errors",
+    "select_terms",
 ]
 
 #: Flexible joints of the default fit: base, shoulder, elbow, wrists 1 and 2. The wrists'
@@ -65,6 +80,12 @@ ROBUST_SCALE = 0.02
 OUTLIER_SIGMAS = 4.0
 #: A fitted zero-load stiffness stays within this factor of its starting value.
 STIFFNESS_SPAN = 100.0
+#: Smallest relative measurement errors believed of a local fit's stated standard errors (ω, ζ):
+#: a local fit of a few seconds of noisy response does not fix ω_n better than 0.1 % or ζ better
+#: than 1 %, whatever its covariance says, and one pose must not outweigh the campaign.
+MIN_RELATIVE_SE = (1.0e-3, 1.0e-2)
+#: Passes of the joint refinement, each with the error scales of the previous one's residuals.
+JOINT_PASSES = 2
 _LSQ = {"x_scale": "jac", "xtol": 1e-12, "ftol": 1e-12, "gtol": 1e-12, "max_nfev": 400}
 _INVALID_RESIDUAL = 10.0
 
@@ -88,6 +109,9 @@ class ModalPoses:
         Joint inertias ``(n_poses, n_dof)`` (for the published form).
     keys
         Pose keys.
+    wn_se_rad_s, zeta_se
+        The local fits' stated standard errors of the identified modes ``(n_poses, 2)``, NaN
+        where the record states none.
     """
 
     mass_kg_m2: np.ndarray
@@ -98,6 +122,13 @@ class ModalPoses:
     true_zeta: np.ndarray
     inertia_kg_m2: np.ndarray
     keys: tuple[str, ...]
+    wn_se_rad_s: np.ndarray | None = None
+    zeta_se: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("wn_se_rad_s", "zeta_se"):
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, np.full(self.wn_rad_s.shape, np.nan))
 
     @property
     def n_poses(self) -> int:
@@ -114,6 +145,8 @@ class ModalPoses:
             self.true_zeta[index],
             self.inertia_kg_m2[index],
             tuple(self.keys[i] for i in np.asarray(index)),
+            self.wn_se_rad_s[index],
+            self.zeta_se[index],
         )
 
 
@@ -133,6 +166,7 @@ def modal_poses(
     robot_params = params(robot_name)
     robots: dict[tuple, Robot] = {}
     mass, tau, inertia, wn, zeta, twn, tzeta, keys = [], [], [], [], [], [], [], []
+    wn_se, zeta_se = [], []
     for i, r in enumerate(records):
         q = r.get("q")
         if q is None or r.get("error"):
@@ -148,6 +182,7 @@ def modal_poses(
         tau.append(model.gravity_torque(q))
         inertia.append(model.joint_inertia(q))
         obs = np.full((2, 2), np.nan)
+        obs_se = np.full((2, 2), np.nan)
         for mode in r.get("modes", []):
             j = mode.get("joint")
             if j not in MODE_JOINTS or "wn_rad_s" not in mode:
@@ -157,12 +192,18 @@ def modal_poses(
             w, z = float(mode.get("wn_rad_s", math.nan)), float(mode.get("zeta", math.nan))
             if math.isfinite(w) and math.isfinite(z) and w > 0 and z > 0:
                 obs[MODE_JOINTS.index(j)] = (w, z)
+                obs_se[MODE_JOINTS.index(j)] = (
+                    _positive_or_nan(mode.get("wn_se_rad_s")),
+                    _positive_or_nan(mode.get("zeta_se")),
+                )
         truth = np.full((2, 2), np.nan)
         for mode in r.get("true_modes") or []:
             if mode.get("joint") in MODE_JOINTS:
                 truth[MODE_JOINTS.index(mode["joint"])] = (mode["wn_rad_s"], mode["zeta"])
         wn.append(obs[:, 0])
         zeta.append(obs[:, 1])
+        wn_se.append(obs_se[:, 0])
+        zeta_se.append(obs_se[:, 1])
         twn.append(truth[:, 0])
         tzeta.append(truth[:, 1])
         keys.append(str(r.get("key", i)))
@@ -177,7 +218,18 @@ def modal_poses(
         np.array(tzeta),
         np.array(inertia),
         tuple(keys),
+        np.array(wn_se),
+        np.array(zeta_se),
     )
+
+
+def _positive_or_nan(value: Any) -> float:
+    """A stated standard error as a float, NaN if absent, not finite or not positive."""
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        return math.nan
+    return value if math.isfinite(value) and value > 0 else math.nan
 
 
 # --------------------------------------------------------------------------- the two steps
@@ -235,7 +287,8 @@ def _predict(
 def _standard_errors(
     jac: np.ndarray, residual: np.ndarray, outlier_sigmas: float | None = None
 ) -> np.ndarray:
-    """``√diag(σ² (JᵀJ)⁻¹)`` with ``σ² = rᵀr / (n − p)``.
+    """``√diag(σ² (JᵀJ)⁻¹)`` with ``σ² = rᵀr / (n − p)``, the inverse through the SVD of ``J``
+    (``V S⁻² Vᵀ``; infinite where ``J`` is rank-deficient: an undeterminable parameter).
 
     With ``outlier_sigmas`` (for a fit with a robust loss), residuals beyond that many robust
     standard deviations (``1.4826 median|r|``) are left out of ``σ²`` and ``J``, as the robust
@@ -249,14 +302,14 @@ def _standard_errors(
         if robust_sigma > 0 and inlier.sum() > jac.shape[1]:
             jac, residual = jac[inlier], residual[inlier]
     n, p = jac.shape
-    sigma2 = float(residual @ residual) / max(n - p, 1)
-    sv = np.linalg.svd(jac, compute_uv=False)
     if p == 0:
         return np.zeros(0)
-    if sv[-1] <= 1e-12 * sv[0]:
+    sigma2 = float(residual @ residual) / max(n - p, 1)
+    _, sv, vt = np.linalg.svd(jac, full_matrices=False)
+    if sv.size < p or sv[-1] <= 1e-12 * sv[0]:
         return np.full(p, math.inf)
-    cov = np.linalg.inv(jac.T @ jac) * sigma2
-    return np.sqrt(np.maximum(np.diag(cov), 0.0))
+    variance = np.einsum("ki,k->i", vt**2, 1.0 / sv**2) * sigma2
+    return np.sqrt(np.maximum(variance, 0.0))
 
 
 def _fit_stiffness(
@@ -331,6 +384,133 @@ def _fit_damping(
     return laws, x, a, a @ x - b
 
 
+@dataclass
+class _Refinement:
+    """The joint least-squares refinement's solution and what its standard errors need."""
+
+    stiffness: dict[int, list[float]]
+    damping: dict[int, list[float]]
+    x: np.ndarray  # stiffness parameters (log k_0, a_1, a_2), then damping c (N m s/rad)
+    se: np.ndarray  # standard errors of x
+    scales: tuple[float, float]  # relative error scale of ω and of ζ, dimensionless
+    weighting: str  # "stated standard errors" or "residual scale", per quantity
+    nfev: int
+    cost_start: float
+    cost: float
+
+
+def _relative_sigma(
+    value: np.ndarray, stated_se: np.ndarray, relative_error: np.ndarray, floor: float
+) -> tuple[np.ndarray, float, str]:
+    """Per-observation relative error scale of one quantity (ω or ζ) and the family scale.
+
+    The stated standard errors (relative, floored at ``floor``) weigh the observations
+    against each other where every observation states one; otherwise they weigh alike. The
+    scale of the family is the robust spread of its residuals at the two-stage solution
+    (``1.4826 median|e/w|``), so that ω and ζ residuals enter the joint fit in units of their
+    own scatter: a local fit's stated error leaves out the map's model error, and the two
+    quantities' errors differ tenfold (about 0.5 % on ω, 5 % on ζ)."""
+    rel = stated_se / value
+    stated = bool(rel.size) and bool(np.all(np.isfinite(rel)))
+    w = np.maximum(rel, floor) if stated else np.ones_like(value)
+    ratio = np.abs(relative_error / w)
+    ratio = ratio[np.isfinite(ratio)]
+    scale = 1.4826 * float(np.median(ratio)) if ratio.size else 1.0
+    scale = max(scale, 1e-3 * floor)  # exact data: any small positive scale
+    return w * scale, scale, "stated standard errors" if stated else "residual scale"
+
+
+def _refine_jointly(
+    poses: ModalPoses,
+    flex_joints: Sequence[int],
+    stiff_terms: Sequence[_Term],
+    damp_terms: Sequence[_Term],
+    damping_load: Mapping[int, int],
+    x_stiffness: np.ndarray,
+    x_damping: np.ndarray,
+    start: Mapping[int, float],
+) -> _Refinement:
+    """All kept stiffness and damping coefficients together, by robust least squares on the
+    relative errors of ω and ζ (each in units of its scatter, :func:`_relative_sigma`),
+    starting from the two-stage solution. The prediction is the core map's, so the fit is
+    right for whichever eigenproblem the core solves: when ω depends on the damping (the
+    exact damped modes), the two-stage solution is only a start."""
+    obs_w = np.isfinite(poses.wn_rad_s)
+    obs_z = np.isfinite(poses.zeta) & obs_w
+    n_s = len(stiff_terms)
+
+    def laws(x: np.ndarray) -> tuple[dict[int, list[float]], dict[int, list[float]]]:
+        damping = {j: [0.0, 0.0, 0.0] for j in flex_joints}
+        for value, t in zip(x[n_s:], damp_terms, strict=True):
+            damping[t.joint][int(t.name[-1])] = float(value)
+        return _stiffness_laws(x[:n_s], stiff_terms, flex_joints), damping
+
+    def relative(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        stiffness, damping = laws(x)
+        pred = _predict(poses, flex_joints, stiffness, damping, damping_load)
+        return (
+            pred[:, :, 0][obs_w] / poses.wn_rad_s[obs_w] - 1.0,
+            pred[:, :, 1][obs_z] / poses.zeta[obs_z] - 1.0,
+        )
+
+    # Bounds: stiffness within STIFFNESS_SPAN of its start (k_0 > 0 through its logarithm),
+    # load terms and damping coefficients non-negative.
+    span = math.log(STIFFNESS_SPAN)
+    lower, upper = [], []
+    for t in stiff_terms:
+        k0 = math.log(start[t.joint])
+        lower.append(k0 - span if t.name == "k_0" else 0.0)
+        upper.append(k0 + span if t.name == "k_0" else np.inf)
+    lower += [0.0] * len(damp_terms)
+    upper += [np.inf] * len(damp_terms)
+    x_start = np.clip(np.concatenate([x_stiffness, x_damping]), lower, upper)
+
+    def scaled(x_at: np.ndarray):
+        """Residual function with the error scales of the residuals at ``x_at``."""
+        e_w, e_z = relative(x_at)
+        sigma_w, scale_w, how_w = _relative_sigma(
+            poses.wn_rad_s[obs_w], poses.wn_se_rad_s[obs_w], e_w, MIN_RELATIVE_SE[0]
+        )
+        sigma_z, scale_z, how_z = _relative_sigma(
+            poses.zeta[obs_z], poses.zeta_se[obs_z], e_z, MIN_RELATIVE_SE[1]
+        )
+
+        def residual(x: np.ndarray) -> np.ndarray:
+            rw, rz = relative(x)
+            r = np.concatenate([rw / sigma_w, rz / sigma_z])
+            return np.where(np.isfinite(r), r, _INVALID_RESIDUAL / min(scale_w, scale_z))
+
+        return residual, (scale_w, scale_z), f"frequency: {how_w}; damping: {how_z}"
+
+    # Two passes: the error scales of the first are those of the two-stage residuals, which
+    # carry the two-stage solution's own error where ω depends on the damping; the second
+    # pass's are those of the first pass's residuals.
+    x, nfev = x_start, 0
+    for _ in range(JOINT_PASSES):
+        residual, scales, weighting = scaled(x)
+        # The same robust loss as the stiffness step, in units of the residuals' scatter: a
+        # residual up to OUTLIER_SIGMAS weighs as in plain least squares.
+        res = optimize.least_squares(
+            residual, x, bounds=(lower, upper), loss="soft_l1", f_scale=OUTLIER_SIGMAS, **_LSQ
+        )
+        x, nfev = res.x, nfev + int(res.nfev)
+    stiffness, damping = laws(x)
+    r0 = residual(x_start)
+    # scipy's soft_l1 cost at the start: ½ Σ C² ρ((r/C)²), ρ(z) = 2(√(1+z) − 1).
+    cost_start = OUTLIER_SIGMAS**2 * float(np.sum(np.sqrt(1 + (r0 / OUTLIER_SIGMAS) ** 2) - 1))
+    return _Refinement(
+        stiffness=stiffness,
+        damping=damping,
+        x=x,
+        se=_standard_errors(res.jac, res.fun, OUTLIER_SIGMAS),
+        scales=scales,
+        weighting=weighting,
+        nfev=nfev,
+        cost_start=cost_start,
+        cost=float(res.cost),
+    )
+
+
 def _json_number(value: float) -> float | None:
     """``value`` as a float, or ``None`` (JSON null) when it is not finite (an unidentifiable
     term's standard error)."""
@@ -342,6 +522,45 @@ def _load_span(poses: ModalPoses, joint: int) -> float:
     return float(np.ptp(np.abs(poses.gravity_torque_nm[:, joint])))
 
 
+def _coefficient_stats(
+    stiff_terms: Sequence[_Term],
+    damp_terms: Sequence[_Term],
+    stiffness: Mapping[int, Sequence[float]],
+    damping: Mapping[int, Sequence[float]],
+    se: np.ndarray,
+    two_stage: tuple[Mapping[int, Sequence[float]], Mapping[int, Sequence[float]]] | None,
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """Every kept law coefficient with its standard error, in physical units (``se``: of the
+    stiffness parameters ``log k_0, a_1, a_2``, then of the damping coefficients), and, after
+    the joint refinement, the two-stage value it started from."""
+    names = ("at_zero", "per_nm", "per_nm2")
+    stiffness_stats, damping_stats = [], []
+    for i, t in enumerate(stiff_terms):
+        index = 0 if t.name == "k_0" else int(t.name[-1])
+        # d k_0 = k_0 d(log k_0); k_i = k_0 a_i, d k_i ≈ k_0 d a_i.
+        entry = {
+            "joint": t.joint,
+            "term": names[index],
+            "value": float(stiffness[t.joint][index]),
+            "se": _json_number(stiffness[t.joint][0] * se[i]),
+        }
+        if two_stage is not None:
+            entry["two_stage"] = float(two_stage[0][t.joint][index])
+        stiffness_stats.append(entry)
+    for i, t in enumerate(damp_terms, start=len(stiff_terms)):
+        index = int(t.name[-1])
+        entry = {
+            "joint": t.joint,
+            "term": names[index],
+            "value": float(damping[t.joint][index]),
+            "se": _json_number(se[i]),
+        }
+        if two_stage is not None:
+            entry["two_stage"] = float(two_stage[1][t.joint][index])
+        damping_stats.append(entry)
+    return stiffness_stats, damping_stats
+
+
 def fit_modal_map(
     records: Sequence[Mapping[str, Any]] | ModalPoses,
     robot_name: str = "ur5e",
@@ -350,6 +569,10 @@ def fit_modal_map(
     damping_load: Mapping[int, int] | None = None,
     drop_t: float = 3.0,
     include_low_confidence: bool = False,
+    refine: bool = True,
+    select_folds: int | None = None,
+    exclude_terms: Collection[str] = (),
+    stiffness_drop_t: float | None = None,
     metadata: Mapping[str, Any] | None = None,
 ) -> ModalMap:
     """Fit a :class:`tvist.ModalMap` to a campaign's identified modes.
@@ -370,6 +593,21 @@ def fit_modal_map(
         Terms below ``drop_t`` standard errors are dropped (set to 0) and the step refitted.
     include_low_confidence
         Also use identifications flagged low-confidence.
+    refine
+        After the two steps (stiffness on ω, damping on ζ, with term dropping), refine every
+        kept coefficient together on ω and ζ (:func:`_refine_jointly`); the standard errors
+        are then the joint fit's. ``False``: the two-step solution.
+    select_folds
+        Also select the stiffness model by held-out error (:func:`select_terms`, this many
+        folds over the poses): a flexible joint other than base and shoulder, or a stiffness
+        load term, is kept only if it lowers the held-out frequency error. About
+        ``folds × (candidates + 1)`` fits per round; ``None`` (default): no selection.
+    exclude_terms
+        Terms left out from the start, as :func:`select_terms` names them: ``"joint 3"``
+        (made rigid), ``"stiffness a_1 of joint 1"``.
+    stiffness_drop_t
+        ``drop_t`` of the stiffness load terms (default ``drop_t``; 0: keep every term not
+        excluded, as after a selection).
     metadata
         Extra metadata; ``fit_statistics`` is filled in here.
 
@@ -395,13 +633,39 @@ def fit_modal_map(
         if isinstance(records, ModalPoses)
         else modal_poses(records, robot_name, include_low_confidence=include_low_confidence)
     )
+    options = {"flex_joints": flex_joints, "damping_load": load, "drop_t": drop_t}
+    options["refine"] = refine
+    selection = None
+    if select_folds is not None and not 2 <= select_folds <= poses.n_poses:
+        raise ValueError(
+            f"select_folds: must be in [2, {poses.n_poses}] (folds over the poses), "
+            f"got {select_folds}"
+        )
+    if select_folds is not None:
+        selection = select_terms(
+            poses, robot_name, folds=select_folds, exclude_terms=exclude_terms, **options
+        )
+        exclude_terms = tuple(selection["exclude"])
+        stiffness_drop_t = 0.0
+    stiff_drop_t = drop_t if stiffness_drop_t is None else stiffness_drop_t
+    for name in exclude_terms:
+        if name not in _term_names(flex_joints):
+            raise ValueError(f"exclude_terms: unknown term {name!r}")
+    rigid = {int(n.split()[1]) for n in exclude_terms if n.startswith("joint ")}
+    if rigid & set(MODE_JOINTS):
+        raise ValueError("exclude_terms: the base and shoulder cannot be made rigid")
+    flex_joints = tuple(j for j in flex_joints if j not in rigid)
     if poses.mass_kg_m2.shape[1] <= max(flex_joints):
         raise ValueError(f"flex_joints {flex_joints}: the robot has {poses.mass_kg_m2.shape[1]}")
     n_obs = int(np.isfinite(poses.wn_rad_s).sum())
     stiff_terms = [_Term(j, "k_0") for j in flex_joints]
     for j in flex_joints:
         if _load_span(poses, j) > MIN_LOAD_SPAN_NM:
-            stiff_terms += [_Term(j, "a_1"), _Term(j, "a_2")]
+            stiff_terms += [
+                _Term(j, a)
+                for a in ("a_1", "a_2")
+                if f"stiffness {a} of joint {j}" not in exclude_terms
+            ]
     damp_terms = []
     for j in flex_joints:
         damp_terms.append(_Term(j, "c_0"))
@@ -446,7 +710,7 @@ def fit_modal_map(
             for i, t in enumerate(stiff_terms)
             if t.name != "k_0"
         ]
-        weak = [w for w in weak if w[0] < drop_t]
+        weak = [w for w in weak if w[0] < stiff_drop_t]
         if not weak:
             break
         _, i = min(weak)
@@ -455,23 +719,6 @@ def fit_modal_map(
             "value": float(x[i]),
             "se": _json_number(se[i]),
         }
-    stiffness_stats = []
-    for i, t in enumerate(stiff_terms):
-        k0 = stiffness[t.joint][0]
-        if t.name == "k_0":
-            stiffness_stats.append(
-                {"joint": t.joint, "term": "at_zero", "value": k0, "se": _json_number(k0 * se[i])}
-            )
-        else:
-            index = int(t.name[-1])
-            stiffness_stats.append(
-                {
-                    "joint": t.joint,
-                    "term": ("per_nm", "per_nm2")[index - 1],
-                    "value": stiffness[t.joint][index],
-                    "se": _json_number(k0 * se[i]),
-                }
-            )
     while True:
         damping, xd, a, fun_d = _fit_damping(poses, flex_joints, stiffness, damp_terms, load)
         active = xd > 0
@@ -492,15 +739,22 @@ def fit_modal_map(
             "value": float(xd[i]),
             "se": _json_number(se_d[i]),
         }
-    damping_stats = [
-        {
-            "joint": t.joint,
-            "term": ("at_zero", "per_nm", "per_nm2")[int(t.name[-1])],
-            "value": float(xd[i]),
-            "se": _json_number(se_d[i]),
+    two_stage = (stiffness, damping)
+    se_all = np.concatenate([se, se_d])
+    refinement: dict[str, Any] | None = None
+    if refine:
+        joint = _refine_jointly(poses, flex_joints, stiff_terms, damp_terms, load, x, xd, start)
+        stiffness, damping, se_all = joint.stiffness, joint.damping, joint.se
+        refinement = {
+            "weighting": joint.weighting,
+            "relative_scale": {"frequency": joint.scales[0], "damping": joint.scales[1]},
+            "cost_two_stage": joint.cost_start,
+            "cost": joint.cost,
+            "nfev": joint.nfev,
         }
-        for i, t in enumerate(damp_terms)
-    ]
+    stiffness_stats, damping_stats = _coefficient_stats(
+        stiff_terms, damp_terms, stiffness, damping, se_all, two_stage if refine else None
+    )
     entries = _entries(flex_joints, stiffness, damping, load)
     fitted = ModalMap(entries, MODE_JOINTS)
     pred = fitted.modes_from_mass_matrix_many(
@@ -517,11 +771,145 @@ def fit_modal_map(
         "damping_nms_per_rad": damping_stats,
         "dropped": dropped,
         "drop_t": drop_t,
+        "joint_refinement": refinement,
+        "excluded": list(exclude_terms),
+        "term_selection": selection,
         "versus_identified": relative_errors(pred, poses.wn_rad_s, poses.zeta),
     }
     meta = {"robot": robot_name, "source": "tvist.ident.fit_modal_map", **(metadata or {})}
     meta["fit_statistics"] = stats
     return ModalMap(entries, MODE_JOINTS, meta)
+
+
+# --------------------------------------------------------------------------- term selection
+
+
+def _term_names(flex_joints: Sequence[int]) -> list[str]:
+    """Names of the terms :func:`select_terms` may leave out, for ``flex_joints``."""
+    names = [f"joint {j}" for j in flex_joints if j not in MODE_JOINTS]
+    return names + [f"stiffness {a} of joint {j}" for j in flex_joints for a in ("a_1", "a_2")]
+
+
+def held_out_frequency_error(
+    poses: ModalPoses,
+    robot_name: str = "ur5e",
+    *,
+    folds: int = 5,
+    seed: int = 0,
+    **options: Any,
+) -> float:
+    """RMS relative error of the natural frequencies (base and shoulder pooled) on held-out
+    poses: ``folds``-fold over poses (a seeded permutation), each fold predicted by
+    :func:`fit_modal_map` (``options``) of the others; infinite if a fold cannot be fitted."""
+    n = poses.n_poses
+    if not 2 <= folds <= n:
+        raise ValueError(f"folds must be in [2, {n}], got {folds}")
+    order = np.random.default_rng(seed).permutation(n)
+    errors = []
+    for k in range(folds):
+        test = np.sort(order[k::folds])
+        train, held = poses.subset(np.setdiff1d(np.arange(n), test)), poses.subset(test)
+        try:
+            modal = fit_modal_map(train, robot_name, **options)
+        except ValueError:
+            return math.inf
+        pred = modal.modes_from_mass_matrix_many(
+            held.mass_kg_m2, held.gravity_torque_nm if modal.uses_gravity else None
+        )[:, :, 0]
+        observed = np.isfinite(held.wn_rad_s)
+        rel = pred[observed] / held.wn_rad_s[observed] - 1.0
+        if not np.all(np.isfinite(rel)):
+            return math.inf
+        errors.append(rel)
+    pooled = np.concatenate(errors)
+    return float(np.sqrt(np.mean(pooled**2))) if pooled.size else math.inf
+
+
+def select_terms(
+    poses: ModalPoses,
+    robot_name: str = "ur5e",
+    *,
+    folds: int = 5,
+    seed: int = 0,
+    **options: Any,
+) -> dict[str, Any]:
+    """Selection of the stiffness model by held-out frequency error.
+
+    Significance (a term beyond ``drop_t`` standard errors) does not show model error: a
+    wrong law can be "significant" (on the demo campaign a wrist stiffness 2.6 times too
+    soft is; with little damping the shoulder's load law can take ``|L|`` for ``L²``).
+    Starting from the terms the significance test keeps, each move is tried: leave out a
+    flexible joint other than base and shoulder (made rigid) or a stiffness load term, or
+    swap a load term for its dropped sibling (``a_1`` ↔ ``a_2``). Every trial fit keeps its
+    stiffness terms as given (no significance dropping) and is scored by
+    :func:`held_out_frequency_error`; the best move is made if it does not raise the error
+    (a swap: if it lowers it), and the search repeats. A term is thus kept only if it
+    lowers the held-out frequency error. Damping terms hardly change the frequencies and are
+    left to the significance test.
+
+    Returns ``{"folds", "seed", "exclude": [names], "moves": [{"move", "held_out_rms"}],
+    "held_out_rms": e}``; ``exclude`` as ``exclude_terms`` of :func:`fit_modal_map` takes it
+    (with ``stiffness_drop_t=0``).
+    """
+    options = {
+        k: v
+        for k, v in options.items()
+        if k not in ("select_folds", "exclude_terms", "stiffness_drop_t")
+    }
+    every = _term_names(options.get("flex_joints", DEFAULT_FLEX_JOINTS))
+    full = fit_modal_map(poses, robot_name, **options)
+    included = {f"joint {e['joint']}" for e in full.flex_joints if e["joint"] not in MODE_JOINTS}
+    included |= {
+        f"stiffness a_{('per_nm', 'per_nm2').index(t['term']) + 1} of joint {t['joint']}"
+        for t in full.metadata["fit_statistics"]["stiffness_nm_per_rad"]
+        if t["term"] != "at_zero"
+    }
+
+    def exclude(terms: set[str]) -> list[str]:
+        return [n for n in every if n not in terms]
+
+    def score(terms: set[str]) -> float:
+        return held_out_frequency_error(
+            poses,
+            robot_name,
+            folds=folds,
+            seed=seed,
+            exclude_terms=exclude(terms),
+            stiffness_drop_t=0.0,
+            **options,
+        )
+
+    current = score(included)
+    moves: list[dict[str, Any]] = []
+    while True:
+        trials: dict[str, tuple[set[str], float, bool]] = {}
+        for name in sorted(included):
+            if name.startswith("joint "):
+                joint = name.split()[1]
+                fewer = {n for n in included if n != name and not n.endswith(f"joint {joint}")}
+                trials[f"leave out {name}"] = (fewer, score(fewer), False)
+                continue
+            fewer = included - {name}
+            trials[f"leave out {name}"] = (fewer, score(fewer), False)
+            sibling = name.replace("a_1", "a_2") if "a_1" in name else name.replace("a_2", "a_1")
+            if sibling not in included and sibling in every:
+                swapped = fewer | {sibling}
+                trials[f"swap {name} for {sibling}"] = (swapped, score(swapped), True)
+        if not trials:
+            break
+        move = min(trials, key=lambda m: trials[m][1])
+        terms, error, is_swap = trials[move]
+        if not (error < current if is_swap else error <= current):
+            break
+        moves.append({"move": move, "held_out_rms": _json_number(error)})
+        included, current = terms, error
+    return {
+        "folds": folds,
+        "seed": seed,
+        "exclude": exclude(included),
+        "moves": moves,
+        "held_out_rms": _json_number(current),
+    }
 
 
 # --------------------------------------------------------------------------- evaluation
@@ -660,6 +1048,7 @@ def fit_map_command(records: Sequence[Mapping[str, Any]], args: Any) -> int:
             records,
             args.robot,
             include_low_confidence=args.include_low_confidence,
+            select_folds=getattr(args, "select_folds", None),
             metadata={"source": f"tvist fit-map --kind modal {args.results}"},
         )
     except ValueError as exc:
@@ -679,6 +1068,13 @@ def fit_map_command(records: Sequence[Mapping[str, Any]], args: Any) -> int:
             )
     if stats["dropped"]:
         print(f"  dropped as negligible: {', '.join(stats['dropped'])}")
+    selection = stats.get("term_selection")
+    if selection:
+        made = ", ".join(m["move"] for m in selection["moves"]) or "none"
+        print(
+            f"  held-out selection ({selection['folds']} folds): moves {made}; held-out "
+            f"frequency error {100 * selection['held_out_rms']:.2f} % RMS"
+        )
     for name, entry in stats["versus_identified"].items():
         print(
             f"  {name}: RMS relative error frequency {100 * entry['frequency']['rms']:.2f} %, "

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 import tvist
-from tvist.ident.robustness import PRV_LIMIT, prv_band, two_mode_shaper
+from tvist.ident.robustness import PRV_LIMIT, pose_modes, prv_band, two_mode_shaper
 
 __all__ = [
     "plot_damping_robustness",
@@ -55,23 +55,52 @@ def _save(fig, path: str | Path) -> Path:
     return path
 
 
+def _design_points(
+    dynmap: tvist.DynamicMap | tvist.ModalMap,
+    j1_values_kg_m2: Sequence[float],
+    j0_kg_m2: float,
+    robot: tvist.robots.Robot | None,
+) -> list[tuple[str, list[tuple[float, float]]]]:
+    """``(title, modes)`` of each panel of :func:`plot_prv_sensitivity`: the published form at
+    ``(J_0, J_1)``; a modal map (whose modes depend on the whole pose) at the paper's test poses
+    Q1 (stretched) and Q3 (folded) of ``robot`` (default: the map's robot, no payload)."""
+    if isinstance(dynmap, tvist.ModalMap):
+        from tvist.trajectory.poses import PAPER_POSES
+
+        if robot is None:
+            robot = tvist.robots.Robot(tvist.robots.params(dynmap.robot or "ur5e"))
+        return [
+            (
+                f"{name}, {robot.payload.mass_kg:g} kg payload",
+                dynmap.modes(robot, PAPER_POSES[name]),
+            )
+            for name in ("Q1", "Q3")
+        ]
+    return [
+        (f"J_0 = {j0_kg_m2:g}, J_1 = {j1:g} kg m²", _modes(dynmap, j0_kg_m2, j1))
+        for j1 in j1_values_kg_m2
+    ]
+
+
 def plot_prv_sensitivity(
-    dynmap: tvist.DynamicMap,
+    dynmap: tvist.DynamicMap | tvist.ModalMap,
     path: str | Path,
     *,
     j1_values_kg_m2: Sequence[float] = (1.0, 3.2, 10.0),
     j0_kg_m2: float = J0_FIXED_KG_M2,
     shaper: str = "zv",
+    robot: tvist.robots.Robot | None = None,
 ) -> Path:
-    """Fig. 27: PRV of the two-mode shaper over actual frequency and damping, per ``J_1``.
+    """Fig. 27: PRV of the two-mode shaper over actual frequency and damping, per ``J_1``
+    (published form) or per test pose Q1, Q3 of ``robot`` (modal map).
 
-    The shaper is designed from the map at ``(J_0, J_1)``; the filled region is PRV <= 10 %,
+    The shaper is designed from the map's modes there; the filled region is PRV <= 10 %,
     the markers are the two design modes.
     """
-    fig, axes = _figure(1, len(j1_values_kg_m2), (5 * len(j1_values_kg_m2), 4))
+    points = _design_points(dynmap, j1_values_kg_m2, j0_kg_m2, robot)
+    fig, axes = _figure(1, len(points), (5 * len(points), 4))
     axes = np.atleast_1d(axes)
-    for ax, j1 in zip(axes, j1_values_kg_m2, strict=True):
-        modes = _modes(dynmap, j0_kg_m2, j1)
+    for ax, (title, modes) in zip(axes, points, strict=True):
         impulses = two_mode_shaper(modes, shaper)
         f_max = 2.5 * max(w for w, _ in modes) / (2 * math.pi)
         f = np.linspace(0.2, f_max, 300)
@@ -83,7 +112,7 @@ def plot_prv_sensitivity(
         ax.clabel(cs, fmt=lambda v: f"{100 * v:.0f} %")
         for (w, zeta), name in zip(modes, ("base", "shoulder"), strict=False):
             ax.plot(w / (2 * math.pi), zeta, "o", label=f"{name} {w / (2 * math.pi):.1f} Hz")
-        ax.set_title(f"J_0 = {j0_kg_m2:g}, J_1 = {j1:g} kg m²")
+        ax.set_title(title)
         ax.set_xlabel("actual natural frequency (Hz)")
         ax.set_ylabel("actual damping ratio")
         ax.legend(loc="upper right", fontsize=8)
@@ -135,48 +164,57 @@ def _points(results: Sequence[Mapping[str, Any]], joint: int, inertia_joint: int
 
 
 def plot_frequency_robustness(
-    dynmap: tvist.DynamicMap,
+    dynmap: tvist.DynamicMap | tvist.ModalMap,
     results: Sequence[Mapping[str, Any]],
     path: str | Path,
     *,
     mode: int = 0,
     joint: int | None = None,
     shaper: str = "zv",
+    robot: tvist.robots.Robot | None = None,
 ) -> Path:
     """Figs. 28 (``mode=0``, base) and 29 (``mode=1``, shoulder): frequency vs inertia.
 
     x: the inertia of the mode's frequency joint (``J_1`` for the paper's map); line: the map
     (the other inertia fixed at mid-range, ``J_0 = 4.5`` as in the paper); shaded: the 10 %
-    PRV band of the two-mode shaper designed from the map; dots: identified frequencies.
+    PRV band of the two-mode shaper designed from the map; dots: identified frequencies. A
+    modal map's modes depend on the whole pose, not on one inertia: it is drawn at each
+    identified pose (model ``robot``, see :func:`~tvist.ident.robustness.pose_modes`), with
+    its 10 % PRV band as an error bar.
     """
-    return _plot_robustness(dynmap, results, path, mode, joint, shaper, "frequency")
+    return _plot_robustness(dynmap, results, path, mode, joint, shaper, "frequency", robot)
 
 
 def plot_damping_robustness(
-    dynmap: tvist.DynamicMap,
+    dynmap: tvist.DynamicMap | tvist.ModalMap,
     results: Sequence[Mapping[str, Any]],
     path: str | Path,
     *,
     mode: int = 1,
     joint: int | None = None,
     shaper: str = "zv",
+    robot: tvist.robots.Robot | None = None,
 ) -> Path:
-    """Fig. 30: damping ratio vs inertia with the 10 % PRV band (default: shoulder mode)."""
-    return _plot_robustness(dynmap, results, path, mode, joint, shaper, "damping")
+    """Fig. 30: damping ratio vs inertia with the 10 % PRV band (default: shoulder mode); a
+    modal map as in :func:`plot_frequency_robustness`."""
+    return _plot_robustness(dynmap, results, path, mode, joint, shaper, "damping", robot)
 
 
 def _plot_robustness(
-    dynmap: tvist.DynamicMap,
+    dynmap: tvist.DynamicMap | tvist.ModalMap,
     results: Sequence[Mapping[str, Any]],
     path: str | Path,
     mode: int,
     joint: int | None,
     shaper: str,
     quantity: str,
+    robot: tvist.robots.Robot | None = None,
 ) -> Path:
     """The map's frequency or damping (``quantity``) against the inertia of its frequency
     joint, with the 10 % PRV band and the identified values."""
     joint = mode if joint is None else joint
+    if isinstance(dynmap, tvist.ModalMap):
+        return _plot_modal_robustness(dynmap, results, path, mode, joint, shaper, quantity, robot)
     f_joint = dynmap.mode_maps[mode]["frequency_joint"]
     jx, f, z = _points(results, joint, f_joint)
     bottom = min(0.3, float(jx.min()) * 0.9) if jx.size else 0.3
@@ -198,14 +236,70 @@ def _plot_robustness(
     return _save(fig, path)
 
 
+def _plot_modal_robustness(
+    modal: tvist.ModalMap,
+    results: Sequence[Mapping[str, Any]],
+    path: str | Path,
+    mode: int,
+    joint: int,
+    shaper: str,
+    quantity: str,
+    robot: tvist.robots.Robot | None,
+) -> Path:
+    """:func:`_plot_robustness` for a modal map: the map's value and its 10 % PRV band at
+    each identified pose, against the inertia of the mode's joint there."""
+    jx, ident, centre, lo, hi = [], [], [], [], []
+    scale = 1 / (2 * math.pi) if quantity == "frequency" else 1.0
+    for record in results:
+        by_joint = {m.get("joint"): m for m in record.get("modes", [])}
+        m = by_joint.get(joint)
+        if m is None or "error" in m or m.get("low_confidence", False):
+            continue
+        modes = pose_modes(modal, record, robot)
+        if modes is None or not all(math.isfinite(w) and 0.0 <= z < 1.0 for w, z in modes):
+            continue
+        w, z = modes[mode]
+        band = prv_band(two_mode_shaper(modes, shaper), w, z, vary=quantity)
+        jx.append(record["inertia_kg_m2"][joint])
+        ident.append((m["wn_rad_s"] if quantity == "frequency" else m["zeta"]) * scale)
+        centre.append((w if quantity == "frequency" else z) * scale)
+        lo.append(band[0] * scale)
+        hi.append(band[1] * scale)
+    fig, ax = _figure(1, 1, (7, 4.5))
+    if jx:
+        c, lo_a, hi_a = np.array(centre), np.array(lo), np.array(hi)
+        ax.errorbar(
+            jx,
+            c,
+            yerr=[c - lo_a, hi_a - c],
+            fmt="s",
+            ms=4,
+            color="k",
+            ecolor="#6baed6",
+            label="modal map, PRV <= 10 % band",
+        )
+        ax.plot(jx, ident, "o", ms=4, color="#d62728", label="identified")
+        ax.set_xscale("log")
+    ax.set_xlabel(f"J_{joint} at the pose (kg m²)")
+    ax.set_ylabel("natural frequency (Hz)" if quantity == "frequency" else "damping ratio")
+    ax.set_title(
+        f"{'base' if mode == 0 else 'shoulder'} mode: robustness to {quantity} errors "
+        f"(modal map, {len(jx)} poses)"
+    )
+    ax.legend()
+    return _save(fig, path)
+
+
 def plot_map_fit(
-    dynmap: tvist.DynamicMap,
+    dynmap: tvist.DynamicMap | tvist.ModalMap,
     results: Sequence[Mapping[str, Any]],
     path: str | Path,
     *,
     joints: Sequence[int] = (0, 1),
+    robot: tvist.robots.Robot | None = None,
 ) -> Path:
-    """Figs. 23-26: identified against map-predicted frequency and damping, per mode."""
+    """Figs. 23-26: identified against map-predicted frequency and damping, per mode (a
+    modal map evaluated with ``robot``'s model, see :func:`~tvist.ident.robustness.pose_modes`)."""
     fig, axes = _figure(2, len(joints), (5 * len(joints), 8), squeeze=False)
     for col, joint in enumerate(joints):
         ident, pred = [], []
@@ -214,8 +308,10 @@ def plot_map_fit(
             m = by_joint.get(joint)
             if m is None or "error" in m or m.get("low_confidence", False):
                 continue
-            tau = record.get("gravity_torque_nm") if dynmap.uses_gravity else None
-            pred.append(dynmap.modes_from_inertia(record["inertia_kg_m2"], tau)[col])
+            modes = pose_modes(dynmap, record, robot)
+            if modes is None:
+                continue
+            pred.append(modes[col])
             ident.append((m["wn_rad_s"], m["zeta"]))
         if not ident:
             continue

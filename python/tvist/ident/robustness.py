@@ -26,6 +26,7 @@ __all__ = [
     "PRV_LIMIT",
     "PoseRobustness",
     "evaluate_map",
+    "pose_modes",
     "prv_band",
     "summarize",
     "two_mode_shaper",
@@ -145,12 +146,35 @@ def _identified_modes(record: Mapping[str, Any], joints: Sequence[int]) -> list 
     return out
 
 
+def pose_modes(
+    dynmap: Any, record: Mapping[str, Any], robot: tvist.robots.Robot | None = None
+) -> list[tuple[float, float]] | None:
+    """The map's modes at a campaign pose: a :class:`tvist.DynamicMap` reads the record's
+    joint inertias (and gravity torques), a :class:`tvist.ModalMap` the mass matrix of
+    ``robot``'s model (default the map's ``metadata.robot``, else the UR5e) with the record's
+    payload at its ``q``. ``None`` if the record lacks what the map reads."""
+    if isinstance(dynmap, tvist.ModalMap):
+        if record.get("q") is None:
+            return None
+        params = robot.params if robot is not None else tvist.robots.params(dynmap.robot or "ur5e")
+        payload = tvist.robots.Payload(
+            float(record.get("payload_kg", 0.0)),
+            tuple(record.get("payload_com_m", (0.0, 0.0, 0.0))),
+        )
+        return dynmap.modes(tvist.robots.Robot(params, payload), record["q"])
+    if "inertia_kg_m2" not in record:
+        return None
+    tau = record.get("gravity_torque_nm") if dynmap.uses_gravity else None
+    return dynmap.modes_from_inertia(record["inertia_kg_m2"], tau)
+
+
 def evaluate_map(
     results: Sequence[Mapping[str, Any]],
-    dynmap: tvist.DynamicMap,
+    dynmap: tvist.DynamicMap | tvist.ModalMap,
     *,
     shaper: str = "zv",
     joints: Sequence[int] = (0, 1),
+    robot: tvist.robots.Robot | None = None,
 ) -> list[PoseRobustness]:
     """Robustness of ``dynmap`` at every confidently identified pose of a campaign.
 
@@ -159,19 +183,23 @@ def evaluate_map(
     results
         Campaign pose records (see :mod:`tvist.ident.campaign`).
     dynmap
-        The map to judge; its modes are in cascade order ``joints`` (base, shoulder).
+        The map to judge (published or modal form); its modes are in cascade order
+        ``joints`` (base, shoulder).
     shaper
         Shaper per mode (the paper: ZV).
     joints
         The excited joint of each map mode.
+    robot
+        For a modal map: the robot model (see :func:`pose_modes`).
     """
     out = []
     for record in results:
         identified = _identified_modes(record, joints)
         if identified is None or "inertia_kg_m2" not in record:
             continue
-        tau = record.get("gravity_torque_nm") if dynmap.uses_gravity else None
-        predicted = dynmap.modes_from_inertia(record["inertia_kg_m2"], tau)
+        predicted = pose_modes(dynmap, record, robot)
+        if predicted is None:
+            continue
         if not all(math.isfinite(w) and math.isfinite(z) and z < 1 for w, z in predicted):
             continue
         impulses = two_mode_shaper(predicted, shaper)

@@ -1,0 +1,198 @@
+"""The modal map's fit against campaign records of a known modal map whose modes are the exact
+damped modes (``modal_fit_reference``: pinocchio's mass matrix, ``scipy.linalg.eig`` of the
+first-order form; no tvist map code), written to a results file and read back as the CLI reads
+it: the joint refinement of stiffness and damping, its standard errors, and what it recovers
+where the base and shoulder modes come close (folded poses such as the paper's Q3)."""
+
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+
+import numpy as np
+
+from modal_fit_reference import LAWS_UR5E, exact_records, law, write_jsonl
+from tvist.demo.identified import DEMO_PLAN
+from tvist.demo.motions import PAYLOAD_COM_M
+from tvist.ident.campaign import load_results
+from tvist.ident.modal_fit import fit_modal_map, modal_poses
+from tvist.modal_map import ModalMap
+from tvist.trajectory.poses import PAPER_POSES
+
+FLEX = (0, 1, 2)
+#: The generating map (see modal_fit_reference.LAWS_UR5E).
+LAWS = LAWS_UR5E
+#: Noise of the size of the local identification's errors, stated in each record as the mode's
+#: standard error: 0.3 % on ω, 3 % on ζ.
+NOISE_WN, NOISE_ZETA = 0.003, 0.03
+
+
+def _poses() -> list[tuple]:
+    """The demo campaign's 36 poses (none and 5 kg, reach 0.25-0.92 m) and the folded pose Q3
+    at 0, 2.5 and 5 kg."""
+    poses = [
+        (p.key, p.q, p.payload_kg, p.payload_com_m) for p in DEMO_PLAN.poses() if p.q is not None
+    ]
+    q3 = np.array(PAPER_POSES["Q3"])
+    return poses + [(f"Q3-{m:g}kg", q3, m, PAYLOAD_COM_M) for m in (0.0, 2.5, 5.0)]
+
+
+def _scaled(damping_scale: float) -> list[dict]:
+    return [
+        dict(e, damping_nms_per_rad=[damping_scale * v for v in e["damping_nms_per_rad"]])
+        for e in LAWS
+    ]
+
+
+@functools.cache
+def _records_file(tmp_dir: str, damping_scale: float, seed: int) -> str:
+    records = exact_records(
+        _scaled(damping_scale), _poses(), noise_wn=NOISE_WN, noise_zeta=NOISE_ZETA, seed=seed
+    )
+    path = write_jsonl(records, Path(tmp_dir) / f"c{damping_scale}_{seed}.jsonl")
+    return str(path)
+
+
+def _terms(modal: ModalMap, what: str) -> dict[tuple[int, str], dict]:
+    return {(t["joint"], t["term"]): t for t in modal.metadata["fit_statistics"][what]}
+
+
+def _law_error(modal: ModalMap, laws: list[dict], joint: int, what: str, load: np.ndarray) -> float:
+    """RMS relative error of the fitted law of ``joint`` (``what``: stiffness or damping
+    field) against the generating one, at the gravity loads ``load`` ``(n_poses, n_dof)``."""
+    fitted = next(e for e in modal.flex_joints if e["joint"] == joint)
+    true = next(e for e in laws if e["joint"] == joint)
+    column = true["damping_load_joint"] if what.startswith("damping") else joint
+    got = np.array([law(fitted[what], v) for v in load[:, column]])
+    want = np.array([law(true[what], v) for v in load[:, column]])
+    return float(np.sqrt(np.mean((got / want - 1.0) ** 2)))
+
+
+def core_frequencies_depend_on_damping() -> bool:
+    """Whether the core's map solves the damped eigenproblem: with non-proportional damping
+    at a folded pose its natural frequencies then change with the damping; with undamped modes
+    and projected damping they do not."""
+    poses = modal_poses(
+        [
+            {
+                "key": "Q3",
+                "q": list(PAPER_POSES["Q3"]),
+                "payload_kg": 5.0,
+                "payload_com_m": list(PAYLOAD_COM_M),
+                "modes": [],
+            }
+        ],
+        "ur5e",
+    )
+    wn = [
+        ModalMap(_scaled(s), (0, 1)).modes_from_mass_matrix_many(
+            poses.mass_kg_m2, poses.gravity_torque_nm
+        )[0, :, 0]
+        for s in (1e-3, 1.0)
+    ]
+    return bool(np.max(np.abs(wn[1] / wn[0] - 1.0)) > 1e-6)
+
+
+def test_with_light_damping_the_joint_refinement_keeps_the_two_stage_solution(tmp_path):
+    # Damping a twentieth of LAWS' (ζ 0.003-0.014): the exact damped natural frequencies are
+    # the undamped ones to 2e-4, below the noise, whichever eigenproblem the core solves; the
+    # stiffness is then fixed by the frequencies alone and the joint fit has nothing to add.
+    records = load_results(_records_file(str(tmp_path), 0.05, 7))
+    two_stage = fit_modal_map(records, "ur5e", flex_joints=FLEX, refine=False)
+    joint = fit_modal_map(records, "ur5e", flex_joints=FLEX)
+    stats = joint.metadata["fit_statistics"]
+    assert stats["joint_refinement"]["cost"] <= stats["joint_refinement"]["cost_two_stage"]
+    for what in ("stiffness_nm_per_rad", "damping_nms_per_rad"):
+        before, after = _terms(two_stage, what), _terms(joint, what)
+        assert before.keys() == after.keys()
+        for key, t in after.items():
+            assert t["two_stage"] == before[key]["value"]
+            # Within 1.5 standard errors of the joint fit (measured on seeds 7-9: at most 1.0,
+            # the base stiffness of seed 7, whose shoulder law took the wrong load term).
+            assert abs(t["value"] - t["two_stage"]) < 1.5 * t["se"], (what, key, t)
+            # And the standard errors alike (measured: 0.78-1.15 times the two-stage ones; the
+            # damping's are weighted by the stated errors and robust now, not plain).
+            assert 0.5 * before[key]["se"] < t["se"] < 1.3 * before[key]["se"], (what, key, t)
+
+
+#: The exact damped core's tolerances (see the test below), and measured recovery:
+#: (joint, field, law index or None for the law's RMS over the poses, tolerance).
+EXACT_CORE_TOLERANCES = (
+    (0, "stiffness_nm_per_rad", 0, 0.006),
+    (1, "stiffness_nm_per_rad", 0, 0.006),
+    (2, "stiffness_nm_per_rad", 0, 0.05),
+    (1, "stiffness_nm_per_rad", None, 0.005),
+    (0, "damping_nms_per_rad", None, 0.08),
+    (1, "damping_nms_per_rad", None, 0.02),
+)
+
+#: The same for today's undamped core (undamped modes, projected damping), see the test.
+UNDAMPED_CORE_TOLERANCES = (0.015, 0.03, 0.15, 0.025, 0.10, 0.08)
+
+
+def test_the_fit_recovers_an_exact_damped_modal_map_where_modes_come_close(tmp_path):
+    # Moderate, very different damping (ζ 0.05-0.13 base, 0.12-0.28 shoulder) and folded poses:
+    # the data's natural frequencies are those of the damped eigenproblem, which differ from
+    # the undamped ones by up to a few per cent where the modes are close.
+    records = load_results(_records_file(str(tmp_path), 1.0, 7))
+    modal = fit_modal_map(records, "ur5e", flex_joints=FLEX)
+    poses = modal_poses(records, "ur5e")
+    assert [e["joint"] for e in modal.flex_joints] == list(FLEX)
+    errors = []
+    for joint, what, index, _ in EXACT_CORE_TOLERANCES:
+        if index is None:
+            errors.append(_law_error(modal, list(LAWS), joint, what, poses.gravity_torque_nm))
+        else:
+            got = next(e for e in modal.flex_joints if e["joint"] == joint)[what][index]
+            want = LAWS[FLEX.index(joint)][what][index]
+            errors.append(abs(got / want - 1.0))
+    if core_frequencies_depend_on_damping():
+        # THESE TOLERANCES ASSUME THE EXACT DAMPED CORE (modes of the damped eigenproblem, each
+        # the eigenmode dominating its joint). Measured with modal_fit_reference's exact damped
+        # modes in place of the core's prediction, seeds 1-3 and 7: base and shoulder stiffness
+        # within 0.27 %, the elbow's within 2.7 %, the shoulder's stiffness law within 0.16 %
+        # RMS over the poses, the damping laws within 6.0 % (base: its zero-load term absorbs
+        # the elbow's damper, which the fit drops as insignificant) and 0.73 % RMS (shoulder).
+        for (joint, what, index, tol), err in zip(EXACT_CORE_TOLERANCES, errors, strict=True):
+            assert err < tol, (joint, what, index, err)
+    else:
+        # The undamped core (undamped modes, projected damping) cannot reproduce these
+        # frequencies: the fit absorbs the difference in the coefficients. Measured (seeds 1-3,
+        # 7): base stiffness 0.4-0.9 % off, the shoulder's 1.8-2.2 %, the elbow's 6.7-12 %, the
+        # shoulder's stiffness law 1.4-1.7 % RMS, the damping laws 2.5-7.3 % (base) and
+        # 1.3-5.9 % RMS (shoulder). Asserted: those errors with a margin (the fit is no worse
+        # than the undamped model allows), and that the exact core's tolerances are missed.
+        for (joint, what, index, _), err, tol in zip(
+            EXACT_CORE_TOLERANCES, errors, UNDAMPED_CORE_TOLERANCES, strict=True
+        ):
+            assert err < tol, (joint, what, index, err)
+        assert max(e / t[3] for e, t in zip(errors, EXACT_CORE_TOLERANCES, strict=True)) > 1.0
+
+
+def test_held_out_selection_keeps_the_generating_terms_and_names_its_moves(tmp_path, capsys):
+    from tvist.cli import main
+
+    path = _records_file(str(tmp_path), 1.0, 7)
+    # The wrists flexible in the fit (the default flexible joints), rigid in the data: they must
+    # not be kept; the elbow and the shoulder's L² law are in the data and must be (the
+    # selection found that leaving either out raises the held-out frequency error, 1.24 % RMS
+    # with them).
+    out = tmp_path / "m.json"
+    argv = ["fit-map", path, "--kind", "modal", "--out", str(out), "--select-folds", "4"]
+    assert main(argv) == 0
+    assert "held-out selection (4 folds)" in capsys.readouterr().out
+    modal = ModalMap.load(out)
+    stats = modal.metadata["fit_statistics"]
+    assert [e["joint"] for e in modal.flex_joints] == [0, 1, 2]
+    load_terms = [(t["joint"], t["term"]) for t in stats["stiffness_nm_per_rad"]]
+    assert (1, "per_nm2") in load_terms
+    selection = stats["term_selection"]
+    assert "stiffness a_2 of joint 1" not in selection["exclude"]
+    assert "joint 2" not in selection["exclude"]
+    # Every move made lowered the held-out error or left it equal.
+    errors = [m["held_out_rms"] for m in selection["moves"]]
+    assert errors == sorted(errors, reverse=True)
+    assert 0 < selection["held_out_rms"] < 0.02
+    # A fold count the poses cannot give is refused, naming the option.
+    assert main([*argv[:-1], "1"]) == 2
+    assert "select_folds: must be in [2, 39]" in capsys.readouterr().err
