@@ -58,10 +58,17 @@ def law(v: Sequence[float], load_nm: float) -> float:
 
 
 def exact_damped_modes(
-    m: np.ndarray, k: np.ndarray, c: np.ndarray, mode_joints: Sequence[int] = (0, 1)
+    m: np.ndarray,
+    k: np.ndarray,
+    c: np.ndarray,
+    mode_joints: Sequence[int] = (0, 1),
+    *,
+    blend: bool = False,
 ) -> list[tuple[float, float]]:
     """``[(ω_n, ζ), ...]`` of the mode dominating each of ``mode_joints`` (indices into the
-    flexible joints), for ``M`` ``(n, n)`` and diagonal ``K``, ``C`` ``(n,)``."""
+    flexible joints), for ``M`` ``(n, n)`` and diagonal ``K``, ``C`` ``(n,)``. With ``blend``,
+    each is instead the average of all modes weighted by the 4th power of their strain-energy
+    share in the joint (the core's assignment, continuous where two modes share a joint)."""
     n = m.shape[0]
     minv = np.linalg.inv(m)
     a = np.block([[np.zeros((n, n)), np.eye(n)], [-minv @ np.diag(k), -minv @ np.diag(c)]])
@@ -70,13 +77,18 @@ def exact_damped_modes(
     lam, phi = lam[upper], vec[:n, upper]
     share = k[:, None] * np.abs(phi) ** 2
     share /= share.sum(axis=0)
+    wn, zeta = np.abs(lam), -lam.real / np.abs(lam)
     out, taken = [], []
     for j in mode_joints:
+        if blend:
+            w = share[j] ** 4 / np.sum(share[j] ** 4)
+            out.append((float(w @ wn), float(w @ zeta)))
+            continue
         s = share[j].copy()
         s[taken] = -np.inf
         i = int(np.argmax(s))
         taken.append(i)
-        out.append((float(abs(lam[i])), float(-lam[i].real / abs(lam[i]))))
+        out.append((float(wn[i]), float(zeta[i])))
     return out
 
 
@@ -106,11 +118,13 @@ def exact_records(
     noise_zeta: float,
     seed: int,
     robot_name: str = "ur5e",
+    blend: bool = False,
 ) -> list[dict]:
     """Campaign pose records (``key``, ``q``, payload, ``modes`` with stated standard errors,
     ``true_modes``) at ``poses`` ``(key, q, payload_kg, payload_com_m)``: the exact damped modes
     of the flexible joints ``laws`` (modal map file entries) with relative Gaussian noise
-    ``noise_wn`` on ω and ``noise_zeta`` on ζ, stated as each mode's standard error."""
+    ``noise_wn`` on ω and ``noise_zeta`` on ζ, stated as each mode's standard error (``blend``:
+    see :func:`exact_damped_modes`)."""
     rng = np.random.default_rng(seed)
     arms: dict[tuple, Arm] = {}
     joints = [int(e["joint"]) for e in laws]
@@ -122,7 +136,7 @@ def exact_records(
         m, tau = arms[arm_key].mass_and_gravity(np.asarray(q, dtype=float))
         k = np.array([law(e["stiffness_nm_per_rad"], tau[e["joint"]]) for e in laws])
         c = np.array([law(e["damping_nms_per_rad"], tau[e["damping_load_joint"]]) for e in laws])
-        truth = exact_damped_modes(m[np.ix_(joints, joints)], k, c)
+        truth = exact_damped_modes(m[np.ix_(joints, joints)], k, c, blend=blend)
         modes = []
         for j, (wn, z) in enumerate(truth):
             modes.append(

@@ -45,11 +45,16 @@ def _scaled(damping_scale: float) -> list[dict]:
 
 
 @functools.cache
-def _records_file(tmp_dir: str, damping_scale: float, seed: int) -> str:
+def _records_file(tmp_dir: str, damping_scale: float, seed: int, blend: bool = False) -> str:
     records = exact_records(
-        _scaled(damping_scale), _poses(), noise_wn=NOISE_WN, noise_zeta=NOISE_ZETA, seed=seed
+        _scaled(damping_scale),
+        _poses(),
+        noise_wn=NOISE_WN,
+        noise_zeta=NOISE_ZETA,
+        seed=seed,
+        blend=blend,
     )
-    path = write_jsonl(records, Path(tmp_dir) / f"c{damping_scale}_{seed}.jsonl")
+    path = write_jsonl(records, Path(tmp_dir) / f"c{damping_scale}_{seed}_{blend}.jsonl")
     return str(path)
 
 
@@ -115,8 +120,8 @@ def test_with_light_damping_the_joint_refinement_keeps_the_two_stage_solution(tm
             assert 0.5 * before[key]["se"] < t["se"] < 1.3 * before[key]["se"], (what, key, t)
 
 
-#: The exact damped core's tolerances (see the test below), and measured recovery:
-#: (joint, field, law index or None for the law's RMS over the poses, tolerance).
+#: Recovery tolerances of the test below: (joint, field, law index or None for the law's RMS
+#: over the poses, tolerance).
 EXACT_CORE_TOLERANCES = (
     (0, "stiffness_nm_per_rad", 0, 0.006),
     (1, "stiffness_nm_per_rad", 0, 0.006),
@@ -125,9 +130,6 @@ EXACT_CORE_TOLERANCES = (
     (0, "damping_nms_per_rad", None, 0.08),
     (1, "damping_nms_per_rad", None, 0.02),
 )
-
-#: The same for today's undamped core (undamped modes, projected damping), see the test.
-UNDAMPED_CORE_TOLERANCES = (0.015, 0.03, 0.15, 0.025, 0.10, 0.08)
 
 
 def test_the_fit_recovers_an_exact_damped_modal_map_where_modes_come_close(tmp_path):
@@ -146,37 +148,29 @@ def test_the_fit_recovers_an_exact_damped_modal_map_where_modes_come_close(tmp_p
             got = next(e for e in modal.flex_joints if e["joint"] == joint)[what][index]
             want = LAWS[FLEX.index(joint)][what][index]
             errors.append(abs(got / want - 1.0))
-    if core_frequencies_depend_on_damping():
-        # THESE TOLERANCES ASSUME THE EXACT DAMPED CORE (modes of the damped eigenproblem, each
-        # the eigenmode dominating its joint). Measured with modal_fit_reference's exact damped
-        # modes in place of the core's prediction, seeds 1-3 and 7: base and shoulder stiffness
-        # within 0.27 %, the elbow's within 2.7 %, the shoulder's stiffness law within 0.16 %
-        # RMS over the poses, the damping laws within 6.0 % (base: its zero-load term absorbs
-        # the elbow's damper, which the fit drops as insignificant) and 0.73 % RMS (shoulder).
-        for (joint, what, index, tol), err in zip(EXACT_CORE_TOLERANCES, errors, strict=True):
-            assert err < tol, (joint, what, index, err)
-    else:
-        # The undamped core (undamped modes, projected damping) cannot reproduce these
-        # frequencies: the fit absorbs the difference in the coefficients. Measured (seeds 1-3,
-        # 7): base stiffness 0.4-0.9 % off, the shoulder's 1.8-2.2 %, the elbow's 6.7-12 %, the
-        # shoulder's stiffness law 1.4-1.7 % RMS, the damping laws 2.5-7.3 % (base) and
-        # 1.3-5.9 % RMS (shoulder). Asserted: those errors with a margin (the fit is no worse
-        # than the undamped model allows), and that the exact core's tolerances are missed.
-        for (joint, what, index, _), err, tol in zip(
-            EXACT_CORE_TOLERANCES, errors, UNDAMPED_CORE_TOLERANCES, strict=True
-        ):
-            assert err < tol, (joint, what, index, err)
-        assert max(e / t[3] for e, t in zip(errors, EXACT_CORE_TOLERANCES, strict=True)) > 1.0
+    # The core solves the damped eigenproblem: its natural frequencies move with the damping.
+    assert core_frequencies_depend_on_damping()
+    # Measured with the core, seeds 1-3 and 7: base and shoulder stiffness within 0.35 %, the
+    # elbow's within 2.7 %, the shoulder's stiffness law within 0.15 % RMS over the poses, the
+    # damping laws within 5.3 % (base: its zero-load term absorbs the elbow's damper, which
+    # the fit drops as insignificant) and 0.96 % RMS (shoulder). The data's modes are the
+    # dominant ones, the core's a share⁴ blend; where two modes share a joint (pose
+    # m5kg-V2-R0, 52/46 %) they differ by about 10 %, which the robust loss leaves out.
+    for (joint, what, index, tol), err in zip(EXACT_CORE_TOLERANCES, errors, strict=True):
+        assert err < tol, (joint, what, index, err)
 
 
 def test_held_out_selection_keeps_the_generating_terms_and_names_its_moves(tmp_path, capsys):
     from tvist.cli import main
 
-    path = _records_file(str(tmp_path), 1.0, 7)
+    # Data the map form represents exactly: the exact damped modes assigned as the core does
+    # (share⁴ blend). With each mode the dominant one instead, the veering pose m5kg-V2-R0,
+    # which the blend cannot match (about 10 % off), tilts the held-out error towards |L| for
+    # the shoulder's law on this seed (0.69 % RMS held out, against 0.27 % here).
+    path = _records_file(str(tmp_path), 1.0, 7, blend=True)
     # The wrists flexible in the fit (the default flexible joints), rigid in the data: they must
-    # not be kept; the elbow and the shoulder's L² law are in the data and must be (the
-    # selection found that leaving either out raises the held-out frequency error, 1.24 % RMS
-    # with them).
+    # not be kept; the elbow and the shoulder's L² law are in the data and must be (leaving
+    # either out raises the held-out frequency error).
     out = tmp_path / "m.json"
     argv = ["fit-map", path, "--kind", "modal", "--out", str(out), "--select-folds", "4"]
     assert main(argv) == 0
@@ -192,7 +186,8 @@ def test_held_out_selection_keeps_the_generating_terms_and_names_its_moves(tmp_p
     # Every move made lowered the held-out error or left it equal.
     errors = [m["held_out_rms"] for m in selection["moves"]]
     assert errors == sorted(errors, reverse=True)
-    assert 0 < selection["held_out_rms"] < 0.02
+    # Held out 0.27 % RMS, the data's 0.3 % noise.
+    assert 0 < selection["held_out_rms"] < 0.005
     # A fold count the poses cannot give is refused, naming the option.
     assert main([*argv[:-1], "1"]) == 2
     assert "select_folds: must be in [2, 39]" in capsys.readouterr().err

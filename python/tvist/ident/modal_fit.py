@@ -2,14 +2,15 @@
 
 The same pose records as :func:`tvist.ident.map_fit.fit_map` (the campaign's JSON lines) are
 used, plus each pose's configuration ``q`` and payload, from which the robot model gives the
-mass matrix and the gravity torques. Two steps, like the published map's fit:
+mass matrix and the gravity torques. Two steps give the start, like the published map's fit:
 
-1. **Stiffness** (nonlinear least squares on relative frequency errors). Per flexible joint
-   ``k(L) = k_0 (1 + a_1 |L|_s + a_2 L²)`` with ``L`` its gravity torque; the parameters are
-   ``log k_0`` and ``a_1, a_2 >= 0`` (the load terms only for joints whose gravity torque
-   varies over the poses). The frequencies do not depend on the damping (modal damping).
-2. **Damping** with the stiffness fixed. The modal damping ratio is *linear* in the damping
-   laws' coefficients, ``ζ = (ω/2) Σ_j (v_j²/k_j)(c_0 + c_1 |L|_s + c_2 L²)``, so it is a
+1. **Stiffness** (nonlinear least squares on relative frequency errors) of the undamped map
+   (no damping: the undamped modes). Per flexible joint ``k(L) = k_0 (1 + a_1 |L|_s + a_2 L²)``
+   with ``L`` its gravity torque; the parameters are ``log k_0`` and ``a_1, a_2 >= 0`` (the
+   load terms only for joints whose gravity torque varies over the poses).
+2. **Damping** with the stiffness fixed. For light damping the damping ratio is nearly
+   *linear* in the damping laws' coefficients (exactly so for the damping projected on the
+   undamped modes, ``ζ = (ω/2) Σ_j (v_j²/k_j)(c_0 + c_1 |L|_s + c_2 L²)``), so it is a
    non-negative linear least-squares problem on relative errors; its columns are evaluations
    of the core map with one unit coefficient each (the physics stays in one place, the
    Rust core).
@@ -19,10 +20,9 @@ A term whose estimate is below ``drop_t`` standard errors is dropped and the ste
 3. **Joint refinement** (default): every kept stiffness and damping coefficient together, robust
    least squares on the relative errors of ω and ζ, each in units of its scatter (the records'
    stated standard errors weigh the poses, the residuals set each quantity's scale), from the
-   two-step solution. The prediction is the core map's: where the core's natural frequencies
-   depend on the damping (the exact damped eigenproblem), steps 1 and 2 are only a start; with
-   undamped modes and projected damping the refinement stays within about a standard error
-   of them.
+   two-step solution. The prediction is the core map's, the exact damped modes: their natural
+   frequencies depend on the damping where modes with different damping come close (the
+   UR5e's base and shoulder at folded poses), so steps 1 and 2 are only a start.
 
 Standard errors are ``√diag(σ² (JᵀJ)⁻¹)`` at the solution (through the SVD of ``J``, residuals
 beyond ``OUTLIER_SIGMAS`` robust standard deviations left out), in physical units.
