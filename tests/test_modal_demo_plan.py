@@ -73,11 +73,14 @@ def _stiffness(modal, joint: int) -> dict:
 def test_the_demo_plan_recovers_the_twins_gear_stiffnesses():
     twin_k = default_flex("ur5e").k1_nm_per_rad
     modal = fit_modal_map(_plan_records(DEMO_PLAN), "ur5e", flex_joints=DEMO_FLEX_JOINTS)
-    assert _joints(modal) == list(DEMO_FLEX_JOINTS)
-    # Base and shoulder within 3 % of the twin's gears (measured: 1-2 %; the map neglects the
-    # wrists' flexibility and the gravity stiffness, which the fit absorbs in these two),
-    # the elbow, ten times stiffer and seen only through its share of the two modes, within 30 %
-    # (measured: 10-20 % low).
+    # Base, shoulder and elbow are kept; the wrists, seen only through their small part in the
+    # base mode at folded poses, are not determined by these modes with 0.5 % noise and are made
+    # rigid (the real campaign's identifications keep wrist 2).
+    assert _joints(modal) == [0, 1, 2]
+    # Base and shoulder within 3 % of the twin's gears (measured: 1-2 %; the fit absorbs the
+    # wrists' flexibility and the gravity stiffness in these two), the elbow, ten times stiffer
+    # and seen only through its share of the two modes, within 30 % (measured: 22 % low with
+    # this seed; 29.6 % with seed 5, the elbow being the least determined of the three).
     for joint, tolerance in ((0, 0.03), (1, 0.03), (2, 0.30)):
         k = _stiffness(modal, joint)
         assert k["value"] == pytest.approx(twin_k[joint], rel=tolerance), (joint, k)
