@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -150,6 +151,21 @@ def test_recommendation_prefers_the_shortest_delay_among_good_reductions(quick_f
     # shorter one wins.
     line = recommendation(motion)
     assert "**Fixed robust shaper over the move**" in line
+
+
+def test_recommendation_takes_the_better_row_within_one_sample_of_the_shortest(quick_fixed):
+    # Two usable rows a sample apart (50 and 52 ms), 95.8 % and 99.26 %: one sample of delay
+    # is a tie, so the higher reduction wins (as on the demo's Q1→Q3); three samples are not.
+    motion = quick_fixed.motions[0]
+    shorter, longer = motion.runs[1], motion.runs[2]
+    for gap_samples, winner in ((1, longer), (3, shorter)):
+        runs = [
+            motion.runs[0],
+            dataclasses.replace(shorter, delay_s=25 * DT_S, reduction_percent=95.8),
+            dataclasses.replace(longer, delay_s=(25 + gap_samples) * DT_S, reduction_percent=99.26),
+        ]
+        line = recommendation(dataclasses.replace(motion, runs=runs))
+        assert f"**{winner.method.label}**" in line, (gap_samples, line)
 
 
 def test_methods_keep_their_keys():

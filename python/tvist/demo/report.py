@@ -654,7 +654,12 @@ def recommendation(motion: MotionRun) -> str:
         return f"{name}: no shaped row to compare."
     best = max(r.reduction_percent for r in usable)
     good = [r for r in usable if r.reduction_percent >= min(GOOD_REDUCTION, best - GOOD_MARGIN)]
-    pick = min(good, key=lambda r: (round(r.delay_s / DT_S), -r.reduction_percent))
+    # The shortest delay, and among the rows within one sample of it the higher reduction.
+    shortest = min(r.delay_s for r in good)
+    pick = max(
+        (r for r in good if r.delay_s <= shortest + 1.5 * DT_S),
+        key=lambda r: r.reduction_percent,
+    )
     others = sorted((r for r in usable if r is not pick), key=lambda r: -r.reduction_percent)[:2]
     why = f"{format_reduction(pick.reduction_percent)} % less residual vibration"
     why += f" for {1e3 * pick.delay_s:.0f} ms of delay"
