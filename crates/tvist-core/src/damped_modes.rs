@@ -18,15 +18,25 @@
 //! modal-damping estimates (accurate to second order in the damping coupling) it converges
 //! in two or three sweeps (cubically near the roots).
 //!
-//! **Elimination order.** Near root `k` the elimination takes coordinate `k` last, so only
-//! the last pivot approaches zero. The others are the successive Schur complements of `Q`
-//! without row and column `k`: near `λ_k` the first is mode `i`'s dynamic stiffness at mode
-//! `k`'s frequency, `1 − (ω_k/ω_i)² + 2iζ_i ω_k/ω_i` to first order, never zero with damping;
-//! a pivot vanishes only where another root of the system lies, so no pivoting is needed for
-//! distinct roots (a zero pivot ends the solve with a failure instead).
+//! **Elimination order.** The iteration for the root started at coordinate `k`'s undamped
+//! mode eliminates `k` last, so only the last pivot approaches zero. The others are the
+//! successive Schur complements of `Q` without row and column `k`: near `λ_k` the first is mode
+//! `i`'s dynamic stiffness at mode `k`'s frequency, `1 − (ω_k/ω_i)² + 2iζ_i ω_k/ω_i` to first
+//! order, never zero with damping; a pivot vanishes only where another root of the system
+//! lies, so no pivoting is needed for distinct roots (a zero pivot ends the solve with a
+//! failure instead; the log-derivative is exact in any order, the order only keeps it
+//! accurate). The mode shape at a converged root eliminates last the coordinate whose diagonal
+//! `λ² a_kk + λ g_kk + 1` is smallest, the direction in which `Q(λ)` is singular there (`A` is
+//! nearly diagonal), whichever start the root came from.
 //!
 //! **Mode shapes.** Each root's null vector comes from the same elimination at the converged
-//! root: coordinate `k` set to 1, the others by back substitution; normalized to unit length.
+//! root: the last coordinate set to 1, the others by back substitution; normalized to unit
+//! length.
+//!
+//! **Safeguards.** A step is at most a quarter of the root's size and never crosses the real
+//! axis (it stops half way): from a start far off (two close modes with very different
+//! damping, whose projected damping ratios are nearly equal) the Aberth correction can
+//! otherwise overshoot into the lower half plane.
 //!
 //! Overdamped modes (real root pairs) cannot be represented by the conjugate-pair iteration:
 //! the solve then reports failure and the caller decides (see
@@ -36,8 +46,13 @@ use crate::sym_eigen::MAX_DIM;
 use num_complex::Complex64;
 
 /// Upper bound on the sweeps (each sweep updates every root once). From the modal-damping
-/// start 2–3 sweeps reach full precision; the bound only guarantees termination.
-pub const MAX_SWEEPS: usize = 60;
+/// start 2–3 sweeps reach full precision, 6–10 where the start is far off; the bound only
+/// guarantees termination (an overdamped mode runs into it).
+pub const MAX_SWEEPS: usize = 40;
+
+/// Largest update of a root in one step, relative to its size (the iteration's steps near
+/// convergence are below 1e-2).
+const MAX_STEP: f64 = 0.25;
 
 /// A root whose update is at most this (relative) is left alone from then on. Each update
 /// is (to first order) the root's error before it, and the convergence is cubic: the error
@@ -95,6 +110,22 @@ impl<const N: usize> Problem<N> {
         }
     }
 
+    /// The coordinate to eliminate last at `λ`: the one whose diagonal `λ² a_ii + λ g_ii + 1`
+    /// is smallest, the direction in which `Q(λ)` is nearly singular near a root (`A` is
+    /// nearly diagonal), whichever start the root came from.
+    #[inline]
+    fn last_coordinate(&self, lambda: Complex64) -> usize {
+        let l2 = lambda * lambda;
+        let mut best = (0, f64::INFINITY);
+        for i in 0..N {
+            let d = (l2 * self.a[i][i] + lambda * self.g[i][i] + 1.0).norm_sqr();
+            if d < best.1 {
+                best = (i, d);
+            }
+        }
+        best.0
+    }
+
     /// The coordinate at elimination slot `slot` when coordinate `k` goes last.
     #[inline(always)]
     fn coordinate(slot: usize, k: usize) -> usize {
@@ -107,8 +138,9 @@ impl<const N: usize> Problem<N> {
         }
     }
 
-    /// `p(λ)/p'(λ)` (the Newton step of the characteristic polynomial) near root `k`: `0` at
-    /// an exact root, `None` on a vanishing pivot before the last or a non-finite result.
+    /// `p(λ)/p'(λ)` (the Newton step of the characteristic polynomial) for the root started
+    /// at coordinate `k`'s undamped mode, eliminating `k` last: `0` at an exact root, `None`
+    /// on a vanishing pivot before the last or a non-finite result.
     fn newton_step(&self, lambda: Complex64, k: usize) -> Option<Complex64> {
         let zero = Complex64::new(0.0, 0.0);
         let (mut u, mut du) = ([[zero; N]; N], [[zero; N]; N]);
@@ -144,8 +176,9 @@ impl<const N: usize> Problem<N> {
         }
     }
 
-    /// Unit null vector of `Q(λ)` at converged root `k` (module docs).
-    fn null_vector(&self, lambda: Complex64, k: usize) -> Option<[Complex64; N]> {
+    /// Unit null vector of `Q(λ)` at a converged root (module docs).
+    fn null_vector(&self, lambda: Complex64) -> Option<[Complex64; N]> {
+        let k = self.last_coordinate(lambda);
         let zero = Complex64::new(0.0, 0.0);
         let (mut u, mut unused) = ([[zero; N]; N], [[zero; N]; N]);
         self.q_and_derivative(lambda, k, &mut u, &mut unused);
@@ -208,15 +241,34 @@ impl<const N: usize> Problem<N> {
                         repulsion += 2.0 * (rk - rj.re) * recip(pair);
                     }
                 }
-                let step = newton * recip(1.0 - newton * repulsion);
-                roots[k] = rk - step;
-                if !(step.is_finite() && roots[k].im > 0.0) {
+                let mut step = newton * recip(1.0 - newton * repulsion);
+                if !step.is_finite() {
                     return None;
                 }
-                // Squared relative update (no hypot on this path).
-                done[k] = step.norm_sqr() <= CONVERGED_STEP * CONVERGED_STEP * roots[k].norm_sqr();
+                // Far from the roots (a start the projected damping put far off, where two
+                // close modes have very different damping) the correction can overshoot:
+                // at most MAX_STEP of the root's size, and never across the real axis (half
+                // way to it instead; an overdamped mode then does not converge).
+                // Done when the Newton correction itself is small (relative, squared: no
+                // hypot on this path), not a limited step, nor an Aberth step that the
+                // repulsion of the root's own conjugate shrinks near the real axis.
+                let tol2 = CONVERGED_STEP * CONVERGED_STEP * rk.norm_sqr();
+                done[k] = newton.norm_sqr() <= tol2 && step.norm_sqr() <= tol2;
+                let size = step.norm_sqr() / rk.norm_sqr();
+                if size > MAX_STEP * MAX_STEP {
+                    step *= MAX_STEP / size.sqrt();
+                }
+                if rk.im - step.im <= 0.0 {
+                    step *= 0.5 * rk.im / step.im;
+                }
+                roots[k] = rk - step;
             }
             if done.iter().all(|&d| d) {
+                // A pair of real roots (an overdamped mode) draws a root and its conjugate
+                // together onto the real axis, where the Newton step vanishes too: refused.
+                if roots.iter().any(|r| r.im * r.im <= 1e-12 * r.norm_sqr()) {
+                    return None;
+                }
                 let zero = Complex64::new(0.0, 0.0);
                 let mut out = DampedModes {
                     roots: [zero; MAX_DIM],
@@ -224,7 +276,7 @@ impl<const N: usize> Problem<N> {
                 };
                 for (k, &root) in roots.iter().enumerate() {
                     out.roots[k] = root;
-                    let z = self.null_vector(root, k)?;
+                    let z = self.null_vector(root)?;
                     for (row, &zr) in out.vectors.iter_mut().zip(&z) {
                         row[k] = zr;
                     }
