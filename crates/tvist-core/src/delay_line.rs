@@ -56,6 +56,13 @@ pub struct Reads {
     pairs: [Pair; MAX_IMPULSES],
     /// Cubic: four-sample stencils of the samples stored after the push.
     taps: [Tap; MAX_IMPULSES],
+    /// Linear, when `whole_len` is the number of `pairs`: the whole-sample part `k` of each
+    /// pair's delay, one pair per delayed impulse of the set they were prepared from, every
+    /// `k` in `[1, max_delay_samples)` and no delay clamped. A new scale whose delays keep
+    /// their whole-sample parts then only re-splits the fraction ([`DelayLine::prepare`]).
+    whole: [f64; MAX_IMPULSES],
+    /// `len` when `whole` describes `pairs` as above; `usize::MAX` otherwise.
+    whole_len: usize,
 }
 
 /// A linear stencil read before the push: `w_old · x(age j) + w_new · x(age j − 1)` in ages
@@ -82,6 +89,8 @@ impl Reads {
             lag: 1,
             weights: [0.0; 4],
         }; MAX_IMPULSES],
+        whole: [0.0; MAX_IMPULSES],
+        whole_len: usize::MAX,
     };
 
     #[inline]
@@ -92,6 +101,79 @@ impl Reads {
     #[inline]
     fn taps(&self) -> &[Tap] {
         self.taps.get(..self.len).unwrap_or(&[])
+    }
+}
+
+/// An impulse sequence as a delay line reads it ([`DelayLine::prepare`]): weights and delays
+/// (in samples per unit of the scale given to `prepare`), made once per sequence so that a
+/// cycle that only rescales the delays does no per-impulse setup.
+///
+/// Invariants: `undelayed <= len <= MAX_IMPULSES`; the first `undelayed` delays are 0 and
+/// `now` is their weights summed in order (from 0); entries past `len` are zero.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DelaySet {
+    now: f64,
+    undelayed: usize,
+    len: usize,
+    weights: [f64; MAX_IMPULSES],
+    delays: [f64; MAX_IMPULSES],
+}
+
+impl DelaySet {
+    /// One impulse of weight 1 at delay 0: the reads pass the input through.
+    pub const IDENTITY: DelaySet = DelaySet {
+        now: 1.0,
+        undelayed: 1,
+        len: 1,
+        weights: [1.0, 0.0, 0.0, 0.0, 0.0],
+        delays: [0.0; MAX_IMPULSES],
+    };
+
+    /// The sequence `weights[i]` at `delays[i]` (entries past [`MAX_IMPULSES`] or past the
+    /// shorter slice are ignored).
+    pub fn new(weights: &[f64], delays: &[f64]) -> DelaySet {
+        let mut set = DelaySet {
+            now: 0.0,
+            undelayed: 0,
+            len: 0,
+            weights: [0.0; MAX_IMPULSES],
+            delays: [0.0; MAX_IMPULSES],
+        };
+        for ((&w, &t), (sw, st)) in weights
+            .iter()
+            .zip(delays)
+            .zip(set.weights.iter_mut().zip(set.delays.iter_mut()))
+        {
+            *sw = w;
+            *st = t;
+            if t == 0.0 && set.undelayed == set.len {
+                set.now += w;
+                set.undelayed += 1;
+            }
+            set.len += 1;
+        }
+        set
+    }
+
+    /// Every impulse `(delay, weight)`, in order.
+    #[inline]
+    fn all(&self) -> impl Iterator<Item = (&f64, &f64)> {
+        let len = self.len.min(MAX_IMPULSES);
+        self.delays[..len].iter().zip(&self.weights[..len])
+    }
+
+    /// Number of impulses after the leading undelayed ones.
+    #[inline]
+    fn n_delayed(&self) -> usize {
+        self.len.saturating_sub(self.undelayed)
+    }
+
+    /// The impulses after the leading undelayed ones `(delay, weight)`, in order.
+    #[inline]
+    fn delayed(&self) -> impl Iterator<Item = (&f64, &f64)> {
+        let len = self.len.min(MAX_IMPULSES);
+        let first = self.undelayed.min(len);
+        self.delays[first..len].iter().zip(&self.weights[first..len])
     }
 }
 
@@ -247,30 +329,34 @@ impl DelayLine {
         (tap, clamped)
     }
 
-    /// Prepares the reads of a whole impulse sequence (`weights[i] · x(n − delays[i])`,
-    /// `delays[i] = times[i] · scale` in samples, each clamped as in [`Self::tap`]) into
-    /// `reads`, for
-    /// [`Self::push_and_read`]. Returns `true` if any delay had to be clamped.
+    /// Prepares the reads of the impulse sequence `set` with its delays multiplied by `scale`
+    /// (`weights[i] · x(n − delays[i] · scale)`, delays in samples, each clamped as in
+    /// [`Self::tap`]) into `reads`, for [`Self::push_and_read`]. Returns `true` if any delay
+    /// had to be clamped.
     ///
-    /// Linear reads are split by the samples they need: the weight of the newest sample (a
-    /// stencil ending at age 0, such as every shaper's first impulse at delay 0) is applied
-    /// to the input itself, and the other stencils read samples stored before the push, so
-    /// no read waits for the store of the same cycle. A stencil whose stored weight is zero
-    /// (a whole-sample delay below one sample) is left out.
+    /// Linear reads are split by the samples they need: the weight of the newest sample (the
+    /// set's undelayed impulses, such as every shaper's first, and any stencil ending at age
+    /// 0) is applied to the input itself, and the other stencils read samples stored before
+    /// the push, so no read waits for the store of the same cycle. A stencil whose stored
+    /// weight is zero (a whole-sample delay below one sample) is left out.
+    ///
+    /// Linear reads whose delays keep their whole-sample parts (see [`Reads`]) only have their
+    /// weights re-split, with the same arithmetic as a fresh preparation, so the result is
+    /// the same to the bit.
     #[inline(always)]
-    pub fn prepare(&self, times: &[f64], scale: f64, weights: &[f64], reads: &mut Reads) -> bool {
+    pub fn prepare(&self, set: &DelaySet, scale: f64, reads: &mut Reads) -> bool {
         let mut clamped = false;
         let mut len = 0;
         match self.interp {
             Interpolation::Linear => {
+                if reads.whole_len == set.n_delayed() && Self::resplit(set, scale, reads) {
+                    return false;
+                }
                 let max = self.max_delay;
-                let mut now = 0.0;
-                for (&t, &w) in times.iter().zip(weights) {
-                    if t == 0.0 {
-                        // No delay (every shaper's first impulse): the input itself.
-                        now += w;
-                        continue;
-                    }
+                let mut now = set.now;
+                // Whether every delayed impulse gets its own pair with k in [1, max).
+                let mut whole = true;
+                for (&t, &w) in set.delayed() {
                     let delay = t * scale;
                     // NaN and delays beyond `max` read at `max`, negative ones at 0.
                     let within = delay <= max;
@@ -279,8 +365,10 @@ impl DelayLine {
                     let d = if d > 0.0 { d } else { 0.0 };
                     // d ∈ [0, max] with max < 1e7 (capacity_for): truncation is the floor.
                     let k = d as i64;
-                    let mu = d - k as f64;
+                    let k_f64 = k as f64;
+                    let mu = d - k_f64;
                     let (w_old, w_new) = (w * mu, w * (1.0 - mu));
+                    whole &= within && k >= 1 && k_f64 < max;
                     // Ages k + 1 and k now are ages k and k − 1 before the push; age 0 now is
                     // the input.
                     let pair = if k == 0 {
@@ -301,25 +389,56 @@ impl DelayLine {
                             w_new,
                         }
                     };
-                    if let Some(slot) = reads.pairs.get_mut(len) {
+                    if let (Some(slot), Some(k_slot)) =
+                        (reads.pairs.get_mut(len), reads.whole.get_mut(len))
+                    {
                         *slot = pair;
+                        *k_slot = k_f64;
                         len += 1;
                     }
                 }
                 reads.now = now;
+                reads.whole_len = if whole { len } else { usize::MAX };
             }
             Interpolation::Cubic => {
-                for ((&t, &w), tap) in times.iter().zip(weights).zip(&mut reads.taps) {
+                for ((&t, &w), tap) in set.all().zip(&mut reads.taps) {
                     let (prepared, over) = self.tap(t * scale, w);
                     *tap = prepared;
                     clamped |= over;
                     len += 1;
                 }
                 reads.now = 0.0;
+                reads.whole_len = usize::MAX;
             }
         }
         reads.len = len;
         clamped
+    }
+
+    /// The linear reads of `set` at `scale` if every delay keeps the whole-sample part stored
+    /// in `reads` (`reads.whole_len == set.n_delayed()`): only the fractions are split again.
+    /// Returns `false` (the reads then need a full preparation) if a delay left its sample.
+    ///
+    /// Same result as [`Self::prepare`]'s general path, bit for bit: for `d` in `[k, k + 1)`
+    /// with integer `k >= 1`, `d − k` is exact (Sterbenz), and its sign and whether it is
+    /// `< 1` are those of the exact difference, so `mu ∈ [0, 1)` holds exactly when
+    /// `floor(d) = k`; then `d < k + 1 <= max` is not clamped, `d > 0`, and the general path
+    /// computes the same `mu`, the same weights and the same `lag`, and adds nothing to `now`.
+    #[inline(always)]
+    fn resplit(set: &DelaySet, scale: f64, reads: &mut Reads) -> bool {
+        let Some(pairs) = reads.pairs.get_mut(..reads.whole_len) else {
+            return false;
+        };
+        for ((pair, &k), (&t, &w)) in pairs.iter_mut().zip(&reads.whole).zip(set.delayed()) {
+            let mu = t * scale - k;
+            if !(mu >= 0.0 && mu < 1.0) {
+                return false;
+            }
+            pair.w_old = w * mu;
+            pair.w_new = w * (1.0 - mu);
+        }
+        reads.now = set.now;
+        true
     }
 
     /// Appends `x` and writes `out = Σ reads(x)` (all channels; `reads` from [`Self::prepare`]

@@ -10,7 +10,7 @@
 //! phases depend on `ζ` alone); for the exact EI shaper a change of `ζ` interpolates its
 //! tabulated solution ([`EiTable`], within 1e-9 of the Newton solve) instead of solving.
 
-use crate::delay_line::{DelayLine, Interpolation, Reads};
+use crate::delay_line::{DelaySet, DelayLine, Interpolation, Reads};
 use crate::ei::EiTable;
 use crate::error::{Error, Status};
 use crate::shaper::{DampedShape, ImpulseArray, Mode, ShaperKind, MAX_IMPULSES};
@@ -32,12 +32,11 @@ pub struct ModeFilter {
     shape_zeta: f64,
     /// The sequence for `shape_zeta`, times as phases `ω_n t`.
     shape: DampedShape,
-    /// The phases of `shape` times `rate_hz`: its delays in samples for `ω_n = 1` rad/s
-    /// (divided by `ω_n` for a mode).
-    shape_samples: [f64; MAX_IMPULSES],
-    /// The sequence used in the latest cycle, designed for `held`.
-    impulses: ImpulseArray,
-    /// The reads of `impulses`, prepared for `line`.
+    /// `shape` as the line reads it: its amplitudes at its phases times `rate_hz`, i.e. its
+    /// delays in samples for `ω_n = 1` rad/s (divided by `ω_n` for a mode).
+    shape_samples: DelaySet,
+    /// The reads of the sequence used in the latest cycle (`shape` at `held.wn_rad_s`, or the
+    /// identity before the first valid mode), prepared for `line`.
     reads: Reads,
     /// [`Status::ZETA_CLAMPED`] if the held mode's `ζ` was limited to the shaper's range.
     zeta_status: Status,
@@ -78,8 +77,7 @@ impl ModeFilter {
             shaping: false,
             shape_zeta: f64::NAN,
             shape: DampedShape::IDENTITY,
-            shape_samples: [0.0; MAX_IMPULSES],
-            impulses: ImpulseArray::IDENTITY,
+            shape_samples: DelaySet::IDENTITY,
             reads: Reads::NONE,
             zeta_status: Status::OK,
             design_status: Status::OK,
@@ -104,14 +102,8 @@ impl ModeFilter {
         self.shaping = false;
         self.shape_zeta = f64::NAN;
         self.set_shape(DampedShape::IDENTITY);
-        self.impulses = ImpulseArray::IDENTITY;
         // One impulse at delay 0: the reads pass the input through.
-        self.line.prepare(
-            &self.shape_samples[..1],
-            1.0,
-            self.shape.amplitudes(),
-            &mut self.reads,
-        );
+        self.line.prepare(&self.shape_samples, 1.0, &mut self.reads);
         self.zeta_status = Status::OK;
         self.design_status = Status::OK;
     }
@@ -180,7 +172,6 @@ impl ModeFilter {
     #[inline]
     fn take_wn(&mut self, wn_rad_s: f64) -> Status {
         self.held.wn_rad_s = wn_rad_s;
-        self.impulses.retime(&self.shape, wn_rad_s);
         self.prepare_reads()
     }
 
@@ -199,7 +190,6 @@ impl ModeFilter {
         self.take_zeta(mode);
         self.held = mode;
         self.shaping = true;
-        self.impulses = self.shape.at(mode.wn_rad_s);
         self.prepare_reads()
     }
 
@@ -213,14 +203,8 @@ impl ModeFilter {
         if self.held.wn_rad_s * self.dt_s >= core::f64::consts::PI {
             status |= Status::MODE_ABOVE_NYQUIST;
         }
-        let n = self.shape.len().min(MAX_IMPULSES);
         let per_rad = 1.0 / self.held.wn_rad_s; // the same division as `impulses`' times
-        if self.line.prepare(
-            &self.shape_samples[..n],
-            per_rad,
-            self.shape.amplitudes(),
-            &mut self.reads,
-        ) {
+        if self.line.prepare(&self.shape_samples, per_rad, &mut self.reads) {
             status |= Status::DELAY_CLAMPED;
         }
         self.design_status = status;
@@ -230,10 +214,11 @@ impl ModeFilter {
     /// Makes `shape` the current shape.
     fn set_shape(&mut self, shape: DampedShape) {
         self.shape = shape;
-        self.shape_samples = [0.0; MAX_IMPULSES];
-        for (d, p) in self.shape_samples.iter_mut().zip(shape.phases_rad()) {
+        let mut samples = [0.0; MAX_IMPULSES];
+        for (d, p) in samples.iter_mut().zip(shape.phases_rad()) {
             *d = p * self.rate_hz;
         }
+        self.shape_samples = DelaySet::new(shape.amplitudes(), &samples);
     }
 
     /// Designs the shape for the damping ratio of a valid mode (limited to the shaper's
@@ -270,12 +255,17 @@ impl ModeFilter {
 
     /// The delay of the current sequence (its last impulse), in seconds.
     pub fn delay_s(&self) -> f64 {
-        self.impulses.duration_s()
+        self.impulses().duration_s()
     }
 
-    /// The impulse sequence used in the latest cycle.
-    pub fn impulses(&self) -> &ImpulseArray {
-        &self.impulses
+    /// The impulse sequence used in the latest cycle: the held shape at the held `ω_n`
+    /// (the identity before the first valid mode).
+    pub fn impulses(&self) -> ImpulseArray {
+        if self.shaping {
+            self.shape.at(self.held.wn_rad_s)
+        } else {
+            ImpulseArray::IDENTITY
+        }
     }
 
     /// The longest delay the line can hold, in seconds.

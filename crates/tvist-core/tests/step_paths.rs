@@ -173,7 +173,7 @@ fn a_new_natural_frequency_alone_gives_what_a_fresh_design_gives() {
                 assert_eq!(a.output(), b.output(), "{name} {interp:?}: cycle {i}");
                 assert_eq!(
                     a.impulses(),
-                    &kind.design(mode),
+                    kind.design(mode),
                     "{name} {interp:?}: cycle {i}"
                 );
             }
