@@ -104,76 +104,91 @@ impl Reads {
     }
 }
 
-/// An impulse sequence as a delay line reads it ([`DelayLine::prepare`]): weights and delays
-/// (in samples per unit of the scale given to `prepare`), made once per sequence so that a
-/// cycle that only rescales the delays does no per-impulse setup.
+/// An impulse sequence as [`DelayLine::prepare`] reads it: `weights[i] · x(n − delays[i] ·
+/// scale)`, made once per sequence (its leading impulses at delay 0, such as every shaper's
+/// first, counted and summed, the others stored from index 0), so that a cycle that only
+/// rescales the delays does no per-impulse setup.
 ///
-/// Invariants: `undelayed <= len <= MAX_IMPULSES`; the first `undelayed` delays are 0 and
-/// `now` is their weights summed in order (from 0); entries past `len` are zero.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct DelaySet {
+/// Invariants: `undelayed + n_delayed <= MAX_IMPULSES`; `now` is the first `undelayed`
+/// entries of `undelayed_weights` summed in order (from 0); entries past the counts are zero.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sequence {
     now: f64,
     undelayed: usize,
-    len: usize,
-    weights: [f64; MAX_IMPULSES],
+    undelayed_weights: [f64; MAX_IMPULSES],
+    n_delayed: usize,
     delays: [f64; MAX_IMPULSES],
+    weights: [f64; MAX_IMPULSES],
 }
 
-impl DelaySet {
+impl Sequence {
     /// One impulse of weight 1 at delay 0: the reads pass the input through.
-    pub const IDENTITY: DelaySet = DelaySet {
+    pub const IDENTITY: Sequence = Sequence {
         now: 1.0,
         undelayed: 1,
-        len: 1,
-        weights: [1.0, 0.0, 0.0, 0.0, 0.0],
+        undelayed_weights: [1.0, 0.0, 0.0, 0.0, 0.0],
+        n_delayed: 0,
         delays: [0.0; MAX_IMPULSES],
+        weights: [0.0; MAX_IMPULSES],
     };
 
-    /// The sequence `weights[i]` at `delays[i]` (entries past [`MAX_IMPULSES`] or past the
-    /// shorter slice are ignored).
-    pub fn new(weights: &[f64], delays: &[f64]) -> DelaySet {
-        let mut set = DelaySet {
+    /// The sequence `weights[i]` at `delays[i] · delay_scale` (entries past
+    /// [`MAX_IMPULSES`] or past the shorter slice are ignored).
+    pub fn new(delays: &[f64], weights: &[f64], delay_scale: f64) -> Sequence {
+        let mut sequence = Sequence::IDENTITY;
+        sequence.assign(delays, weights, delay_scale);
+        sequence
+    }
+
+    /// Makes this [`Self::new`]`(delays, weights, delay_scale)` in place.
+    #[inline]
+    pub fn assign(&mut self, delays: &[f64], weights: &[f64], delay_scale: f64) {
+        *self = Sequence {
             now: 0.0,
             undelayed: 0,
-            len: 0,
-            weights: [0.0; MAX_IMPULSES],
+            undelayed_weights: [0.0; MAX_IMPULSES],
+            n_delayed: 0,
             delays: [0.0; MAX_IMPULSES],
+            weights: [0.0; MAX_IMPULSES],
         };
-        for ((&w, &t), (sw, st)) in weights
-            .iter()
-            .zip(delays)
-            .zip(set.weights.iter_mut().zip(set.delays.iter_mut()))
-        {
-            *sw = w;
-            *st = t;
-            if t == 0.0 && set.undelayed == set.len {
-                set.now += w;
-                set.undelayed += 1;
+        for (&t, &w) in delays.iter().zip(weights).take(MAX_IMPULSES) {
+            if t == 0.0 && self.n_delayed == 0 {
+                if let Some(slot) = self.undelayed_weights.get_mut(self.undelayed) {
+                    *slot = w;
+                    self.now += w;
+                    self.undelayed += 1;
+                }
+            } else if let (Some(st), Some(sw)) = (
+                self.delays.get_mut(self.n_delayed),
+                self.weights.get_mut(self.n_delayed),
+            ) {
+                *st = t * delay_scale;
+                *sw = w;
+                self.n_delayed += 1;
             }
-            set.len += 1;
         }
-        set
     }
 
     /// Every impulse `(delay, weight)`, in order.
-    #[inline]
+    #[inline(always)]
     fn all(&self) -> impl Iterator<Item = (&f64, &f64)> {
-        let len = self.len.min(MAX_IMPULSES);
-        self.delays[..len].iter().zip(&self.weights[..len])
-    }
-
-    /// Number of impulses after the leading undelayed ones.
-    #[inline]
-    fn n_delayed(&self) -> usize {
-        self.len.saturating_sub(self.undelayed)
+        let undelayed = self.undelayed.min(MAX_IMPULSES);
+        core::iter::repeat(&0.0)
+            .zip(&self.undelayed_weights[..undelayed])
+            .chain(self.delayed())
     }
 
     /// The impulses after the leading undelayed ones `(delay, weight)`, in order.
-    #[inline]
+    #[inline(always)]
     fn delayed(&self) -> impl Iterator<Item = (&f64, &f64)> {
-        let len = self.len.min(MAX_IMPULSES);
-        let first = self.undelayed.min(len);
-        self.delays[first..len].iter().zip(&self.weights[first..len])
+        let n = self.n_delayed.min(MAX_IMPULSES);
+        self.delays[..n].iter().zip(&self.weights[..n])
+    }
+
+    /// Number of impulses after the leading undelayed ones.
+    #[inline(always)]
+    fn n_delayed(&self) -> usize {
+        self.n_delayed
     }
 }
 
@@ -330,7 +345,7 @@ impl DelayLine {
     }
 
     /// Prepares the reads of the impulse sequence `set` with its delays multiplied by `scale`
-    /// (`weights[i] · x(n − delays[i] · scale)`, delays in samples, each clamped as in
+    /// (`weights[i] · x(n − delays[i] · scale)`, in samples, each clamped as in
     /// [`Self::tap`]) into `reads`, for [`Self::push_and_read`]. Returns `true` if any delay
     /// had to be clamped.
     ///
@@ -344,7 +359,7 @@ impl DelayLine {
     /// weights re-split, with the same arithmetic as a fresh preparation, so the result is
     /// the same to the bit.
     #[inline(always)]
-    pub fn prepare(&self, set: &DelaySet, scale: f64, reads: &mut Reads) -> bool {
+    pub fn prepare(&self, set: &Sequence, scale: f64, reads: &mut Reads) -> bool {
         let mut clamped = false;
         let mut len = 0;
         match self.interp {
@@ -425,11 +440,13 @@ impl DelayLine {
     /// `floor(d) = k`; then `d < k + 1 <= max` is not clamped, `d > 0`, and the general path
     /// computes the same `mu`, the same weights and the same `lag`, and adds nothing to `now`.
     #[inline(always)]
-    fn resplit(set: &DelaySet, scale: f64, reads: &mut Reads) -> bool {
+    fn resplit(set: &Sequence, scale: f64, reads: &mut Reads) -> bool {
         let Some(pairs) = reads.pairs.get_mut(..reads.whole_len) else {
             return false;
         };
-        for ((pair, &k), (&t, &w)) in pairs.iter_mut().zip(&reads.whole).zip(set.delayed()) {
+        // `pairs` has `set.n_delayed` entries: the zip stops there.
+        let delayed = set.delays.iter().zip(&set.weights);
+        for ((pair, &k), (&t, &w)) in pairs.iter_mut().zip(&reads.whole).zip(delayed) {
             let mu = t * scale - k;
             if !(mu >= 0.0 && mu < 1.0) {
                 return false;

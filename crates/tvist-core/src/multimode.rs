@@ -212,15 +212,11 @@ impl<D: Dynamics> TvShaper<D> {
             }
         } else {
             status |= self.ask_modes();
-            // Every filter takes its mode first (a design never depends on the signal), then
-            // the signal runs through the cascade with no call in between.
+            // Each filter takes its mode (a design never depends on the signal), then shapes
+            // the output of the filter before it.
             for (filter, &mode) in self.filters.iter_mut().zip(&self.modes) {
                 status |= filter.take(mode);
-            }
-            for filter in &mut self.filters {
-                let (filter_status, filtered) = filter.step_held_fixed(&stage);
-                status |= filter_status;
-                stage = filtered;
+                stage = filter.read_fixed(&stage);
             }
             self.designed = true;
         }

@@ -10,10 +10,10 @@
 //! phases depend on `ζ` alone); for the exact EI shaper a change of `ζ` interpolates its
 //! tabulated solution ([`EiTable`], within 1e-9 of the Newton solve) instead of solving.
 
-use crate::delay_line::{DelaySet, DelayLine, Interpolation, Reads};
+use crate::delay_line::{DelayLine, Interpolation, Reads, Sequence};
 use crate::ei::EiTable;
 use crate::error::{Error, Status};
-use crate::shaper::{DampedShape, ImpulseArray, Mode, ShaperKind, MAX_IMPULSES};
+use crate::shaper::{DampedShape, ImpulseArray, Mode, ShaperKind};
 
 /// One time-varying shaper for one mode, applied to all channels.
 #[derive(Debug, Clone)]
@@ -22,6 +22,8 @@ pub struct ModeFilter {
     /// `1 / dt_s`, samples per second.
     rate_hz: f64,
     dt_s: f64,
+    /// The Nyquist frequency `π / dt_s`, rad/s.
+    nyquist_rad_s: f64,
     line: DelayLine,
     /// Last valid mode seen; NaN until the first one (the filter then passes through), so
     /// that it compares unequal to every mode.
@@ -34,7 +36,7 @@ pub struct ModeFilter {
     shape: DampedShape,
     /// `shape` as the line reads it: its amplitudes at its phases times `rate_hz`, i.e. its
     /// delays in samples for `ω_n = 1` rad/s (divided by `ω_n` for a mode).
-    shape_samples: DelaySet,
+    shape_samples: Sequence,
     /// The reads of the sequence used in the latest cycle (`shape` at `held.wn_rad_s`, or the
     /// identity before the first valid mode), prepared for `line`.
     reads: Reads,
@@ -72,12 +74,13 @@ impl ModeFilter {
             kind,
             rate_hz: 1.0 / dt_s,
             dt_s,
+            nyquist_rad_s: core::f64::consts::PI / dt_s,
             line: DelayLine::new(n_channels, max_delay_s / dt_s, interp)?,
             held: Mode::new(f64::NAN, f64::NAN),
             shaping: false,
             shape_zeta: f64::NAN,
             shape: DampedShape::IDENTITY,
-            shape_samples: DelaySet::IDENTITY,
+            shape_samples: Sequence::IDENTITY,
             reads: Reads::NONE,
             zeta_status: Status::OK,
             design_status: Status::OK,
@@ -159,7 +162,7 @@ impl ModeFilter {
 
     /// Pushes `input`, reads the current design and keeps the output.
     #[inline(always)]
-    fn read_fixed<const N: usize>(&mut self, input: &[f64; N]) -> [f64; N] {
+    pub(crate) fn read_fixed<const N: usize>(&mut self, input: &[f64; N]) -> [f64; N] {
         let y = self.line.push_and_read_fixed(input, &self.reads);
         if let Ok(output) = <&mut [f64; N]>::try_from(self.output.as_mut_slice()) {
             *output = y;
@@ -200,7 +203,7 @@ impl ModeFilter {
         let mut status = self.zeta_status;
         // A mode at or above the Nyquist frequency π/dt_s is shaped as given (its impulses
         // fall within about one sample) and reported every cycle it is held.
-        if self.held.wn_rad_s * self.dt_s >= core::f64::consts::PI {
+        if self.held.wn_rad_s >= self.nyquist_rad_s {
             status |= Status::MODE_ABOVE_NYQUIST;
         }
         let per_rad = 1.0 / self.held.wn_rad_s; // the same division as `impulses`' times
@@ -212,13 +215,11 @@ impl ModeFilter {
     }
 
     /// Makes `shape` the current shape.
+    #[inline(always)]
     fn set_shape(&mut self, shape: DampedShape) {
         self.shape = shape;
-        let mut samples = [0.0; MAX_IMPULSES];
-        for (d, p) in samples.iter_mut().zip(shape.phases_rad()) {
-            *d = p * self.rate_hz;
-        }
-        self.shape_samples = DelaySet::new(shape.amplitudes(), &samples);
+        self.shape_samples
+            .assign(shape.phases_rad(), shape.amplitudes(), self.rate_hz);
     }
 
     /// Designs the shape for the damping ratio of a valid mode (limited to the shaper's
