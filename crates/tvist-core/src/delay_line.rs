@@ -110,7 +110,7 @@ impl Reads {
 /// rescales the delays does no per-impulse setup.
 ///
 /// Invariants: `undelayed + n_delayed <= MAX_IMPULSES`; `now` is the first `undelayed`
-/// entries of `undelayed_weights` summed in order (from 0); entries past the counts are zero.
+/// entries of `undelayed_weights` summed in order (from 0); entries past the counts are unused.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sequence {
     now: f64,
@@ -143,30 +143,26 @@ impl Sequence {
     /// Makes this [`Self::new`]`(delays, weights, delay_scale)` in place.
     #[inline]
     pub fn assign(&mut self, delays: &[f64], weights: &[f64], delay_scale: f64) {
-        *self = Sequence {
-            now: 0.0,
-            undelayed: 0,
-            undelayed_weights: [0.0; MAX_IMPULSES],
-            n_delayed: 0,
-            delays: [0.0; MAX_IMPULSES],
-            weights: [0.0; MAX_IMPULSES],
-        };
-        for (&t, &w) in delays.iter().zip(weights).take(MAX_IMPULSES) {
-            if t == 0.0 && self.n_delayed == 0 {
-                if let Some(slot) = self.undelayed_weights.get_mut(self.undelayed) {
-                    *slot = w;
-                    self.now += w;
-                    self.undelayed += 1;
-                }
-            } else if let (Some(st), Some(sw)) = (
-                self.delays.get_mut(self.n_delayed),
-                self.weights.get_mut(self.n_delayed),
-            ) {
-                *st = t * delay_scale;
-                *sw = w;
-                self.n_delayed += 1;
-            }
+        let len = delays.len().min(weights.len()).min(MAX_IMPULSES);
+        let (delays, weights) = (&delays[..len], &weights[..len]);
+        let undelayed = delays.iter().take_while(|&&t| t == 0.0).count();
+        let (now_weights, delayed_weights) = weights.split_at(undelayed);
+        self.now = 0.0;
+        for (slot, &w) in self.undelayed_weights.iter_mut().zip(now_weights) {
+            *slot = w;
+            self.now += w;
         }
+        self.undelayed = undelayed;
+        for ((st, sw), (&t, &w)) in self
+            .delays
+            .iter_mut()
+            .zip(self.weights.iter_mut())
+            .zip(delays[undelayed..].iter().zip(delayed_weights))
+        {
+            *st = t * delay_scale;
+            *sw = w;
+        }
+        self.n_delayed = len - undelayed;
     }
 
     /// Every impulse `(delay, weight)`, in order.

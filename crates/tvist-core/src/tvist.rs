@@ -30,12 +30,14 @@ pub struct ModeFilter {
     held: Mode,
     /// Whether a valid mode has been seen (`held` is a mode).
     shaping: bool,
-    /// Damping ratio `shape` was designed for (after limiting); NaN before the first design.
+    /// Damping ratio the current shape was designed for (after limiting); NaN before the
+    /// first design (the shape is then the identity).
     shape_zeta: f64,
-    /// The sequence for `shape_zeta`, times as phases `ω_n t`.
-    shape: DampedShape,
-    /// `shape` as the line reads it: its amplitudes at its phases times `rate_hz`, i.e. its
-    /// delays in samples for `ω_n = 1` rad/s (divided by `ω_n` for a mode).
+    /// Whether the current shape is the EI table's ([`Self::shape`]).
+    shape_from_table: bool,
+    /// The current shape ([`Self::shape`]) as the line reads it: its amplitudes at its phases
+    /// times `rate_hz`, i.e. its delays in samples for `ω_n = 1` rad/s (divided by `ω_n` for
+    /// a mode).
     shape_samples: Sequence,
     /// The reads of the sequence used in the latest cycle (`shape` at `held.wn_rad_s`, or the
     /// identity before the first valid mode), prepared for `line`.
@@ -79,7 +81,7 @@ impl ModeFilter {
             held: Mode::new(f64::NAN, f64::NAN),
             shaping: false,
             shape_zeta: f64::NAN,
-            shape: DampedShape::IDENTITY,
+            shape_from_table: false,
             shape_samples: Sequence::IDENTITY,
             reads: Reads::NONE,
             zeta_status: Status::OK,
@@ -104,7 +106,8 @@ impl ModeFilter {
         self.held = Mode::new(f64::NAN, f64::NAN);
         self.shaping = false;
         self.shape_zeta = f64::NAN;
-        self.set_shape(DampedShape::IDENTITY);
+        self.shape_from_table = false;
+        self.shape_samples = Sequence::IDENTITY;
         // One impulse at delay 0: the reads pass the input through.
         self.line.prepare(&self.shape_samples, 1.0, &mut self.reads);
         self.zeta_status = Status::OK;
@@ -214,32 +217,21 @@ impl ModeFilter {
         status
     }
 
-    /// Makes `shape` the current shape.
-    #[inline(always)]
-    fn set_shape(&mut self, shape: DampedShape) {
-        self.shape = shape;
-        self.shape_samples
-            .assign(shape.phases_rad(), shape.amplitudes(), self.rate_hz);
-    }
-
     /// Designs the shape for the damping ratio of a valid mode (limited to the shaper's
     /// range, [`Status::ZETA_CLAMPED`]) unless it is the current one.
     fn take_zeta(&mut self, mode: Mode) {
         let (design_mode, limited) = self.kind.within_range(mode);
         let design_zeta = design_mode.zeta;
         if design_zeta != self.shape_zeta {
-            let shape = match &self.ei_table {
-                // A change of ζ while shaping: the tabulated exact solution. The first design
-                // (after construction or a reset) is solved, so constant modes get exactly
-                // the offline design.
-                Some(table) if self.shaping => {
-                    let (amplitudes, phases_rad) = table.shape(design_zeta);
-                    DampedShape::three(&amplitudes, &phases_rad)
-                }
-                _ => self.kind.damped_shape(design_zeta),
-            };
-            self.set_shape(shape);
+            // A change of ζ while shaping with the exact EI shaper reads its tabulated
+            // solution. The first design (after construction or a reset) is solved, so
+            // constant modes get exactly the offline design.
+            let from_table = self.shaping && self.ei_table.is_some();
+            let shape = self.design_shape(design_zeta, from_table);
+            self.shape_samples
+                .assign(shape.phases_rad(), shape.amplitudes(), self.rate_hz);
             self.shape_zeta = design_zeta;
+            self.shape_from_table = from_table;
         }
         self.zeta_status = if limited {
             Status::ZETA_CLAMPED
@@ -263,9 +255,32 @@ impl ModeFilter {
     /// (the identity before the first valid mode).
     pub fn impulses(&self) -> ImpulseArray {
         if self.shaping {
-            self.shape.at(self.held.wn_rad_s)
+            self.shape().at(self.held.wn_rad_s)
         } else {
             ImpulseArray::IDENTITY
+        }
+    }
+
+    /// The current shape (impulse times as phases `ω_n t`), designed again: the shape for
+    /// `shape_zeta` as [`Self::design_shape`] made it (deterministic, so the same bits).
+    fn shape(&self) -> DampedShape {
+        if self.shape_zeta.is_nan() {
+            DampedShape::IDENTITY
+        } else {
+            self.design_shape(self.shape_zeta, self.shape_from_table)
+        }
+    }
+
+    /// The shape for damping ratio `zeta`: the family's design, or for the exact EI shaper
+    /// with `from_table` the tabulated solution.
+    #[inline(always)]
+    fn design_shape(&self, zeta: f64, from_table: bool) -> DampedShape {
+        match &self.ei_table {
+            Some(table) if from_table => {
+                let (amplitudes, phases_rad) = table.shape(zeta);
+                DampedShape::three(&amplitudes, &phases_rad)
+            }
+            _ => self.kind.damped_shape(zeta),
         }
     }
 
