@@ -356,13 +356,14 @@ impl DelayLine {
     /// the same to the bit.
     #[inline(always)]
     pub fn prepare(&self, set: &Sequence, scale: f64, reads: &mut Reads) -> bool {
+        // Linear reads only (`whole_len` is usize::MAX for cubic ones).
+        if reads.whole_len == set.n_delayed() && Self::resplit(set, scale, reads) {
+            return false;
+        }
         let mut clamped = false;
         let mut len = 0;
         match self.interp {
             Interpolation::Linear => {
-                if reads.whole_len == set.n_delayed() && Self::resplit(set, scale, reads) {
-                    return false;
-                }
                 let max = self.max_delay;
                 let mut now = set.now;
                 // Whether every delayed impulse gets its own pair with k in [1, max).
@@ -444,7 +445,7 @@ impl DelayLine {
         let delayed = set.delays.iter().zip(&set.weights);
         for ((pair, &k), (&t, &w)) in pairs.iter_mut().zip(&reads.whole).zip(delayed) {
             let mu = t * scale - k;
-            if !(mu >= 0.0 && mu < 1.0) {
+            if !(0.0..1.0).contains(&mu) {
                 return false;
             }
             pair.w_old = w * mu;
@@ -631,5 +632,52 @@ impl DelayLine {
     fn rows2(&self, lag: usize) -> (&[f64], &[f64]) {
         let block = self.block(lag, 2);
         block.split_at(block.len() / 2)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What a read of `reads` uses (entries past the counts are stale, not compared).
+    fn used(reads: &Reads) -> (f64, Vec<Pair>, usize, Vec<f64>) {
+        let whole = reads.whole.get(..reads.whole_len).unwrap_or(&[]).to_vec();
+        (reads.now, reads.pairs().to_vec(), reads.whole_len, whole)
+    }
+
+    #[test]
+    fn re_split_reads_equal_fresh_ones_and_are_taken_when_whole_samples_stay() {
+        // A ZVD-like sequence (one undelayed impulse, two delayed) whose scale drifts slowly
+        // across whole samples and out beyond the line (clamped) and back, then below one
+        // sample and to negative delays.
+        let line = DelayLine::new(3, 40.0, Interpolation::Linear).expect("line");
+        let set = Sequence::new(&[0.0, 11.0, 22.0], &[0.25, 0.5, 0.25], 1.0);
+        let mut kept = Reads::NONE;
+        let (mut resplit, mut clamped) = (0, 0);
+        let steps = 20_000;
+        for i in 0..steps {
+            let scale = match i {
+                0..19_000 => 1.2 + 0.9 * (i as f64 * 3e-4).sin(),
+                19_000..19_990 => 0.03 + 0.1 * (i - 19_000) as f64 / 1000.0,
+                _ => -0.5,
+            };
+            let mut fresh = Reads::NONE;
+            let clamped_fresh = line.prepare(&set, scale, &mut fresh);
+            let mut probe = kept;
+            let took_resplit =
+                kept.whole_len == set.n_delayed() && DelayLine::resplit(&set, scale, &mut probe);
+            let clamped_kept = line.prepare(&set, scale, &mut kept);
+            assert_eq!(used(&kept), used(&fresh), "step {i}, scale {scale}");
+            assert_eq!(clamped_kept, clamped_fresh, "step {i}");
+            resplit += usize::from(took_resplit);
+            clamped += usize::from(clamped_fresh);
+        }
+        // The delays (11 and 22 samples per unit scale) move by at most 0.006 samples a step,
+        // so nearly every step that is neither clamped nor below one sample re-splits.
+        assert!(
+            resplit + clamped > steps * 9 / 10,
+            "re-split {resplit}, clamped {clamped} of {steps}"
+        );
+        assert!(clamped > 1000 && resplit > steps / 2, "{resplit} {clamped}");
     }
 }

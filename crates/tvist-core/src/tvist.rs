@@ -210,7 +210,10 @@ impl ModeFilter {
             status |= Status::MODE_ABOVE_NYQUIST;
         }
         let per_rad = 1.0 / self.held.wn_rad_s; // the same division as `impulses`' times
-        if self.line.prepare(&self.shape_samples, per_rad, &mut self.reads) {
+        if self
+            .line
+            .prepare(&self.shape_samples, per_rad, &mut self.reads)
+        {
             status |= Status::DELAY_CLAMPED;
         }
         self.design_status = status;
