@@ -6,8 +6,12 @@
 //!
 //! Cost structure: a cycle whose mode equals the held one reads prepared taps (position and
 //! weights per impulse, [`Reads`]) and returns the status stored with them. A new `ω_n` only
-//! rescales the delays (one division per mode, one fractional split per impulse); a new `ζ` also redesigns the shape ([`DampedShape`]: amplitudes and
-//! phases depend on `ζ` alone); for the exact EI shaper a change of `ζ` interpolates its
+//! rescales the delays of the shape, prepared once per shape ([`Sequence`]): one division per
+//! mode, and per delayed impulse one multiplication and, while the delay stays within the
+//! same whole sample (nearly always when modes drift), only the fraction split again, bit for
+//! bit what a fresh preparation gives. A new `ζ` also redesigns the shape ([`DampedShape`]:
+//! amplitudes and phases depend on `ζ` alone; the closed forms cost a square root, two
+//! divisions and an exponential); for the exact EI shaper a change of `ζ` interpolates its
 //! tabulated solution ([`EiTable`], within 1e-9 of the Newton solve) instead of solving.
 
 use crate::delay_line::{DelayLine, Interpolation, Reads, Sequence};
