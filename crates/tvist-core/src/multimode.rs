@@ -212,10 +212,12 @@ impl<D: Dynamics> TvShaper<D> {
             }
         } else {
             status |= self.ask_modes();
-            // Each filter takes its mode (a design never depends on the signal), then shapes
-            // the output of the filter before it.
+            // Every filter takes its mode first (a design never depends on the signal), then
+            // the signal runs through the cascade.
             for (filter, &mode) in self.filters.iter_mut().zip(&self.modes) {
                 status |= filter.take(mode);
+            }
+            for filter in &mut self.filters {
                 stage = filter.read_fixed(&stage);
             }
             self.designed = true;
