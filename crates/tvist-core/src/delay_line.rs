@@ -56,6 +56,13 @@ pub struct Reads {
     pairs: [Pair; MAX_IMPULSES],
     /// Cubic: four-sample stencils of the samples stored after the push.
     taps: [Tap; MAX_IMPULSES],
+    /// Linear, when `whole_len` is the number of `pairs`: the whole-sample part `k` of each
+    /// pair's delay, one pair per delayed impulse of the set they were prepared from, every
+    /// `k` in `[1, max_delay_samples)` and no delay clamped. A new scale whose delays keep
+    /// their whole-sample parts then only re-splits the fraction ([`DelayLine::prepare`]).
+    whole: [f64; MAX_IMPULSES],
+    /// `len` when `whole` describes `pairs` as above; `usize::MAX` otherwise.
+    whole_len: usize,
 }
 
 /// A linear stencil read before the push: `w_old · x(age j) + w_new · x(age j − 1)` in ages
@@ -82,6 +89,8 @@ impl Reads {
             lag: 1,
             weights: [0.0; 4],
         }; MAX_IMPULSES],
+        whole: [0.0; MAX_IMPULSES],
+        whole_len: usize::MAX,
     };
 
     #[inline]
@@ -92,6 +101,90 @@ impl Reads {
     #[inline]
     fn taps(&self) -> &[Tap] {
         self.taps.get(..self.len).unwrap_or(&[])
+    }
+}
+
+/// An impulse sequence as [`DelayLine::prepare`] reads it: `weights[i] · x(n − delays[i] ·
+/// scale)`, made once per sequence (its leading impulses at delay 0, such as every shaper's
+/// first, counted and summed, the others stored from index 0), so that a cycle that only
+/// rescales the delays does no per-impulse setup.
+///
+/// Invariants: `undelayed + n_delayed <= MAX_IMPULSES`; `now` is the first `undelayed`
+/// entries of `undelayed_weights` summed in order (from 0); entries past the counts are unused.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sequence {
+    now: f64,
+    undelayed: usize,
+    undelayed_weights: [f64; MAX_IMPULSES],
+    n_delayed: usize,
+    delays: [f64; MAX_IMPULSES],
+    weights: [f64; MAX_IMPULSES],
+}
+
+impl Sequence {
+    /// One impulse of weight 1 at delay 0: the reads pass the input through.
+    pub const IDENTITY: Sequence = Sequence {
+        now: 1.0,
+        undelayed: 1,
+        undelayed_weights: [1.0, 0.0, 0.0, 0.0, 0.0],
+        n_delayed: 0,
+        delays: [0.0; MAX_IMPULSES],
+        weights: [0.0; MAX_IMPULSES],
+    };
+
+    /// The sequence `weights[i]` at `delays[i] · delay_scale` (entries past
+    /// [`MAX_IMPULSES`] or past the shorter slice are ignored).
+    pub fn new(delays: &[f64], weights: &[f64], delay_scale: f64) -> Sequence {
+        let mut sequence = Sequence::IDENTITY;
+        sequence.assign(delays, weights, delay_scale);
+        sequence
+    }
+
+    /// Makes this [`Self::new`]`(delays, weights, delay_scale)` in place.
+    #[inline]
+    pub fn assign(&mut self, delays: &[f64], weights: &[f64], delay_scale: f64) {
+        let len = delays.len().min(weights.len()).min(MAX_IMPULSES);
+        let (delays, weights) = (&delays[..len], &weights[..len]);
+        let undelayed = delays.iter().take_while(|&&t| t == 0.0).count();
+        let (now_weights, delayed_weights) = weights.split_at(undelayed);
+        self.now = 0.0;
+        for (slot, &w) in self.undelayed_weights.iter_mut().zip(now_weights) {
+            *slot = w;
+            self.now += w;
+        }
+        self.undelayed = undelayed;
+        for ((st, sw), (&t, &w)) in self
+            .delays
+            .iter_mut()
+            .zip(self.weights.iter_mut())
+            .zip(delays[undelayed..].iter().zip(delayed_weights))
+        {
+            *st = t * delay_scale;
+            *sw = w;
+        }
+        self.n_delayed = len - undelayed;
+    }
+
+    /// Every impulse `(delay, weight)`, in order.
+    #[inline(always)]
+    fn all(&self) -> impl Iterator<Item = (&f64, &f64)> {
+        let undelayed = self.undelayed.min(MAX_IMPULSES);
+        core::iter::repeat(&0.0)
+            .zip(&self.undelayed_weights[..undelayed])
+            .chain(self.delayed())
+    }
+
+    /// The impulses after the leading undelayed ones `(delay, weight)`, in order.
+    #[inline(always)]
+    fn delayed(&self) -> impl Iterator<Item = (&f64, &f64)> {
+        let n = self.n_delayed.min(MAX_IMPULSES);
+        self.delays[..n].iter().zip(&self.weights[..n])
+    }
+
+    /// Number of impulses after the leading undelayed ones.
+    #[inline(always)]
+    fn n_delayed(&self) -> usize {
+        self.n_delayed
     }
 }
 
@@ -247,30 +340,35 @@ impl DelayLine {
         (tap, clamped)
     }
 
-    /// Prepares the reads of a whole impulse sequence (`weights[i] · x(n − delays[i])`,
-    /// `delays[i] = times[i] · scale` in samples, each clamped as in [`Self::tap`]) into
-    /// `reads`, for
-    /// [`Self::push_and_read`]. Returns `true` if any delay had to be clamped.
+    /// Prepares the reads of the impulse sequence `set` with its delays multiplied by `scale`
+    /// (`weights[i] · x(n − delays[i] · scale)`, in samples, each clamped as in
+    /// [`Self::tap`]) into `reads`, for [`Self::push_and_read`]. Returns `true` if any delay
+    /// had to be clamped.
     ///
-    /// Linear reads are split by the samples they need: the weight of the newest sample (a
-    /// stencil ending at age 0, such as every shaper's first impulse at delay 0) is applied
-    /// to the input itself, and the other stencils read samples stored before the push, so
-    /// no read waits for the store of the same cycle. A stencil whose stored weight is zero
-    /// (a whole-sample delay below one sample) is left out.
+    /// Linear reads are split by the samples they need: the weight of the newest sample (the
+    /// set's undelayed impulses, such as every shaper's first, and any stencil ending at age
+    /// 0) is applied to the input itself, and the other stencils read samples stored before
+    /// the push, so no read waits for the store of the same cycle. A stencil whose stored
+    /// weight is zero (a whole-sample delay below one sample) is left out.
+    ///
+    /// Linear reads whose delays keep their whole-sample parts (see [`Reads`]) only have their
+    /// weights re-split, with the same arithmetic as a fresh preparation, so the result is
+    /// the same to the bit.
     #[inline(always)]
-    pub fn prepare(&self, times: &[f64], scale: f64, weights: &[f64], reads: &mut Reads) -> bool {
+    pub fn prepare(&self, set: &Sequence, scale: f64, reads: &mut Reads) -> bool {
+        // Linear reads only (`whole_len` is usize::MAX for cubic ones).
+        if reads.whole_len == set.n_delayed() && Self::resplit(set, scale, reads) {
+            return false;
+        }
         let mut clamped = false;
         let mut len = 0;
         match self.interp {
             Interpolation::Linear => {
                 let max = self.max_delay;
-                let mut now = 0.0;
-                for (&t, &w) in times.iter().zip(weights) {
-                    if t == 0.0 {
-                        // No delay (every shaper's first impulse): the input itself.
-                        now += w;
-                        continue;
-                    }
+                let mut now = set.now;
+                // Whether every delayed impulse gets its own pair with k in [1, max).
+                let mut whole = true;
+                for (&t, &w) in set.delayed() {
                     let delay = t * scale;
                     // NaN and delays beyond `max` read at `max`, negative ones at 0.
                     let within = delay <= max;
@@ -279,8 +377,10 @@ impl DelayLine {
                     let d = if d > 0.0 { d } else { 0.0 };
                     // d ∈ [0, max] with max < 1e7 (capacity_for): truncation is the floor.
                     let k = d as i64;
-                    let mu = d - k as f64;
+                    let k_f64 = k as f64;
+                    let mu = d - k_f64;
                     let (w_old, w_new) = (w * mu, w * (1.0 - mu));
+                    whole &= within && k >= 1 && k_f64 < max;
                     // Ages k + 1 and k now are ages k and k − 1 before the push; age 0 now is
                     // the input.
                     let pair = if k == 0 {
@@ -301,25 +401,58 @@ impl DelayLine {
                             w_new,
                         }
                     };
-                    if let Some(slot) = reads.pairs.get_mut(len) {
+                    if let (Some(slot), Some(k_slot)) =
+                        (reads.pairs.get_mut(len), reads.whole.get_mut(len))
+                    {
                         *slot = pair;
+                        *k_slot = k_f64;
                         len += 1;
                     }
                 }
                 reads.now = now;
+                reads.whole_len = if whole { len } else { usize::MAX };
             }
             Interpolation::Cubic => {
-                for ((&t, &w), tap) in times.iter().zip(weights).zip(&mut reads.taps) {
+                for ((&t, &w), tap) in set.all().zip(&mut reads.taps) {
                     let (prepared, over) = self.tap(t * scale, w);
                     *tap = prepared;
                     clamped |= over;
                     len += 1;
                 }
                 reads.now = 0.0;
+                reads.whole_len = usize::MAX;
             }
         }
         reads.len = len;
         clamped
+    }
+
+    /// The linear reads of `set` at `scale` if every delay keeps the whole-sample part stored
+    /// in `reads` (`reads.whole_len == set.n_delayed()`): only the fractions are split again.
+    /// Returns `false` (the reads then need a full preparation) if a delay left its sample.
+    ///
+    /// Same result as [`Self::prepare`]'s general path, bit for bit: for `d` in `[k, k + 1)`
+    /// with integer `k >= 1`, `d − k` is exact (Sterbenz), and its sign and whether it is
+    /// `< 1` are those of the exact difference, so `mu ∈ [0, 1)` holds exactly when
+    /// `floor(d) = k`; then `d < k + 1 <= max` is not clamped, `d > 0`, and the general path
+    /// computes the same `mu`, the same weights and the same `lag`, and adds nothing to `now`.
+    #[inline(always)]
+    fn resplit(set: &Sequence, scale: f64, reads: &mut Reads) -> bool {
+        let Some(pairs) = reads.pairs.get_mut(..reads.whole_len) else {
+            return false;
+        };
+        // `pairs` has `set.n_delayed` entries: the zip stops there.
+        let delayed = set.delays.iter().zip(&set.weights);
+        for ((pair, &k), (&t, &w)) in pairs.iter_mut().zip(&reads.whole).zip(delayed) {
+            let mu = t * scale - k;
+            if !(0.0..1.0).contains(&mu) {
+                return false;
+            }
+            pair.w_old = w * mu;
+            pair.w_new = w * (1.0 - mu);
+        }
+        reads.now = set.now;
+        true
     }
 
     /// Appends `x` and writes `out = Σ reads(x)` (all channels; `reads` from [`Self::prepare`]
@@ -499,5 +632,52 @@ impl DelayLine {
     fn rows2(&self, lag: usize) -> (&[f64], &[f64]) {
         let block = self.block(lag, 2);
         block.split_at(block.len() / 2)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What a read of `reads` uses (entries past the counts are stale, not compared).
+    fn used(reads: &Reads) -> (f64, Vec<Pair>, usize, Vec<f64>) {
+        let whole = reads.whole.get(..reads.whole_len).unwrap_or(&[]).to_vec();
+        (reads.now, reads.pairs().to_vec(), reads.whole_len, whole)
+    }
+
+    #[test]
+    fn re_split_reads_equal_fresh_ones_and_are_taken_when_whole_samples_stay() {
+        // A ZVD-like sequence (one undelayed impulse, two delayed) whose scale drifts slowly
+        // across whole samples and out beyond the line (clamped) and back, then below one
+        // sample and to negative delays.
+        let line = DelayLine::new(3, 40.0, Interpolation::Linear).expect("line");
+        let set = Sequence::new(&[0.0, 11.0, 22.0], &[0.25, 0.5, 0.25], 1.0);
+        let mut kept = Reads::NONE;
+        let (mut resplit, mut clamped) = (0, 0);
+        let steps = 20_000;
+        for i in 0..steps {
+            let scale = match i {
+                0..19_000 => 1.2 + 0.9 * (i as f64 * 3e-4).sin(),
+                19_000..19_990 => 0.03 + 0.1 * (i - 19_000) as f64 / 1000.0,
+                _ => -0.5,
+            };
+            let mut fresh = Reads::NONE;
+            let clamped_fresh = line.prepare(&set, scale, &mut fresh);
+            let mut probe = kept;
+            let took_resplit =
+                kept.whole_len == set.n_delayed() && DelayLine::resplit(&set, scale, &mut probe);
+            let clamped_kept = line.prepare(&set, scale, &mut kept);
+            assert_eq!(used(&kept), used(&fresh), "step {i}, scale {scale}");
+            assert_eq!(clamped_kept, clamped_fresh, "step {i}");
+            resplit += usize::from(took_resplit);
+            clamped += usize::from(clamped_fresh);
+        }
+        // The delays (11 and 22 samples per unit scale) move by at most 0.006 samples a step,
+        // so nearly every step that is neither clamped nor below one sample re-splits.
+        assert!(
+            resplit + clamped > steps * 9 / 10,
+            "re-split {resplit}, clamped {clamped} of {steps}"
+        );
+        assert!(clamped > 1000 && resplit > steps / 2, "{resplit} {clamped}");
     }
 }

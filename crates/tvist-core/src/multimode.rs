@@ -213,14 +213,12 @@ impl<D: Dynamics> TvShaper<D> {
         } else {
             status |= self.ask_modes();
             // Every filter takes its mode first (a design never depends on the signal), then
-            // the signal runs through the cascade with no call in between.
+            // the signal runs through the cascade.
             for (filter, &mode) in self.filters.iter_mut().zip(&self.modes) {
                 status |= filter.take(mode);
             }
             for filter in &mut self.filters {
-                let (filter_status, filtered) = filter.step_held_fixed(&stage);
-                status |= filter_status;
-                stage = filtered;
+                stage = filter.read_fixed(&stage);
             }
             self.designed = true;
         }

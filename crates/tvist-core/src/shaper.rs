@@ -257,6 +257,7 @@ impl ShaperKind {
     /// The sequence for damping ratio `zeta` with times as phases `ω_n t` (rad): every
     /// family's shape depends on `ζ` only, and designing for a mode of that `ζ` divides the
     /// phases by `ω_n` ([`DampedShape::at`]). Allocation-free; `0 <= zeta < 1`.
+    #[inline]
     pub fn damped_shape(&self, zeta: f64) -> DampedShape {
         match *self {
             ShaperKind::Ei { v_tol } => {

@@ -6,14 +6,18 @@
 //!
 //! Cost structure: a cycle whose mode equals the held one reads prepared taps (position and
 //! weights per impulse, [`Reads`]) and returns the status stored with them. A new `ω_n` only
-//! rescales the delays (one division per mode, one fractional split per impulse); a new `ζ` also redesigns the shape ([`DampedShape`]: amplitudes and
-//! phases depend on `ζ` alone); for the exact EI shaper a change of `ζ` interpolates its
+//! rescales the delays of the shape, prepared once per shape ([`Sequence`]): one division per
+//! mode, and per delayed impulse one multiplication and, while the delay stays within the
+//! same whole sample (nearly always when modes drift), only the fraction split again, bit for
+//! bit what a fresh preparation gives. A new `ζ` also redesigns the shape ([`DampedShape`]:
+//! amplitudes and phases depend on `ζ` alone; the closed forms cost a square root, two
+//! divisions and an exponential); for the exact EI shaper a change of `ζ` interpolates its
 //! tabulated solution ([`EiTable`], within 1e-9 of the Newton solve) instead of solving.
 
-use crate::delay_line::{DelayLine, Interpolation, Reads};
+use crate::delay_line::{DelayLine, Interpolation, Reads, Sequence};
 use crate::ei::EiTable;
 use crate::error::{Error, Status};
-use crate::shaper::{DampedShape, ImpulseArray, Mode, ShaperKind, MAX_IMPULSES};
+use crate::shaper::{DampedShape, ImpulseArray, Mode, ShaperKind};
 
 /// One time-varying shaper for one mode, applied to all channels.
 #[derive(Debug, Clone)]
@@ -22,22 +26,25 @@ pub struct ModeFilter {
     /// `1 / dt_s`, samples per second.
     rate_hz: f64,
     dt_s: f64,
+    /// The Nyquist frequency `π / dt_s`, rad/s.
+    nyquist_rad_s: f64,
     line: DelayLine,
     /// Last valid mode seen; NaN until the first one (the filter then passes through), so
     /// that it compares unequal to every mode.
     held: Mode,
     /// Whether a valid mode has been seen (`held` is a mode).
     shaping: bool,
-    /// Damping ratio `shape` was designed for (after limiting); NaN before the first design.
+    /// Damping ratio the current shape was designed for (after limiting); NaN before the
+    /// first design (the shape is then the identity).
     shape_zeta: f64,
-    /// The sequence for `shape_zeta`, times as phases `ω_n t`.
-    shape: DampedShape,
-    /// The phases of `shape` times `rate_hz`: its delays in samples for `ω_n = 1` rad/s
-    /// (divided by `ω_n` for a mode).
-    shape_samples: [f64; MAX_IMPULSES],
-    /// The sequence used in the latest cycle, designed for `held`.
-    impulses: ImpulseArray,
-    /// The reads of `impulses`, prepared for `line`.
+    /// Whether the current shape is the EI table's ([`Self::shape`]).
+    shape_from_table: bool,
+    /// The current shape ([`Self::shape`]) as the line reads it: its amplitudes at its phases
+    /// times `rate_hz`, i.e. its delays in samples for `ω_n = 1` rad/s (divided by `ω_n` for
+    /// a mode).
+    shape_samples: Sequence,
+    /// The reads of the sequence used in the latest cycle (`shape` at `held.wn_rad_s`, or the
+    /// identity before the first valid mode), prepared for `line`.
     reads: Reads,
     /// [`Status::ZETA_CLAMPED`] if the held mode's `ζ` was limited to the shaper's range.
     zeta_status: Status,
@@ -73,13 +80,13 @@ impl ModeFilter {
             kind,
             rate_hz: 1.0 / dt_s,
             dt_s,
+            nyquist_rad_s: core::f64::consts::PI / dt_s,
             line: DelayLine::new(n_channels, max_delay_s / dt_s, interp)?,
             held: Mode::new(f64::NAN, f64::NAN),
             shaping: false,
             shape_zeta: f64::NAN,
-            shape: DampedShape::IDENTITY,
-            shape_samples: [0.0; MAX_IMPULSES],
-            impulses: ImpulseArray::IDENTITY,
+            shape_from_table: false,
+            shape_samples: Sequence::IDENTITY,
             reads: Reads::NONE,
             zeta_status: Status::OK,
             design_status: Status::OK,
@@ -103,15 +110,10 @@ impl ModeFilter {
         self.held = Mode::new(f64::NAN, f64::NAN);
         self.shaping = false;
         self.shape_zeta = f64::NAN;
-        self.set_shape(DampedShape::IDENTITY);
-        self.impulses = ImpulseArray::IDENTITY;
+        self.shape_from_table = false;
+        self.shape_samples = Sequence::IDENTITY;
         // One impulse at delay 0: the reads pass the input through.
-        self.line.prepare(
-            &self.shape_samples[..1],
-            1.0,
-            self.shape.amplitudes(),
-            &mut self.reads,
-        );
+        self.line.prepare(&self.shape_samples, 1.0, &mut self.reads);
         self.zeta_status = Status::OK;
         self.design_status = Status::OK;
     }
@@ -167,7 +169,7 @@ impl ModeFilter {
 
     /// Pushes `input`, reads the current design and keeps the output.
     #[inline(always)]
-    fn read_fixed<const N: usize>(&mut self, input: &[f64; N]) -> [f64; N] {
+    pub(crate) fn read_fixed<const N: usize>(&mut self, input: &[f64; N]) -> [f64; N] {
         let y = self.line.push_and_read_fixed(input, &self.reads);
         if let Ok(output) = <&mut [f64; N]>::try_from(self.output.as_mut_slice()) {
             *output = y;
@@ -180,7 +182,6 @@ impl ModeFilter {
     #[inline]
     fn take_wn(&mut self, wn_rad_s: f64) -> Status {
         self.held.wn_rad_s = wn_rad_s;
-        self.impulses.retime(&self.shape, wn_rad_s);
         self.prepare_reads()
     }
 
@@ -199,7 +200,6 @@ impl ModeFilter {
         self.take_zeta(mode);
         self.held = mode;
         self.shaping = true;
-        self.impulses = self.shape.at(mode.wn_rad_s);
         self.prepare_reads()
     }
 
@@ -210,30 +210,18 @@ impl ModeFilter {
         let mut status = self.zeta_status;
         // A mode at or above the Nyquist frequency π/dt_s is shaped as given (its impulses
         // fall within about one sample) and reported every cycle it is held.
-        if self.held.wn_rad_s * self.dt_s >= core::f64::consts::PI {
+        if self.held.wn_rad_s >= self.nyquist_rad_s {
             status |= Status::MODE_ABOVE_NYQUIST;
         }
-        let n = self.shape.len().min(MAX_IMPULSES);
         let per_rad = 1.0 / self.held.wn_rad_s; // the same division as `impulses`' times
-        if self.line.prepare(
-            &self.shape_samples[..n],
-            per_rad,
-            self.shape.amplitudes(),
-            &mut self.reads,
-        ) {
+        if self
+            .line
+            .prepare(&self.shape_samples, per_rad, &mut self.reads)
+        {
             status |= Status::DELAY_CLAMPED;
         }
         self.design_status = status;
         status
-    }
-
-    /// Makes `shape` the current shape.
-    fn set_shape(&mut self, shape: DampedShape) {
-        self.shape = shape;
-        self.shape_samples = [0.0; MAX_IMPULSES];
-        for (d, p) in self.shape_samples.iter_mut().zip(shape.phases_rad()) {
-            *d = p * self.rate_hz;
-        }
     }
 
     /// Designs the shape for the damping ratio of a valid mode (limited to the shaper's
@@ -242,18 +230,15 @@ impl ModeFilter {
         let (design_mode, limited) = self.kind.within_range(mode);
         let design_zeta = design_mode.zeta;
         if design_zeta != self.shape_zeta {
-            let shape = match &self.ei_table {
-                // A change of ζ while shaping: the tabulated exact solution. The first design
-                // (after construction or a reset) is solved, so constant modes get exactly
-                // the offline design.
-                Some(table) if self.shaping => {
-                    let (amplitudes, phases_rad) = table.shape(design_zeta);
-                    DampedShape::three(&amplitudes, &phases_rad)
-                }
-                _ => self.kind.damped_shape(design_zeta),
-            };
-            self.set_shape(shape);
+            // A change of ζ while shaping with the exact EI shaper reads its tabulated
+            // solution. The first design (after construction or a reset) is solved, so
+            // constant modes get exactly the offline design.
+            let from_table = self.shaping && self.ei_table.is_some();
+            let shape = self.design_shape(design_zeta, from_table);
+            self.shape_samples
+                .assign(shape.phases_rad(), shape.amplitudes(), self.rate_hz);
             self.shape_zeta = design_zeta;
+            self.shape_from_table = from_table;
         }
         self.zeta_status = if limited {
             Status::ZETA_CLAMPED
@@ -270,12 +255,40 @@ impl ModeFilter {
 
     /// The delay of the current sequence (its last impulse), in seconds.
     pub fn delay_s(&self) -> f64 {
-        self.impulses.duration_s()
+        self.impulses().duration_s()
     }
 
-    /// The impulse sequence used in the latest cycle.
-    pub fn impulses(&self) -> &ImpulseArray {
-        &self.impulses
+    /// The impulse sequence used in the latest cycle: the held shape at the held `ω_n`
+    /// (the identity before the first valid mode).
+    pub fn impulses(&self) -> ImpulseArray {
+        if self.shaping {
+            self.shape().at(self.held.wn_rad_s)
+        } else {
+            ImpulseArray::IDENTITY
+        }
+    }
+
+    /// The current shape (impulse times as phases `ω_n t`), designed again: the shape for
+    /// `shape_zeta` as [`Self::design_shape`] made it (deterministic, so the same bits).
+    fn shape(&self) -> DampedShape {
+        if self.shape_zeta.is_nan() {
+            DampedShape::IDENTITY
+        } else {
+            self.design_shape(self.shape_zeta, self.shape_from_table)
+        }
+    }
+
+    /// The shape for damping ratio `zeta`: the family's design, or for the exact EI shaper
+    /// with `from_table` the tabulated solution.
+    #[inline(always)]
+    fn design_shape(&self, zeta: f64, from_table: bool) -> DampedShape {
+        match &self.ei_table {
+            Some(table) if from_table => {
+                let (amplitudes, phases_rad) = table.shape(zeta);
+                DampedShape::three(&amplitudes, &phases_rad)
+            }
+            _ => self.kind.damped_shape(zeta),
+        }
     }
 
     /// The longest delay the line can hold, in seconds.

@@ -283,7 +283,7 @@ fn redesigns_equal_the_offline_design_of_every_cycles_mode() {
                     }
                 } else {
                     // Same code path (shape for ζ, then scaled by ω_n): bit for bit.
-                    assert_eq!(got, &want, "{name}, cycle {i}");
+                    assert_eq!(got, want, "{name}, cycle {i}");
                 }
             }
         }
@@ -407,7 +407,7 @@ fn delays_beyond_the_buffer_are_clamped_and_damping_beyond_a_fit_is_limited() {
     let s = shaper.step(&[1.0], &mut y);
     assert!(s.contains(Status::ZETA_CLAMPED), "{s:?}");
     let limited = ShaperKind::Ei { v_tol: 0.05 }.design(Mode::new(40.0, 0.4));
-    assert_eq!(shaper.filters()[0].impulses(), &limited);
+    assert_eq!(shaper.filters()[0].impulses(), limited);
 }
 
 #[test]
