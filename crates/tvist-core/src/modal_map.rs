@@ -317,8 +317,8 @@ impl ModalMap {
             let zeta = out.zeta[i].min(0.9);
             start[i] = Complex64::new(-zeta * wn, wn * (1.0 - zeta * zeta).sqrt());
         }
-        // In the undamped modal coordinates `y = V z`: `(λ² diag(μ) + λ G + I) z = 0` with
-        // `G = Vᵀ diag(c/k) V`.
+        // In the (nearly) undamped modal coordinates `y = V z`: `(λ² VᵀBV + λ G + I) z = 0`
+        // with `G = Vᵀ diag(c/k) V`.
         let mut g = [[0.0; MAX_DIM]; MAX_DIM];
         for i in 0..nf {
             for j in i..nf {
