@@ -77,8 +77,11 @@ def test_modes_match_scipys_damped_eigenproblem_weighted_by_strain_energy():
         weights = exact.strain_energy[:2] ** 4
         weights /= weights.sum(axis=1, keepdims=True)
         want = np.column_stack([weights @ exact.wn_rad_s, weights @ exact.zeta])
-        # Two independent eigensolvers agree to rounding: measured 4e-13 at worst.
-        np.testing.assert_allclose(pred, want, rtol=1e-9)
+        # Two independent eigensolvers. The core's roots are exact to rounding; its mode shapes
+        # (the blend's weights) are those of each root's last iterate, within its last Newton
+        # correction (at most 1e-6, typically 1e-8) of the root: measured 7.4e-7 at worst over
+        # 2000 random poses (4e-13 with a separate elimination at each root).
+        np.testing.assert_allclose(pred, want, rtol=2e-6)
 
 
 def test_shaped_modes_are_the_dominant_exact_modes_over_the_campaign():

@@ -29,9 +29,14 @@
 //! `λ² a_kk + λ g_kk + 1` is smallest, the direction in which `Q(λ)` is singular there (`A` is
 //! nearly diagonal), whichever start the root came from.
 //!
-//! **Mode shapes.** Each root's null vector comes from the same elimination at the converged
-//! root: the last coordinate set to 1, the others by back substitution; normalized to unit
-//! length.
+//! **Mode shapes.** Each root's null vector comes from the elimination that found it
+//! converged (the last coordinate set to 1, the others by back substitution; unit length): at
+//! the root's last iterate, within its last Newton correction (at most `CONVERGED_STEP`,
+//! typically 1e-8, relative) of the root, so the shape carries that error divided by the
+//! modes' relative separation while the root itself is exact to rounding. That saves an
+//! elimination per mode (6 % of the modal map's step); the shapes only weigh the modes'
+//! assignment. Where that elimination cannot give it (the root's own coordinate is not the
+//! singular one there), a separate elimination at the root does.
 //!
 //! **Safeguards.** A step is at most a quarter of the root's size and never crosses the real
 //! axis (it stops half way): from a start far off (two close modes with very different
@@ -140,18 +145,28 @@ impl<const N: usize> Problem<N> {
 
     /// `p(λ)/p'(λ)` (the Newton step of the characteristic polynomial) for the root started
     /// at coordinate `k`'s undamped mode, eliminating `k` last: `0` at an exact root, `None`
-    /// on a vanishing pivot before the last or a non-finite result.
-    fn newton_step(&self, lambda: Complex64, k: usize) -> Option<Complex64> {
+    /// on a vanishing pivot before the last or a non-finite result. Where the step is within
+    /// `tol2` (squared) and `k` is the coordinate singular at `λ`, the same elimination also
+    /// gives the unit null vector (written to `shape`; otherwise `shape` is left alone).
+    fn newton_step(
+        &self,
+        lambda: Complex64,
+        k: usize,
+        tol2: f64,
+        shape: &mut Option<[Complex64; N]>,
+    ) -> Option<Complex64> {
         let zero = Complex64::new(0.0, 0.0);
         let (mut u, mut du) = ([[zero; N]; N], [[zero; N]; N]);
         self.q_and_derivative(lambda, k, &mut u, &mut du);
         let mut log_derivative = Complex64::new(0.0, 0.0);
+        let mut inv_pivots = [zero; N];
         for p in 0..N {
             let (pivot, dpivot) = (u[p][p], du[p][p]);
             if pivot.norm_sqr() == 0.0 {
                 return (p == N - 1).then_some(Complex64::new(0.0, 0.0));
             }
             let inv_pivot = recip(pivot);
+            inv_pivots[p] = inv_pivot;
             log_derivative += dpivot * inv_pivot;
             for r in p + 1..N {
                 // Dual elimination: l + ε l' = (u_pr + ε u'_pr) / (u_pp + ε u'_pp); symmetric,
@@ -167,33 +182,28 @@ impl<const N: usize> Problem<N> {
         }
         let step = recip(log_derivative);
         // An infinite log-derivative is a last pivot short of exact zero: a zero step.
-        if log_derivative.is_finite() && step.is_finite() {
-            Some(step)
+        let step = if log_derivative.is_finite() && step.is_finite() {
+            step
         } else if log_derivative.is_nan() {
-            None
+            return None;
         } else {
-            Some(Complex64::new(0.0, 0.0))
+            zero
+        };
+        if step.norm_sqr() <= tol2 && self.last_coordinate(lambda) == k {
+            *shape = Self::back_substitution(&u, &inv_pivots, k);
         }
+        Some(step)
     }
 
-    /// Unit null vector of `Q(λ)` at a converged root (module docs).
-    fn null_vector(&self, lambda: Complex64) -> Option<[Complex64; N]> {
-        let k = self.last_coordinate(lambda);
+    /// The unit null vector of an eliminated `Q` (upper triangle `u`, reciprocal pivots
+    /// `inv_pivots`, coordinate `k` last) whose last pivot vanishes: the last coordinate set
+    /// to 1, the others by back substitution, in the original coordinates.
+    fn back_substitution(
+        u: &[[Complex64; N]; N],
+        inv_pivots: &[Complex64; N],
+        k: usize,
+    ) -> Option<[Complex64; N]> {
         let zero = Complex64::new(0.0, 0.0);
-        let (mut u, mut unused) = ([[zero; N]; N], [[zero; N]; N]);
-        self.q_and_derivative(lambda, k, &mut u, &mut unused);
-        for p in 0..N - 1 {
-            let inv_pivot = recip(u[p][p]);
-            for r in p + 1..N {
-                let l = u[p][r] * inv_pivot;
-                for c in r..N {
-                    let upc = u[p][c];
-                    u[r][c] -= l * upc;
-                }
-            }
-            // The pivot's reciprocal, for the back substitution.
-            u[p][p] = inv_pivot;
-        }
         let mut x = [zero; N];
         x[N - 1] = Complex64::new(1.0, 0.0);
         for r in (0..N - 1).rev() {
@@ -201,7 +211,7 @@ impl<const N: usize> Problem<N> {
             for c in r + 1..N {
                 s -= u[r][c] * x[c];
             }
-            x[r] = s * u[r][r];
+            x[r] = s * inv_pivots[r];
         }
         let norm2: f64 = x.iter().map(|v| v.norm_sqr()).sum();
         if !(norm2.is_finite() && norm2 > 0.0) {
@@ -215,6 +225,27 @@ impl<const N: usize> Problem<N> {
         Some(z)
     }
 
+    /// Unit null vector of `Q(λ)` at a converged root (module docs).
+    fn null_vector(&self, lambda: Complex64) -> Option<[Complex64; N]> {
+        let k = self.last_coordinate(lambda);
+        let zero = Complex64::new(0.0, 0.0);
+        let (mut u, mut unused) = ([[zero; N]; N], [[zero; N]; N]);
+        self.q_and_derivative(lambda, k, &mut u, &mut unused);
+        let mut inv_pivots = [zero; N];
+        for p in 0..N - 1 {
+            let inv_pivot = recip(u[p][p]);
+            inv_pivots[p] = inv_pivot;
+            for r in p + 1..N {
+                let l = u[p][r] * inv_pivot;
+                for c in r..N {
+                    let upc = u[p][c];
+                    u[r][c] -= l * upc;
+                }
+            }
+        }
+        Self::back_substitution(&u, &inv_pivots, k)
+    }
+
     /// The Aberth iteration (see [`damped_modes`]).
     fn solve(&self, start: &[Complex64; MAX_DIM]) -> Option<DampedModes> {
         let mut roots = [Complex64::new(0.0, 0.0); N];
@@ -225,13 +256,21 @@ impl<const N: usize> Problem<N> {
         // A root is left alone once its own update is below CONVERGED_STEP (it is then a
         // fixed point of its Newton step, whatever the others still do).
         let mut done = [false; N];
+        // Each root's mode shape, from the elimination that found it converged (the root then
+        // moves by at most CONVERGED_STEP, relative; the shape's error is that over the
+        // modes' separation) or, where that elimination could not give it, from its own.
+        let mut shapes: [Option<[Complex64; N]>; N] = [None; N];
         for _ in 0..MAX_SWEEPS {
             for k in 0..N {
                 if done[k] {
                     continue;
                 }
                 let rk = roots[k];
-                let newton = self.newton_step(rk, k)?;
+                // Done when the Newton correction itself is small (relative, squared: no
+                // hypot on this path), not a limited step, nor an Aberth step that the
+                // repulsion of the root's own conjugate shrinks near the real axis.
+                let tol2 = CONVERGED_STEP * CONVERGED_STEP * rk.norm_sqr();
+                let newton = self.newton_step(rk, k, tol2, &mut shapes[k])?;
                 // Repulsion of the other roots and of every conjugate (real coefficients):
                 // `1/(λ_k − λ_j) + 1/(λ_k − λ̄_j) = 2 (λ_k − Re λ_j) / ((λ_k − λ_j)(λ_k − λ̄_j))`.
                 let mut repulsion = recip(rk - rk.conj());
@@ -245,15 +284,11 @@ impl<const N: usize> Problem<N> {
                 if !step.is_finite() {
                     return None;
                 }
+                done[k] = newton.norm_sqr() <= tol2 && step.norm_sqr() <= tol2;
                 // Far from the roots (a start the projected damping put far off, where two
                 // close modes have very different damping) the correction can overshoot:
                 // at most MAX_STEP of the root's size, and never across the real axis (half
                 // way to it instead; an overdamped mode then does not converge).
-                // Done when the Newton correction itself is small (relative, squared: no
-                // hypot on this path), not a limited step, nor an Aberth step that the
-                // repulsion of the root's own conjugate shrinks near the real axis.
-                let tol2 = CONVERGED_STEP * CONVERGED_STEP * rk.norm_sqr();
-                done[k] = newton.norm_sqr() <= tol2 && step.norm_sqr() <= tol2;
                 let size = step.norm_sqr() / rk.norm_sqr();
                 if size > MAX_STEP * MAX_STEP {
                     step *= MAX_STEP / size.sqrt();
@@ -276,7 +311,10 @@ impl<const N: usize> Problem<N> {
                 };
                 for (k, &root) in roots.iter().enumerate() {
                     out.roots[k] = root;
-                    let z = self.null_vector(root)?;
+                    let z = match shapes[k] {
+                        Some(z) => z,
+                        None => self.null_vector(root)?,
+                    };
                     for (row, &zr) in out.vectors.iter_mut().zip(&z) {
                         row[k] = zr;
                     }
@@ -378,7 +416,9 @@ mod tests {
     #[test]
     fn close_modes_do_not_collapse_onto_one_root() {
         // Two modes 2 % apart with strongly coupled, very different damping: both roots are
-        // found, distinct, each with its own null vector (residual at rounding level).
+        // found, distinct, each with its own null vector. The vector is that of the root's last
+        // iterate, within its last correction (here 1e-8) of the root: residual 1.2e-8
+        // measured, bound 1e-6 (CONVERGED_STEP).
         let mu = [1.0 / 400.0f64.powi(2), 1.0 / 408.0f64.powi(2)];
         let g = embed(&[
             &[2.0 * 0.05 / 400.0, 0.3 / 400.0],
@@ -395,7 +435,7 @@ mod tests {
                 for (c, &zc) in z.iter().enumerate() {
                     res += l * g[r][c] * zc;
                 }
-                assert!(res.norm() < 1e-12, "root {k}: residual {res}");
+                assert!(res.norm() < 1e-6, "root {k}: residual {res}");
             }
         }
     }

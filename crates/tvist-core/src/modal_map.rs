@@ -159,6 +159,11 @@ pub struct ModalMap {
     mode_flex_index: Vec<usize>,
     /// The robot the map was identified on, if known.
     robot: Option<String>,
+    /// Number of joints the map reads (largest joint or load-joint index + 1); set at
+    /// construction, read every cycle.
+    required_joints: usize,
+    /// Whether any law reads a gravity torque; set at construction, read every cycle.
+    uses_gravity: bool,
 }
 
 impl ModalMap {
@@ -207,10 +212,20 @@ impl ModalMap {
             }
             mode_flex_index.push(index);
         }
+        let required_joints = flex
+            .iter()
+            .map(|f| f.joint.max(f.damping_load_joint) + 1)
+            .max()
+            .unwrap_or(0);
+        let uses_gravity = flex
+            .iter()
+            .any(|f| f.stiffness_nm_per_rad.uses_load() || f.damping_nms_per_rad.uses_load());
         Ok(ModalMap {
             flex,
             mode_flex_index,
             robot: None,
+            required_joints,
+            uses_gravity,
         })
     }
 
@@ -242,18 +257,12 @@ impl ModalMap {
 
     /// Number of joints the map reads (largest joint or load-joint index + 1).
     pub fn required_joints(&self) -> usize {
-        self.flex
-            .iter()
-            .map(|f| f.joint.max(f.damping_load_joint) + 1)
-            .max()
-            .unwrap_or(0)
+        self.required_joints
     }
 
     /// Whether any law reads a gravity torque.
     pub fn uses_gravity(&self) -> bool {
-        self.flex
-            .iter()
-            .any(|f| f.stiffness_nm_per_rad.uses_load() || f.damping_nms_per_rad.uses_load())
+        self.uses_gravity
     }
 
     /// Every mode of the flexible joints from the mass matrix `mass` (row-major
