@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+import tvist
 from modal_fit_reference import LAWS_UR5E, exact_records, law, write_jsonl
 from tvist.demo.identified import DEMO_PLAN
 from tvist.demo.motions import PAYLOAD_COM_M
@@ -191,3 +192,31 @@ def test_held_out_selection_keeps_the_generating_terms_and_names_its_moves(tmp_p
     # A fold count the poses cannot give is refused, naming the option.
     assert main([*argv[:-1], "1"]) == 2
     assert "select_folds: must be in [2, 39]" in capsys.readouterr().err
+
+
+def test_records_of_another_robot_are_refused_naming_the_robot_flag(tmp_path, capsys):
+    from tvist.cli import main
+
+    # Records as a UR10e campaign writes them (joint inertias of its own model, payload
+    # included), fitted as the default ur5e: refused on one line naming --robot, not fitted
+    # with the wrong mass matrices; accepted as ur10e.
+    ur10e = tvist.robots.ur10e(payload_kg=5.0, payload_com_m=(0.0, 0.0, 0.05))
+    rng = np.random.default_rng(2)
+    records = [
+        {
+            "key": f"p{i}",
+            "q": q.tolist(),
+            "payload_kg": 5.0,
+            "payload_com_m": [0.0, 0.0, 0.05],
+            "inertia_kg_m2": ur10e.joint_inertia(q).tolist(),
+            "modes": [],
+            "error": None,
+        }
+        for i, q in enumerate(rng.uniform(-3.0, 3.0, (4, 6)))
+    ]
+    path = write_jsonl(records, tmp_path / "ur10e.jsonl")
+    assert main(["fit-map", str(path), "--kind", "modal", "--out", str(tmp_path / "m.json")]) == 2
+    err = capsys.readouterr().err
+    assert "differ from the ur5e model's" in err and "--robot" in err
+    assert len(err.strip().splitlines()) == 1
+    assert modal_poses(load_results(path), "ur10e").n_poses == 4

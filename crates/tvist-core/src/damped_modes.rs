@@ -374,14 +374,7 @@ pub fn damped_modes(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn embed(rows: &[&[f64]]) -> [[f64; MAX_DIM]; MAX_DIM] {
-        let mut a = [[0.0; MAX_DIM]; MAX_DIM];
-        for (i, r) in rows.iter().enumerate() {
-            a[i][..r.len()].copy_from_slice(r);
-        }
-        a
-    }
+    use crate::sym_eigen::embed;
 
     fn diagonal(values: &[f64]) -> [[f64; MAX_DIM]; MAX_DIM] {
         let mut a = [[0.0; MAX_DIM]; MAX_DIM];

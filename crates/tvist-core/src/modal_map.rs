@@ -315,12 +315,7 @@ impl ModalMap {
                 return None;
             }
             let wn = 1.0 / mu[i].sqrt();
-            let mut modal_c = 0.0;
-            for f in 0..nf {
-                let share = v[f][i] * v[f][i];
-                out.strain_share[i][f] = share;
-                modal_c += c_over_k[f] * share;
-            }
+            let modal_c: f64 = (0..nf).map(|f| c_over_k[f] * v[f][i] * v[f][i]).sum();
             out.wn_rad_s[i] = wn;
             out.zeta[i] = 0.5 * wn * modal_c;
             let zeta = out.zeta[i].min(0.9);
@@ -346,6 +341,13 @@ impl ModalMap {
                 for f in 0..nf {
                     let y: Complex64 = (0..nf).map(|j| v[f][j] * damped.vectors[j][i]).sum();
                     out.strain_share[i][f] = y.norm_sqr();
+                }
+            }
+        } else {
+            // The fallback: the undamped modes' shares `v_fi²`.
+            for i in 0..nf {
+                for f in 0..nf {
+                    out.strain_share[i][f] = v[f][i] * v[f][i];
                 }
             }
         }

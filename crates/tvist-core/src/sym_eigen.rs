@@ -148,17 +148,19 @@ fn jacobi<const N: usize>(
     Some((rotated, vectors))
 }
 
+/// The leading block `rows` in a [`Matrix`] (unit tests of the modules built on it).
+#[cfg(test)]
+pub(crate) fn embed(rows: &[&[f64]]) -> Matrix {
+    let mut a = [[0.0; MAX_DIM]; MAX_DIM];
+    for (i, r) in rows.iter().enumerate() {
+        a[i][..r.len()].copy_from_slice(r);
+    }
+    a
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn embed(rows: &[&[f64]]) -> [[f64; MAX_DIM]; MAX_DIM] {
-        let mut a = [[0.0; MAX_DIM]; MAX_DIM];
-        for (i, r) in rows.iter().enumerate() {
-            a[i][..r.len()].copy_from_slice(r);
-        }
-        a
-    }
 
     #[test]
     fn two_by_two_matches_the_closed_form() {

@@ -161,7 +161,8 @@ def modal_poses(
     Raises
     ------
     ValueError
-        No record with a configuration ``q``.
+        No record with a configuration ``q``, or a record whose stored joint inertias are not
+        this robot model's (a campaign run with another robot or payload).
     """
     robot_params = params(robot_name)
     robots: dict[tuple, Robot] = {}
@@ -178,6 +179,7 @@ def modal_poses(
         if key not in robots:
             robots[key] = Robot(robot_params, Payload(key[0], key[1]))
         model = robots[key]
+        _check_stored_inertia(r, i, model.joint_inertia(q), robot_name)
         mass.append(model.mass_matrix(q))
         tau.append(model.gravity_torque(q))
         inertia.append(model.joint_inertia(q))
@@ -221,6 +223,34 @@ def modal_poses(
         np.array(wn_se),
         np.array(zeta_se),
     )
+
+
+#: Relative difference beyond which a record's stored joint inertias are not the robot
+#: model's (the campaign writes the same model's values, equal to rounding).
+INERTIA_MISMATCH = 1e-6
+
+
+def _check_stored_inertia(
+    record: Mapping[str, Any], index: int, model_inertia: np.ndarray, robot_name: str
+) -> None:
+    """Refuse a record whose stored joint inertias (``inertia_kg_m2``, written by the campaign
+    from its robot model) are not ``robot_name``'s at its pose: the campaign ran with another
+    robot or payload, and the fit would silently use the wrong mass matrices."""
+    stored = record.get("inertia_kg_m2")
+    if stored is None:
+        return
+    stored = np.asarray(stored, dtype=float)
+    if stored.shape != model_inertia.shape:
+        return
+    rel = np.abs(stored - model_inertia) / np.maximum(np.abs(model_inertia), 1e-9)
+    worst = float(np.max(rel)) if rel.size else 0.0
+    if not worst <= INERTIA_MISMATCH:
+        key = record.get("key", index)
+        raise ValueError(
+            f"records[{index}] ({key}): its joint inertias differ from the {robot_name} "
+            f"model's by {100 * worst:.3g} %: the campaign ran with another robot or payload; "
+            "pass the campaign's robot (--robot)"
+        )
 
 
 def _positive_or_nan(value: Any) -> float:
