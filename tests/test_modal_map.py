@@ -237,9 +237,8 @@ def _twin_records(robot_name: str, payloads, every: int, seed: int, noise: float
                 }
             )
     for r in records:  # the published form reads the model's inertias
-        model = tvist.robots.Robot(
-            tvist.robots.params(robot_name), tvist.robots.Payload(r["payload_kg"])
-        )
+        payload = tvist.robots.Payload(r["payload_kg"], tuple(r["payload_com_m"]))
+        model = tvist.robots.Robot(tvist.robots.params(robot_name), payload)
         r["inertia_kg_m2"] = model.joint_inertia(np.array(r["q"])).tolist()
         r["gravity_torque_nm"] = model.gravity_torque(np.array(r["q"])).tolist()
     return records
