@@ -10,6 +10,7 @@ import functools
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import tvist
 from modal_fit_reference import LAWS_UR5E, exact_records, law, write_jsonl
@@ -154,11 +155,35 @@ def test_the_fit_recovers_an_exact_damped_modal_map_where_modes_come_close(tmp_p
     # Measured with the core, seeds 1-3 and 7: base and shoulder stiffness within 0.35 %, the
     # elbow's within 2.7 %, the shoulder's stiffness law within 0.15 % RMS over the poses, the
     # damping laws within 5.3 % (base: its zero-load term absorbs the elbow's damper, which
-    # the fit drops as insignificant) and 0.96 % RMS (shoulder). The data's modes are the
+    # the default fit leaves out) and 0.96 % RMS (shoulder). The data's modes are the
     # dominant ones, the core's a share⁴ blend; where two modes share a joint (pose
     # m5kg-V2-R0, 52/46 %) they differ by about 10 %, which the robust loss leaves out.
     for (joint, what, index, tol), err in zip(EXACT_CORE_TOLERANCES, errors, strict=True):
         assert err < tol, (joint, what, index, err)
+
+
+def test_only_the_joints_of_the_identified_modes_get_a_damper_unless_asked(tmp_path):
+    # The data's elbow has a damper (40 N m s/rad); the default fit gives it none, and a set of
+    # damped joints without base and shoulder, or with a rigid joint, is refused by name.
+    records = load_results(_records_file(str(tmp_path), 1.0, 7))
+    poses = modal_poses(records, "ur5e")
+    modal = fit_modal_map(poses, "ur5e", flex_joints=FLEX)
+    damping = {e["joint"]: e["damping_nms_per_rad"] for e in modal.flex_joints}
+    assert damping[2] == [0.0, 0.0, 0.0]
+    assert damping[0][0] > 0 and damping[1][0] > 0
+    def damper_terms(fitted: ModalMap) -> set[int]:
+        """Joints whose damping terms the fit considered (kept or dropped)."""
+        stats = fitted.metadata["fit_statistics"]
+        kept = {t["joint"] for t in stats["damping_nms_per_rad"]}
+        dropped = {int(k.split()[-1]) for k in stats["dropped"] if k.startswith("damping")}
+        return kept | dropped
+
+    assert damper_terms(modal) == {0, 1}
+    asked = fit_modal_map(poses, "ur5e", flex_joints=FLEX, damped_joints=FLEX)
+    assert damper_terms(asked) == {0, 1, 2}
+    for bad in ((0,), (0, 1, 4)):
+        with pytest.raises(ValueError, match="damped_joints"):
+            fit_modal_map(poses, "ur5e", flex_joints=FLEX, damped_joints=bad)
 
 
 def test_held_out_selection_keeps_the_generating_terms_and_names_its_moves(tmp_path, capsys):
