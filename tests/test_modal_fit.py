@@ -171,6 +171,7 @@ def test_only_the_joints_of_the_identified_modes_get_a_damper_unless_asked(tmp_p
     damping = {e["joint"]: e["damping_nms_per_rad"] for e in modal.flex_joints}
     assert damping[2] == [0.0, 0.0, 0.0]
     assert damping[0][0] > 0 and damping[1][0] > 0
+
     def damper_terms(fitted: ModalMap) -> set[int]:
         """Joints whose damping terms the fit considered (kept or dropped)."""
         stats = fitted.metadata["fit_statistics"]
