@@ -176,7 +176,7 @@ def test_unsupported_command_fails_loudly(server) -> None:
 
 _STREAM_AND_DIE = """
 import sys, time, rtde_control
-c = rtde_control.RTDEControlInterface("127.0.0.1")
+c = rtde_control.RTDEControlInterface(sys.argv[7])
 q = [float(v) for v in sys.argv[1:7]]
 for k in range(250):  # 0.5 s of servoJ moving joint 5, then killed mid-stream
     t = c.initPeriod()
@@ -194,7 +194,7 @@ while True:
 def test_client_disconnect_mid_stream_holds(server) -> None:
     """The servo client dies: the arm settles at the last servoJ target and holds it."""
     proc = subprocess.Popen(
-        [sys.executable, "-c", _STREAM_AND_DIE, *(str(v) for v in Q1)],
+        [sys.executable, "-c", _STREAM_AND_DIE, *(str(v) for v in Q1), HOST],
         stdout=subprocess.PIPE,
         text=True,
     )

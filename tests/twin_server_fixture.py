@@ -1,8 +1,14 @@
-"""Start ``tvist twin-server`` as a subprocess on UR's fixed localhost ports, for tests."""
+"""Start ``tvist twin-server`` as a subprocess on UR's fixed ports, for tests.
+
+The server listens on a loopback address of its own test session (``127.x.y.z`` from the
+process id; Linux routes the whole of ``127.0.0.0/8`` to this machine), so that test runs in
+parallel on one machine, or a twin server someone left running on ``127.0.0.1``, do not take
+each other's ports."""
 
 from __future__ import annotations
 
 import contextlib
+import os
 import select
 import socket
 import subprocess
@@ -14,7 +20,9 @@ from collections.abc import Iterator
 import pytest
 
 UR_PORTS = (30004, 29999, 30001, 30002, 30003)
-HOST = "127.0.0.1"
+_PID = os.getpid()
+#: This session's loopback address (never 127.0.0.1; the last byte never 0 or 255).
+HOST = f"127.{1 + (_PID >> 16) % 254}.{(_PID >> 8) & 255}.{1 + (_PID & 255) % 254}"
 #: The twin the tests' server runs: the demo's 5 kg payload, 5 cm beyond the flange.
 PAYLOAD_KG = 5.0
 PAYLOAD_COM_M = (0.0, 0.0, 0.05)
@@ -32,7 +40,7 @@ def check_ports_free() -> None:
             except OSError as exc:
                 pytest.fail(
                     f"port {port} on {HOST} is taken ({exc.strerror}): the twin server tests "
-                    "need UR's ports 30001-30004 and 29999; stop the process listening there"
+                    "need UR's ports 30001-30004 and 29999 there"
                 )
 
 
@@ -40,7 +48,8 @@ def check_ports_free() -> None:
 def twin_server(*extra: str) -> Iterator[subprocess.Popen]:
     """A running twin server (5 kg payload); stopped (and checked alive) afterwards."""
     check_ports_free()
-    args = [sys.executable, "-m", "tvist.urserver", "--payload-kg", str(PAYLOAD_KG)]
+    args = [sys.executable, "-m", "tvist.urserver", "--host", HOST]
+    args += ["--payload-kg", str(PAYLOAD_KG)]
     args += ["--payload-com", *(str(v) for v in PAYLOAD_COM_M), *extra]
     proc = subprocess.Popen(
         args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1
