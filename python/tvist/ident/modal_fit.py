@@ -793,7 +793,32 @@ def fit_modal_map(
     se_all = np.concatenate([se, se_d])
     refinement: dict[str, Any] | None = None
     if refine:
-        joint = _refine_jointly(poses, flex_joints, stiff_terms, damp_terms, load, x, xd, start)
+        while True:
+            joint = _refine_jointly(poses, flex_joints, stiff_terms, damp_terms, load, x, xd, start)
+            # The significance test again, on the joint fit: a load term the two stages kept
+            # may have lost its significance (it is dropped, and the refinement repeated).
+            n_s = len(stiff_terms)
+            weak = [
+                (abs(joint.x[i]) / joint.se[i] if joint.se[i] > 0 else math.inf, i)
+                for i, t in enumerate([*stiff_terms, *damp_terms])
+                if t.name not in ("k_0", "c_0") or (t.name == "c_0" and t.joint not in MODE_JOINTS)
+            ]
+            weak = [w for w in weak if w[0] < (stiff_drop_t if w[1] < n_s else drop_t)]
+            if not weak:
+                break
+            _, i = min(weak)
+            terms = stiff_terms if i < n_s else damp_terms
+            t = terms.pop(i if i < n_s else i - n_s)
+            what = "stiffness" if i < n_s else "damping"
+            dropped[f"{what} {t.name} of joint {t.joint}"] = {
+                "value": float(joint.x[i]),
+                "se": _json_number(joint.se[i]),
+                "stage": "joint refinement",
+            }
+            if i < n_s:
+                x, xd = np.delete(joint.x[:n_s], i), joint.x[n_s:]
+            else:
+                x, xd = joint.x[:n_s], np.delete(joint.x[n_s:], i - n_s)
         stiffness, damping, se_all = joint.stiffness, joint.damping, joint.se
         refinement = {
             "weighting": joint.weighting,
