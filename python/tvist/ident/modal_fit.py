@@ -74,7 +74,7 @@ MODE_JOINTS = (0, 1)
 #: model's error and, through the damped eigenproblem (where ω depends on the damping), pull
 #: the stiffnesses with them. Measured on the UR5e twin's 208-pose campaign (the twin damps
 #: every joint): base frequency error against the true modes 0.17 % RMS, 1.6 % max in sample
-#: (0.15 / 0.74 % held out), against 0.52 / 6.5 % (0.31 / 2.8 %) with a damper at every
+#: (0.15 / 0.7 % held out), against 0.52 / 6.5 % (0.31 / 2.8 %) with a damper at every
 #: flexible joint, which put wrist 1 at 11 100 N m/rad (twin: 15 000).
 DEFAULT_DAMPED_JOINTS = MODE_JOINTS
 #: The base carries no gravity torque; its bearing and gear friction grow with the arm's
