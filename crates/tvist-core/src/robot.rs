@@ -617,8 +617,8 @@ impl Robot {
     /// entries, `joints <= n`. Entries from `joints` on are left untouched.
     ///
     /// A non-finite angle in `q` (any joint, read or not) gives NaN for every entry
-    /// evaluated: `guard`, the sum of `q_k − q_k` (0 for finite angles, NaN otherwise), is
-    /// added to each, which leaves a finite result as it is, bit for bit.
+    /// evaluated: `guard`, the sum of `0 · q_k` from +0 (+0 for finite angles, NaN otherwise), is
+    /// added to each, which leaves a nonzero finite result as it is, bit for bit.
     #[inline]
     fn inertia_pass<const GRAVITY: bool>(
         &mut self,
@@ -630,7 +630,7 @@ impl Robot {
         if joints == 0 {
             return;
         }
-        let guard = q.iter().fold(0.0, |g, &v| g + (v - v));
+        let guard = q.iter().fold(0.0, |g, &v| g + v * 0.0);
         let n = self.joints.len();
         // As in `joint_space_pass`: the joints beyond `start` are folded into setup's
         // constant composite unless one of them is read.
