@@ -274,11 +274,9 @@ impl ShaperKind {
     /// period `π/√(1−ζ²)` (rad of `ω_n t`). Other kinds give the identity.
     #[inline]
     fn closed_form(&self, zeta: f64) -> DampedShape {
-        // ω_n · T_d / 2 = π/√(1−ζ²) as π √d / d: the square root and the division do not
-        // wait for each other.
-        let d = 1.0 - zeta * zeta;
-        let half = (PI / d) * d.sqrt();
-        let k = crate::exp_fast::exp(-zeta * half);
+        let df = (1.0 - zeta * zeta).sqrt();
+        let half = PI / df; // ω_n · T_d / 2
+        let k = (-zeta * half).exp();
         match *self {
             ShaperKind::Zv => DampedShape::normalized(&[1.0, k], &[0.0, half]),
             ShaperKind::Zvd => {
@@ -290,7 +288,7 @@ impl ShaperKind {
             ),
             ShaperKind::Mzv => {
                 // K^{3/4} = exp(−0.75 ζπ/√(1−ζ²)).
-                let km = crate::exp_fast::exp(-0.75 * zeta * half);
+                let km = (-0.75 * zeta * half).exp();
                 let a1 = 1.0 - core::f64::consts::FRAC_1_SQRT_2;
                 let a2 = (core::f64::consts::SQRT_2 - 1.0) * km;
                 let a3 = a1 * km * km;
