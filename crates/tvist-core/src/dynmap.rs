@@ -328,7 +328,7 @@ impl ModeMap {
     /// the gravity term uses [`smooth_abs_torque_nm`]. Returns an invalid mode (NaN) when an
     /// inertia read is not finite and positive, or the (saturated) inertias give no positive
     /// stiffness or gain term. Allocation-free.
-    #[inline(always)]
+    #[inline]
     pub fn evaluate(&self, j: &[f64], tau_g: &[f64]) -> Mode {
         let invalid = Mode::new(f64::NAN, f64::NAN);
         let (Some(&j_f_raw), Some(&j_d_raw)) =

@@ -610,92 +610,6 @@ impl Robot {
         true
     }
 
-    /// The joint inertias `M[k, k]` of joints `k < joints` into `inertia[k]` and, with
-    /// `GRAVITY`, their gravity torques into `tau_g[k]`: the composite pass of
-    /// [`Self::joint_space_pass`] with nothing else formed (what a dynamic map reads every
-    /// cycle). Caller checks lengths: `q`, `inertia` and `tau_g` (if `GRAVITY`) have `n`
-    /// entries, `joints <= n`. Entries from `joints` on are left untouched.
-    ///
-    /// A non-finite angle in `q` (any joint, read or not) gives NaN for every entry
-    /// evaluated: `guard`, the sum of `0 · q_k` from +0 (+0 for finite angles, NaN otherwise), is
-    /// added to each, which leaves a nonzero finite result as it is, bit for bit.
-    #[inline]
-    fn inertia_pass<const GRAVITY: bool>(
-        &mut self,
-        q: &[f64],
-        joints: usize,
-        inertia: &mut [f64],
-        tau_g: &mut [f64],
-    ) {
-        if joints == 0 {
-            return;
-        }
-        let guard = q.iter().fold(0.0, |g, &v| g + v * 0.0);
-        let n = self.joints.len();
-        // As in `joint_space_pass`: the joints beyond `start` are folded into setup's
-        // constant composite unless one of them is read.
-        let (start, mut composite) = if joints <= self.fixed_from {
-            (self.fixed_from, self.fixed_composite)
-        } else {
-            (n, Moments::ZERO)
-        };
-        let ws = &mut self.ws;
-        crate::trig::sin_cos_each(&q[1..start], &mut ws.sin_cos[1..start]);
-        if GRAVITY {
-            let mut u = [0.0, 0.0, 1.0];
-            for k in 1..joints {
-                if k > 1 {
-                    let (s, c) = ws.sin_cos[k - 1];
-                    (u[0], u[1]) = rotate_pair(u[0], u[1], c, -s);
-                }
-                let dh = &self.dh[k - 1];
-                (u[1], u[2]) = rotate_pair(u[1], u[2], dh.cos_alpha, -dh.sin_alpha);
-                ws.up[k] = u;
-            }
-        }
-        let mut end = start;
-        if joints < start && start == self.fixed_from {
-            composite = self.fixed_before_turn;
-            composite.turn_z(ws.sin_cos[start - 1]);
-            end = start - 1;
-        }
-        let beyond = self.moments[joints..end]
-            .iter()
-            .zip(&self.dh[joints..end])
-            .zip(&ws.sin_cos[joints..end]);
-        for ((body, dh), &sc) in beyond.rev() {
-            composite.add(body);
-            composite.move_to_parent(dh);
-            composite.turn_z(sc);
-        }
-        let read = self.moments[1..joints]
-            .iter()
-            .zip(&self.dh[1..joints])
-            .zip(&ws.sin_cos[1..joints])
-            .zip(&mut inertia[1..joints]);
-        for (k, (((body, dh), &sc), out)) in read.enumerate().rev() {
-            composite.add(body);
-            composite.move_to_parent(dh);
-            let e = &composite.second_kg_m2;
-            *out = (e[0] + e[1]) + guard;
-            composite.turn_z(sc);
-            if GRAVITY {
-                let (h, u) = (&composite.first_kg_m, &ws.up[k + 1]);
-                if let Some(t) = tau_g.get_mut(k + 1) {
-                    *t = GRAVITY_M_S2 * (u[1] * h[0] - u[0] * h[1]) + guard;
-                }
-            }
-        }
-        // Joint 0's inertia alone (it turns about the gravity axis: torque 0).
-        composite.add(&self.moments[0]);
-        inertia[0] = composite.z_inertia_in_parent(&self.dh[0]) + guard;
-        if GRAVITY {
-            if let Some(t) = tau_g.first_mut() {
-                *t = guard;
-            }
-        }
-    }
-
     /// The joint-space pass: for joints `k < joints`, the inertia `M[k, k]` into `inertia[k]`
     /// (or, with `mass`, the leading `joints × joints` block of the row-major `n × n` mass
     /// matrix) and the gravity torque into `tau_g[k]`. Caller checks lengths: `q`, `inertia`
@@ -915,10 +829,7 @@ impl Robot {
         if inertia.len() != n || q.len() != n || joints > n || !tau_ok {
             return Status::BAD_LENGTH;
         }
-        match tau_g {
-            Some(tau) => self.inertia_pass::<true>(q, joints, inertia, tau),
-            None => self.inertia_pass::<false>(q, joints, inertia, &mut []),
-        }
+        self.joint_space_pass(q, joints, Some(inertia), None, tau_g);
         Status::OK
     }
 
