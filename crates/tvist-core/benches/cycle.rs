@@ -206,6 +206,8 @@ fn signal(n: usize) -> Vec<f64> {
 type Run = Box<dyn FnMut() -> f64>;
 
 struct Case {
+    /// Row number in the full table.
+    number: usize,
     name: &'static str,
     /// Index of the case this one is compared with (same round), and the target ratio.
     reference: Option<(usize, Option<f64>)>,
@@ -295,6 +297,7 @@ fn main() {
     let mut cases: Vec<Case> = Vec::new();
     let mut add = |name, reference, run| {
         cases.push(Case {
+            number: cases.len() + 1,
             name,
             reference,
             run,
@@ -403,6 +406,38 @@ fn main() {
         return;
     }
 
+    // `TVIST_BENCH_CASES=6,10,11` times only these cases and the ones they are compared with.
+    if let Ok(list) = std::env::var("TVIST_BENCH_CASES") {
+        let mut keep = vec![false; cases.len()];
+        for k in list.split(',') {
+            let k: usize = k
+                .trim()
+                .parse()
+                .expect("TVIST_BENCH_CASES lists case numbers");
+            keep[k - 1] = true;
+            if let Some((r, _)) = cases[k - 1].reference {
+                keep[r] = true;
+            }
+        }
+        let mut index = 0;
+        let mut renumber = vec![0; cases.len()];
+        for (i, &kept) in keep.iter().enumerate() {
+            renumber[i] = index;
+            index += usize::from(kept);
+        }
+        let mut i = 0;
+        cases.retain(|_| {
+            i += 1;
+            keep[i - 1]
+        });
+        for case in &mut cases {
+            case.reference = case
+                .reference
+                .filter(|&(r, _)| keep[r])
+                .map(|(r, target)| (renumber[r], target));
+        }
+    }
+
     // Warm-up round, then interleaved measured rounds in a rotated order.
     for case in &mut cases {
         black_box((case.run)());
@@ -439,7 +474,7 @@ fn print_table(cases: &[Case]) {
     );
     println!("| # | case | min ns | median ns | ratio to | ratio | target |");
     println!("|---|---|---|---|---|---|---|");
-    for (i, c) in cases.iter().enumerate() {
+    for c in cases {
         let (reference, ratio, target) = match c.reference {
             Some((r, target)) => {
                 let ratio = median(&c.ratios);
@@ -448,7 +483,7 @@ fn print_table(cases: &[Case]) {
                     format!("≤ {t} ({met})")
                 };
                 (
-                    format!("#{}", r + 1),
+                    format!("#{}", cases[r].number),
                     format!("{ratio:.2}"),
                     target.map(verdict).unwrap_or_default(),
                 )
@@ -457,7 +492,7 @@ fn print_table(cases: &[Case]) {
         };
         println!(
             "| {} | {} | {:.1} | {:.1} | {reference} | {ratio} | {target} |",
-            i + 1,
+            c.number,
             c.name,
             min(&c.ns),
             median(&c.ns),

@@ -147,10 +147,14 @@ impl Sequence {
         let (delays, weights) = (&delays[..len], &weights[..len]);
         let undelayed = delays.iter().take_while(|&&t| t == 0.0).count();
         let (now_weights, delayed_weights) = weights.split_at(undelayed);
+        // Every slot, zero past the undelayed ones: a fixed count, unrolled (a copy of a
+        // length known only now would be a library call).
         self.now = 0.0;
-        for (slot, &w) in self.undelayed_weights.iter_mut().zip(now_weights) {
-            *slot = w;
-            self.now += w;
+        for (i, slot) in self.undelayed_weights.iter_mut().enumerate() {
+            *slot = now_weights.get(i).copied().unwrap_or(0.0);
+            if i < undelayed {
+                self.now += *slot;
+            }
         }
         self.undelayed = undelayed;
         for ((st, sw), (&t, &w)) in self
@@ -643,6 +647,31 @@ mod tests {
     fn used(reads: &Reads) -> (f64, Vec<Pair>, usize, Vec<f64>) {
         let whole = reads.whole.get(..reads.whole_len).unwrap_or(&[]).to_vec();
         (reads.now, reads.pairs().to_vec(), reads.whole_len, whole)
+    }
+
+    #[test]
+    fn a_sequence_sums_its_undelayed_weights_in_order_and_keeps_the_delayed_ones() {
+        // Three impulses at delay 0 (their weights summed left to right: 0.1 + 0.2 + 0.3 is
+        // not 0.3 + 0.2 + 0.1 in floating point), then two delayed; then the same sequence
+        // assigned over with one undelayed impulse, which must not keep the others.
+        let mut set = Sequence::new(
+            &[0.0, 0.0, 0.0, 3.0, 5.0],
+            &[0.1, 0.2, 0.3, 0.15, 0.25],
+            2.0,
+        );
+        assert_eq!(set.now.to_bits(), ((0.1 + 0.2) + 0.3f64).to_bits());
+        assert_ne!(set.now.to_bits(), ((0.3 + 0.2) + 0.1f64).to_bits());
+        assert_eq!(set.undelayed, 3);
+        assert_eq!(&set.undelayed_weights[..3], &[0.1, 0.2, 0.3]);
+        let delayed: Vec<(f64, f64)> = set.delayed().map(|(&t, &w)| (t, w)).collect();
+        assert_eq!(delayed, vec![(6.0, 0.15), (10.0, 0.25)]);
+        set.assign(&[0.0, 4.0], &[0.7, 0.3], 0.5);
+        assert_eq!((set.now, set.undelayed), (0.7, 1));
+        let all: Vec<(f64, f64)> = set.all().map(|(&t, &w)| (t, w)).collect();
+        assert_eq!(all, vec![(0.0, 0.7), (2.0, 0.3)]);
+        // No undelayed impulse at all: nothing is applied to the input.
+        set.assign(&[1.0], &[1.0], 1.0);
+        assert_eq!((set.now, set.undelayed, set.n_delayed()), (0.0, 0, 1));
     }
 
     #[test]

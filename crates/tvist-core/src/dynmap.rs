@@ -352,8 +352,12 @@ impl ModeMap {
             0.0
         };
         let stiffness = c.k_0 + c.k_j * j_f + gravity;
+        // ω_n² = (1 + k_p/J_f) K/J_f = P/J_f² with P = (J_f + k_p) K, so ω_n = √P / J_f and
+        // 2 √(K J_f) = 2 ω_n J_f / √g_f: ζ = g_d^e_d g_f^(e_f + ½) num / (2 √P). The square
+        // root and the divisions by J_f and P are independent of each other (they overlap).
         let inv_j_f = 1.0 / j_f;
-        let gain_f = 1.0 + c.k_p * inv_j_f;
+        let p_f = j_f + c.k_p;
+        let gain_f = p_f * inv_j_f;
         // One joint in both roles (the general map): one division.
         let gain_d = if j_d == j_f {
             gain_f
@@ -364,7 +368,10 @@ impl ModeMap {
         if !(j_f > 0.0 && j_d > 0.0 && stiffness > 0.0 && gain_f > 0.0 && gain_d > 0.0) {
             return invalid;
         }
-        let wn_rad_s = (gain_f * stiffness * inv_j_f).sqrt();
+        let p = p_f * stiffness;
+        let root_p = p.sqrt();
+        let inv_p = 1.0 / p;
+        let wn_rad_s = root_p * inv_j_f;
         // The square root only where it is read (c_1 = 0 in the reduced and published maps).
         let root_term = if c.c_1 != 0.0 {
             c.c_1 * j_d.sqrt()
@@ -372,10 +379,8 @@ impl ModeMap {
             0.0
         };
         let numerator = (c.c_0 + root_term + c.c_2 * j_d) * (1.0 + c.c_tau * j_d);
-        // 2 √(K J_f) = 2 ω_n J_f / √g_f, so ζ = g_d^e_d g_f^(e_f + ½) num / (2 ω_n J_f): the
-        // frequency's square root serves both, one division.
         let gains = self.gain_product(gain_d, gain_f, j_d == j_f);
-        let zeta = 0.5 * numerator * gains / (wn_rad_s * j_f);
+        let zeta = (0.5 * numerator * gains * inv_p) * root_p;
         Mode::new(wn_rad_s, zeta)
     }
 

@@ -73,8 +73,14 @@ fn sin_cos_reduced(x: f64) -> (f64, f64) {
     let j = shifted - ROUND;
     let r = (x - j * PIO2_HI) - j * PIO2_LO;
     let z = r * r;
-    let sin_r = r + z * r * (S1 + z * (S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)))));
-    let tail = z * z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6)))));
+    // The polynomials in Estrin's form (pairs of coefficients first, then z², z⁴): a third
+    // of Horner's chain of dependent operations, so the angle's result is ready sooner.
+    let z2 = z * z;
+    let z4 = z2 * z2;
+    let sin_p = (S1 + z * S2) + z2 * (S3 + z * S4) + z4 * (S5 + z * S6);
+    let cos_p = (C1 + z * C2) + z2 * (C3 + z * C4) + z4 * (C5 + z * C6);
+    let sin_r = r + z * r * sin_p;
+    let tail = z2 * cos_p;
     let half_z = 0.5 * z;
     let w = 1.0 - half_z;
     let cos_r = w + (((1.0 - w) - half_z) + tail);
