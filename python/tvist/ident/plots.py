@@ -15,7 +15,13 @@ from typing import Any
 import numpy as np
 
 import tvist
-from tvist.ident.robustness import PRV_LIMIT, pose_modes, prv_band, two_mode_shaper
+from tvist.ident.robustness import (
+    PRV_LIMIT,
+    pose_modes,
+    prv_band,
+    two_mode_shaper,
+    usable_mode,
+)
 
 __all__ = [
     "plot_damping_robustness",
@@ -251,9 +257,8 @@ def _plot_modal_robustness(
     jx, ident, centre, lo, hi = [], [], [], [], []
     scale = 1 / (2 * math.pi) if quantity == "frequency" else 1.0
     for record in results:
-        by_joint = {m.get("joint"): m for m in record.get("modes", [])}
-        m = by_joint.get(joint)
-        if m is None or "error" in m or m.get("low_confidence", False):
+        m = usable_mode(record, joint)
+        if m is None:
             continue
         modes = pose_modes(modal, record, robot)
         if modes is None or not all(math.isfinite(w) and 0.0 <= z < 1.0 for w, z in modes):
@@ -304,9 +309,8 @@ def plot_map_fit(
     for col, joint in enumerate(joints):
         ident, pred = [], []
         for record in results:
-            by_joint = {m.get("joint"): m for m in record.get("modes", [])}
-            m = by_joint.get(joint)
-            if m is None or "error" in m or m.get("low_confidence", False):
+            m = usable_mode(record, joint)
+            if m is None:
                 continue
             modes = pose_modes(dynmap, record, robot)
             if modes is None:

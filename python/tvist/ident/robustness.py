@@ -30,6 +30,7 @@ __all__ = [
     "prv_band",
     "summarize",
     "two_mode_shaper",
+    "usable_mode",
 ]
 
 #: The paper's requirement: at most 10 % residual vibration.
@@ -135,12 +136,21 @@ class PoseRobustness:
         )
 
 
-def _identified_modes(record: Mapping[str, Any], joints: Sequence[int]) -> list | None:
+def usable_mode(record: Mapping[str, Any], joint: int) -> Mapping[str, Any] | None:
+    """The campaign record's identified mode of ``joint`` (the last one named so), or ``None``
+    where it is missing, failed (``"error"``) or flagged low-confidence."""
     by_joint = {m.get("joint"): m for m in record.get("modes", [])}
+    m = by_joint.get(joint)
+    if m is None or "error" in m or m.get("low_confidence", False):
+        return None
+    return m
+
+
+def _identified_modes(record: Mapping[str, Any], joints: Sequence[int]) -> list | None:
     out = []
     for j in joints:
-        m = by_joint.get(j)
-        if m is None or "error" in m or m.get("low_confidence", False):
+        m = usable_mode(record, j)
+        if m is None:
             return None
         out.append((float(m["wn_rad_s"]), float(m["zeta"])))
     return out
