@@ -20,6 +20,9 @@ use tvist_core::{
 #[path = "../tests/robot_support/mod.rs"]
 mod robot_support;
 
+#[path = "support/hand_ur5e.rs"]
+mod hand_ur5e;
+
 /// Rounds per case (min and median are taken over these).
 const ROUNDS: usize = 41;
 /// Cycles per case and round (20 s at 500 Hz).
@@ -290,6 +293,33 @@ fn ur5e_map() -> MapDynamics {
     .expect("valid map")
 }
 
+/// Bench row #10 written out by hand for its one case ([`hand_ur5e`]).
+fn hand_ur5e() -> hand_ur5e::HandUr5eZv {
+    let map = DynamicMap::paper_ur5e();
+    let [base, shoulder] = [0, 1].map(|m| map.mode_maps()[m].coefficients);
+    hand_ur5e::HandUr5eZv::new(&robot_support::ur_robot("ur5e", 5.0), base, shoulder, DT_S)
+}
+
+/// Largest difference between row #10 (`TvShaper` with [`MapDynamics`]) and its hand-written
+/// form over the whole signal.
+fn hand_agreement() -> f64 {
+    let x: Vec<[f64; 6]> = rows(&signal(6));
+    let mut hand = hand_ur5e();
+    hand.fill(&x[0]);
+    let cfg = TvShaperConfig::new(DT_S, 6, ShaperKind::Zv);
+    let mut shaper = TvShaper::new(ur5e_map(), &cfg).expect("valid");
+    let mut b = [0.0; 6];
+    let mut worst = 0.0f64;
+    for row in &x {
+        let a = hand.step(row);
+        let _ = shaper.step(row, &mut b);
+        for (p, q) in a.iter().zip(&b) {
+            worst = worst.max((p - q).abs());
+        }
+    }
+    worst
+}
+
 fn main() {
     let q1 = q1_modes();
     let ei = ShaperKind::from_name("ei", None).expect("registry name");
@@ -384,6 +414,23 @@ fn main() {
         with(Drifting { k: 0 }, ei, linear),
     );
 
+    add(
+        "6 DOF, 2 modes ZV: #10 written out by hand for the UR5e (the floor)",
+        Some((constant6, None)),
+        {
+            let x: Vec<[f64; 6]> = rows(&signal(6));
+            let mut hand = hand_ur5e();
+            hand.fill(&x[0]);
+            Box::new(move || {
+                let mut sum = 0.0;
+                for row in &x {
+                    sum += hand.step(black_box(row))[0];
+                }
+                sum
+            })
+        },
+    );
+
     // Same impulses, the same two-point reads in another order: rounding only.
     for d in [
         reference_agreement::<1>(ShaperKind::Zv, &[ONE_MODE]),
@@ -392,6 +439,10 @@ fn main() {
     ] {
         assert!(d <= 1e-12, "the fixed reference disagrees by {d}");
     }
+    // The same modes up to rounding in a loop that feeds the output back into the modes: a
+    // 1e-16 relative difference of a delay moves a read by 1e-16 of a sample.
+    let d = hand_agreement();
+    assert!(d <= 1e-12, "the hand-written row #10 disagrees by {d} rad");
 
     // Instruction counts (load-independent): `TVIST_BENCH_CASE=<#>` runs that case's cycles
     // once inside `measured`, for `valgrind --tool=callgrind --toggle-collect=*measured*`.
@@ -459,6 +510,20 @@ fn main() {
         }
     }
     print_table(&cases);
+    // How far the general path of row #10 is from its hand-written floor (row #14).
+    let row = |number| cases.iter().find(|c| c.number == number);
+    if let (Some(general), Some(floor)) = (row(10), row(14)) {
+        let ratios: Vec<f64> = general
+            .ns
+            .iter()
+            .zip(&floor.ns)
+            .map(|(g, f)| g / f)
+            .collect();
+        println!(
+            "\n#10 / #14 (the general path against its hand-written floor): {:.2}",
+            median(&ratios)
+        );
+    }
 }
 
 /// One pass of a case: [`STEPS`] cycles.

@@ -45,7 +45,7 @@ pub mod robot_data;
 pub mod robot_modes;
 pub mod shaper;
 pub mod sym_eigen;
-mod trig;
+pub mod trig;
 pub mod tvist;
 pub mod ztdis;
 
