@@ -207,7 +207,12 @@ impl HandUr5eZv {
     /// `(J_0, J_1)` at pose `q`, kg m².
     #[inline(always)]
     fn inertias(&self, q: &[f64; 6]) -> (f64, f64) {
-        let sc = [1, 2, 3, 4].map(|k| trig::sin_cos(q[k]));
+        let sc = [
+            trig::sin_cos(q[1]),
+            trig::sin_cos(q[2]),
+            trig::sin_cos(q[3]),
+            trig::sin_cos(q[4]),
+        ];
         let mut c = self.beyond_4;
         c.add(&self.body[4]);
         c.quarter_x(-1.0);
