@@ -30,6 +30,7 @@ pub mod dynamics;
 pub mod dynmap;
 pub mod ei;
 pub mod error;
+mod exp_decay;
 mod held_input;
 pub mod limits;
 pub mod map_dynamics;

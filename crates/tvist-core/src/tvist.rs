@@ -17,12 +17,16 @@
 use crate::delay_line::{DelayLine, Interpolation, Reads, Sequence};
 use crate::ei::EiTable;
 use crate::error::{Error, Status};
-use crate::shaper::{DampedShape, ImpulseArray, Mode, ShaperKind};
+use crate::shaper::{ClosedForm, ClosedShape, DampedShape, ImpulseArray, Mode, ShaperKind};
 
 /// One time-varying shaper for one mode, applied to all channels.
 #[derive(Debug, Clone)]
 pub struct ModeFilter {
     kind: ShaperKind,
+    /// The closed form of `kind`, if it has one.
+    closed_form: Option<ClosedForm>,
+    /// The largest damping ratio `kind` designs for ([`ShaperKind::max_zeta`]).
+    max_zeta: f64,
     /// `1 / dt_s`, samples per second.
     rate_hz: f64,
     dt_s: f64,
@@ -78,6 +82,8 @@ impl ModeFilter {
         }
         let mut filter = ModeFilter {
             kind,
+            closed_form: ClosedForm::of(kind),
+            max_zeta: kind.max_zeta(),
             rate_hz: 1.0 / dt_s,
             dt_s,
             nyquist_rad_s: core::f64::consts::PI / dt_s,
@@ -187,6 +193,10 @@ impl ModeFilter {
 
     /// A mode other than the held one: redesign for it if valid, hold otherwise. Returns the
     /// cycle's status.
+    ///
+    /// A new `ζ` of a closed-form shaper ([`ClosedForm`]) is written straight into the
+    /// line's form; the other shapers go through their general design
+    /// ([`Self::design_general`], kept out of line so that this path stays small).
     #[inline(never)]
     fn take_mode(&mut self, mode: Mode) -> Status {
         if !mode.is_valid() {
@@ -197,7 +207,24 @@ impl ModeFilter {
             };
             return Status::MODES_HELD | unshaped | self.design_status;
         }
-        self.take_zeta(mode);
+        // ζ limited to the shaper's range.
+        let limited = mode.zeta > self.max_zeta;
+        let zeta = if limited { self.max_zeta } else { mode.zeta };
+        self.zeta_status = if limited {
+            Status::ZETA_CLAMPED
+        } else {
+            Status::OK
+        };
+        if zeta != self.shape_zeta {
+            match self.closed_form {
+                Some(ClosedForm::Zv) => self.assign_closed(&ClosedForm::zv(zeta)),
+                Some(ClosedForm::Zvd) => self.assign_closed(&ClosedForm::zvd(zeta)),
+                Some(ClosedForm::Zvdd) => self.assign_closed(&ClosedForm::zvdd(zeta)),
+                Some(ClosedForm::Mzv) => self.assign_closed(&ClosedForm::mzv(zeta)),
+                None => self.design_general(zeta),
+            }
+            self.shape_zeta = zeta;
+        }
         self.held = mode;
         self.shaping = true;
         self.prepare_reads()
@@ -224,27 +251,30 @@ impl ModeFilter {
         status
     }
 
-    /// Designs the shape for the damping ratio of a valid mode (limited to the shaper's
-    /// range, [`Status::ZETA_CLAMPED`]) unless it is the current one.
-    fn take_zeta(&mut self, mode: Mode) {
-        let (design_mode, limited) = self.kind.within_range(mode);
-        let design_zeta = design_mode.zeta;
-        if design_zeta != self.shape_zeta {
-            // A change of ζ while shaping with the exact EI shaper reads its tabulated
-            // solution. The first design (after construction or a reset) is solved, so
-            // constant modes get exactly the offline design.
-            let from_table = self.shaping && self.ei_table.is_some();
-            let shape = self.design_shape(design_zeta, from_table);
-            self.shape_samples
-                .assign(shape.phases_rad(), shape.amplitudes(), self.rate_hz);
-            self.shape_zeta = design_zeta;
-            self.shape_from_table = from_table;
-        }
-        self.zeta_status = if limited {
-            Status::ZETA_CLAMPED
-        } else {
-            Status::OK
-        };
+    /// The shape of a closed-form shaper as the line reads it: its phases times `rate_hz`
+    /// (the same sequence [`Sequence::assign`] makes of [`Self::design_shape`]'s, since
+    /// both come from the one closed form and only its first impulse is undelayed).
+    #[inline(always)]
+    fn assign_closed<const N: usize>(&mut self, shape: &ClosedShape<N>) {
+        self.shape_samples.assign_first_undelayed(
+            &shape.phases_rad,
+            &shape.amplitudes,
+            self.rate_hz,
+        );
+        self.shape_from_table = false;
+    }
+
+    /// The shape of a shaper without a closed form for damping ratio `zeta`, as the line
+    /// reads it. A change of ζ while shaping with the exact EI shaper reads its tabulated
+    /// solution; the first design (after construction or a reset) is solved, so constant
+    /// modes get exactly the offline design.
+    #[inline(never)]
+    fn design_general(&mut self, zeta: f64) {
+        let from_table = self.shaping && self.ei_table.is_some();
+        let shape = self.design_shape(zeta, from_table);
+        self.shape_samples
+            .assign(shape.phases_rad(), shape.amplitudes(), self.rate_hz);
+        self.shape_from_table = from_table;
     }
 
     /// The output of the latest cycle.
