@@ -30,7 +30,6 @@ pub mod dynamics;
 pub mod dynmap;
 pub mod ei;
 pub mod error;
-mod exp_decay;
 mod held_input;
 pub mod limits;
 pub mod map_dynamics;

@@ -9,10 +9,13 @@
 //! rescales the delays of the shape, prepared once per shape ([`Sequence`]): one division per
 //! mode, and per delayed impulse one multiplication and, while the delay stays within the
 //! same whole sample (nearly always when modes drift), only the fraction split again, bit for
-//! bit what a fresh preparation gives. A new `ζ` also redesigns the shape ([`DampedShape`]:
-//! amplitudes and phases depend on `ζ` alone; the closed forms cost a square root, two
-//! divisions and an exponential); for the exact EI shaper a change of `ζ` interpolates its
-//! tabulated solution ([`EiTable`], within 1e-9 of the Newton solve) instead of solving.
+//! bit what a fresh preparation gives. A new `ζ` also redesigns the shape (amplitudes and
+//! phases depend on `ζ` alone): the closed forms (`ClosedForm`: a square root and a
+//! division side by side, an exponential and one more division) are written straight into the
+//! line's form and their reads prepared in the same pass, with no general shape in between;
+//! the others go through their [`DampedShape`], and for the exact EI shaper a change of `ζ`
+//! interpolates its tabulated solution ([`EiTable`], within 1e-9 of the Newton solve) instead
+//! of solving.
 
 use crate::delay_line::{DelayLine, Interpolation, Reads, Sequence};
 use crate::ei::EiTable;
@@ -196,7 +199,7 @@ impl ModeFilter {
     ///
     /// A new `ζ` of a closed-form shaper ([`ClosedForm`]) is written straight into the
     /// line's form; the other shapers go through their general design
-    /// ([`Self::design_general`], kept out of line so that this path stays small).
+    /// ([`Self::take_zeta_general`], kept out of line so that this path stays small).
     #[inline(never)]
     fn take_mode(&mut self, mode: Mode) -> Status {
         if !mode.is_valid() {
@@ -207,27 +210,29 @@ impl ModeFilter {
             };
             return Status::MODES_HELD | unshaped | self.design_status;
         }
-        // ζ limited to the shaper's range.
-        let limited = mode.zeta > self.max_zeta;
-        let zeta = if limited { self.max_zeta } else { mode.zeta };
-        self.zeta_status = if limited {
-            Status::ZETA_CLAMPED
-        } else {
-            Status::OK
-        };
-        if zeta != self.shape_zeta {
-            match self.closed_form {
-                Some(ClosedForm::Zv) => self.assign_closed(&ClosedForm::zv(zeta)),
-                Some(ClosedForm::Zvd) => self.assign_closed(&ClosedForm::zvd(zeta)),
-                Some(ClosedForm::Zvdd) => self.assign_closed(&ClosedForm::zvdd(zeta)),
-                Some(ClosedForm::Mzv) => self.assign_closed(&ClosedForm::mzv(zeta)),
-                None => self.design_general(zeta),
-            }
-            self.shape_zeta = zeta;
-        }
         self.held = mode;
         self.shaping = true;
-        self.prepare_reads()
+        match self.closed_form {
+            // The closed forms cover every underdamped mode (their limit is ζ < 1): `ζ` is
+            // designed as given, and each form's reads are prepared right after it.
+            Some(form) => {
+                self.zeta_status = Status::OK;
+                if mode.zeta == self.shape_zeta {
+                    return self.prepare_reads();
+                }
+                self.shape_zeta = mode.zeta;
+                match form {
+                    ClosedForm::Zv => self.take_closed(&ClosedForm::zv(mode.zeta)),
+                    ClosedForm::Zvd => self.take_closed(&ClosedForm::zvd(mode.zeta)),
+                    ClosedForm::Zvdd => self.take_closed(&ClosedForm::zvdd(mode.zeta)),
+                    ClosedForm::Mzv => self.take_closed(&ClosedForm::mzv(mode.zeta)),
+                }
+            }
+            None => {
+                self.take_zeta_general(mode.zeta);
+                self.prepare_reads()
+            }
+        }
     }
 
     /// Prepares the reads of `impulses` (designed for `held`) and returns the status they
@@ -251,30 +256,43 @@ impl ModeFilter {
         status
     }
 
-    /// The shape of a closed-form shaper as the line reads it: its phases times `rate_hz`
-    /// (the same sequence [`Sequence::assign`] makes of [`Self::design_shape`]'s, since
-    /// both come from the one closed form and only its first impulse is undelayed).
+    /// Takes the shape of a closed-form shaper (designed for `held`): as the line reads it,
+    /// its phases times `rate_hz` (the same sequence [`Sequence::assign`] makes of
+    /// [`Self::design_shape`]'s, since both come from the one closed form and only its first
+    /// impulse is undelayed); then prepares its reads. Returns the cycle's status.
     #[inline(always)]
-    fn assign_closed<const N: usize>(&mut self, shape: &ClosedShape<N>) {
+    fn take_closed<const N: usize>(&mut self, shape: &ClosedShape<N>) -> Status {
         self.shape_samples.assign_first_undelayed(
             &shape.phases_rad,
             &shape.amplitudes,
             self.rate_hz,
         );
         self.shape_from_table = false;
+        self.prepare_reads()
     }
 
-    /// The shape of a shaper without a closed form for damping ratio `zeta`, as the line
-    /// reads it. A change of ζ while shaping with the exact EI shaper reads its tabulated
+    /// The shape of a shaper without a closed form for the damping ratio `zeta` of a valid
+    /// mode, limited to the shaper's range ([`Status::ZETA_CLAMPED`]), unless it is the
+    /// current one. A change of ζ while shaping with the exact EI shaper reads its tabulated
     /// solution; the first design (after construction or a reset) is solved, so constant
     /// modes get exactly the offline design.
     #[inline(never)]
-    fn design_general(&mut self, zeta: f64) {
-        let from_table = self.shaping && self.ei_table.is_some();
-        let shape = self.design_shape(zeta, from_table);
-        self.shape_samples
-            .assign(shape.phases_rad(), shape.amplitudes(), self.rate_hz);
-        self.shape_from_table = from_table;
+    fn take_zeta_general(&mut self, zeta: f64) {
+        let limited = zeta > self.max_zeta;
+        let zeta = if limited { self.max_zeta } else { zeta };
+        self.zeta_status = if limited {
+            Status::ZETA_CLAMPED
+        } else {
+            Status::OK
+        };
+        if zeta != self.shape_zeta {
+            let from_table = self.shaping && self.ei_table.is_some();
+            let shape = self.design_shape(zeta, from_table);
+            self.shape_samples
+                .assign(shape.phases_rad(), shape.amplitudes(), self.rate_hz);
+            self.shape_zeta = zeta;
+            self.shape_from_table = from_table;
+        }
     }
 
     /// The output of the latest cycle.
@@ -324,5 +342,46 @@ impl ModeFilter {
     /// The longest delay the line can hold, in seconds.
     pub fn max_delay_s(&self) -> f64 {
         self.line.max_delay_samples() * self.dt_s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_new_zeta_of_a_closed_form_gives_the_general_designs_sequence_to_the_bit() {
+        // The closed forms are written straight into the line's form when ζ changes
+        // (`take_closed`); the general path makes a `DampedShape` and assigns it. Both must
+        // give the same sequence, bit for bit, for damping ratios over all of [0, 1): zero,
+        // tiny, the usual range, and so close to 1 that K underflows to 0. `fresh` designs
+        // from scratch every time; `kept` redesigns over its previous ζ.
+        let mut zetas = vec![0.0, 1e-300, 1e-12, 0.999, 0.999_999_9, 1.0f64.next_down()];
+        zetas.extend((0..2000).map(|i| (i as f64 * 0.618_033_988_75).fract()));
+        for kind in [
+            ShaperKind::Zv,
+            ShaperKind::Zvd,
+            ShaperKind::Zvdd,
+            ShaperKind::Mzv,
+        ] {
+            let new =
+                || ModeFilter::new(kind, 2, 0.002, 0.5, Interpolation::Linear).expect("valid");
+            let (mut fresh, mut kept) = (new(), new());
+            for (i, &zeta) in zetas.iter().enumerate() {
+                let mode = Mode::new(40.0 + i as f64 * 1e-3, zeta);
+                fresh.forget_mode();
+                let status = fresh.take_mode(mode);
+                assert_eq!(kept.take_mode(mode), status, "{kind:?} ζ = {zeta}");
+                assert!(
+                    !status.contains(Status::ZETA_CLAMPED),
+                    "{kind:?} ζ = {zeta}"
+                );
+                let shape = kind.damped_shape(zeta);
+                let general = Sequence::new(shape.phases_rad(), shape.amplitudes(), fresh.rate_hz);
+                assert_eq!(fresh.shape_samples, general, "{kind:?} ζ = {zeta}");
+                assert_eq!(kept.shape_samples, general, "{kind:?} ζ = {zeta}");
+                assert_eq!(fresh.impulses(), kind.design(mode), "{kind:?} ζ = {zeta}");
+            }
+        }
     }
 }
