@@ -261,7 +261,7 @@ impl ShaperKind {
         }
     }
 
-    /// ZV, ZVD, ZVDD and MZV: their closed forms ([`ClosedForm::shape`]). Other kinds give
+    /// ZV, ZVD, ZVDD and MZV: their closed forms (`ClosedForm`). Other kinds give
     /// the identity.
     #[inline]
     fn closed_form(&self, zeta: f64) -> DampedShape {
@@ -295,7 +295,7 @@ pub(crate) enum ClosedForm {
 }
 
 /// A closed-form shape of `N` impulses: amplitudes summing to 1 (up to rounding) at phases
-/// `ω_n t_i` (rad), the first at phase 0 and every other one at a phase `>= π` (increasing).
+/// `ω_n t_i` (rad), the first at phase 0 and the others at positive, increasing phases.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct ClosedShape<const N: usize> {
     pub(crate) amplitudes: [f64; N],

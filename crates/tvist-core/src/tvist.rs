@@ -26,7 +26,7 @@ use crate::shaper::{ClosedForm, ClosedShape, DampedShape, ImpulseArray, Mode, Sh
 #[derive(Debug, Clone)]
 pub struct ModeFilter {
     kind: ShaperKind,
-    /// The closed form of `kind`, if it has one.
+    /// The closed form of `kind`, if it has one (and covers every `ζ < 1`).
     closed_form: Option<ClosedForm>,
     /// The largest damping ratio `kind` designs for ([`ShaperKind::max_zeta`]).
     max_zeta: f64,
@@ -85,7 +85,9 @@ impl ModeFilter {
         }
         let mut filter = ModeFilter {
             kind,
-            closed_form: ClosedForm::of(kind),
+            // The direct path designs ζ as given: only for the closed forms whose range is
+            // every underdamped mode (a valid mode's ζ is below 1).
+            closed_form: ClosedForm::of(kind).filter(|_| kind.max_zeta() >= 1.0),
             max_zeta: kind.max_zeta(),
             rate_hz: 1.0 / dt_s,
             dt_s,
@@ -210,12 +212,12 @@ impl ModeFilter {
             };
             return Status::MODES_HELD | unshaped | self.design_status;
         }
-        self.held = mode;
-        self.shaping = true;
         match self.closed_form {
             // The closed forms cover every underdamped mode (their limit is ζ < 1): `ζ` is
             // designed as given, and each form's reads are prepared right after it.
             Some(form) => {
+                self.held = mode;
+                self.shaping = true;
                 self.zeta_status = Status::OK;
                 if mode.zeta == self.shape_zeta {
                     return self.prepare_reads();
@@ -229,7 +231,10 @@ impl ModeFilter {
                 }
             }
             None => {
+                // Designed before `shaping` is set: the first design after a start is solved.
                 self.take_zeta_general(mode.zeta);
+                self.held = mode;
+                self.shaping = true;
                 self.prepare_reads()
             }
         }
@@ -382,6 +387,35 @@ mod tests {
                 assert_eq!(kept.shape_samples, general, "{kind:?} ζ = {zeta}");
                 assert_eq!(fresh.impulses(), kind.design(mode), "{kind:?} ζ = {zeta}");
             }
+        }
+    }
+
+    #[test]
+    fn the_exact_ei_shaper_solves_its_first_design_and_reads_its_table_after() {
+        // After construction and after a reset the design is the Newton solve itself (the
+        // offline design, to the bit); a later change of ζ reads the table, which differs
+        // from a solve (by rounding at least) but stays within its 1e-9.
+        let kind = ShaperKind::Ei { v_tol: 0.05 };
+        let mut filter =
+            ModeFilter::new(kind, 1, 0.002, 0.5, Interpolation::Linear).expect("valid");
+        let (first, second) = (Mode::new(50.0, 0.26), Mode::new(50.0, 0.2612345));
+        for _ in 0..2 {
+            let _ = filter.take_mode(first);
+            assert!(!filter.shape_from_table);
+            assert_eq!(filter.impulses(), kind.design(first));
+            let _ = filter.take_mode(second);
+            assert!(filter.shape_from_table);
+            let (got, solved) = (filter.impulses(), kind.design(second));
+            assert_ne!(got, solved);
+            for (a, b) in got
+                .amplitudes()
+                .iter()
+                .zip(solved.amplitudes())
+                .chain(got.times_s().iter().zip(solved.times_s()))
+            {
+                assert!((a - b).abs() <= 1e-9, "{a} vs {b}");
+            }
+            filter.forget_mode();
         }
     }
 }
