@@ -169,6 +169,33 @@ impl Sequence {
         self.n_delayed = len - undelayed;
     }
 
+    /// [`Self::assign`] for `N` impulses of which only the first has delay 0 (`delays[0] == 0`
+    /// and every other delay `> 0`, as in every closed-form shaper, [`crate::shaper`]), whose
+    /// first weight is not `−0.0`: the same sequence (`now` is the first weight, as `0 + w`
+    /// is), with nothing left to count or to test at run time.
+    #[inline(always)]
+    pub(crate) fn assign_first_undelayed<const N: usize>(
+        &mut self,
+        delays: &[f64; N],
+        weights: &[f64; N],
+        delay_scale: f64,
+    ) {
+        let now = weights.first().copied().unwrap_or(0.0);
+        self.now = now;
+        self.undelayed = 1;
+        self.undelayed_weights = [now, 0.0, 0.0, 0.0, 0.0];
+        for ((st, sw), (&t, &w)) in self
+            .delays
+            .iter_mut()
+            .zip(self.weights.iter_mut())
+            .zip(delays.iter().zip(weights).skip(1))
+        {
+            *st = t * delay_scale;
+            *sw = w;
+        }
+        self.n_delayed = N.saturating_sub(1).min(MAX_IMPULSES);
+    }
+
     /// Every impulse `(delay, weight)`, in order.
     #[inline(always)]
     fn all(&self) -> impl Iterator<Item = (&f64, &f64)> {
@@ -364,6 +391,13 @@ impl DelayLine {
         if reads.whole_len == set.n_delayed() && Self::resplit(set, scale, reads) {
             return false;
         }
+        self.prepare_fresh(set, scale, reads)
+    }
+
+    /// [`Self::prepare`] from scratch: every read split and placed again. Out of line: when
+    /// modes drift, nearly every cycle re-splits instead, and that path stays small.
+    #[inline(never)]
+    fn prepare_fresh(&self, set: &Sequence, scale: f64, reads: &mut Reads) -> bool {
         let mut clamped = false;
         let mut len = 0;
         match self.interp {

@@ -6,6 +6,9 @@
 //!   `K = exp(−ζπ/√(1−ζ²))`.
 //! - MZV: three impulses at `[0, 3/8, 3/4]·T_d` with the damped amplitudes of the standard
 //!   modified-ZV form.
+//!
+//!   These four are defined once (`ClosedForm`); the general shape and the time-varying
+//!   filter's direct path both evaluate that definition.
 //! - EI: designed exactly for the damped mode ([`crate::ei`]: residual vibration `V` at the
 //!   design point, its local maximum, and zero vibration at one frequency either side), starting
 //!   from the published polynomial-in-ζ fit; the vibration tolerance `V` is a parameter
@@ -235,18 +238,6 @@ impl ShaperKind {
         }
     }
 
-    /// `mode` with its damping ratio limited to [`Self::max_zeta`]; the flag says whether it
-    /// was limited.
-    #[inline]
-    pub fn within_range(&self, mode: Mode) -> (Mode, bool) {
-        let max = self.max_zeta();
-        if mode.zeta > max {
-            (Mode::new(mode.wn_rad_s, max), true)
-        } else {
-            (mode, false)
-        }
-    }
-
     /// The impulse sequence for `mode`. Allocation-free; the caller guarantees
     /// `mode.is_valid()` (checked at setup, or held by the time-varying filter).
     #[inline]
@@ -270,31 +261,16 @@ impl ShaperKind {
         }
     }
 
-    /// ZV, ZVD, ZVDD and MZV: closed forms in `K = exp(−ζπ/√(1−ζ²))` and the damped half
-    /// period `π/√(1−ζ²)` (rad of `ω_n t`). Other kinds give the identity.
+    /// ZV, ZVD, ZVDD and MZV: their closed forms (`ClosedForm`). Other kinds give
+    /// the identity.
     #[inline]
     fn closed_form(&self, zeta: f64) -> DampedShape {
-        let df = (1.0 - zeta * zeta).sqrt();
-        let half = PI / df; // ω_n · T_d / 2
-        let k = (-zeta * half).exp();
-        match *self {
-            ShaperKind::Zv => DampedShape::normalized(&[1.0, k], &[0.0, half]),
-            ShaperKind::Zvd => {
-                DampedShape::normalized(&[1.0, 2.0 * k, k * k], &[0.0, half, 2.0 * half])
-            }
-            ShaperKind::Zvdd => DampedShape::normalized(
-                &[1.0, 3.0 * k, 3.0 * k * k, k * k * k],
-                &[0.0, half, 2.0 * half, 3.0 * half],
-            ),
-            ShaperKind::Mzv => {
-                // K^{3/4} = exp(−0.75 ζπ/√(1−ζ²)).
-                let km = (-0.75 * zeta * half).exp();
-                let a1 = 1.0 - core::f64::consts::FRAC_1_SQRT_2;
-                let a2 = (core::f64::consts::SQRT_2 - 1.0) * km;
-                let a3 = a1 * km * km;
-                DampedShape::normalized(&[a1, a2, a3], &[0.0, 0.75 * half, 1.5 * half])
-            }
-            _ => DampedShape::IDENTITY,
+        match ClosedForm::of(*self) {
+            Some(ClosedForm::Zv) => DampedShape::closed(&ClosedForm::zv(zeta)),
+            Some(ClosedForm::Zvd) => DampedShape::closed(&ClosedForm::zvd(zeta)),
+            Some(ClosedForm::Zvdd) => DampedShape::closed(&ClosedForm::zvdd(zeta)),
+            Some(ClosedForm::Mzv) => DampedShape::closed(&ClosedForm::mzv(zeta)),
+            None => DampedShape::IDENTITY,
         }
     }
 
@@ -303,6 +279,103 @@ impl ShaperKind {
         match *self {
             ShaperKind::Ei { v_tol } => Some(v_tol),
             _ => None,
+        }
+    }
+}
+
+/// The shapers with a closed form in `ζ`: the one definition of each, used by
+/// [`ShaperKind::damped_shape`] and, without the general shape's bookkeeping, by the
+/// time-varying filter when `ζ` changes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum ClosedForm {
+    Zv,
+    Zvd,
+    Zvdd,
+    Mzv,
+}
+
+/// A closed-form shape of `N` impulses: amplitudes summing to 1 (up to rounding) at phases
+/// `ω_n t_i` (rad), the first at phase 0 and the others at positive, increasing phases.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct ClosedShape<const N: usize> {
+    pub(crate) amplitudes: [f64; N],
+    pub(crate) phases_rad: [f64; N],
+}
+
+impl ClosedForm {
+    /// The closed form of `kind`, if it has one.
+    #[inline(always)]
+    pub(crate) fn of(kind: ShaperKind) -> Option<ClosedForm> {
+        match kind {
+            ShaperKind::Zv => Some(ClosedForm::Zv),
+            ShaperKind::Zvd => Some(ClosedForm::Zvd),
+            ShaperKind::Zvdd => Some(ClosedForm::Zvdd),
+            ShaperKind::Mzv => Some(ClosedForm::Mzv),
+            _ => None,
+        }
+    }
+
+    /// The terms every closed form is made of, for `0 <= zeta < 1`: the damped half period
+    /// `π/√(1−ζ²)` (rad of `ω_n t`) and the decay `K^f = exp(−f ζπ/√(1−ζ²))` of the mode over
+    /// the fraction `f` of it.
+    #[inline(always)]
+    fn half_period_and_decay(zeta: f64, fraction: f64) -> (f64, f64) {
+        // π/√u as (π/u)·√u: the division runs beside the square root instead of after it
+        // (a shorter dependent chain when ζ changes every cycle; within 2 ulps of π/√u).
+        let u = 1.0 - zeta * zeta;
+        let pi_per_u = PI / u;
+        let root = u.sqrt();
+        let half = pi_per_u * root; // ω_n · T_d / 2
+        (half, (-(fraction * zeta) * pi_per_u * root).exp())
+    }
+
+    /// ZV: `A = [1, K]/(1+K)` at `[0, T_d/2]`.
+    #[inline(always)]
+    pub(crate) fn zv(zeta: f64) -> ClosedShape<2> {
+        let (half, k) = Self::half_period_and_decay(zeta, 1.0);
+        let inv_sum = 1.0 / (1.0 + k);
+        ClosedShape {
+            amplitudes: [inv_sum, k * inv_sum],
+            phases_rad: [0.0, half],
+        }
+    }
+
+    /// ZVD: `A = [1, 2K, K²]/(1+K)²` at `[0, T_d/2, T_d]`.
+    #[inline(always)]
+    pub(crate) fn zvd(zeta: f64) -> ClosedShape<3> {
+        let (half, k) = Self::half_period_and_decay(zeta, 1.0);
+        let sum_root = 1.0 + k; // Σ A = (1+K)²
+        let inv_sum = 1.0 / (sum_root * sum_root);
+        ClosedShape {
+            amplitudes: [inv_sum, 2.0 * k * inv_sum, k * k * inv_sum],
+            phases_rad: [0.0, half, 2.0 * half],
+        }
+    }
+
+    /// ZVDD: `A = [1, 3K, 3K², K³]/(1+K)³` at `[0, T_d/2, T_d, 3T_d/2]`.
+    #[inline(always)]
+    pub(crate) fn zvdd(zeta: f64) -> ClosedShape<4> {
+        let (half, k) = Self::half_period_and_decay(zeta, 1.0);
+        let raw = [1.0, 3.0 * k, 3.0 * k * k, k * k * k];
+        let sum_root = 1.0 + k; // Σ A = (1+K)³
+        let inv_sum = 1.0 / (sum_root * sum_root * sum_root);
+        ClosedShape {
+            amplitudes: raw.map(|a| a * inv_sum),
+            phases_rad: [0.0, half, 2.0 * half, 3.0 * half],
+        }
+    }
+
+    /// MZV: three impulses at `[0, 3/8, 3/4]·T_d` with the damped amplitudes of the standard
+    /// modified-ZV form, `[1 − 1/√2, (√2 − 1)K^{3/4}, (1 − 1/√2)K^{3/2}]` normalized.
+    #[inline(always)]
+    pub(crate) fn mzv(zeta: f64) -> ClosedShape<3> {
+        let (half, km) = Self::half_period_and_decay(zeta, 0.75); // km = K^{3/4}
+        let a1 = 1.0 - core::f64::consts::FRAC_1_SQRT_2;
+        let raw = [a1, (core::f64::consts::SQRT_2 - 1.0) * km, a1 * km * km];
+        let inv_sum = 1.0 / ((raw[0] + raw[1]) + raw[2]);
+        ClosedShape {
+            amplitudes: raw.map(|a| a * inv_sum),
+            phases_rad: [0.0, 0.75 * half, 1.5 * half],
         }
     }
 }
@@ -343,6 +416,27 @@ impl DampedShape {
         {
             *oa = a * inv_sum;
             *op = *p;
+            out.len += 1;
+        }
+        out
+    }
+
+    /// A closed-form shape as it is (already normalized).
+    #[inline(always)]
+    pub(crate) fn closed<const N: usize>(shape: &ClosedShape<N>) -> DampedShape {
+        let mut out = DampedShape {
+            len: 0,
+            amplitudes: [0.0; MAX_IMPULSES],
+            phases_rad: [0.0; MAX_IMPULSES],
+        };
+        for ((&a, &p), (oa, op)) in shape
+            .amplitudes
+            .iter()
+            .zip(&shape.phases_rad)
+            .zip(out.amplitudes.iter_mut().zip(out.phases_rad.iter_mut()))
+        {
+            *oa = a;
+            *op = p;
             out.len += 1;
         }
         out

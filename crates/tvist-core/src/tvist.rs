@@ -9,20 +9,27 @@
 //! rescales the delays of the shape, prepared once per shape ([`Sequence`]): one division per
 //! mode, and per delayed impulse one multiplication and, while the delay stays within the
 //! same whole sample (nearly always when modes drift), only the fraction split again, bit for
-//! bit what a fresh preparation gives. A new `ζ` also redesigns the shape ([`DampedShape`]:
-//! amplitudes and phases depend on `ζ` alone; the closed forms cost a square root, two
-//! divisions and an exponential); for the exact EI shaper a change of `ζ` interpolates its
-//! tabulated solution ([`EiTable`], within 1e-9 of the Newton solve) instead of solving.
+//! bit what a fresh preparation gives. A new `ζ` also redesigns the shape (amplitudes and
+//! phases depend on `ζ` alone): the closed forms (`ClosedForm`: a square root and a
+//! division side by side, an exponential and one more division) are written straight into the
+//! line's form and their reads prepared in the same pass, with no general shape in between;
+//! the others go through their [`DampedShape`], and for the exact EI shaper a change of `ζ`
+//! interpolates its tabulated solution ([`EiTable`], within 1e-9 of the Newton solve) instead
+//! of solving.
 
 use crate::delay_line::{DelayLine, Interpolation, Reads, Sequence};
 use crate::ei::EiTable;
 use crate::error::{Error, Status};
-use crate::shaper::{DampedShape, ImpulseArray, Mode, ShaperKind};
+use crate::shaper::{ClosedForm, ClosedShape, DampedShape, ImpulseArray, Mode, ShaperKind};
 
 /// One time-varying shaper for one mode, applied to all channels.
 #[derive(Debug, Clone)]
 pub struct ModeFilter {
     kind: ShaperKind,
+    /// The closed form of `kind`, if it has one (and covers every `ζ < 1`).
+    closed_form: Option<ClosedForm>,
+    /// The largest damping ratio `kind` designs for ([`ShaperKind::max_zeta`]).
+    max_zeta: f64,
     /// `1 / dt_s`, samples per second.
     rate_hz: f64,
     dt_s: f64,
@@ -78,6 +85,10 @@ impl ModeFilter {
         }
         let mut filter = ModeFilter {
             kind,
+            // The direct path designs ζ as given: only for the closed forms whose range is
+            // every underdamped mode (a valid mode's ζ is below 1).
+            closed_form: ClosedForm::of(kind).filter(|_| kind.max_zeta() >= 1.0),
+            max_zeta: kind.max_zeta(),
             rate_hz: 1.0 / dt_s,
             dt_s,
             nyquist_rad_s: core::f64::consts::PI / dt_s,
@@ -187,6 +198,10 @@ impl ModeFilter {
 
     /// A mode other than the held one: redesign for it if valid, hold otherwise. Returns the
     /// cycle's status.
+    ///
+    /// A new `ζ` of a closed-form shaper ([`ClosedForm`]) is written straight into the
+    /// line's form; the other shapers go through their general design
+    /// ([`Self::take_zeta_general`], kept out of line so that this path stays small).
     #[inline(never)]
     fn take_mode(&mut self, mode: Mode) -> Status {
         if !mode.is_valid() {
@@ -197,10 +212,32 @@ impl ModeFilter {
             };
             return Status::MODES_HELD | unshaped | self.design_status;
         }
-        self.take_zeta(mode);
-        self.held = mode;
-        self.shaping = true;
-        self.prepare_reads()
+        match self.closed_form {
+            // The closed forms cover every underdamped mode (their limit is ζ < 1): `ζ` is
+            // designed as given, and each form's reads are prepared right after it.
+            Some(form) => {
+                self.held = mode;
+                self.shaping = true;
+                self.zeta_status = Status::OK;
+                if mode.zeta == self.shape_zeta {
+                    return self.prepare_reads();
+                }
+                self.shape_zeta = mode.zeta;
+                match form {
+                    ClosedForm::Zv => self.take_closed(&ClosedForm::zv(mode.zeta)),
+                    ClosedForm::Zvd => self.take_closed(&ClosedForm::zvd(mode.zeta)),
+                    ClosedForm::Zvdd => self.take_closed(&ClosedForm::zvdd(mode.zeta)),
+                    ClosedForm::Mzv => self.take_closed(&ClosedForm::mzv(mode.zeta)),
+                }
+            }
+            None => {
+                // Designed before `shaping` is set: the first design after a start is solved.
+                self.take_zeta_general(mode.zeta);
+                self.held = mode;
+                self.shaping = true;
+                self.prepare_reads()
+            }
+        }
     }
 
     /// Prepares the reads of `impulses` (designed for `held`) and returns the status they
@@ -224,27 +261,43 @@ impl ModeFilter {
         status
     }
 
-    /// Designs the shape for the damping ratio of a valid mode (limited to the shaper's
-    /// range, [`Status::ZETA_CLAMPED`]) unless it is the current one.
-    fn take_zeta(&mut self, mode: Mode) {
-        let (design_mode, limited) = self.kind.within_range(mode);
-        let design_zeta = design_mode.zeta;
-        if design_zeta != self.shape_zeta {
-            // A change of ζ while shaping with the exact EI shaper reads its tabulated
-            // solution. The first design (after construction or a reset) is solved, so
-            // constant modes get exactly the offline design.
-            let from_table = self.shaping && self.ei_table.is_some();
-            let shape = self.design_shape(design_zeta, from_table);
-            self.shape_samples
-                .assign(shape.phases_rad(), shape.amplitudes(), self.rate_hz);
-            self.shape_zeta = design_zeta;
-            self.shape_from_table = from_table;
-        }
+    /// Takes the shape of a closed-form shaper (designed for `held`): as the line reads it,
+    /// its phases times `rate_hz` (the same sequence [`Sequence::assign`] makes of
+    /// [`Self::design_shape`]'s, since both come from the one closed form and only its first
+    /// impulse is undelayed); then prepares its reads. Returns the cycle's status.
+    #[inline(always)]
+    fn take_closed<const N: usize>(&mut self, shape: &ClosedShape<N>) -> Status {
+        self.shape_samples.assign_first_undelayed(
+            &shape.phases_rad,
+            &shape.amplitudes,
+            self.rate_hz,
+        );
+        self.shape_from_table = false;
+        self.prepare_reads()
+    }
+
+    /// The shape of a shaper without a closed form for the damping ratio `zeta` of a valid
+    /// mode, limited to the shaper's range ([`Status::ZETA_CLAMPED`]), unless it is the
+    /// current one. A change of ζ while shaping with the exact EI shaper reads its tabulated
+    /// solution; the first design (after construction or a reset) is solved, so constant
+    /// modes get exactly the offline design.
+    #[inline(never)]
+    fn take_zeta_general(&mut self, zeta: f64) {
+        let limited = zeta > self.max_zeta;
+        let zeta = if limited { self.max_zeta } else { zeta };
         self.zeta_status = if limited {
             Status::ZETA_CLAMPED
         } else {
             Status::OK
         };
+        if zeta != self.shape_zeta {
+            let from_table = self.shaping && self.ei_table.is_some();
+            let shape = self.design_shape(zeta, from_table);
+            self.shape_samples
+                .assign(shape.phases_rad(), shape.amplitudes(), self.rate_hz);
+            self.shape_zeta = zeta;
+            self.shape_from_table = from_table;
+        }
     }
 
     /// The output of the latest cycle.
@@ -294,5 +347,75 @@ impl ModeFilter {
     /// The longest delay the line can hold, in seconds.
     pub fn max_delay_s(&self) -> f64 {
         self.line.max_delay_samples() * self.dt_s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_new_zeta_of_a_closed_form_gives_the_general_designs_sequence_to_the_bit() {
+        // The closed forms are written straight into the line's form when ζ changes
+        // (`take_closed`); the general path makes a `DampedShape` and assigns it. Both must
+        // give the same sequence, bit for bit, for damping ratios over all of [0, 1): zero,
+        // tiny, the usual range, and so close to 1 that K underflows to 0. `fresh` designs
+        // from scratch every time; `kept` redesigns over its previous ζ.
+        let mut zetas = vec![0.0, 1e-300, 1e-12, 0.999, 0.999_999_9, 1.0f64.next_down()];
+        zetas.extend((0..2000).map(|i| (i as f64 * 0.618_033_988_75).fract()));
+        for kind in [
+            ShaperKind::Zv,
+            ShaperKind::Zvd,
+            ShaperKind::Zvdd,
+            ShaperKind::Mzv,
+        ] {
+            let new =
+                || ModeFilter::new(kind, 2, 0.002, 0.5, Interpolation::Linear).expect("valid");
+            let (mut fresh, mut kept) = (new(), new());
+            for (i, &zeta) in zetas.iter().enumerate() {
+                let mode = Mode::new(40.0 + i as f64 * 1e-3, zeta);
+                fresh.forget_mode();
+                let status = fresh.take_mode(mode);
+                assert_eq!(kept.take_mode(mode), status, "{kind:?} ζ = {zeta}");
+                assert!(
+                    !status.contains(Status::ZETA_CLAMPED),
+                    "{kind:?} ζ = {zeta}"
+                );
+                let shape = kind.damped_shape(zeta);
+                let general = Sequence::new(shape.phases_rad(), shape.amplitudes(), fresh.rate_hz);
+                assert_eq!(fresh.shape_samples, general, "{kind:?} ζ = {zeta}");
+                assert_eq!(kept.shape_samples, general, "{kind:?} ζ = {zeta}");
+                assert_eq!(fresh.impulses(), kind.design(mode), "{kind:?} ζ = {zeta}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_exact_ei_shaper_solves_its_first_design_and_reads_its_table_after() {
+        // After construction and after a reset the design is the Newton solve itself (the
+        // offline design, to the bit); a later change of ζ reads the table, which differs
+        // from a solve (by rounding at least) but stays within its 1e-9.
+        let kind = ShaperKind::Ei { v_tol: 0.05 };
+        let mut filter =
+            ModeFilter::new(kind, 1, 0.002, 0.5, Interpolation::Linear).expect("valid");
+        let (first, second) = (Mode::new(50.0, 0.26), Mode::new(50.0, 0.2612345));
+        for _ in 0..2 {
+            let _ = filter.take_mode(first);
+            assert!(!filter.shape_from_table);
+            assert_eq!(filter.impulses(), kind.design(first));
+            let _ = filter.take_mode(second);
+            assert!(filter.shape_from_table);
+            let (got, solved) = (filter.impulses(), kind.design(second));
+            assert_ne!(got, solved);
+            for (a, b) in got
+                .amplitudes()
+                .iter()
+                .zip(solved.amplitudes())
+                .chain(got.times_s().iter().zip(solved.times_s()))
+            {
+                assert!((a - b).abs() <= 1e-9, "{a} vs {b}");
+            }
+            filter.forget_mode();
+        }
     }
 }
