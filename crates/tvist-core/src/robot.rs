@@ -11,6 +11,7 @@
 //! A non-finite joint angle (in any joint, also one nothing depends on) gives NaN entries.
 
 use crate::error::{Error, Status};
+use crate::inertia_pass::{leading_joint_inertias, AxialMoments, InertiaStep};
 use crate::sym_eigen::{sym_eigen, Matrix, MAX_DIM};
 
 /// Standard gravity used for gravity torques, m/s².
@@ -168,10 +169,10 @@ impl Workspace {
 /// `z` axis is `E_xx + E_yy`. Moments of rigidly joined bodies add; a frame change transforms
 /// them exactly ([`Moments::move_to_parent`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Moments {
-    mass_kg: f64,
-    first_kg_m: [f64; 3],
-    second_kg_m2: [f64; 6],
+pub(crate) struct Moments {
+    pub(crate) mass_kg: f64,
+    pub(crate) first_kg_m: [f64; 3],
+    pub(crate) second_kg_m2: [f64; 6],
 }
 
 impl Moments {
@@ -216,7 +217,7 @@ impl Moments {
     /// Rx(α) r`. The turn `Rz(q_k)` follows in [`Self::turn_z`]; it leaves the inertia about
     /// `z` (`E_xx + E_yy`) unchanged.
     #[inline]
-    fn move_to_parent(&mut self, dh: &DhConstants) {
+    pub(crate) fn move_to_parent(&mut self, dh: &DhConstants) {
         let (m, h, e) = (self.mass_kg, &mut self.first_kg_m, &mut self.second_kg_m2);
         // Rx(α): the (y, z) plane turns.
         match dh.twist {
@@ -369,7 +370,7 @@ fn rotate_sym_plane(e: &mut [f64; 6], uu: usize, vv: usize, uv: usize, c2: f64, 
 
 /// The twist `Rx(α)` of a DH step, by kind: most arms use only `α ∈ {0, ±π/2}`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Twist {
+pub(crate) enum Twist {
     /// `α = 0`: nothing turns.
     None,
     /// `α = ±π/2` (to within 1e-15 rad, below the rounding of `π/2` itself): `(y, z) ↦
@@ -381,14 +382,14 @@ enum Twist {
 
 /// Per-joint constants of the DH step `Tz(d) Tx(a) Rx(α)`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct DhConstants {
-    twist: Twist,
-    a_m: f64,
-    d_m: f64,
-    cos_alpha: f64,
-    sin_alpha: f64,
-    cos_2alpha: f64,
-    sin_2alpha: f64,
+pub(crate) struct DhConstants {
+    pub(crate) twist: Twist,
+    pub(crate) a_m: f64,
+    pub(crate) d_m: f64,
+    pub(crate) cos_alpha: f64,
+    pub(crate) sin_alpha: f64,
+    pub(crate) cos_2alpha: f64,
+    pub(crate) sin_2alpha: f64,
 }
 
 impl DhConstants {
@@ -435,6 +436,10 @@ pub struct Robot {
     /// same at every pose): where a pass that reads none of the joints from `fixed_from − 1`
     /// on starts.
     fixed_before_turn: Moments,
+    /// Per joint, the constants of the inertia-only pass ([`crate::inertia_pass`]).
+    inertia_steps: Vec<InertiaStep>,
+    /// [`Self::fixed_before_turn`] in that pass's form.
+    fixed_start: AxialMoments,
     ws: Workspace,
     /// The robot's name (for example `"ur5e"`), if it has one: dynamic maps are checked
     /// against it.
@@ -480,6 +485,8 @@ impl Robot {
             fixed_from: n,
             fixed_composite: Moments::ZERO,
             fixed_before_turn: Moments::ZERO,
+            inertia_steps: Vec::with_capacity(n),
+            fixed_start: AxialMoments::ZERO,
             joints,
             links,
             payload,
@@ -543,6 +550,16 @@ impl Robot {
         self.fixed_before_turn = self.fixed_composite;
         self.fixed_before_turn.add(&self.moments[last]);
         self.fixed_before_turn.move_to_parent(&self.dh[last]);
+        self.fixed_start = AxialMoments::of(&self.fixed_before_turn);
+        // Mass of the composite of bodies k..n, from the flange inwards.
+        let mut beyond_kg = 0.0;
+        self.inertia_steps.clear();
+        for k in (0..n).rev() {
+            beyond_kg += self.bodies[k].mass_kg;
+            let step = InertiaStep::of(&self.dh[k], &self.moments[k], beyond_kg);
+            self.inertia_steps.push(step);
+        }
+        self.inertia_steps.reverse();
     }
 
     /// Replaces the payload (setup-time call: validates).
@@ -829,7 +846,21 @@ impl Robot {
         if inertia.len() != n || q.len() != n || joints > n || !tau_ok {
             return Status::BAD_LENGTH;
         }
-        self.joint_space_pass(q, joints, Some(inertia), None, tau_g);
+        // Inertias alone at angles the inline sine takes (finite ones, in practice all):
+        // the specialised pass. Non-finite angles (NaN entries) and gravity: the general one.
+        let in_range = q
+            .iter()
+            .fold(true, |ok, v| ok & (v.abs() <= crate::trig::FAST_RANGE_RAD));
+        if tau_g.is_none() && in_range {
+            let (top, start) = if joints <= self.fixed_from {
+                (self.fixed_from - 1, &self.fixed_start)
+            } else {
+                (n - 1, &self.inertia_steps[n - 1].body)
+            };
+            leading_joint_inertias(q, &self.inertia_steps, top, start, &mut inertia[..joints]);
+        } else {
+            self.joint_space_pass(q, joints, Some(inertia), None, tau_g);
+        }
         Status::OK
     }
 

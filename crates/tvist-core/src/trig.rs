@@ -42,7 +42,7 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     if !fast {
         return x.sin_cos();
     }
-    sin_cos_reduced(x)
+    sin_cos_in_range(x)
 }
 
 /// `(sin x, cos x)` of every `x[k]` into `out[k]` (the shorter length counts), as
@@ -52,7 +52,7 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
 pub fn sin_cos_each(x: &[f64], out: &mut [(f64, f64)]) {
     if x.iter().all(|v| v.abs() <= FAST_RANGE_RAD) {
         for (o, &v) in out.iter_mut().zip(x) {
-            *o = sin_cos_reduced(v);
+            *o = sin_cos_in_range(v);
         }
     } else {
         for (o, &v) in out.iter_mut().zip(x) {
@@ -61,9 +61,10 @@ pub fn sin_cos_each(x: &[f64], out: &mut [(f64, f64)]) {
     }
 }
 
-/// The reduction and polynomials for `|x| <= FAST_RANGE_RAD`, branch-free.
+/// `(sin x, cos x)` for `|x| <= FAST_RANGE_RAD` (the caller checks the range, which also
+/// excludes NaN and infinities): the reduction and polynomials alone, branch-free.
 #[inline(always)]
-fn sin_cos_reduced(x: f64) -> (f64, f64) {
+pub(crate) fn sin_cos_in_range(x: f64) -> (f64, f64) {
     // Round to nearest by adding and removing 1.5 · 2^52 (|x · 2/π| < 2^51): no libm call.
     // The sum's lowest mantissa bits are `j` modulo 4 (its unit in the last place is 1 and
     // 2^51 is a multiple of 4).
