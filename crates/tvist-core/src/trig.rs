@@ -85,15 +85,11 @@ pub(crate) fn sin_cos_in_range(x: f64) -> (f64, f64) {
     let half_z = 0.5 * z;
     let w = 1.0 - half_z;
     let cos_r = w + (((1.0 - w) - half_z) + tail);
-    // Quadrant j mod 4: (sin, cos) = (s, c), (c, −s), (−s, −c), (−c, s): odd quadrants swap
-    // the two, sin is negated in quadrants 2 and 3, cos in 1 and 2 (bit masks, no branches).
-    let swap = 0u64.wrapping_sub(quadrant & 1);
-    let (sb, cb) = (sin_r.to_bits(), cos_r.to_bits());
-    let s = (sb & !swap) | (cb & swap);
-    let c = (cb & !swap) | (sb & swap);
-    let sin_sign = (quadrant & 2) << 62;
-    let cos_sign = ((quadrant + 1) & 2) << 62;
-    (f64::from_bits(s ^ sin_sign), f64::from_bits(c ^ cos_sign))
+    // Quadrant j mod 4: (sin, cos) = (s, c), (c, −s), (−s, −c), (−c, s), i.e. entries j and
+    // j + 1 (mod 4) of the cycle [s, c, −s, −c] (an indexed read, no branches).
+    let cycle = [sin_r, cos_r, -sin_r, -cos_r];
+    let j = quadrant as usize;
+    (cycle[j & 3], cycle[(j + 1) & 3])
 }
 
 #[cfg(test)]
