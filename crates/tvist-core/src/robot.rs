@@ -819,7 +819,9 @@ impl Robot {
     }
 
     /// Joint inertias and, if `tau_g` is given, gravity torques from one pass (the composite
-    /// rigid body algorithm: the inertias are exactly the diagonal of [`Self::mass_matrix`]).
+    /// rigid body algorithm: the inertias are the diagonal of [`Self::mass_matrix`]; bit for
+    /// bit with `tau_g`, to rounding without, where the
+    /// specialised inertia-only pass evaluates them).
     pub fn joint_inertia_and_gravity(
         &mut self,
         q: &[f64],
@@ -832,7 +834,7 @@ impl Robot {
 
     /// [`Self::joint_inertia_and_gravity`] for joints `0..joints` only (for example the
     /// joints a dynamic map reads): entries from `joints` on are left untouched. Slices have
-    /// length `n_dof`; `joints <= n_dof`. The same arithmetic as the full evaluation (the
+    /// length `n_dof`; `joints <= n_dof`. Equal to the full evaluation to rounding (the
     /// composites beyond the last joint read are still formed, but nothing is read from them).
     pub fn leading_joint_inertia_and_gravity(
         &mut self,
