@@ -268,18 +268,23 @@ pub(crate) fn leading_joint_inertias(
         return;
     }
     // Joints top..=2: read, turn, carry into the frame below; joint 1: read and turn; joint
-    // 0: its inertia alone.
-    for (k, (&qk, step)) in q[2..=top].iter().zip(&steps[1..top]).enumerate().rev() {
+    // 0: its inertia alone. Each angle's sine is taken one step ahead of its turn: it does
+    // not depend on the composite, so it is under way while the step before it runs.
+    let mut next = Turn::of(q[top]);
+    for (k, (&q_below, step)) in q[1..top].iter().zip(&steps[1..top]).enumerate().rev() {
+        // Joint k + 2 is read and turned; joint k + 1's sine is taken.
         if let Some(o) = out.get_mut(k + 2) {
             *o = c.sum;
         }
-        c.turn(&Turn::of(qk));
+        let turn = next;
+        next = Turn::of(q_below);
+        c.turn(&turn);
         c.carry_by_kind(step);
     }
     if let Some(o) = out.get_mut(1) {
         *o = c.sum;
     }
-    c.turn(&Turn::of(q[1]));
+    c.turn(&next);
     out[0] = c.sum_after_carry(&steps[0]);
 }
 

@@ -850,20 +850,30 @@ impl Robot {
         }
         // Inertias alone at angles the inline sine takes (finite ones, in practice all):
         // the specialised pass. Non-finite angles (NaN entries) and gravity: the general one.
-        let in_range = q
-            .iter()
-            .fold(true, |ok, v| ok & (v.abs() <= crate::trig::FAST_RANGE_RAD));
-        if tau_g.is_none() && in_range {
-            let (top, start) = if joints <= self.fixed_from {
-                (self.fixed_from - 1, &self.fixed_start)
-            } else {
-                (n - 1, &self.inertia_steps[n - 1].body)
-            };
-            leading_joint_inertias(q, &self.inertia_steps, top, start, &mut inertia[..joints]);
+        let in_range = || {
+            q.iter()
+                .fold(true, |ok, v| ok & (v.abs() <= crate::trig::FAST_RANGE_RAD))
+        };
+        if tau_g.is_none() && in_range() {
+            self.inertia_only_pass(q, &mut inertia[..joints]);
         } else {
             self.joint_space_pass(q, joints, Some(inertia), None, tau_g);
         }
         Status::OK
+    }
+
+    /// `J_k` for `k < out.len()` by the specialised pass of [`crate::inertia_pass`] (every
+    /// `|q_k| <= trig::FAST_RANGE_RAD`, checked by the caller; lengths too). Kept out of line:
+    /// inlined next to the general pass, the general pass (with gravity) ran slower.
+    #[inline(never)]
+    fn inertia_only_pass(&self, q: &[f64], out: &mut [f64]) {
+        let n = self.joints.len();
+        let (top, start) = if out.len() <= self.fixed_from {
+            (self.fixed_from - 1, &self.fixed_start)
+        } else {
+            (n - 1, &self.inertia_steps[n - 1].body)
+        };
+        leading_joint_inertias(q, &self.inertia_steps, top, start, out);
     }
 
     /// The leading `joints × joints` block of `M(q)` into the row-major `n × n` `mass`
