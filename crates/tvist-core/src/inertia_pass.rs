@@ -225,7 +225,8 @@ impl InertiaStep {
 }
 
 /// `sin`, `cos` of a joint angle and of twice it.
-struct Turn {
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Turn {
     sin: f64,
     cos: f64,
     sin_2: f64,
@@ -233,6 +234,13 @@ struct Turn {
 }
 
 impl Turn {
+    pub(crate) const ZERO_ANGLE: Turn = Turn {
+        sin: 0.0,
+        cos: 1.0,
+        sin_2: 0.0,
+        cos_2: 1.0,
+    };
+
     /// For `|q| <= trig::FAST_RANGE_RAD` (checked by the caller).
     #[inline(always)]
     fn of(q: f64) -> Turn {
@@ -250,13 +258,15 @@ impl Turn {
 ///
 /// `steps[k]` is joint `k`'s step; the bodies from joint `top + 1` on are folded into
 /// `start`, the composite of bodies `top..n` in frame `top` before its turn (constant: the
-/// turns of the joints beyond do not change it). `out.len() <= top + 1`.
+/// turns of the joints beyond do not change it). `out.len() <= top + 1`; `turns` is scratch
+/// of `q`'s length.
 #[inline]
 pub(crate) fn leading_joint_inertias(
     q: &[f64],
     steps: &[InertiaStep],
     top: usize,
     start: &AxialMoments,
+    turns: &mut [Turn],
     out: &mut [f64],
 ) {
     if out.is_empty() {
@@ -267,24 +277,24 @@ pub(crate) fn leading_joint_inertias(
         out[0] = c.sum;
         return;
     }
+    // Every angle's sine first, in the order the turns need them: none depends on the
+    // composite, so all are under way before the dependent chain of steps needs them.
+    for (t, &qk) in turns[1..=top].iter_mut().zip(&q[1..=top]).rev() {
+        *t = Turn::of(qk);
+    }
     // Joints top..=2: read, turn, carry into the frame below; joint 1: read and turn; joint
-    // 0: its inertia alone. Each angle's sine is taken one step ahead of its turn: it does
-    // not depend on the composite, so it is under way while the step before it runs.
-    let mut next = Turn::of(q[top]);
-    for (k, (&q_below, step)) in q[1..top].iter().zip(&steps[1..top]).enumerate().rev() {
-        // Joint k + 2 is read and turned; joint k + 1's sine is taken.
+    // 0: its inertia alone.
+    for (k, (turn, step)) in turns[2..=top].iter().zip(&steps[1..top]).enumerate().rev() {
         if let Some(o) = out.get_mut(k + 2) {
             *o = c.sum;
         }
-        let turn = next;
-        next = Turn::of(q_below);
-        c.turn(&turn);
+        c.turn(turn);
         c.carry_by_kind(step);
     }
     if let Some(o) = out.get_mut(1) {
         *o = c.sum;
     }
-    c.turn(&next);
+    c.turn(&turns[1]);
     out[0] = c.sum_after_carry(&steps[0]);
 }
 

@@ -11,7 +11,7 @@
 //! A non-finite joint angle (in any joint, also one nothing depends on) gives NaN entries.
 
 use crate::error::{Error, Status};
-use crate::inertia_pass::{leading_joint_inertias, AxialMoments, InertiaStep};
+use crate::inertia_pass::{leading_joint_inertias, AxialMoments, InertiaStep, Turn};
 use crate::sym_eigen::{sym_eigen, Matrix, MAX_DIM};
 
 /// Standard gravity used for gravity torques, m/s².
@@ -149,6 +149,8 @@ struct Workspace {
     /// Momentum of composite `j` moving with joint `j` at unit rate, carried down the chain
     /// to read `M[k, j]`, `k < j`.
     force: Vec<Momentum>,
+    /// The turns of the current pose for the inertia-only pass.
+    turns: Vec<Turn>,
 }
 
 impl Workspace {
@@ -159,6 +161,7 @@ impl Workspace {
             sin_cos: vec![(0.0, 1.0); n],
             up: vec![[0.0, 0.0, 1.0]; n],
             force: vec![Momentum::ZERO; n],
+            turns: vec![Turn::ZERO_ANGLE; n],
         }
     }
 }
@@ -866,14 +869,15 @@ impl Robot {
     /// `|q_k| <= trig::FAST_RANGE_RAD`, checked by the caller; lengths too). Kept out of line:
     /// inlined next to the general pass, the general pass (with gravity) ran slower.
     #[inline(never)]
-    fn inertia_only_pass(&self, q: &[f64], out: &mut [f64]) {
+    fn inertia_only_pass(&mut self, q: &[f64], out: &mut [f64]) {
         let n = self.joints.len();
         let (top, start) = if out.len() <= self.fixed_from {
             (self.fixed_from - 1, &self.fixed_start)
         } else {
             (n - 1, &self.inertia_steps[n - 1].body)
         };
-        leading_joint_inertias(q, &self.inertia_steps, top, start, out);
+        let turns = &mut self.ws.turns;
+        leading_joint_inertias(q, &self.inertia_steps, top, start, turns, out);
     }
 
     /// The leading `joints × joints` block of `M(q)` into the row-major `n × n` `mass`
