@@ -11,7 +11,11 @@
 //!   constant;
 //! - the `(x, y)` block of the second moment is carried as its trace, difference and doubled
 //!   product ([`AxialMoments`]): a turn about `z` keeps the trace (the inertia about the
-//!   axis, read directly) and rotates the other two as a plain vector by `2θ`.
+//!   axis, read directly) and rotates the other two as a plain vector by `2θ`;
+//! - every angle's sine and cosine (and those of twice the angle) are taken before the chain
+//!   of steps starts, from the top joint down (the order the steps need them): none depends
+//!   on the carried moments, so they run ahead of the chain, which then needs no spare
+//!   registers for them.
 //!
 //! The results equal the general pass to rounding (the sums are associated differently).
 

@@ -822,9 +822,7 @@ impl Robot {
     }
 
     /// Joint inertias and, if `tau_g` is given, gravity torques from one pass (the composite
-    /// rigid body algorithm: the inertias are the diagonal of [`Self::mass_matrix`]; bit for
-    /// bit with `tau_g`, to rounding without, where the
-    /// specialised inertia-only pass evaluates them).
+    /// rigid body algorithm: the inertias are exactly the diagonal of [`Self::mass_matrix`]).
     pub fn joint_inertia_and_gravity(
         &mut self,
         q: &[f64],
@@ -832,13 +830,20 @@ impl Robot {
         tau_g: Option<&mut [f64]>,
     ) -> Status {
         let n = self.joints.len();
-        self.leading_joint_inertia_and_gravity(q, n, inertia, tau_g)
+        if !Self::lengths_ok(n, q, inertia, n, &tau_g) {
+            return Status::BAD_LENGTH;
+        }
+        self.joint_space_pass(q, n, Some(inertia), None, tau_g);
+        Status::OK
     }
 
     /// [`Self::joint_inertia_and_gravity`] for joints `0..joints` only (for example the
     /// joints a dynamic map reads): entries from `joints` on are left untouched. Slices have
-    /// length `n_dof`; `joints <= n_dof`. Equal to the full evaluation to rounding (the
-    /// composites beyond the last joint read are still formed, but nothing is read from them).
+    /// length `n_dof`; `joints <= n_dof`. With `tau_g`, the same arithmetic as the full
+    /// evaluation (the composites beyond the last joint read are still formed, but nothing is
+    /// read from them); without, the inertias come from a pass specialised for them alone (the
+    /// per-cycle evaluation of a dynamic map without a gravity term) and equal the full
+    /// evaluation to rounding.
     pub fn leading_joint_inertia_and_gravity(
         &mut self,
         q: &[f64],
@@ -847,8 +852,7 @@ impl Robot {
         tau_g: Option<&mut [f64]>,
     ) -> Status {
         let n = self.joints.len();
-        let tau_ok = tau_g.as_ref().is_none_or(|t| t.len() == n);
-        if inertia.len() != n || q.len() != n || joints > n || !tau_ok {
+        if !Self::lengths_ok(n, q, inertia, joints, &tau_g) {
             return Status::BAD_LENGTH;
         }
         // Inertias alone at angles the inline sine takes (finite ones, in practice all):
@@ -863,6 +867,18 @@ impl Robot {
             self.joint_space_pass(q, joints, Some(inertia), None, tau_g);
         }
         Status::OK
+    }
+
+    /// `q` and `inertia` of `n` entries, `tau_g` too if given, `joints <= n`.
+    fn lengths_ok(
+        n: usize,
+        q: &[f64],
+        inertia: &[f64],
+        joints: usize,
+        tau_g: &Option<&mut [f64]>,
+    ) -> bool {
+        let tau_ok = tau_g.as_ref().is_none_or(|t| t.len() == n);
+        inertia.len() == n && q.len() == n && joints <= n && tau_ok
     }
 
     /// `J_k` for `k < out.len()` by the specialised pass of [`crate::inertia_pass`] (every
