@@ -330,18 +330,52 @@ impl ModeMap {
     /// stiffness or gain term. Allocation-free.
     #[inline]
     pub fn evaluate(&self, j: &[f64], tau_g: &[f64]) -> Mode {
+        self.evaluate_in_form(self.form(), j, tau_g)
+    }
+
+    /// What of the evaluation is fixed by the map itself (see [`ModeForm`]).
+    fn form(&self) -> ModeForm {
+        let (e_d, e_f) = (self.damping_gain_exponent, self.frequency_gain_exponent);
+        ModeForm {
+            // Equal ranges, so the two saturated inertias are equal too.
+            one_joint: self.frequency_joint == self.damping_joint
+                && self.frequency_range == self.damping_range,
+            gains: if e_d == 0.5 && e_f == 0.0 {
+                GainForm::SquareRoot
+            } else if e_d == 1.0 && e_f == -0.5 {
+                GainForm::DampingGain
+            } else {
+                GainForm::Powers
+            },
+        }
+    }
+
+    /// [`Self::evaluate`] with `form == self.form()` (resolved once by [`DynamicMap`]).
+    #[inline(always)]
+    fn evaluate_in_form(&self, form: ModeForm, j: &[f64], tau_g: &[f64]) -> Mode {
         let invalid = Mode::new(f64::NAN, f64::NAN);
-        let (Some(&j_f_raw), Some(&j_d_raw)) =
-            (j.get(self.frequency_joint), j.get(self.damping_joint))
-        else {
+        let Some(&j_f_raw) = j.get(self.frequency_joint) else {
             return invalid;
         };
+        let j_d_raw = if form.one_joint {
+            j_f_raw
+        } else {
+            match j.get(self.damping_joint) {
+                Some(&v) => v,
+                None => return invalid,
+            }
+        };
         // A broken input stays an error: saturation must not turn it into a plausible mode.
-        if !(j_f_raw.is_finite() && j_f_raw > 0.0 && j_d_raw.is_finite() && j_d_raw > 0.0) {
+        if !(is_positive_and_finite(j_f_raw) & is_positive_and_finite(j_d_raw)) {
             return invalid;
         }
+        // Both stay positive and finite: a range lies in (0, ∞).
         let j_f = saturate_to(self.frequency_range, j_f_raw);
-        let j_d = saturate_to(self.damping_range, j_d_raw);
+        let j_d = if form.one_joint {
+            j_f
+        } else {
+            saturate_to(self.damping_range, j_d_raw)
+        };
         let c = &self.coefficients;
         let gravity = if c.k_g != 0.0 {
             match tau_g.get(self.frequency_joint) {
@@ -359,13 +393,10 @@ impl ModeMap {
         let p_f = j_f + c.k_p;
         let gain_f = p_f * inv_j_f;
         // One joint in both roles (the general map): one division.
-        let gain_d = if j_d == j_f {
-            gain_f
-        } else {
-            1.0 + c.k_p / j_d
-        };
+        let same = form.one_joint || j_d == j_f;
+        let gain_d = if same { gain_f } else { 1.0 + c.k_p / j_d };
         // Written as positive tests so that NaN inputs fail them.
-        if !(j_f > 0.0 && j_d > 0.0 && stiffness > 0.0 && gain_f > 0.0 && gain_d > 0.0) {
+        if !(stiffness > 0.0 && gain_f > 0.0 && gain_d > 0.0) {
             return invalid;
         }
         let p = p_f * stiffness;
@@ -379,30 +410,55 @@ impl ModeMap {
             0.0
         };
         let numerator = (c.c_0 + root_term + c.c_2 * j_d) * (1.0 + c.c_tau * j_d);
-        let gains = self.gain_product(gain_d, gain_f, j_d == j_f);
+        let gains = self.gain_product(form.gains, gain_d, gain_f, same);
         let zeta = (0.5 * numerator * gains * inv_p) * root_p;
         Mode::new(wn_rad_s, zeta)
     }
 
-    /// `g_d^e_d · g_f^(e_f + ½)` for `g_d, g_f > 0` (`same`: one joint in both roles, so
-    /// `g_d == g_f`), without `powf` for the published forms: the general map (`e_d = ½`,
-    /// `e_f = 0`: `g` for one joint, `√(g_d g_f)` for two) and the UR5e base form (`e_d = 1`,
-    /// `e_f = −½`: `g_d`).
-    #[inline]
-    fn gain_product(&self, gain_d: f64, gain_f: f64, same: bool) -> f64 {
-        let (e_d, e_f) = (self.damping_gain_exponent, self.frequency_gain_exponent);
-        if e_d == 0.5 && e_f == 0.0 {
-            if same {
-                gain_f
-            } else {
-                (gain_d * gain_f).sqrt()
+    /// `g_d^e_d · g_f^(e_f + ½)` for `g_d, g_f > 0` (`same`: `g_d == g_f`), without `powf`
+    /// for the published forms: the general map (`e_d = ½`, `e_f = 0`: `g` for one joint,
+    /// `√(g_d g_f)` for two) and the UR5e base form (`e_d = 1`, `e_f = −½`: `g_d`).
+    #[inline(always)]
+    fn gain_product(&self, form: GainForm, gain_d: f64, gain_f: f64, same: bool) -> f64 {
+        match form {
+            GainForm::SquareRoot if same => gain_f,
+            GainForm::SquareRoot => (gain_d * gain_f).sqrt(),
+            GainForm::DampingGain => gain_d,
+            GainForm::Powers => {
+                let (e_d, e_f) = (self.damping_gain_exponent, self.frequency_gain_exponent);
+                gain_d.powf(e_d) * gain_f.powf(e_f + 0.5)
             }
-        } else if e_d == 1.0 && e_f == -0.5 {
-            gain_d
-        } else {
-            gain_d.powf(e_d) * gain_f.powf(e_f + 0.5)
         }
     }
+}
+
+/// What of a [`ModeMap`]'s evaluation its definition fixes, resolved once instead of tested
+/// every cycle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct ModeForm {
+    /// One joint drives both frequency and damping (with one range): `J_d = J_f`.
+    one_joint: bool,
+    gains: GainForm,
+}
+
+/// How `g_d^e_d · g_f^(e_f + ½)` is formed ([`ModeMap::gain_product`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum GainForm {
+    /// `e_d = ½`, `e_f = 0`: `√(g_d g_f)` (`g` when both are equal).
+    SquareRoot,
+    /// `e_d = 1`, `e_f = −½`: `g_d`.
+    DampingGain,
+    /// Any other exponents: `powf`.
+    Powers,
+}
+
+/// `0 < x < ∞` (false for NaN) as one integer comparison: the positive finite non-zero
+/// values are exactly the bit patterns `1..=f64::MAX.to_bits()` (sign bit clear, exponent not
+/// all ones); `+0` wraps around to the largest pattern, negative values, infinities and NaN
+/// lie above.
+#[inline(always)]
+fn is_positive_and_finite(x: f64) -> bool {
+    x.to_bits().wrapping_sub(1) < f64::MAX.to_bits()
 }
 
 /// The robot the paper's map ([`DynamicMap::paper_ur5e`]) was identified on.
@@ -417,6 +473,8 @@ pub struct DynamicMap {
     /// [`Self::required_joints`] and [`Self::uses_gravity`], fixed by the modes.
     required_joints: usize,
     uses_gravity: bool,
+    /// Each mode's [`ModeMap::form`], resolved once.
+    forms: Vec<ModeForm>,
 }
 
 impl DynamicMap {
@@ -508,6 +566,7 @@ impl DynamicMap {
                 .max()
                 .unwrap_or(0),
             uses_gravity: modes.iter().any(ModeMap::uses_gravity),
+            forms: modes.iter().map(ModeMap::form).collect(),
             modes,
             robot,
         }
@@ -542,8 +601,8 @@ impl DynamicMap {
         if self.uses_gravity() && tau_g.len() < self.required_joints() {
             return Status::BAD_LENGTH;
         }
-        for (o, mode) in out.iter_mut().zip(&self.modes) {
-            *o = mode.evaluate(j, tau_g);
+        for (o, (mode, form)) in out.iter_mut().zip(self.modes.iter().zip(&self.forms)) {
+            *o = mode.evaluate_in_form(*form, j, tau_g);
         }
         Status::OK
     }

@@ -31,6 +31,7 @@ pub mod dynmap;
 pub mod ei;
 pub mod error;
 mod held_input;
+mod inertia_pass;
 pub mod limits;
 pub mod map_dynamics;
 #[cfg(feature = "json")]

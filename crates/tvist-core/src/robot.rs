@@ -11,6 +11,7 @@
 //! A non-finite joint angle (in any joint, also one nothing depends on) gives NaN entries.
 
 use crate::error::{Error, Status};
+use crate::inertia_pass::{leading_joint_inertias, AxialMoments, InertiaStep, Turn};
 use crate::sym_eigen::{sym_eigen, Matrix, MAX_DIM};
 
 /// Standard gravity used for gravity torques, m/s².
@@ -148,6 +149,8 @@ struct Workspace {
     /// Momentum of composite `j` moving with joint `j` at unit rate, carried down the chain
     /// to read `M[k, j]`, `k < j`.
     force: Vec<Momentum>,
+    /// The turns of the current pose for the inertia-only pass.
+    turns: Vec<Turn>,
 }
 
 impl Workspace {
@@ -158,6 +161,7 @@ impl Workspace {
             sin_cos: vec![(0.0, 1.0); n],
             up: vec![[0.0, 0.0, 1.0]; n],
             force: vec![Momentum::ZERO; n],
+            turns: vec![Turn::ZERO_ANGLE; n],
         }
     }
 }
@@ -168,10 +172,10 @@ impl Workspace {
 /// `z` axis is `E_xx + E_yy`. Moments of rigidly joined bodies add; a frame change transforms
 /// them exactly ([`Moments::move_to_parent`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Moments {
-    mass_kg: f64,
-    first_kg_m: [f64; 3],
-    second_kg_m2: [f64; 6],
+pub(crate) struct Moments {
+    pub(crate) mass_kg: f64,
+    pub(crate) first_kg_m: [f64; 3],
+    pub(crate) second_kg_m2: [f64; 6],
 }
 
 impl Moments {
@@ -216,7 +220,7 @@ impl Moments {
     /// Rx(α) r`. The turn `Rz(q_k)` follows in [`Self::turn_z`]; it leaves the inertia about
     /// `z` (`E_xx + E_yy`) unchanged.
     #[inline]
-    fn move_to_parent(&mut self, dh: &DhConstants) {
+    pub(crate) fn move_to_parent(&mut self, dh: &DhConstants) {
         let (m, h, e) = (self.mass_kg, &mut self.first_kg_m, &mut self.second_kg_m2);
         // Rx(α): the (y, z) plane turns.
         match dh.twist {
@@ -369,7 +373,7 @@ fn rotate_sym_plane(e: &mut [f64; 6], uu: usize, vv: usize, uv: usize, c2: f64, 
 
 /// The twist `Rx(α)` of a DH step, by kind: most arms use only `α ∈ {0, ±π/2}`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Twist {
+pub(crate) enum Twist {
     /// `α = 0`: nothing turns.
     None,
     /// `α = ±π/2` (to within 1e-15 rad, below the rounding of `π/2` itself): `(y, z) ↦
@@ -381,14 +385,14 @@ enum Twist {
 
 /// Per-joint constants of the DH step `Tz(d) Tx(a) Rx(α)`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct DhConstants {
-    twist: Twist,
-    a_m: f64,
-    d_m: f64,
-    cos_alpha: f64,
-    sin_alpha: f64,
-    cos_2alpha: f64,
-    sin_2alpha: f64,
+pub(crate) struct DhConstants {
+    pub(crate) twist: Twist,
+    pub(crate) a_m: f64,
+    pub(crate) d_m: f64,
+    pub(crate) cos_alpha: f64,
+    pub(crate) sin_alpha: f64,
+    pub(crate) cos_2alpha: f64,
+    pub(crate) sin_2alpha: f64,
 }
 
 impl DhConstants {
@@ -435,6 +439,10 @@ pub struct Robot {
     /// same at every pose): where a pass that reads none of the joints from `fixed_from − 1`
     /// on starts.
     fixed_before_turn: Moments,
+    /// Per joint, the constants of the inertia-only pass ([`crate::inertia_pass`]).
+    inertia_steps: Vec<InertiaStep>,
+    /// [`Self::fixed_before_turn`] in that pass's form.
+    fixed_start: AxialMoments,
     ws: Workspace,
     /// The robot's name (for example `"ur5e"`), if it has one: dynamic maps are checked
     /// against it.
@@ -480,6 +488,8 @@ impl Robot {
             fixed_from: n,
             fixed_composite: Moments::ZERO,
             fixed_before_turn: Moments::ZERO,
+            inertia_steps: Vec::with_capacity(n),
+            fixed_start: AxialMoments::ZERO,
             joints,
             links,
             payload,
@@ -543,6 +553,16 @@ impl Robot {
         self.fixed_before_turn = self.fixed_composite;
         self.fixed_before_turn.add(&self.moments[last]);
         self.fixed_before_turn.move_to_parent(&self.dh[last]);
+        self.fixed_start = AxialMoments::of(&self.fixed_before_turn);
+        // Mass of the composite of bodies k..n, from the flange inwards.
+        let mut beyond_kg = 0.0;
+        self.inertia_steps.clear();
+        for k in (0..n).rev() {
+            beyond_kg += self.bodies[k].mass_kg;
+            let step = InertiaStep::of(&self.dh[k], &self.moments[k], beyond_kg);
+            self.inertia_steps.push(step);
+        }
+        self.inertia_steps.reverse();
     }
 
     /// Replaces the payload (setup-time call: validates).
@@ -810,13 +830,20 @@ impl Robot {
         tau_g: Option<&mut [f64]>,
     ) -> Status {
         let n = self.joints.len();
-        self.leading_joint_inertia_and_gravity(q, n, inertia, tau_g)
+        if !Self::lengths_ok(n, q, inertia, n, &tau_g) {
+            return Status::BAD_LENGTH;
+        }
+        self.joint_space_pass(q, n, Some(inertia), None, tau_g);
+        Status::OK
     }
 
     /// [`Self::joint_inertia_and_gravity`] for joints `0..joints` only (for example the
     /// joints a dynamic map reads): entries from `joints` on are left untouched. Slices have
-    /// length `n_dof`; `joints <= n_dof`. The same arithmetic as the full evaluation (the
-    /// composites beyond the last joint read are still formed, but nothing is read from them).
+    /// length `n_dof`; `joints <= n_dof`. With `tau_g`, the same arithmetic as the full
+    /// evaluation (the composites beyond the last joint read are still formed, but nothing is
+    /// read from them); without, the inertias come from a pass specialised for them alone (the
+    /// per-cycle evaluation of a dynamic map without a gravity term) and equal the full
+    /// evaluation to rounding.
     pub fn leading_joint_inertia_and_gravity(
         &mut self,
         q: &[f64],
@@ -825,12 +852,48 @@ impl Robot {
         tau_g: Option<&mut [f64]>,
     ) -> Status {
         let n = self.joints.len();
-        let tau_ok = tau_g.as_ref().is_none_or(|t| t.len() == n);
-        if inertia.len() != n || q.len() != n || joints > n || !tau_ok {
+        if !Self::lengths_ok(n, q, inertia, joints, &tau_g) {
             return Status::BAD_LENGTH;
         }
-        self.joint_space_pass(q, joints, Some(inertia), None, tau_g);
+        // Inertias alone at angles the inline sine takes (finite ones, in practice all):
+        // the specialised pass. Non-finite angles (NaN entries) and gravity: the general one.
+        let in_range = || {
+            q.iter()
+                .fold(true, |ok, v| ok & (v.abs() <= crate::trig::FAST_RANGE_RAD))
+        };
+        if tau_g.is_none() && in_range() {
+            self.inertia_only_pass(q, &mut inertia[..joints]);
+        } else {
+            self.joint_space_pass(q, joints, Some(inertia), None, tau_g);
+        }
         Status::OK
+    }
+
+    /// `q` and `inertia` of `n` entries, `tau_g` too if given, `joints <= n`.
+    fn lengths_ok(
+        n: usize,
+        q: &[f64],
+        inertia: &[f64],
+        joints: usize,
+        tau_g: &Option<&mut [f64]>,
+    ) -> bool {
+        let tau_ok = tau_g.as_ref().is_none_or(|t| t.len() == n);
+        inertia.len() == n && q.len() == n && joints <= n && tau_ok
+    }
+
+    /// `J_k` for `k < out.len()` by the specialised pass of [`crate::inertia_pass`] (every
+    /// `|q_k| <= trig::FAST_RANGE_RAD`, checked by the caller; lengths too). Kept out of line:
+    /// inlined next to the general pass, the general pass (with gravity) ran slower.
+    #[inline(never)]
+    fn inertia_only_pass(&mut self, q: &[f64], out: &mut [f64]) {
+        let n = self.joints.len();
+        let (top, start) = if out.len() <= self.fixed_from {
+            (self.fixed_from - 1, &self.fixed_start)
+        } else {
+            (n - 1, &self.inertia_steps[n - 1].body)
+        };
+        let turns = &mut self.ws.turns;
+        leading_joint_inertias(q, &self.inertia_steps, top, start, turns, out);
     }
 
     /// The leading `joints × joints` block of `M(q)` into the row-major `n × n` `mass`

@@ -30,7 +30,13 @@ fn robot_map_and_map_shaper_never_allocate() {
             robot.joint_inertia_and_gravity(q, &mut j, Some(&mut tau));
             robot.leading_joint_inertia_and_gravity(q, 2, &mut j, Some(&mut tau));
             robot.leading_mass_matrix_and_gravity(q, 3, &mut m, Some(&mut tau));
+            // The inertia-only pass, for every number of joints read.
+            for joints in 0..=6 {
+                robot.leading_joint_inertia_and_gravity(q, joints, &mut j, None);
+            }
         }
+        // An angle beyond the inline sine's range takes the general pass.
+        robot.leading_joint_inertia_and_gravity(&[0.0, 0.0, 2.0e5, 0.0, 0.0, 0.0], 2, &mut j, None);
         // Wrong lengths and NaN poses take the same allocation-free path.
         robot.mass_matrix(&[0.0; 5], &mut m);
         robot.joint_inertia(&[f64::NAN; 6], &mut j);
