@@ -237,9 +237,11 @@ impl HandUr5eZv {
     /// `(A0, delay in samples)` of the ZV shaper for `(ω_n, ζ)`.
     #[inline(always)]
     fn zv(&self, wn_rad_s: f64, zeta: f64) -> (f64, f64) {
-        let root = (1.0 - zeta * zeta).sqrt();
-        let k = (-zeta * PI / root).exp();
-        (1.0 / (1.0 + k), PI * self.inv_dt_s / (wn_rad_s * root))
+        // π/√u as (π/u)·√u: the division beside the square root, not after it.
+        let u = 1.0 - zeta * zeta;
+        let (pi_per_u, root) = (PI / u, u.sqrt());
+        let k = (-zeta * pi_per_u * root).exp();
+        (1.0 / (1.0 + k), pi_per_u * root * self.inv_dt_s / wn_rad_s)
     }
 
     #[inline(always)]
