@@ -182,14 +182,8 @@ fn unusual_robots() -> Vec<(Vec<DhJoint>, Vec<RigidBody>, RigidBody)> {
     ]
 }
 
-/// Every modes call of the provider agrees with the reference to 1e-13 relative (inertias
-/// read, `ω_n` and `ζ`). Tolerance: the inertias are sums of positive terms, each side rounds
-/// a few dozen times (the reference through six 4 × 4 products and the rotation of each
-/// tensor), and `ω_n` and `ζ` are a few products, square roots and quotients of them; the
-/// largest disagreement seen is 3.4e-15, so 1e-13 leaves a margin of 30 and still fails any
-/// change of the arithmetic's meaning (a wrong term is far above 1e-6).
-#[test]
-fn map_step_equals_a_world_frame_reference_at_random_poses() {
+/// The six UR arms with 2.5 kg on the flange axis, then [`unusual_robots`].
+fn every_arm() -> Vec<(Vec<DhJoint>, Vec<RigidBody>, RigidBody)> {
     let mut robots: Vec<(Vec<DhJoint>, Vec<RigidBody>, RigidBody)> =
         ["ur3e", "ur5e", "ur10e", "ur16e", "ur20", "ur5"]
             .iter()
@@ -199,6 +193,18 @@ fn map_step_equals_a_world_frame_reference_at_random_poses() {
             })
             .collect();
     robots.extend(unusual_robots());
+    robots
+}
+
+/// Every modes call of the provider agrees with the reference to 1e-13 relative (inertias
+/// read, `ω_n` and `ζ`). Tolerance: the inertias are sums of positive terms, each side rounds
+/// a few dozen times (the reference through six 4 × 4 products and the rotation of each
+/// tensor), and `ω_n` and `ζ` are a few products, square roots and quotients of them; the
+/// largest disagreement seen is 3.4e-15, so 1e-13 leaves a margin of 30 and still fails any
+/// change of the arithmetic's meaning (a wrong term is far above 1e-6).
+#[test]
+fn map_step_equals_a_world_frame_reference_at_random_poses() {
+    let robots = every_arm();
     let mut rng = Rng(0x5EED_F3A9);
     let mut worst = 0.0f64;
     for (joints, links, payload) in robots {
@@ -243,15 +249,7 @@ fn map_step_equals_a_world_frame_reference_at_random_poses() {
 /// the joints beyond those read untouched. Tolerance 1e-13 relative, as above.
 #[test]
 fn inertias_alone_equal_the_reference_for_every_number_of_joints_read() {
-    let mut robots: Vec<(Vec<DhJoint>, Vec<RigidBody>, RigidBody)> =
-        ["ur3e", "ur5e", "ur10e", "ur16e", "ur20", "ur5"]
-            .iter()
-            .map(|name| {
-                let (joints, links) = ur_chain(name);
-                (joints, links, RigidBody::point(2.5, [0.0, 0.0, 0.05]))
-            })
-            .collect();
-    robots.extend(unusual_robots());
+    let robots = every_arm();
     let mut rng = Rng(0x1A2B_3C4D);
     let mut worst = 0.0f64;
     for (joints, links, payload) in robots {
