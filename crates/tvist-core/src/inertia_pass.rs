@@ -19,7 +19,7 @@
 //!
 //! The results equal the general pass to rounding (the sums are associated differently).
 
-use crate::robot::{DhConstants, Moments, Twist};
+use crate::robot::{rotate_pair, DhConstants, Moments, Twist};
 
 /// The mass-free part of [`Moments`] (about the frame origin, in frame coordinates) in the
 /// form a turn about `z` acts on simply: `sum = E_xx + E_yy` (the inertia about `z`, kept by
@@ -300,12 +300,6 @@ pub(crate) fn leading_joint_inertias(
     }
     c.turn(&turns[1]);
     out[0] = c.sum_after_carry(&steps[0]);
-}
-
-/// `(u, v) ↦ (c u − s v, s u + c v)`.
-#[inline(always)]
-fn rotate_pair(u: f64, v: f64, c: f64, s: f64) -> (f64, f64) {
-    (c * u - s * v, s * u + c * v)
 }
 
 /// The symmetric block `[[uu, uv], [uv, vv]]` turned by `θ` (`c2 = cos 2θ`, `s2 = sin 2θ`):

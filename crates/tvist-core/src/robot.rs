@@ -353,7 +353,7 @@ impl Momentum {
 
 /// `(u, v) ↦ (c u − s v, s u + c v)`: a vector's components in a plane turned by `(s, c)`.
 #[inline]
-fn rotate_pair(u: f64, v: f64, c: f64, s: f64) -> (f64, f64) {
+pub(crate) fn rotate_pair(u: f64, v: f64, c: f64, s: f64) -> (f64, f64) {
     (c * u - s * v, s * u + c * v)
 }
 
