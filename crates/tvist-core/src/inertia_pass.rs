@@ -60,6 +60,30 @@ impl AxialMoments {
         }
     }
 
+    /// `E_xx`, kg m².
+    #[inline(always)]
+    fn e_xx(&self) -> f64 {
+        0.5 * (self.sum + self.diff)
+    }
+
+    /// `E_yy`, kg m².
+    #[inline(always)]
+    fn e_yy(&self) -> f64 {
+        0.5 * (self.sum - self.diff)
+    }
+
+    /// `(E_yy, E_zz, E_yz)` after the general twist `Rx(α)` of `step`.
+    #[inline(always)]
+    fn yz_block_twisted(&self, step: &InertiaStep) -> (f64, f64, f64) {
+        rotate_sym(
+            self.e_yy(),
+            self.zz,
+            self.yz,
+            step.cos_2alpha,
+            step.sin_2alpha,
+        )
+    }
+
     /// `Rz(θ)`: the moments in axes turned by `θ` about `z`.
     #[inline(always)]
     fn turn(&mut self, t: &Turn) {
@@ -80,22 +104,15 @@ impl AxialMoments {
             // (y, z) ↦ (−s z, s y), s = ±1: E_yy and E_zz swap, E_yz changes sign,
             // (E_xy, E_xz) ↦ (−s E_xz, s E_xy), (h_y, h_z) ↦ (−s h_z, s h_y).
             let s = step.sin_alpha;
-            let e_xx = 0.5 * (v.sum + v.diff);
-            let e_yy = 0.5 * (v.sum - v.diff);
+            let (e_xx, e_yy) = (v.e_xx(), v.e_yy());
             (v.sum, v.diff, v.zz) = (e_xx + v.zz, e_xx - v.zz, e_yy);
             v.yz = -v.yz;
             (v.off2, v.xz) = (-2.0 * s * v.xz, 0.5 * s * v.off2);
             (v.h[1], v.h[2]) = (-s * v.h[2], s * v.h[1]);
         } else if TWIST == TWIST_GENERAL {
             let (c, s) = (step.cos_alpha, step.sin_alpha);
-            let e_xx = 0.5 * (v.sum + v.diff);
-            let (e_yy, zz, yz) = rotate_sym(
-                0.5 * (v.sum - v.diff),
-                v.zz,
-                v.yz,
-                step.cos_2alpha,
-                step.sin_2alpha,
-            );
+            let e_xx = v.e_xx();
+            let (e_yy, zz, yz) = v.yz_block_twisted(step);
             (v.sum, v.diff, v.zz, v.yz) = (e_xx + e_yy, e_xx - e_yy, zz, yz);
             let (xy, xz) = rotate_pair(0.5 * v.off2, v.xz, c, s);
             (v.off2, v.xz) = (2.0 * xy, xz);
@@ -133,17 +150,8 @@ impl AxialMoments {
         let v = self;
         let moved = match step.twist {
             Twist::None => v.sum,
-            Twist::Quarter(_) => 0.5 * (v.sum + v.diff) + v.zz,
-            Twist::General => {
-                let (e_yy, _, _) = rotate_sym(
-                    0.5 * (v.sum - v.diff),
-                    v.zz,
-                    v.yz,
-                    step.cos_2alpha,
-                    step.sin_2alpha,
-                );
-                0.5 * (v.sum + v.diff) + e_yy
-            }
+            Twist::Quarter(_) => v.e_xx() + v.zz,
+            Twist::General => v.e_xx() + v.yz_block_twisted(step).0,
         };
         let shift = step.two_a * v.h[0];
         (moved + shift) + step.body.sum

@@ -182,6 +182,15 @@ fn unusual_robots() -> Vec<(Vec<DhJoint>, Vec<RigidBody>, RigidBody)> {
     ]
 }
 
+/// `links` with `payload` merged into the last one: the bodies the reference evaluates.
+fn with_payload(links: &[RigidBody], payload: &RigidBody) -> Vec<RigidBody> {
+    let mut bodies = links.to_vec();
+    if let Some(last) = bodies.last_mut() {
+        *last = last.combined(payload);
+    }
+    bodies
+}
+
 /// The six UR arms with 2.5 kg on the flange axis, then [`unusual_robots`].
 fn every_arm() -> Vec<(Vec<DhJoint>, Vec<RigidBody>, RigidBody)> {
     let mut robots: Vec<(Vec<DhJoint>, Vec<RigidBody>, RigidBody)> =
@@ -209,9 +218,7 @@ fn map_step_equals_a_world_frame_reference_at_random_poses() {
     let mut worst = 0.0f64;
     for (joints, links, payload) in robots {
         let robot = Robot::new(joints.clone(), links.clone(), payload).expect("valid robot");
-        let mut bodies = links.clone();
-        let last = bodies.len() - 1;
-        bodies[last] = links[last].combined(&payload);
+        let bodies = with_payload(&links, &payload);
         // The paper's map was identified on the UR5e; on the larger arms its damping law
         // leaves the underdamped range, so it is exercised on the arms of its size.
         let arm_size_of_ur5e =
@@ -254,9 +261,7 @@ fn inertias_alone_equal_the_reference_for_every_number_of_joints_read() {
     let mut worst = 0.0f64;
     for (joints, links, payload) in robots {
         let mut robot = Robot::new(joints.clone(), links.clone(), payload).expect("valid robot");
-        let mut bodies = links.clone();
-        let last = bodies.len() - 1;
-        bodies[last] = links[last].combined(&payload);
+        let bodies = with_payload(&links, &payload);
         let n = joints.len();
         for trial in 0..100 {
             let mut q = rng.pose(n);
@@ -291,9 +296,7 @@ fn gravity_torques_equal_the_reference_at_random_poses() {
     let mut rng = Rng(77);
     for (joints, links, payload) in unusual_robots() {
         let mut robot = Robot::new(joints.clone(), links.clone(), payload).expect("valid robot");
-        let mut bodies = links.clone();
-        let last = bodies.len() - 1;
-        bodies[last] = links[last].combined(&payload);
+        let bodies = with_payload(&links, &payload);
         let n = joints.len();
         for _ in 0..200 {
             let q = rng.pose(n);
@@ -390,8 +393,7 @@ fn inertias_with_random_payloads_equal_the_reference_at_random_poses() {
             };
             let mut robot =
                 Robot::new(joints.clone(), links.clone(), payload).expect("valid payload");
-            let mut bodies = links.clone();
-            bodies[n - 1] = links[n - 1].combined(&payload);
+            let bodies = with_payload(&links, &payload);
             for _ in 0..25 {
                 let q = rng.pose(n);
                 let (j_ref, tau_ref) = reference_inertia_and_gravity(&joints, &bodies, &q);
