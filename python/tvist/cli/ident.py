@@ -478,7 +478,8 @@ def add_fit_map_command(sub: argparse._SubParsersAction) -> None:
         "--kind",
         choices=("paper10", "modal"),
         default="paper10",
-        help="map form: the published 10 coefficients (paper10) or the modal map (modal)",
+        help="map form: the published 10 coefficients (paper10, the default) or the modal "
+        "map (modal)",
     )
     p.add_argument(
         "--include-low-confidence", action="store_true", help="also use flagged identifications"

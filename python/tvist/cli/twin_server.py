@@ -64,7 +64,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         payload_from="default 0: none",
         payload_default=0.0,
     )
-    p.add_argument("--host", default="127.0.0.1", help="address to listen on")
+    p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
     p.add_argument(
         "--q0",
         type=float,
