@@ -244,3 +244,14 @@ def test_run_with_a_map_uses_the_controller_payload_and_says_so(server, tmp_path
         f"controller at {HOST}"
     ) in done.stdout
     assert log_payload(log).mass_kg == PAYLOAD_KG  # and the log names it for identify
+
+
+def test_sensitivity_of_a_modal_map_needs_its_payload(tmp_path, capsys):
+    # A modal map's PRV panels at Q1 and Q3 depend on the payload: none given, none in the map.
+    path = tmp_path / "modal.json"
+    from modal_fit_reference import LAWS_UR5E
+
+    tvist.ModalMap(LAWS_UR5E, metadata={"robot": "ur5e"}).save(path)
+    assert main(["sensitivity", "--map", str(path), "--out", str(tmp_path / "s")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "a modal map's PRV panels" in err[0] and "--payload-kg" in err[0]

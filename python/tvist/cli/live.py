@@ -60,12 +60,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     try:
         Q, _ = read_joint_csv(existing_file(args.move, "move"))
-        shaper = _shaper(args, Q.shape[1])
-    except (OSError, ValueError) as exc:
-        return _error("run", str(exc))
-    try:
         log_path = output_file(args.log or Path(args.move).with_suffix(".rtde.csv"), "--log")
-    except ValueError as exc:
+        shaper = _shaper(args, Q.shape[1])  # after the files: it may ask the controller
+    except (OSError, ValueError) as exc:
         return _error("run", str(exc))
     from tvist.live import APPROACH_ACCEL_RAD_S2, APPROACH_SPEED_RAD_S
 

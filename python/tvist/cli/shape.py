@@ -325,6 +325,11 @@ def _cmd_shape(args: argparse.Namespace) -> int:
         raise ValueError("give a CSV file or --bag BAG (one of them)")
     if not (np.isfinite(args.dt_s) and args.dt_s > 0):
         raise ValueError(f"--dt-s must be > 0; got {args.dt_s}")
+    if args.bag is None:  # the files first, then the payload (which may come from the map)
+        existing_file(args.input, "input")
+        output_file(args.out, "--out")
+    else:
+        existing_dir(args.bag, "--bag")
     robot, dynamics = _robot_and_dynamics(args)
     if args.bag is not None:
         return _cmd_shape_bag(args, robot, dynamics)
