@@ -255,3 +255,22 @@ def test_sensitivity_of_a_modal_map_needs_its_payload(tmp_path, capsys):
     assert main(["sensitivity", "--map", str(path), "--out", str(tmp_path / "s")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "a modal map's PRV panels" in err[0] and "--payload-kg" in err[0]
+
+
+def test_the_recorder_leaves_out_optional_fields_a_controller_lacks(server, tmp_path):
+    # A controller without the payload fields (before e-Series 5.5.1) answers NOT_FOUND for
+    # them: the recording goes on without them. A name the twin does not know stands in.
+    from tvist.live import LOG_FIELDS, RtdeRecorder
+
+    path = tmp_path / "log.csv"
+    with RtdeRecorder(HOST, path, LOG_FIELDS, optional_fields=("no_such_field",)) as recorder:
+        recorder.wait_newer(recorder.n_samples)
+        assert recorder.fields == LOG_FIELDS
+    with RtdeRecorder(HOST, None, ("timestamp",), optional_fields=("payload",)) as recorder:
+        assert recorder.fields == ("timestamp", "payload")
+        assert recorder.latest["payload"] == PAYLOAD_KG
+    header = path.read_text().splitlines()[0]
+    assert header.startswith("timestamp,target_q_0") and "no_such_field" not in header
+    # A required field the controller lacks is still refused, naming it.
+    with pytest.raises(ValueError, match="does not provide no_such_field"):
+        RtdeRecorder(HOST, tmp_path / "x.csv", ("timestamp", "no_such_field"))
