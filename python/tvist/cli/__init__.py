@@ -40,7 +40,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tvist",
         description="Vibration suppression for robot arms: shaping, identification, the "
-        "simulated twin and reports.",
+        "simulated twin and reports. Frequencies are in Hz on the command line (undamped "
+        "natural frequencies), rad/s in the Python API; times in s.",
     )
     parser.add_argument("--version", action="version", version=f"tvist {_version()}")
     parser.add_argument(
