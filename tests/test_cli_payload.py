@@ -143,6 +143,15 @@ def test_identify_takes_the_payload_the_log_names(logs, capsys):
     assert json.loads(capsys.readouterr().out) == from_log
 
 
+def test_identify_batch_takes_each_logs_payload(logs, tmp_path, capsys):
+    out = tmp_path / "r.jsonl"
+    assert main(["identify", str(logs["named"]), "--out", str(out), "--workers", "1"]) == 0
+    assert "payload from each log's payload columns: 3 kg (1 logs)" in capsys.readouterr().out
+    (record,) = [json.loads(line) for line in out.read_text().splitlines()]
+    assert record["payload_kg"] == LOG_PAYLOAD_KG
+    assert record["payload_com_m"] == list(LOG_PAYLOAD_COM_M)
+
+
 def test_a_log_whose_payload_changes_is_refused(logs, tmp_path):
     lines = logs["named"].read_text().splitlines()
     half = len(lines) // 2
