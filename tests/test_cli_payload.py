@@ -152,6 +152,21 @@ def test_identify_batch_takes_each_logs_payload(logs, tmp_path, capsys):
     assert record["payload_com_m"] == list(LOG_PAYLOAD_COM_M)
 
 
+def test_a_repaired_log_still_names_its_payload(logs, tmp_path, capsys):
+    # A malformed row refused by default and dropped with --repair: the payload is read from
+    # the rows that remain, as the log itself is.
+    lines = logs["named"].read_text().splitlines()
+    path = tmp_path / "torn.csv"
+    path.write_text("\n".join([*lines[:50], "1.0,2.0", *lines[50:]]) + "\n")
+    argv = ["identify", str(path), "--joint", "1", "--repair", "drop-bad-rows"]
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    assert "payload 3 kg, centre of mass 0 0 0.05 m (flange frame), from the log's" in (
+        captured.out
+    )
+    assert "dropped 1 malformed row" in captured.err
+
+
 def test_a_log_whose_payload_changes_is_refused(logs, tmp_path):
     lines = logs["named"].read_text().splitlines()
     half = len(lines) // 2

@@ -437,7 +437,15 @@ def log_payload(path: str | Path):
     """
     from tvist.robots import Payload
 
-    table = read_table(path, (), PAYLOAD_COLUMNS, separator=_detect_separator)
+    # Only the payload is read here; the log itself is judged (or repaired, as asked) by
+    # read_rtde_csv, so malformed rows are simply passed over.
+    table = read_table(
+        path,
+        (),
+        PAYLOAD_COLUMNS,
+        separator=_detect_separator,
+        repair=("drop-bad-rows", "keep-first-duplicate"),
+    )
     if set(table.columns) != set(PAYLOAD_COLUMNS):
         return None
     values = table.data[:, [table.columns[c] for c in PAYLOAD_COLUMNS]]
