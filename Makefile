@@ -6,7 +6,7 @@ export VIRTUAL_ENV := $(CURDIR)/$(VENV)
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml -o -name '*.json') Cargo.toml pyproject.toml
 
-.PHONY: demo test build lint fmt bench rust-test ffi-test cpp-example pytest wheel clean mutants
+.PHONY: demo test build lint fmt bench rust-test ffi-test cpp-example cpp-containers pytest wheel clean mutants
 
 demo: build
 	$(PY) -m tvist.cli demo
@@ -33,7 +33,7 @@ rust-test:
 # printed, dynamically; the C++ example (header-only tvist.hpp) on a map file. All are run.
 FFI_LIBS := -lgcc_s -lutil -lrt -lpthread -lm -ldl
 CXX ?= c++
-ffi-test: build cpp-example
+ffi-test: build cpp-example cpp-containers
 	@mkdir -p target/c
 	cc -std=c11 -Wall -Wextra -Werror -Iinclude examples/c/shape_move.c \
 		target/release/libtvist.a $(FFI_LIBS) -o target/c/shape_move
@@ -43,6 +43,8 @@ ffi-test: build cpp-example
 	./target/c/shape_move_shared
 	$(PY) -c "import tvist; tvist.DynamicMap.paper_ur5e().save('target/cpp/paper_ur5e.json')"
 	./target/cpp/shape_with_map ur5e 5.0 0 0 0.05 target/cpp/paper_ur5e.json 0.002 zv
+	./target/cpp/hpp_containers_17
+	./target/cpp/hpp_containers_20
 
 # The C++ example against libtvist.a (the pytest parity test uses it too).
 cpp-example:
@@ -50,6 +52,15 @@ cpp-example:
 	@mkdir -p target/cpp
 	$(CXX) -std=c++17 -Wall -Wextra -Werror -Iinclude examples/cpp/shape_with_map.cpp \
 		target/release/libtvist.a $(FFI_LIBS) -o target/cpp/shape_with_map
+
+# tvist.hpp's container overloads against the pointer forms, as C++17 and as C++20.
+cpp-containers:
+	cargo build -p tvist-ffi --release -q
+	@mkdir -p target/cpp
+	for std in 17 20; do \
+		$(CXX) -std=c++$$std -Wall -Wextra -Werror -Iinclude tests/cpp/hpp_containers.cpp \
+			target/release/libtvist.a $(FFI_LIBS) -o target/cpp/hpp_containers_$$std || exit 1; \
+	done
 
 # Release wheel (abi3, Python >= 3.10) into dist/: installs without a Rust toolchain.
 wheel: $(PY)

@@ -1,11 +1,15 @@
 /*
- * tvist.hpp - header-only C++17 wrapper of the C API (tvist.h): an RAII, move-only shaper
+ * tvist.hpp - header-only C++17 (and C++20) wrapper of the C API (tvist.h): an RAII, move-only shaper
  * handle. Setup errors throw tvist::Error (with the library's code and message); the
  * per-cycle calls are noexcept, allocation-free and return the status bits.
  *
  *   tvist::Shaper s = tvist::Shaper::from_map("ur10e", 5.0, {0, 0, 0.05}, "map.json", 0.002);
  *   s.reset(q0);
  *   int32_t status = s.step(q_planned, q_cmd);   // every cycle; q arrays of s.n_dof() doubles
+ *
+ * step and reset take raw pointers (n_dof() doubles), std::array<double, N>, std::vector<double>
+ * and, in C++20, std::span; on a length other than n_dof() the sized forms return
+ * TVIST_STATUS_BAD_LENGTH (step) or TVIST_ERR_DIMENSION_MISMATCH (reset).
  *
  * Link as for the C API (libtvist.a or libtvist.so).
  */
@@ -19,6 +23,9 @@
 #include <string>
 #include <utility>
 #include <vector>
+#if __cplusplus >= 202002L
+#include <span>
+#endif
 
 #include "tvist.h"
 
@@ -71,7 +78,8 @@ public:
         return Shaper(out);
     }
 
-    /* The map in map_json_path (paper10 or modal map file) for UR e-Series robot `robot` with a point payload. */
+    /* The map in map_json_path (paper10 or modal map file) for UR robot `robot` (e-Series or
+     * CB-series, see TVIST_ERR_UNKNOWN_ROBOT) with a point payload. */
     static Shaper from_map(const std::string &robot, double payload_kg,
                            const std::array<double, 3> &payload_com_m,
                            const std::string &map_json_path, double dt_s,
@@ -111,8 +119,36 @@ public:
         return tvist_shaper_step(handle_, q_in, q_out, n_dof());
     }
 
+    /* One cycle on containers that know their length (std::array<double, N>, std::vector;
+     * std::span in C++20): TVIST_STATUS_BAD_LENGTH unless both hold n_dof() doubles. */
+    template <std::size_t N>
+    int32_t step(const std::array<double, N> &q_in, std::array<double, N> &q_out) noexcept {
+        return tvist_shaper_step(handle_, q_in.data(), q_out.data(), N);
+    }
+    int32_t step(const std::vector<double> &q_in, std::vector<double> &q_out) noexcept {
+        return step_n(q_in.data(), q_in.size(), q_out.data(), q_out.size());
+    }
+
     /* At rest at q0 (n_dof() doubles). */
     int32_t reset(const double *q0) noexcept { return tvist_shaper_reset(handle_, q0, n_dof()); }
+
+    /* At rest at q0 (a container of n_dof() doubles; TVIST_ERR_DIMENSION_MISMATCH otherwise). */
+    template <std::size_t N>
+    int32_t reset(const std::array<double, N> &q0) noexcept {
+        return tvist_shaper_reset(handle_, q0.data(), N);
+    }
+    int32_t reset(const std::vector<double> &q0) noexcept {
+        return tvist_shaper_reset(handle_, q0.data(), q0.size());
+    }
+
+#if __cplusplus >= 202002L
+    int32_t step(std::span<const double> q_in, std::span<double> q_out) noexcept {
+        return step_n(q_in.data(), q_in.size(), q_out.data(), q_out.size());
+    }
+    int32_t reset(std::span<const double> q0) noexcept {
+        return tvist_shaper_reset(handle_, q0.data(), q0.size());
+    }
+#endif
 
     double delay_s() const noexcept { return tvist_shaper_delay_s(handle_); }
     std::size_t n_dof() const noexcept { return tvist_shaper_n_dof(handle_); }
@@ -135,6 +171,14 @@ private:
         tvist_last_error_message(&text[0], text.size());
         text.pop_back();
         return text;
+    }
+
+    /* tvist_shaper_step on arrays of stated lengths. The library checks the length against
+     * n_dof (TVIST_STATUS_BAD_LENGTH, counted, nothing accessed); arrays of two lengths are
+     * passed as length 0 so that they get the same answer. */
+    int32_t step_n(const double *q_in, std::size_t n_in, double *q_out,
+                   std::size_t n_out) noexcept {
+        return tvist_shaper_step(handle_, q_in, q_out, n_in == n_out ? n_in : 0);
     }
 
     static void check(int32_t code) {

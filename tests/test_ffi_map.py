@@ -190,3 +190,28 @@ def test_the_readme_dynamic_link_line_works_as_printed(program, tmp_path):
     run = subprocess.run([str(binary)], capture_output=True, text=True, env={"PATH": "/usr/bin"})
     assert run.returncode == 0, run.stderr
     assert "ok: the shaped move ends where the commanded one does" in run.stdout
+
+
+def test_cpp_unknown_robot_error_quotes_the_name(program, tmp_path):
+    # The message shows the name as typed, in quotes (not a Rust Option), and the known names.
+    path = tmp_path / "ur5e.json"
+    tvist.DynamicMap.paper_ur5e().save(path)
+    args = ["ur6e", "5", "0", "0", "0.05", str(path), "0.002", "zv"]
+    run = subprocess.run([str(program), *args], capture_output=True, text=True)
+    assert run.returncode == 1
+    assert 'unknown robot "ur6e"; known: ' in run.stderr, run.stderr
+    assert "Some(" not in run.stderr
+
+
+@pytest.mark.parametrize("standard", ["17", "20"])
+def test_cpp_wrapper_takes_arrays_vectors_and_spans(standard):
+    # tests/cpp/hpp_containers.cpp: the container forms of step/reset equal the pointer forms
+    # to the last bit and refuse wrong lengths as the C API does (its own checks, exit 0).
+    subprocess.run(["make", "-s", "cpp-containers"], cwd=ROOT, check=True)
+    run = subprocess.run(
+        [str(ROOT / "target" / "cpp" / f"hpp_containers_{standard}")],
+        capture_output=True,
+        text=True,
+    )
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert run.stdout.strip() == f"ok (C++{standard})"

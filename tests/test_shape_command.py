@@ -223,7 +223,7 @@ def test_bad_files_and_arguments_are_refused(tmp_path, capsys):
     o = str(tmp_path / "o.csv")
     refused(["shape", str(back), "--out", o, "--modes", "2:0.1"], "strictly increasing", capsys)
     refused(["shape", str(ok), "--out", o], "--modes, --map", capsys)
-    refused(["shape", str(ok), "--out", o, "--paper-map"], "--robot", capsys)
+    refused(["shape", str(ok), "--out", o, "--paper-map", "--payload-kg", "5"], "--robot", capsys)
     refused(["shape", "--out", o, "--modes", "2:0.1"], "--bag", capsys)
     refused(["shape", str(ok), "--out", o, "--modes", "2:0.1", "--dt-s", "0"], "--dt-s", capsys)
     with pytest.raises(SystemExit):  # argparse: three numbers X Y Z

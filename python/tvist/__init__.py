@@ -53,8 +53,20 @@ def __getattr__(name: str):
 #: Names of the registry shapers, for :func:`shaper` and ``TvShaper(shaper=...)``.
 SHAPERS: tuple[str, ...] = tuple(_core.SHAPERS)
 
+
+class _StatusFlags(enum.IntFlag):
+    """Status bits that print as their flag names (``INPUT_HELD|DELAY_CLAMPED``, ``OK``)."""
+
+    def __str__(self) -> str:
+        names = [flag.name for flag in type(self) if flag and flag in self]
+        unknown = int(self) & ~sum(int(flag) for flag in type(self))
+        if unknown:  # bits the core has not named (a newer library): shown as a number
+            names.append(hex(unknown))
+        return "|".join(names) or "OK"
+
+
 #: Per-step status flags reported by ``TvShaper.last_status`` (defined once, in the core).
-Status = enum.IntFlag("Status", {"OK": 0, **_core.STATUS_FLAGS})
+Status = _StatusFlags("Status", {"OK": 0, **_core.STATUS_FLAGS})
 
 #: Largest ``n_dof`` of a shaper, and largest total delay-line memory (bytes) it may request;
 #: larger requests raise ``ValueError`` (limits of the core, shared with the C API).

@@ -188,6 +188,9 @@ def prv_flat(
 ) -> npt.NDArray[np.float64]: ...
 
 class ConstantModes:
+    """Fixed modes ``[(wn_rad_s, zeta), ...]``: undamped natural frequency in rad/s (2π × Hz;
+    below 2 Hz a ``UserWarning`` says so) and damping ratio."""
+
     def __init__(self, modes: Sequence[tuple[float, float]]) -> None: ...
     @property
     def modes(self) -> list[tuple[float, float]]: ...

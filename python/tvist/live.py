@@ -37,6 +37,10 @@ LOG_FIELDS = (
     "actual_TCP_pose",
     "actual_tool_accelerometer",
 )
+#: RTDE fields of the payload the controller has been told (``set_payload``, the installation):
+#: mass (kg) and centre of gravity (m, flange frame). Recorded when the controller provides
+#: them (e-Series 5.5.1 and later), so a log names the payload it was recorded with.
+PAYLOAD_FIELDS = ("payload", "payload_cog")
 #: servoJ's lookahead time (s): UR's minimum. The shaper has already removed the arm's modes
 #: from the reference; a longer lookahead only adds smoothing and lag the shaper does not
 #: account for (and, on the arm's time-varying modes, delays the reference further).
@@ -54,6 +58,24 @@ APPROACH_ACCEL_RAD_S2 = 0.5
 REALTIME_PRIORITY = 10
 #: The shaped reference has settled when it is this close to the end pose (rad).
 SETTLED_TOL_RAD = 1e-9
+
+
+def read_controller_payload(host: str, port: int = 30004):
+    """The payload the controller at ``host`` has been told (RTDE ``payload``,
+    ``payload_cog``): a :class:`tvist.robots.Payload` (kg; m in the flange frame).
+
+    Raises
+    ------
+    ValueError
+        If the controller does not provide these fields (before e-Series 5.5.1).
+    OSError
+        If the controller cannot be reached.
+    """
+    from tvist.robots import Payload
+
+    with RtdeRecorder(host, None, PAYLOAD_FIELDS, frequency_hz=10.0, port=port) as recorder:
+        values = recorder.latest
+    return Payload(float(values["payload"]), tuple(float(v) for v in values["payload_cog"]))
 
 
 def _rtde_control():
@@ -77,13 +99,16 @@ class RtdeRecorder:
     host
         Robot (or twin server) address.
     path
-        CSV to write.
+        CSV to write, or ``None`` to keep only the latest package (:attr:`latest`).
     fields
         RTDE output variables (scalars or vectors of doubles).
     frequency_hz
         Output rate asked of the controller (e-Series: up to 500 Hz).
     port
         RTDE port.
+    optional_fields
+        More variables, left out (and so not in :attr:`fields`) if the controller does not
+        provide them.
 
     Raises
     ------
@@ -100,6 +125,7 @@ class RtdeRecorder:
         fields: Sequence[str] = LOG_FIELDS,
         frequency_hz: float = 500.0,
         port: int = 30004,
+        optional_fields: Sequence[str] = (),
     ) -> None:
         import socket
         import struct
@@ -107,7 +133,7 @@ class RtdeRecorder:
         from tvist.urserver import rtde
 
         self._rtde = rtde
-        self.path = Path(path)
+        self.path = None if path is None else Path(path)
         self.latest: dict = {}
         self.n_samples = 0
         self._new_sample = threading.Condition()
@@ -118,25 +144,33 @@ class RtdeRecorder:
         reply = self._request(rtde.REQUEST_PROTOCOL_VERSION, struct.pack(">H", 2))
         if reply[:1] != b"\x01":
             raise ValueError(f"{host}: the controller refused RTDE protocol version 2")
-        names = ",".join(fields).encode()
-        reply = self._request(
-            rtde.CONTROL_PACKAGE_SETUP_OUTPUTS, struct.pack(">d", frequency_hz) + names
-        )
-        types = reply[1:].decode().split(",")
-        unknown = [f for f, t in zip(fields, types, strict=False) if t == "NOT_FOUND"]
+        fields = [*fields, *optional_fields]
+        for _ in range(2):  # the second setup leaves out the optional fields not provided
+            names = ",".join(fields).encode()
+            reply = self._request(
+                rtde.CONTROL_PACKAGE_SETUP_OUTPUTS, struct.pack(">d", frequency_hz) + names
+            )
+            types = reply[1:].decode().split(",")
+            unknown = [f for f, t in zip(fields, types, strict=False) if t == "NOT_FOUND"]
+            if not unknown or not set(unknown) <= set(optional_fields):
+                break
+            fields = [f for f in fields if f not in unknown]
         if unknown or reply[0] == 0:
             raise ValueError(
                 f"{host}: the controller does not provide {', '.join(unknown) or 'these fields'}"
                 f" at {frequency_hz:g} Hz"
             )
+        self.fields = tuple(fields)
         self._recipe = rtde.Recipe(reply[0], list(fields), types)
         self._columns = []
         for name, kind in zip(fields, types, strict=True):
             width = rtde.TYPE_WIDTHS.get(kind, 0)
             self._columns += [name] if width == 0 else [f"{name}_{i}" for i in range(width)]
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._file = self.path.open("w")
-        self._file.write(",".join(self._columns) + "\n")
+        self._file = None
+        if self.path is not None:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._file = self.path.open("w")
+            self._file.write(",".join(self._columns) + "\n")
         if self._request(rtde.CONTROL_PACKAGE_START, b"")[:1] != b"\x01":
             raise ValueError(f"{host}: the controller refused to start the output stream")
         self._first = threading.Event()
@@ -191,11 +225,12 @@ class RtdeRecorder:
                 if kind != data_kind or payload[:1] != bytes([self._recipe.recipe_id]):
                     continue
                 values = self._recipe.unpack(payload)
-                row = []
-                for name in self._recipe.names:
-                    value = values[name]
-                    row.extend(value if isinstance(value, list) else [value])
-                self._file.write(",".join(f"{float(v):.6f}" for v in row) + "\n")
+                if self._file is not None:
+                    row = []
+                    for name in self._recipe.names:
+                        value = values[name]
+                        row.extend(value if isinstance(value, list) else [value])
+                    self._file.write(",".join(f"{float(v):.6f}" for v in row) + "\n")
                 with self._new_sample:
                     self.latest = values
                     self.n_samples += 1
@@ -205,7 +240,7 @@ class RtdeRecorder:
             if not self._stop.is_set():
                 log.error("RTDE recording ended: the connection was lost")
 
-    def stop(self) -> Path:
+    def stop(self) -> Path | None:
         """Stop reading, close the connection and the file; the file's path."""
         self._stop.set()
         try:
@@ -214,7 +249,8 @@ class RtdeRecorder:
             pass
         self._thread.join(timeout=5.0)
         self._sock.close()
-        self._file.close()
+        if self._file is not None:
+            self._file.close()
         return self.path
 
     def __enter__(self) -> RtdeRecorder:
@@ -318,7 +354,9 @@ def run_shaped_move(
         time.sleep(0.5)  # let the approach's vibration pass before the log starts
         if shaper is not None:
             shaper.reset(q_ref[0].copy())
-        with RtdeRecorder(robot_ip, path, LOG_FIELDS, 1.0 / dt_s) as recorder:
+        with RtdeRecorder(
+            robot_ip, path, LOG_FIELDS, 1.0 / dt_s, optional_fields=PAYLOAD_FIELDS
+        ) as recorder:
             run = _stream(control, recorder, q_ref, shaper, dt_s, lookahead_s, gain, max_settle_s)
             time.sleep(tail_s)
             final_q = np.array(recorder.latest["actual_q"])
@@ -417,8 +455,11 @@ def record(
     stop: threading.Event | None = None,
     fields: Sequence[str] = LOG_FIELDS,
     on_start: Callable[[], object] | None = None,
+    optional_fields: Sequence[str] = PAYLOAD_FIELDS,
 ) -> Path:
-    """Record RTDE ``fields`` to ``out`` until ``duration_s`` passes, ``stop`` is set or Ctrl-C.
+    """Record RTDE ``fields`` (and ``optional_fields`` the controller provides: by default
+    the payload, so the log names it) to ``out`` until ``duration_s`` passes, ``stop`` is set
+    or Ctrl-C.
 
     ``on_start`` is called once the first sample has arrived.
 
@@ -427,7 +468,7 @@ def record(
     """
     stop = stop or threading.Event()
     deadline = None if duration_s is None else time.monotonic() + duration_s
-    recorder = RtdeRecorder(robot_ip, out, fields, frequency_hz)
+    recorder = RtdeRecorder(robot_ip, out, fields, frequency_hz, optional_fields=optional_fields)
     if on_start is not None:
         on_start()
     try:

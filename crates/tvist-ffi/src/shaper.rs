@@ -137,6 +137,17 @@ unsafe fn c_str<'a>(ptr: *const c_char) -> Option<&'a str> {
     unsafe { CStr::from_ptr(ptr) }.to_str().ok()
 }
 
+/// C string `ptr` as a user typed it, in double quotes (`"ur6e"`); bytes that are not UTF-8
+/// shown as U+FFFD.
+///
+/// # Safety
+/// `ptr` is non-null and NUL-terminated.
+unsafe fn quoted(ptr: *const c_char) -> String {
+    // SAFETY: guaranteed by the caller.
+    let text = unsafe { CStr::from_ptr(ptr) }.to_string_lossy();
+    format!("{text:?}")
+}
+
 /// The options at `options`, or the defaults for a null pointer.
 ///
 /// # Safety
@@ -232,7 +243,7 @@ fn build(provider: Provider, config: &TvShaperConfig) -> Result<TvistShaper, i32
     Ok(TvistShaper::new(shaper))
 }
 
-/// The UR e-Series entry named by C string `robot_name` (setup errors recorded).
+/// The robot data entry (e-Series or CB-series) named by C string `robot_name` (setup errors recorded).
 ///
 /// # Safety
 /// `robot_name` is non-null and NUL-terminated.
@@ -245,9 +256,11 @@ unsafe fn robot_entry(robot_name: *const c_char) -> Result<&'static RobotEntry, 
         .find(|e| Some(e.name.as_str()) == name)
         .ok_or_else(|| {
             let known: Vec<&str> = entries.iter().map(|e| e.name.as_str()).collect();
+            // SAFETY: forwarded from the caller.
+            let shown = unsafe { quoted(robot_name) };
             fail(
                 TVIST_ERR_UNKNOWN_ROBOT,
-                format!("unknown robot {name:?}; known: {}", known.join(", ")),
+                format!("unknown robot {shown}; known: {}", known.join(", ")),
             )
         })
 }
@@ -364,12 +377,12 @@ pub unsafe extern "C" fn tvist_shaper_new_ur_map(
                 ));
             }
             // SAFETY: non-null and NUL-terminated (caller).
-            let name = c_str(robot_name);
-            if name != Some(PAPER_MAP_ROBOT) {
+            if c_str(robot_name) != Some(PAPER_MAP_ROBOT) {
+                let shown = quoted(robot_name);
                 return Err(fail(
                     TVIST_ERR_UNKNOWN_ROBOT,
                     format!(
-                        "robot {name:?}: the paper's dynamic map is identified for \
+                        "robot {shown}: the paper's dynamic map is identified for \
                          {PAPER_MAP_ROBOT:?} only; use tvist_shaper_new_map with a map file \
                          for other robots"
                     ),
@@ -396,8 +409,9 @@ pub unsafe extern "C" fn tvist_shaper_new_ur_map(
 
 /// Creates a shaper driven by the map in file `map_json_path` (any map file tvist writes:
 /// `tvist fit-map`, `DynamicMap.save`, `ModalMap.save`; a `"kind": "modal"` file drives the
-/// modal provider, which solves the mass-matrix eigenproblem every cycle) for UR e-Series robot `robot_name` (`"ur3e"`,
-/// `"ur5e"`, `"ur10e"`, `"ur16e"`, `"ur20"`) with a point payload of `payload_kg` at
+/// modal provider, which solves the mass-matrix eigenproblem every cycle) for UR robot
+/// `robot_name` (e-Series `"ur3e"`, `"ur5e"`, `"ur10e"`, `"ur16e"`, `"ur20"` or CB-series
+/// `"ur3"`, `"ur5"`, `"ur10"`) with a point payload of `payload_kg` at
 /// `payload_com_m` (flange frame, m), shaping its joints sampled every `dt_s` seconds.
 ///
 /// Returns as [`tvist_shaper_new_constant`]; `TVIST_ERR_UNKNOWN_ROBOT` for an unknown robot,

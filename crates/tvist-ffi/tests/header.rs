@@ -144,3 +144,26 @@ fn every_exported_function_is_declared_and_nothing_else() {
     assert!(exported.len() >= 8, "{exported:?}");
     assert_eq!(declared_functions(), exported);
 }
+
+#[test]
+fn unknown_robot_comment_lists_every_robot_the_library_accepts() {
+    // The comment block just above `TVIST_ERR_UNKNOWN_ROBOT = ` names the accepted robots in
+    // double quotes; it must name each robot of the robot data, and nothing else.
+    let entry = HEADER
+        .find("TVIST_ERR_UNKNOWN_ROBOT =")
+        .expect("TVIST_ERR_UNKNOWN_ROBOT");
+    let comment_start = HEADER[..entry]
+        .rfind("/*")
+        .expect("comment above the entry");
+    let listed: std::collections::BTreeSet<&str> = HEADER[comment_start..entry]
+        .split('"')
+        .skip(1)
+        .step_by(2)
+        .collect();
+    let known: std::collections::BTreeSet<&str> = tvist_core::robot_data::ur_e_series_entries()
+        .expect("robot data")
+        .iter()
+        .map(|e| e.name.as_str())
+        .collect();
+    assert_eq!(listed, known);
+}

@@ -117,20 +117,41 @@ fn prv_flat<'py>(
     Ok(out.into_pyarray(py))
 }
 
-/// Constant modes [(wn_rad_s, zeta), ...]: time-invariant multi-mode shaping.
+/// Constant modes [(wn_rad_s, zeta), ...]: time-invariant multi-mode shaping. wn_rad_s is
+/// the undamped natural frequency in rad/s (2*pi times Hz; a value below 2 Hz is warned about).
 #[pyclass(name = "ConstantModes", module = "tvist._core", frozen)]
 #[derive(Clone)]
 struct PyConstantModes {
     inner: core::ConstantModes,
 }
 
+/// Lowest natural frequency (Hz) of a `ConstantModes` mode taken as meant without a warning.
+/// A lower one is more likely a frequency in Hz given where rad/s is meant (8 "rad/s" is
+/// 1.27 Hz, below the modes of robot arms); it is warned about, not refused, because a soft
+/// payload mount can ring that low.
+const LOWEST_PLAUSIBLE_MODE_HZ: f64 = 2.0;
+
 #[pymethods]
 impl PyConstantModes {
     #[new]
-    fn new(modes: Vec<(f64, f64)>) -> PyResult<Self> {
-        Ok(PyConstantModes {
-            inner: core::ConstantModes::new(modes_from_pairs(modes)).map_err(value_error)?,
-        })
+    fn new(py: Python<'_>, modes: Vec<(f64, f64)>) -> PyResult<Self> {
+        let inner =
+            core::ConstantModes::new(modes_from_pairs(modes.clone())).map_err(value_error)?;
+        for (i, (wn_rad_s, _)) in modes.into_iter().enumerate() {
+            let hz = wn_rad_s / std::f64::consts::TAU;
+            if hz < LOWEST_PLAUSIBLE_MODE_HZ {
+                let message = format!(
+                    "ConstantModes: mode {i} has wn_rad_s = {wn_rad_s:.6} rad/s, i.e. {hz:.3} \
+                     Hz, below {LOWEST_PLAUSIBLE_MODE_HZ} Hz, lower than a robot arm's modes; \
+                     wn_rad_s is in rad/s (2*pi times the frequency in Hz)"
+                );
+                let message = std::ffi::CString::new(message)
+                    .map_err(|e| PyValueError::new_err(e.to_string()))?;
+                let category = py.get_type::<pyo3::exceptions::PyUserWarning>();
+                PyErr::warn(py, category.as_any(), &message, 1)?;
+            }
+        }
+        Ok(PyConstantModes { inner })
     }
 
     /// The modes as [(wn_rad_s, zeta), ...].

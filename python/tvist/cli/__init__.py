@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 
 from tvist.cli.demo import add_demo_command, add_zero_delay_command
 from tvist.cli.ident import (
@@ -39,7 +40,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tvist",
         description="Vibration suppression for robot arms: shaping, identification, the "
-        "simulated twin and reports.",
+        "simulated twin and reports. Frequencies are in Hz on the command line (undamped "
+        "natural frequencies), rad/s in the Python API; times in s.",
     )
     parser.add_argument("--version", action="version", version=f"tvist {_version()}")
     parser.add_argument(
@@ -69,11 +71,21 @@ USER_ERRORS = (ValueError, OSError)
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run one command; user errors print ``tvist <command>: error: ...`` and return 2."""
+    """Run one command; user errors print ``tvist <command>: error: ...`` and return 2, and
+    warnings ``tvist <command>: warning: ...`` (one line each)."""
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
-    args = build_parser().parse_args([a for a in argv if a != "--debug"])
-    where = f"tvist {args.command}"
+    with warnings.catch_warnings():
+        where = ["tvist"]
+        warnings.showwarning = lambda message, *_, **__: print(
+            f"{where[0]}: warning: {message}", file=sys.stderr
+        )
+        args = build_parser().parse_args([a for a in argv if a != "--debug"])
+        where[0] = f"tvist {args.command}"
+        return _run(args, where[0], debug)
+
+
+def _run(args: argparse.Namespace, where: str, debug: bool) -> int:
     try:
         return int(args.func(args) or 0)
     except KeyboardInterrupt:

@@ -120,6 +120,8 @@ def add_zero_delay_command(sub: argparse._SubParsersAction) -> None:
 
 def _zero_delay_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``tvist zero-delay``."""
+    from tvist.cli.args import add_dt_s
+
     p.add_argument(
         "--reference",
         nargs="+",
@@ -127,7 +129,7 @@ def _zero_delay_arguments(p: argparse.ArgumentParser) -> None:
         choices=["min_jerk", "trapezoid"],
         help="reference move(s) (default: both)",
     )
-    p.add_argument("--dt", type=float, default=0.002, help="control period, s (default 0.002)")
+    add_dt_s(p)
     p.add_argument(
         "--rest-s",
         type=float,
@@ -145,7 +147,7 @@ def _run_zero_delay(args: argparse.Namespace) -> int:
     from tvist.demo.ztdis_benchmark import format_table, plot_benchmark, run_benchmark
 
     benches = [
-        run_benchmark(ref, dt_s=args.dt, rest_s=tuple(args.rest_s)) for ref in args.reference
+        run_benchmark(ref, dt_s=args.dt_s, rest_s=tuple(args.rest_s)) for ref in args.reference
     ]
     for bench in benches:
         print(format_table(bench))

@@ -16,9 +16,11 @@ from pathlib import Path
 from tvist.cli.args import (
     add_robot_and_payload,
     existing_file,
+    kinematic_robot,
     map_from_args,
+    map_payload,
     output_file,
-    robot_from_args,
+    payload_from_args,
 )
 
 __all__ = [
@@ -38,7 +40,12 @@ def _error(command: str, message: str) -> int:
 def _add_payload_args(p: argparse.ArgumentParser) -> None:
     from tvist.cli.args import add_robot_and_payload
 
-    add_robot_and_payload(p)
+    add_robot_and_payload(
+        p,
+        "payload mass during the logs",
+        payload_from="default: the log's payload columns, which 'tvist record' and 'tvist run' "
+        "write; required for other logs",
+    )
 
 
 # --------------------------------------------------------------------------- campaign
@@ -195,11 +202,28 @@ def _cmd_identify(args: argparse.Namespace) -> int:
 
 
 def _identify_batch(args: argparse.Namespace, paths: list[Path]) -> int:
+    from collections import Counter
+
+    from tvist.cli.args import payload_from_args
     from tvist.ident.batch import identify_logs
+    from tvist.ident.logs import log_payload
 
     def message(text: str) -> None:
         print(f"tvist identify: warning: {text}", file=sys.stderr)
 
+    if args.payload_kg is not None or args.payload_com is not None:
+        payload_from_args(args, needed_for="identification (the joint inertias)")
+    else:  # each log's own payload: every log must name one
+        found = {path: log_payload(path) for path in paths}
+        missing = [path for path, payload in found.items() if payload is None]
+        if missing:
+            raise ValueError(
+                f"no payload: {missing[0]} (and {len(missing) - 1} more logs) has no payload "
+                "columns; give --payload-kg KG (and --payload-com X Y Z)"
+            )
+        counts = Counter(float(p.mass_kg) for p in found.values())
+        text = ", ".join(f"{kg:g} kg ({n} logs)" for kg, n in sorted(counts.items()))
+        print(f"payload from each log's payload columns: {text}")
     records = identify_logs(
         paths,
         robot_name=args.robot,
@@ -238,10 +262,11 @@ def _identify_batch(args: argparse.Namespace, paths: list[Path]) -> int:
 def _identify_one(args: argparse.Namespace, path: Path) -> int:
     import warnings
 
+    from tvist.cli.args import payload_from_args
     from tvist.ident.batch import excited_joint
     from tvist.ident.local_fit import identify_local
-    from tvist.ident.logs import LogWarning, read_rtde_csv
-    from tvist.robots import Payload, Robot, params
+    from tvist.ident.logs import LogWarning, log_payload, read_rtde_csv
+    from tvist.robots import Robot, params
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LogWarning)
@@ -253,8 +278,14 @@ def _identify_one(args: argparse.Namespace, path: Path) -> int:
         )
     for w in caught:
         print(f"tvist identify: warning: {w.message}", file=sys.stderr)
+    payload = payload_from_args(
+        args,
+        ("the log's payload columns", lambda: log_payload(path)),
+        needed_for="identification (the joint inertias)",
+        out=sys.stderr if args.json else None,
+    )
     joint = excited_joint(record) if args.joint is None else args.joint
-    robot = Robot(params(args.robot), Payload(args.payload_kg, tuple(args.payload_com)))
+    robot = Robot(params(args.robot), payload)
     fit = identify_local(
         record,
         joint,
@@ -374,6 +405,7 @@ def _cmd_fit_map(args: argparse.Namespace) -> int:
     output_file(args.out, "--out")
     if not results:
         return _error("fit-map", f"{args.results}: no pose records")
+    print(f"payload from the pose records: {_payload_summary(results)}")
     if args.kind == "modal":
         from tvist.ident.modal_fit import fit_map_command
 
@@ -410,6 +442,16 @@ def _cmd_fit_map(args: argparse.Namespace) -> int:
     return 0
 
 
+def _payload_summary(records) -> str:
+    """``"0 kg (12 poses), 5 kg (12 poses)"``; records without ``payload_kg`` counted apart."""
+    from collections import Counter
+
+    counts = Counter(
+        f"{float(r['payload_kg']):g} kg" if "payload_kg" in r else "not recorded" for r in records
+    )
+    return ", ".join(f"{k} ({n} poses)" for k, n in sorted(counts.items()))
+
+
 def add_fit_map_command(sub: argparse._SubParsersAction) -> None:
     """``tvist fit-map RESULTS.jsonl``: fit the dynamic map to identified poses."""
     p = sub.add_parser(
@@ -421,8 +463,10 @@ def add_fit_map_command(sub: argparse._SubParsersAction) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("results", help="pose records (JSON lines, see below)")
-    p.add_argument("--out", default="out/map.json", help="map file to write")
-    p.add_argument("--robot", default="ur5e", help="robot model name stored in the map")
+    p.add_argument("--out", default="out/map.json", help="map file to write (default out/map.json)")
+    p.add_argument(
+        "--robot", default="ur5e", help="robot model name stored in the map (default ur5e)"
+    )
     p.add_argument(
         "--k0",
         type=float,
@@ -434,7 +478,8 @@ def add_fit_map_command(sub: argparse._SubParsersAction) -> None:
         "--kind",
         choices=("paper10", "modal"),
         default="paper10",
-        help="map form: the published 10 coefficients (paper10) or the modal map (modal)",
+        help="map form: the published 10 coefficients (paper10, the default) or the modal "
+        "map (modal)",
     )
     p.add_argument(
         "--include-low-confidence", action="store_true", help="also use flagged identifications"
@@ -472,7 +517,13 @@ def _cmd_sensitivity(args: argparse.Namespace) -> int:
             f"--map {args.map}: a modal map identified on {map_robot}, not on {args.robot} "
             "(--robot)"
         )
-    robot = robot_from_args(args)
+    if isinstance(dynmap, ModalMap):  # its panels' modes depend on the payload
+        payload_from_args(
+            args,
+            ("the map file", lambda: map_payload(dynmap)),
+            needed_for="a modal map's PRV panels at Q1 and Q3",
+        )
+    robot = kinematic_robot(args)  # otherwise the records' payloads are used
     results = load_results(existing_file(args.results, "--results")) if args.results else []
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -513,7 +564,11 @@ def add_sensitivity_command(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--map", help="map file, paper10 or modal (default: the paper's UR5e map)")
     p.add_argument("--results", help="campaign results (JSON lines) to overlay and judge")
     p.add_argument("--out", default="out/sensitivity", help="output folder")
-    add_robot_and_payload(p, "payload of a modal map's PRV panels at Q1 and Q3")
+    add_robot_and_payload(
+        p,
+        "payload of a modal map's PRV panels at Q1 and Q3",
+        payload_from="modal map: required unless the map file names one",
+    )
     p.set_defaults(robot=None)
     for action in p._actions:
         if action.dest == "robot":

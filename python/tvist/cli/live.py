@@ -1,4 +1,7 @@
-"""``tvist run`` (a shaped move on a UR, live) and ``tvist record`` (an RTDE log)."""
+"""``tvist run`` (a shaped move on a UR, live) and ``tvist record`` (an RTDE log).
+
+``tvist run`` shapes with the payload the controller has been told (RTDE ``payload``,
+``payload_cog``) unless ``--payload-kg`` is given, and prints which it used."""
 
 from __future__ import annotations
 
@@ -13,9 +16,10 @@ def _error(command: str, message: str) -> int:
 
 
 def _shaper(args: argparse.Namespace, n_dof: int):
-    """The TvShaper of ``--modes`` / ``--map`` / ``--paper-map``, or None for ``--unshaped``."""
+    """The TvShaper of ``--modes`` / ``--map`` / ``--paper-map``, or None for ``--unshaped``.
+    A map's payload is ``--payload-kg`` or the controller's (printed)."""
     import tvist
-    from tvist.cli.args import map_from_args, robot_from_args
+    from tvist.cli.args import map_dynamics, map_from_args, payload_from_args, robot_from_args
     from tvist.cli.shape import parse_modes
 
     if args.unshaped:
@@ -23,11 +27,27 @@ def _shaper(args: argparse.Namespace, n_dof: int):
     if args.modes:
         provider = tvist.ConstantModes(parse_modes(args.modes))
     else:
+        dynmap = map_from_args(args)
+        payload_from_args(
+            args,
+            (f"the controller at {args.robot_ip}", lambda: _controller_payload(args.robot_ip)),
+            needed_for="shaping with a map",
+        )
         robot = robot_from_args(args)
         if robot.n_dof != n_dof:
             raise ValueError(f"the file has {n_dof} joints, the {args.robot} has {robot.n_dof}")
-        provider = tvist.MapDynamics(robot, map_from_args(args))
-    return tvist.TvShaper(provider, dt_s=args.dt, n_dof=n_dof, shaper=args.shaper)
+        provider = map_dynamics(args, robot, dynmap)
+    return tvist.TvShaper(provider, dt_s=args.dt_s, n_dof=n_dof, shaper=args.shaper)
+
+
+def _controller_payload(robot_ip: str):
+    """The controller's payload, or None if it does not publish one (an old firmware)."""
+    from tvist.live import read_controller_payload
+
+    try:
+        return read_controller_payload(robot_ip)
+    except ValueError:
+        return None
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -40,20 +60,25 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     try:
         Q, _ = read_joint_csv(existing_file(args.move, "move"))
-        shaper = _shaper(args, Q.shape[1])
+        log_path = output_file(args.log or Path(args.move).with_suffix(".rtde.csv"), "--log")
+        shaper = _shaper(args, Q.shape[1])  # after the files: it may ask the controller
     except (OSError, ValueError) as exc:
         return _error("run", str(exc))
-    try:
-        log_path = output_file(args.log or Path(args.move).with_suffix(".rtde.csv"), "--log")
-    except ValueError as exc:
-        return _error("run", str(exc))
+    from tvist.live import APPROACH_ACCEL_RAD_S2, APPROACH_SPEED_RAD_S
+
+    print(
+        f"approach: moveJ to the first row at {APPROACH_SPEED_RAD_S:g} rad/s, "
+        f"{APPROACH_ACCEL_RAD_S2:g} rad/s² (not shaped, not logged), then the move at "
+        f"--dt-s {args.dt_s:g} s",
+        flush=True,
+    )
     try:
         result = run_shaped_move(
             args.robot_ip,
             Q,
             log_path,
             shaper=shaper,
-            dt_s=args.dt,
+            dt_s=args.dt_s,
             lookahead_s=args.lookahead,
             gain=args.gain,
             tail_s=args.tail,
@@ -112,28 +137,47 @@ def _cmd_record(args: argparse.Namespace) -> int:
 
 
 def _add_payload(p: argparse.ArgumentParser) -> None:
-    from tvist.cli.args import add_robot_and_payload
+    from tvist.cli.args import add_allow_other_robot, add_robot_and_payload
 
-    add_robot_and_payload(p)
+    add_robot_and_payload(
+        p,
+        "payload mass for a map",
+        payload_from="default: the controller's, read over RTDE (payload, payload_cog)",
+    )
+    add_allow_other_robot(p)
 
 
 def add_run_command(sub: argparse._SubParsersAction) -> None:
+    from tvist.cli.args import add_dt_s
     from tvist.live import SERVO_GAIN, SERVO_LOOKAHEAD_S
 
     p = sub.add_parser(
-        "run", help="run a joint trajectory CSV on a UR with servoJ at 500 Hz, shaped live"
+        "run",
+        help="run a joint trajectory CSV on a UR with servoJ at 500 Hz, shaped live",
+        description="Move to the CSV's first row with moveJ (0.5 rad/s, unshaped), then "
+        "stream the rows with servoJ, shaped live by --map/--paper-map/--modes. A file "
+        "written by 'tvist shape' is shaped already: run it with --unshaped. Frequencies "
+        "are in Hz on the command line, rad/s in the Python API.",
     )
     p.add_argument("move", help="CSV of joint positions (rad), one row per control period")
     p.add_argument("--robot-ip", required=True, help="robot (or twin server) address")
     modes = p.add_mutually_exclusive_group()
     modes.add_argument("--map", help="map file, paper10 or modal (tvist fit-map)")
     modes.add_argument("--paper-map", action="store_true", help="the paper's UR5e map")
-    modes.add_argument("--modes", help="fixed modes FREQ_HZ:ZETA,...")
-    modes.add_argument("--unshaped", action="store_true", help="stream the reference unshaped")
+    modes.add_argument(
+        "--modes",
+        help="fixed modes FREQ_HZ:ZETA,...: undamped natural frequency in Hz (not rad/s), "
+        "damping ratio",
+    )
+    modes.add_argument(
+        "--unshaped",
+        action="store_true",
+        help="stream the rows as they are (for a file 'tvist shape' has shaped already)",
+    )
     p.add_argument("--shaper", default="zv", help="shaper per mode: zv, zvd, ei (default zv)")
     _add_payload(p)
     p.add_argument("--log", help="RTDE log to write (default MOVE.rtde.csv)")
-    p.add_argument("--dt", type=float, default=0.002, help="control period, s (default 0.002)")
+    add_dt_s(p)
     p.add_argument(
         "--lookahead",
         type=float,
@@ -153,6 +197,8 @@ def add_record_command(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("record", help="record the RTDE fields identification needs (until Ctrl-C)")
     p.add_argument("--robot-ip", required=True, help="robot (or twin server) address")
     p.add_argument("--out", required=True, help="CSV to write (ur_rtde's format)")
-    p.add_argument("--frequency", type=float, default=500.0, help="Hz (default 500)")
+    p.add_argument(
+        "--frequency", type=float, default=500.0, help="RTDE output rate, Hz (default 500)"
+    )
     p.add_argument("--duration", type=float, default=None, help="stop after this many s")
     p.set_defaults(func=_cmd_record)

@@ -18,8 +18,14 @@ Methods: ``tvist`` (multi-mode FD-TVIST: the output is longer by the shaper dela
 pose), ``ztdis`` / ``modified`` (zero added delay, same length; rest padding is kept and only
 the motion is compressed). Modes come from ``--modes`` (fixed, ``FREQ_HZ:ZETA,...``) or from
 a map (``--map FILE``, paper10 or modal, or ``--paper-map``) with the robot model (``--robot``,
-``--payload-kg``, ``--payload-com X Y Z``). The largest distance of the shaped tool path from
+``--payload-kg``, ``--payload-com X Y Z``; without ``--payload-kg`` the map file's payload, if
+it names one; otherwise the command stops). The largest distance of the shaped tool path from
 the planned one (:func:`tvist.analysis.path_deviation`) is reported for the ``--robot`` model.
+Frequencies on the command line are in Hz (``--modes``, the printed modes: undamped natural
+frequencies f_n = ω_n / 2π); the Python API takes ω_n in rad/s.
+
+The output is already shaped: run it on a robot with ``tvist run OUT --unshaped`` (shaping it
+again would add a second delay and filter the modes twice).
 """
 
 from __future__ import annotations
@@ -33,11 +39,17 @@ from pathlib import Path
 import numpy as np
 
 from tvist.cli.args import (
+    add_allow_other_robot,
+    add_dt_s,
     add_robot_and_payload,
     existing_dir,
     existing_file,
+    kinematic_robot,
+    map_dynamics,
     map_from_args,
+    map_payload,
     output_file,
+    payload_from_args,
     robot_from_args,
 )
 from tvist.trajectory.joint_names import joint_order
@@ -192,21 +204,25 @@ def shape_file(
     return ShapedFile(out, added, end_modes, counts, alpha)
 
 
-def _dynamics(args: argparse.Namespace, robot):
-    """Fixed modes or the map provider for ``robot``."""
-    import tvist
-
+def _robot_and_dynamics(args: argparse.Namespace):
+    """The ``--robot`` model and the fixed modes, or the map provider for it with its payload
+    (``--payload-kg`` or the map file's, printed; the kinematics of the path deviation do not
+    depend on the payload)."""
     if args.modes:
-        return parse_modes(args.modes)
+        return kinematic_robot(args), parse_modes(args.modes)
     if not (args.map or args.paper_map):
         raise ValueError("give --modes, --map FILE or --paper-map")
-    return tvist.MapDynamics(robot, map_from_args(args))
+    dynmap = map_from_args(args)
+    payload_from_args(
+        args, ("the map file", lambda: map_payload(dynmap)), needed_for="shaping with a map"
+    )
+    robot = robot_from_args(args)
+    return robot, map_dynamics(args, robot, dynmap)
 
 
 def _describe_modes(end_modes: list[tuple[float, float]]) -> str:
-    return ", ".join(
-        f"{w * np.sqrt(1 - z * z) / (2 * np.pi):.2f} Hz / ζ {z:.3f}" for w, z in end_modes
-    )
+    """Modes as the command line takes them: undamped natural frequency f_n (Hz) and ζ."""
+    return ", ".join(f"f_n {w / (2 * np.pi):.2f} Hz / ζ {z:.3f}" for w, z in end_modes)
 
 
 def _cmd_shape_csv(args: argparse.Namespace, robot, dynamics) -> int:
@@ -309,8 +325,12 @@ def _cmd_shape(args: argparse.Namespace) -> int:
         raise ValueError("give a CSV file or --bag BAG (one of them)")
     if not (np.isfinite(args.dt_s) and args.dt_s > 0):
         raise ValueError(f"--dt-s must be > 0; got {args.dt_s}")
-    robot = robot_from_args(args)
-    dynamics = _dynamics(args, robot)
+    if args.bag is None:  # the files first, then the payload (which may come from the map)
+        existing_file(args.input, "input")
+        output_file(args.out, "--out")
+    else:
+        existing_dir(args.bag, "--bag")
+    robot, dynamics = _robot_and_dynamics(args)
     if args.bag is not None:
         return _cmd_shape_bag(args, robot, dynamics)
     return _cmd_shape_csv(args, robot, dynamics)
@@ -318,7 +338,11 @@ def _cmd_shape(args: argparse.Namespace) -> int:
 
 def add_shape_command(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "shape", help="shape a joint trajectory (CSV, with or without times, or a ROS 2 bag)"
+        "shape",
+        help="shape a joint trajectory (CSV, with or without times, or a ROS 2 bag)",
+        description="Shape a joint trajectory offline. Frequencies are in Hz on the command "
+        "line (undamped natural frequencies), rad/s in the Python API. The output is "
+        "shaped already: run it with 'tvist run OUT --robot-ip IP --unshaped'.",
     )
     p.add_argument(
         "input",
@@ -329,21 +353,19 @@ def add_shape_command(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--bag", help="ROS 2 bag directory to shape instead of a CSV (tvist[ros])")
     p.add_argument("--topic", help="JointTrajectory topic of --bag (e.g. /joint_trajectory)")
     p.add_argument("--out", required=True, help="output CSV (or bag directory with --bag)")
-    p.add_argument(
-        "--dt-s",
-        "--dt",
-        dest="dt_s",
-        type=float,
-        default=0.002,
-        help="control period, s (default 0.002)",
-    )
+    add_dt_s(p)
     p.add_argument("--method", choices=METHODS, default="tvist", help="default tvist")
     p.add_argument("--shaper", default="zv", help="registry shaper name (default zv)")
     source = p.add_mutually_exclusive_group()
-    source.add_argument("--modes", help="fixed modes FREQ_HZ:ZETA,... (undamped frequency)")
+    source.add_argument(
+        "--modes",
+        help="fixed modes FREQ_HZ:ZETA,...: undamped natural frequency in Hz (not rad/s), "
+        "damping ratio",
+    )
     source.add_argument(
         "--map", help="map file, paper10 or modal (tvist fit-map, DynamicMap/ModalMap.save)"
     )
     source.add_argument("--paper-map", action="store_true", help="the paper's UR5e map")
-    add_robot_and_payload(p)
+    add_allow_other_robot(p)
+    add_robot_and_payload(p, payload_from="with a map: required unless the map file names one")
     p.set_defaults(func=_cmd_shape)

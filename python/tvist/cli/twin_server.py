@@ -8,6 +8,7 @@ import sys
 
 
 def _cmd_twin_server(args: argparse.Namespace) -> int:
+    from tvist.cli.args import DEFAULT_PAYLOAD_COM_M
     from tvist.urserver import PortInUse, start_twin_server
 
     logging.basicConfig(level=logging.INFO, format="twin-server: %(levelname)s: %(message)s")
@@ -17,7 +18,7 @@ def _cmd_twin_server(args: argparse.Namespace) -> int:
         server = start_twin_server(
             args.robot,
             args.payload_kg,
-            args.payload_com,
+            args.payload_com or DEFAULT_PAYLOAD_COM_M,
             host=args.host,
             q0=args.q0,
             accel_noise_std=args.accel_noise,
@@ -29,7 +30,12 @@ def _cmd_twin_server(args: argparse.Namespace) -> int:
         print(f"tvist twin-server: error: {exc}", file=sys.stderr)
         return 2
     ports = ", ".join(str(p) for p in server.ports.all())
-    print(f"twin server ready on {args.host}: ports {ports} (Ctrl-C stops it)", flush=True)
+    com = " ".join(f"{v:g}" for v in (args.payload_com or DEFAULT_PAYLOAD_COM_M))
+    print(
+        f"twin server ready on {args.host}: ports {ports}, {args.robot} with a "
+        f"{args.payload_kg:g} kg payload at {com} m (--payload-kg) (Ctrl-C stops it)",
+        flush=True,
+    )
     try:
         server.serve_forever()
     except KeyboardInterrupt:
@@ -52,8 +58,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     ``python -m tvist.urserver``)."""
     from tvist.cli.args import add_robot_and_payload
 
-    add_robot_and_payload(p, payload_help="mounted payload")
-    p.add_argument("--host", default="127.0.0.1", help="address to listen on")
+    add_robot_and_payload(
+        p,
+        "payload mounted on the simulated arm",
+        payload_from="default 0: none",
+        payload_default=0.0,
+    )
+    p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
     p.add_argument(
         "--q0",
         type=float,

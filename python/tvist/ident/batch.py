@@ -148,17 +148,43 @@ def pair_logs(logs: Sequence[LoadedLog]) -> tuple[list[PosePair], list[LoadedLog
 @dataclass(frozen=True)
 class _Job:
     robot_name: str
-    payload_kg: float
+    payload_kg: float | None  # None: each log's own (its payload columns)
     payload_com_m: tuple[float, float, float]
     accel_frame: str
     options: FitOptions
     separate_modes: bool
 
 
-def _identify_pair(pair: PosePair, job: _Job) -> dict[str, Any]:
-    from tvist.robots import Payload, Robot, params
+def _pair_payload(pair: PosePair, job: _Job):
+    """The pose's payload: the job's, or the one its logs name (they must agree)."""
+    from tvist.ident.logs import log_payload
+    from tvist.robots import Payload
 
-    robot = Robot(params(job.robot_name), Payload(job.payload_kg, job.payload_com_m))
+    if job.payload_kg is not None:
+        return Payload(job.payload_kg, job.payload_com_m)
+    logs = [log for log in (pair.base, pair.shoulder) if log is not None]
+    payloads = [log_payload(log.path) for log in logs]
+    for log, payload in zip(logs, payloads, strict=True):
+        if payload is None:
+            raise ValueError(f"{log.path}: no payload columns; give the payload explicitly")
+    first = payloads[0]
+    for log, payload in zip(logs[1:], payloads[1:], strict=True):
+        if payload.mass_kg != first.mass_kg or not np.array_equal(payload.com_m, first.com_m):
+            raise ValueError(
+                f"{logs[0].path} and {log.path} start at one pose but name different payloads "
+                f"({first.mass_kg:g} and {payload.mass_kg:g} kg)"
+            )
+    return first
+
+
+def _identify_pair(pair: PosePair, job: _Job) -> dict[str, Any]:
+    from tvist.robots import Robot, params
+
+    try:
+        payload = _pair_payload(pair, job)
+    except ValueError as exc:
+        return {"key": pair.key, "error": str(exc)}
+    robot = Robot(params(job.robot_name), payload)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # reported when the logs were read
         result: PoseRecord = identify_pose(
@@ -190,8 +216,8 @@ def identify_logs(
     paths: Sequence[Path],
     *,
     robot_name: str = "ur5e",
-    payload_kg: float = 0.0,
-    payload_com_m: Sequence[float] = (0.0, 0.0, 0.05),
+    payload_kg: float | None = None,
+    payload_com_m: Sequence[float] | None = None,
     accel_frame: str = "flange",
     options: FitOptions | None = None,
     separate_modes: bool = True,
@@ -204,13 +230,18 @@ def identify_logs(
 ) -> list[dict[str, Any]]:
     """Identify every pose in ``paths``; one record (:class:`PoseRecord` dict) per pose.
 
+    The payload is ``payload_kg`` at ``payload_com_m`` (default 5 cm beyond the flange) for
+    every log, or with ``payload_kg=None`` the one each log names (its payload columns, written
+    by ``tvist record`` and ``tvist run``); a pose whose logs name none gets an ``error``.
     ``on_message`` receives the log warnings and the logs that were skipped (one line each).
     ``workers`` processes (default: the number of CPUs) run the reading and the fits.
     """
     job = _Job(
         robot_name=robot_name,
-        payload_kg=float(payload_kg),
-        payload_com_m=tuple(float(v) for v in payload_com_m),  # type: ignore[arg-type]
+        payload_kg=None if payload_kg is None else float(payload_kg),
+        payload_com_m=tuple(  # type: ignore[arg-type]
+            float(v) for v in (payload_com_m or (0.0, 0.0, 0.05))
+        ),
         accel_frame=accel_frame,
         options=options or FitOptions(),
         separate_modes=separate_modes,

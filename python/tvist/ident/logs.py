@@ -47,11 +47,13 @@ from tvist.ident.csv_table import LogFormatError, read_table
 from tvist.trajectory.resample import MAX_GRID_SAMPLES
 
 __all__ = [
+    "PAYLOAD_COLUMNS",
     "LogFormatError",
     "LogWarning",
     "Record",
     "find_gaps",
     "is_uniform",
+    "log_payload",
     "read_rtde_csv",
     "resample_uniform",
 ]
@@ -413,6 +415,49 @@ def read_rtde_csv(
             stacklevel=2,
         )
     return record
+
+
+#: Columns of the payload in a log (RTDE ``payload``, kg, and ``payload_cog``, m in the flange
+#: frame), which ``tvist record`` and ``tvist run`` write when the controller provides them.
+PAYLOAD_COLUMNS = ("payload", *_columns("payload_cog", 3))
+#: Largest change of the payload within one log taken as one payload (kg; m): the CSV's
+#: 6 decimals.
+PAYLOAD_TOLERANCE = 1e-6
+
+
+def log_payload(path: str | Path):
+    """The payload a log was recorded with (:data:`PAYLOAD_COLUMNS`), a
+    :class:`tvist.robots.Payload`, or ``None`` if the log has no payload columns.
+
+    Raises
+    ------
+    LogFormatError
+        If the payload changes within the log (which payload the fit should use is then
+        unknown) or the file is not a readable RTDE log.
+    """
+    from tvist.robots import Payload
+
+    # Only the payload is read here; the log itself is judged (or repaired, as asked) by
+    # read_rtde_csv, so malformed rows are simply passed over.
+    table = read_table(
+        path,
+        (),
+        PAYLOAD_COLUMNS,
+        separator=_detect_separator,
+        repair=("drop-bad-rows", "keep-first-duplicate"),
+    )
+    if set(table.columns) != set(PAYLOAD_COLUMNS):
+        return None
+    values = table.data[:, [table.columns[c] for c in PAYLOAD_COLUMNS]]
+    values = values[np.all(np.isfinite(values), axis=1)]
+    if values.shape[0] == 0:
+        return None
+    if np.max(np.ptp(values, axis=0)) > PAYLOAD_TOLERANCE:
+        raise LogFormatError(
+            f"{path}: the payload changes during the log ({values[:, 0].min():g} to "
+            f"{values[:, 0].max():g} kg); give the payload explicitly"
+        )
+    return Payload(float(values[0, 0]), tuple(float(v) for v in values[0, 1:]))
 
 
 def _take(data: np.ndarray, index: dict[str, int], rtde_name: str, width: int) -> np.ndarray:

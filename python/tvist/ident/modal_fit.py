@@ -184,7 +184,7 @@ def modal_poses(
         q = np.asarray(q, dtype=float)
         if q.shape != (robot_params.n_dof,) or not np.all(np.isfinite(q)):
             raise ValueError(f"records[{i}]: 'q' must be {robot_params.n_dof} finite angles")
-        key = (float(r.get("payload_kg", 0.0)), tuple(r.get("payload_com_m", (0.0, 0.0, 0.0))))
+        key = _record_payload(r, i)
         if key not in robots:
             robots[key] = Robot(robot_params, Payload(key[0], key[1]))
         model = robots[key]
@@ -1112,6 +1112,22 @@ def format_comparison(cv: Mapping[str, Any]) -> str:
                         f"{100 * f['max']:.2f} | {100 * z['rms']:.1f} | {100 * z['max']:.1f} |"
                     )
     return "\n".join(lines)
+
+
+def _record_payload(record: Mapping[str, Any], i: int) -> tuple[float, tuple[float, ...]]:
+    """``(payload_kg, payload_com_m)`` of pose record ``i``: both must be there (the mass
+    matrices depend on them), except the centre of mass of a zero payload."""
+    name = f"records[{i}] ({record.get('key', 'no key')})"
+    if "payload_kg" not in record:
+        raise ValueError(
+            f"{name}: no payload_kg; a pose record names its payload (tvist identify "
+            "--payload-kg, or logs recorded with it)"
+        )
+    mass = float(record["payload_kg"])
+    com = record.get("payload_com_m")
+    if com is None and mass != 0.0:
+        raise ValueError(f"{name}: payload_kg {mass:g} without payload_com_m")
+    return mass, tuple(float(v) for v in (com or (0.0, 0.0, 0.0)))
 
 
 def fit_map_command(records: Sequence[Mapping[str, Any]], args: Any) -> int:
