@@ -433,9 +433,7 @@ def read_rtde_csv(
     return record
 
 
-def _in_si_units(
-    path: Path, record: Record, rows: np.ndarray, units: Any, check: bool
-) -> Record:
+def _in_si_units(path: Path, record: Record, rows: np.ndarray, units: Any, check: bool) -> Record:
     """``record`` converted to SI from the declared ``units``, checked unless ``check`` is
     False (:func:`tvist.units.check_log`; ``rows`` are the samples' data rows)."""
     columns = {
