@@ -175,16 +175,38 @@ def test_an_unknown_unit_is_one_line_naming_the_option(radian_log, capsys):
 
 
 def test_pose_records_in_degrees_are_refused_by_fit_map(tmp_path, capsys):
-    """A pose record identified from a degrees log read as radians (q = 17.2, -91.7, ...)."""
-    q_deg = (Q0 / DEG).tolist()
-    record = {"key": "p0", "q": q_deg, "payload_kg": 0.0, "inertia_kg_m2": [1.0] * 6}
-    record["modes"] = [{"joint": 0, "wn_rad_s": 90.0, "zeta": 0.05, "low_confidence": False}]
-    results = tmp_path / "poses.jsonl"
-    results.write_text(json.dumps(record) + "\n")
-    assert main(["fit-map", str(results), "--out", str(tmp_path / "map.json")]) == 2
+    """Pose records identified from logs in degrees read as radians: q = (17.2, -91.7, ...),
+    inertias and gravity torques of the poses those numbers name in radians, modes of the
+    true poses (the paper's map). Enough poses for a map: only the unit stops the fit."""
+    import tvist
+
+    rng = np.random.default_rng(4)
+    robot = ur5e()
+    truth = tvist.DynamicMap.paper_ur5e()
+    with (tmp_path / "poses.jsonl").open("w") as fh:
+        for i in range(12):
+            q = Q0 + rng.uniform(-0.6, 0.6, 6)
+            wrong = q / DEG  # degrees, taken for radians
+            modes = truth.modes_from_inertia_many(
+                robot.joint_inertia_many([q]), robot.gravity_torque_many([q])
+            )[0]
+            record = {
+                "key": f"p{i}",
+                "q": wrong.tolist(),
+                "payload_kg": 0.0,
+                "inertia_kg_m2": robot.joint_inertia(wrong).tolist(),
+                "gravity_torque_nm": robot.gravity_torque(wrong).tolist(),
+                "modes": [
+                    {"joint": j, "wn_rad_s": float(w), "zeta": float(z), "low_confidence": False}
+                    for j, (w, z) in enumerate(modes)
+                ],
+            }
+            fh.write(json.dumps(record) + "\n")
+    out = tmp_path / "map.json"
+    assert main(["fit-map", str(tmp_path / "poses.jsonl"), "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "record 1 (p0)" in err[0] and "--units q=deg" in err[0], err
-    assert not (tmp_path / "map.json").exists()
+    assert not out.exists()
 
 
 # --------------------------------------------------------------------------- confidence
