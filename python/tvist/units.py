@@ -463,7 +463,7 @@ def joint_peaks(q: np.ndarray, dt_s: float) -> dict[str, np.ndarray]:
 
 def check_trajectory(
     q: np.ndarray,
-    dt_s: float,
+    dt_s: float | None,
     params=None,
     *,
     columns: list[str] | None = None,
@@ -477,7 +477,7 @@ def check_trajectory(
     q
         Joint positions, rad, ``(n_samples, n_dof)``, one row every ``dt_s`` s.
     dt_s
-        Sample period, s.
+        Sample period, s; ``None`` for waypoints (no speed check: check their resampling).
     params
         :class:`tvist.robots.RobotParams` whose joint and speed limits apply (its ``n_dof``
         must match); ``None`` checks the unit only.
@@ -521,6 +521,8 @@ def check_trajectory(
             f"outside joint {joint}'s limits [{lower[joint]:.4g}, {upper[joint]:.4g}] rad on the "
             f"{params.name}; keep every pose inside the limits"
         )
+    if dt_s is None:
+        return
     speed = np.abs(np.diff(q, axis=0)) / dt_s
     fast = np.argwhere(speed > params.max_velocity_rad_s)
     if fast.size:

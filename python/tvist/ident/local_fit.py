@@ -549,8 +549,7 @@ def fit_local(
         reasons.append(f"uncertain damping: standard error {zeta_se:.4f}")
     elif not zeta >= 2.0 * zeta_se:
         reasons.append(
-            f"uncertain damping: ζ = {zeta:.4f} ± {zeta_se:.4f} is not 2 standard errors "
-            "above zero"
+            f"uncertain damping: ζ = {zeta:.4f} ± {zeta_se:.4f} is not 2 standard errors above zero"
         )
     if wn < wn_lo * 1.02 or wn > wn_hi / 1.02:
         reasons.append(
