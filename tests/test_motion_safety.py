@@ -149,8 +149,6 @@ def test_run_reports_a_protective_stop_and_how_to_recover(server, receive, tmp_p
     """A protective stop (a moveJ beyond the elbow's limit, sent by ur_rtde itself): the run
     refuses to start with the controller's own account and the dashboard commands that
     clear it; once unlocked, the same command runs, announcing the approach move first."""
-    from tvist.cli.live import _with_controller_reason
-
     bad = receive.getActualQ()
     bad[2] = JOINT_LIMITS_RAD[2, 1] + 0.5
     control = rtde_control.RTDEControlInterface(HOST)
@@ -175,6 +173,8 @@ def test_run_reports_a_protective_stop_and_how_to_recover(server, receive, tmp_p
     assert "check --robot-ip" not in err[0]
     np.testing.assert_array_equal(np.array(receive.getTargetQ()), before)
     # After a refusal in the middle of a run, the same account is added to the message.
+    from tvist.cli.live import _with_controller_reason
+
     reason = _with_controller_reason(HOST, "the robot refused servoJ at period 7", "")
     assert reason.startswith("the robot refused servoJ at period 7: the controller reports ")
     assert "unlock protective stop" in reason
