@@ -13,6 +13,7 @@ import json
 import math
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -241,3 +242,19 @@ def test_a_damping_within_two_standard_errors_of_zero_is_flagged():
         f"uncertain damping: ζ = {fit.zeta:.4f} ± {fit.zeta_se:.4f} is not 2 standard errors "
         "above zero",
     )
+
+
+@pytest.mark.parametrize("column", ["target_q_3", "target_qd_0"])
+def test_a_cell_near_the_float_limit_is_refused_without_numpy_warnings(
+    radian_log, tmp_path, column
+):
+    def edit(header, table):
+        table[100, header.index(column)] = 1e300
+
+    log = rewrite(radian_log, tmp_path / "huge.csv", edit)
+    text = log.read_text().replace(f"{1e300:.6f}", "1e300")  # a short cell, as a recorder writes
+    log.write_text(text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a RuntimeWarning would be raised here
+        with pytest.raises(UnitError):
+            read_rtde_csv(log)
