@@ -287,7 +287,7 @@ def add_run_command(sub: argparse._SubParsersAction) -> None:
         "run", help="run a joint trajectory CSV on a UR with servoJ at 500 Hz, shaped live"
     )
     p.add_argument("move", help="CSV of joint positions (rad), one row per control period")
-    p.add_argument("--robot-ip", help="robot (or twin server) address")
+    p.add_argument("--robot-ip", help="robot (or twin server) address (not with --dry-run)")
     modes = p.add_mutually_exclusive_group()
     modes.add_argument("--map", help="map file, paper10 or modal (tvist fit-map)")
     modes.add_argument("--paper-map", action="store_true", help="the paper's UR5e map")
