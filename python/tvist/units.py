@@ -64,9 +64,9 @@ UNITS: dict[str, dict[str, float]] = {
 }
 #: What each quantity is, for help texts.
 QUANTITIES = {
-    "q": "joint positions (target_q, actual_q)",
-    "qd": "joint velocities (target_qd)",
-    "qdd": "joint accelerations (target_qdd)",
+    "q": "joint positions",
+    "qd": "joint velocities",
+    "qdd": "joint accelerations",
     "acc": "tool accelerometer",
 }
 #: RTDE log column -> quantity.
@@ -151,7 +151,10 @@ def units_text(units: Mapping[str, str]) -> str:
 def units_help(quantities: tuple[str, ...] = tuple(UNITS)) -> str:
     """Help text of a ``--units`` option accepting ``quantities``."""
     choices = "; ".join(f"{q} ({QUANTITIES[q]}): {' | '.join(UNITS[q])}" for q in quantities)
-    return f"units of the input if not SI, e.g. q=deg,acc=g (default: the first of each): {choices}"
+    example = "q=deg,acc=g" if "acc" in quantities else "q=deg"
+    return (
+        f"units of the input where not SI, e.g. {example} (default: the first of each): {choices}"
+    )
 
 
 def to_si(values: Any, quantity: str, unit: str) -> np.ndarray:
