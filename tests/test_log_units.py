@@ -258,3 +258,23 @@ def test_a_cell_near_the_float_limit_is_refused_without_numpy_warnings(
         warnings.simplefilter("error")  # a RuntimeWarning would be raised here
         with pytest.raises(UnitError):
             read_rtde_csv(log)
+
+
+def test_identify_many_logs_converts_declared_units(radian_log, tmp_path):
+    """Batch identification (worker processes) reads each log with the declared units: the
+    pose record of a base and a shoulder log in degrees holds q in rad, equal to Q0."""
+    shoulder = generate_log(
+        tmp_path / "shoulder.csv", seed=22, joint=1, wn_rad_s=2 * math.pi * 12.0, zeta=0.1, q0=Q0
+    ).path
+    folder = tmp_path / "deg"
+    folder.mkdir()
+    for src in (radian_log, shoulder):
+        rewrite(src, folder / src.name, in_degrees)
+    out = tmp_path / "poses.jsonl"
+    declare = ["--units", "q=deg,qd=deg/s,qdd=deg/s2", "--workers", "1"]
+    assert main(["identify", str(folder), "--out", str(out), *declare]) == 0
+    (record,) = [json.loads(line) for line in out.read_text().splitlines()]
+    # q is the median of actual_q over the first standstill (at Q0); 6 decimals of a degree
+    # are 1.7e-8 rad.
+    np.testing.assert_allclose(record["q"], Q0, atol=1e-6)
+    assert {m["joint"] for m in record["modes"]} == {0, 1}
