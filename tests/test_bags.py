@@ -26,12 +26,14 @@ MSG_ORDER = [2, 0, 1, 5, 3, 4]
 
 
 def plan(scale: float):
-    """Waypoints Q1 -> (part of the way to) Q3 with velocities, 9 points over 1.2 s."""
+    """Waypoints Q1 -> (part of the way to) Q3 with velocities, 9 points over 1.8 s: the
+    elbow peaks at 2.7 rad/s, within the ur5e's 3.14 rad/s also once shaped (tvist shape
+    refuses a shaped trajectory beyond the limit)."""
     q1, q3 = np.asarray(PAPER_POSES["Q1"]), np.asarray(PAPER_POSES["Q3"])
-    t = np.linspace(0.0, 1.2, 9) + 0.05  # the first point is not at 0
-    s = (t - t[0]) / 1.2
+    t = np.linspace(0.0, 1.8, 9) + 0.05  # the first point is not at 0
+    s = (t - t[0]) / 1.8
     q = q1 + scale * np.outer(s**3 * (10 - 15 * s + 6 * s**2), q3 - q1)
-    v = scale * np.outer((30 * s**2 - 60 * s**3 + 30 * s**4) / 1.2, q3 - q1)
+    v = scale * np.outer((30 * s**2 - 60 * s**3 + 30 * s**4) / 1.8, q3 - q1)
     return t, q, v
 
 
@@ -146,3 +148,25 @@ def test_zero_delay_method_in_a_bag_ends_at_the_last_waypoint(tmp_path):
         np.testing.assert_allclose(positions, ref.q[:, MSG_ORDER], rtol=0, atol=1e-8)
         last = msg.points[-1].time_from_start
         assert last.sec + 1e-9 * last.nanosec == pytest.approx(t_wp[-1], abs=1e-9)
+
+
+def test_a_bag_in_degrees_or_beyond_the_limits_is_refused(tmp_path, capsys):
+    """Positions in degrees (ROS uses rad), or a point beyond the elbow's limit on the ur5e
+    (π rad), are refused naming the message, the point and the joint."""
+    t, q, v = plan(1.0)
+    elbow_beyond = q.copy()
+    elbow_beyond[4, 2] = 3.5
+    cases = [
+        (np.degrees(q), np.degrees(v), "point 0, column ur5e_shoulder_lift_joint: -180"),
+        (elbow_beyond, v, "point 4, column ur5e_elbow_joint: 3.5 rad is outside joint 2's"),
+    ]
+    for k, (positions, velocities, message) in enumerate(cases):
+        src = tmp_path / f"in{k}"
+        with Writer(src, version=9, storage_plugin=StoragePlugin.SQLITE3) as w:
+            conn = w.add_connection("/joint_trajectory", JT, typestore=TS)
+            w.write(conn, 2_000, TS.serialize_cdr(trajectory_msg(t, positions, velocities), JT))
+        args = ["shape", "--bag", str(src), "--topic", "/joint_trajectory", "--modes", MODES_ARG]
+        assert main([*args, "--out", str(tmp_path / f"out{k}")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "message at 2000 ns on /joint_trajectory" in err[0], err
+        assert message in err[0], err

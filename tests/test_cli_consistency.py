@@ -10,11 +10,13 @@ import subprocess
 import sys
 import warnings
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 import tvist
+import tvist.cli.live
 from tvist.cli import COMMANDS, build_parser, main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -195,7 +197,11 @@ def test_run_says_how_it_approaches_the_first_row(move_csv, tmp_path, monkeypatc
     def fake_run(robot_ip, Q, log_path, **kwargs):  # noqa: N803
         return LiveRun(Path(log_path), 0.0, 1.0, len(Q), 0, 1.0, Q[-1])
 
+    def fake_state(robot_ip):
+        return SimpleNamespace(actual_q=np.zeros(6))
+
     monkeypatch.setattr(tvist.live, "run_shaped_move", fake_run)
+    monkeypatch.setattr(tvist.cli.live, "_controller_ready", fake_state)
     argv = ["run", str(move_csv), "--robot-ip", "127.0.0.1", "--unshaped", "--tail", "0"]
     assert main([*argv, "--log", str(tmp_path / "log.csv")]) == 0
     out = capsys.readouterr().out

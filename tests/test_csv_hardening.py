@@ -13,7 +13,15 @@ import numpy as np
 import pytest
 
 from tvist.ident.csv_table import LogFormatError
-from tvist.ident.logs import LogWarning, Record, read_rtde_csv
+from tvist.ident.logs import LogWarning, Record
+from tvist.ident.logs import read_rtde_csv as read_rtde_log
+
+
+def read_rtde_csv(path, **kwargs) -> Record:
+    """The reader's format layer: these records are random numbers, not a physical log, so
+    the unit check (tested in test_log_units.py) is off."""
+    return read_rtde_log(path, check_units=False, **kwargs)
+
 
 DT_S = 0.002  # e-Series RTDE period
 ATOL_6DP = 5.01e-7  # "ur_rtde" writes 6 decimals: rounding error at most 0.5e-6
@@ -368,13 +376,17 @@ def test_text_in_an_unused_column_is_ignored(tmp_path):
 
 
 def test_identify_repairs_a_malformed_row_when_asked(tmp_path, capsys):
+    from ident_reference import generate_log
     from tvist.cli import main
 
-    rec = make_record()
-    path = write_edited(tmp_path, rec, lambda lines: insert_field_in_row(lines, 3, 5))
+    # A physical log (the command also checks its units), with one row of 29 fields.
+    path = tmp_path / "log.csv"
+    q0 = np.array([0.3, -1.4, 1.2, -1.3, 1.5, 0.1])
+    generate_log(path, seed=5, joint=0, wn_rad_s=2 * np.pi * 15.0, zeta=0.05, q0=q0)
+    path.write_text("\n".join(insert_field_in_row(path.read_text().splitlines(), 3, 5)) + "\n")
     main(["identify", str(path), "--joint", "0"])
     assert "--repair drop-bad-rows" in capsys.readouterr().err  # the hint names the flag
     main(["identify", str(path), "--joint", "0", "--repair", "drop-bad-rows", "--json"])
     err = capsys.readouterr().err
-    assert "has 35 fields" not in err.split("warning")[0]  # no longer refused for the row
+    assert "has 29 fields" not in err.split("warning")[0]  # no longer refused for the row
     assert "tvist identify: warning:" in err and "data row 3" in err  # repaired, with a warning

@@ -395,16 +395,55 @@ def _stream(control, recorder, q_ref, shaper, dt_s, lookahead_s, gain, max_settl
         if not control.servoJ([float(v) for v in q], 0.0, 0.0, dt_s, lookahead_s, gain):
             raise RuntimeError(f"the robot refused servoJ at period {k}")
         sent += 1
-        if k >= n - 1 and float(np.max(np.abs(q - end))) <= SETTLED_TOL_RAD:
+        if _settled(k, n, q, end, limit, max_settle_s):
             break
-        if k >= limit:
-            raise RuntimeError(
-                f"the shaped reference has not settled {max_settle_s:g} s after the move's end"
-            )
         count = recorder.wait_newer(count)
     reference_end_s = start_s + (n - 1) * dt_s
     end_s = float(recorder.latest["timestamp"])
     return start_s, end_s, sent, skipped, reference_end_s
+
+
+def _settled(k: int, n: int, q: np.ndarray, end: np.ndarray, limit: int, max_settle_s: float):
+    """True once sample ``k`` is past the reference's last (``n - 1``) and the shaped sample
+    ``q`` is at the end pose; ``RuntimeError`` past sample ``limit``."""
+    if k >= n - 1 and float(np.max(np.abs(q - end))) <= SETTLED_TOL_RAD:
+        return True
+    if k >= limit:
+        raise RuntimeError(
+            f"the shaped reference has not settled {max_settle_s:g} s after the move's end"
+        )
+    return False
+
+
+def shaped_reference(
+    Q: np.ndarray,  # noqa: N803 (the paper's Q)
+    shaper=None,
+    dt_s: float = 0.002,
+    max_settle_s: float = 5.0,
+) -> np.ndarray:
+    """The joint reference :func:`run_shaped_move` streams, computed offline, one row per
+    control period: ``Q`` stepped through ``shaper`` (reset to ``Q[0]``) until the shaped
+    reference has settled at the end pose, or ``Q`` itself without a shaper. The servo loop
+    takes the same steps, so a run that skips no period sends exactly these rows.
+
+    Raises
+    ------
+    RuntimeError
+        If the shaped reference has not settled ``max_settle_s`` after the reference's end.
+    """
+    q_ref = np.asarray(Q, dtype=float)
+    if shaper is None:
+        return q_ref.copy()
+    n, end = q_ref.shape[0], q_ref[-1]
+    limit = n + int(np.ceil(max_settle_s / dt_s))
+    shaper.reset(q_ref[0].copy())
+    rows = []
+    for k in range(limit + 1):
+        q = np.array(shaper.step(q_ref[min(k, n - 1)]), dtype=float)
+        rows.append(q)
+        if _settled(k, n, q, end, limit, max_settle_s):
+            break
+    return np.array(rows)
 
 
 def _realtime_priority():

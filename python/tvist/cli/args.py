@@ -237,3 +237,10 @@ def map_from_args(args: argparse.Namespace):
     if args.paper_map:
         return tvist.DynamicMap.paper_ur5e()
     return tvist.load_map(existing_file(args.map, "--map"))
+
+
+def add_units(p: argparse.ArgumentParser, quantities: tuple[str, ...]) -> None:
+    """``--units q=deg,...``: the input's units where they are not SI (converted on reading)."""
+    from tvist.units import units_help
+
+    p.add_argument("--units", default=None, metavar="Q=UNIT,...", help=units_help(quantities))

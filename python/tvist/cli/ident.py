@@ -15,6 +15,7 @@ from pathlib import Path
 
 from tvist.cli.args import (
     add_robot_and_payload,
+    add_units,
     existing_file,
     kinematic_robot,
     map_from_args,
@@ -187,6 +188,9 @@ def add_campaign_command(sub: argparse._SubParsersAction) -> None:
 
 def _cmd_identify(args: argparse.Namespace) -> int:
     from tvist.ident.batch import expand_logs
+    from tvist.units import parse_units
+
+    parse_units(args.units)  # a bad --units is one error, not one per log
 
     try:
         paths = expand_logs(args.logs)
@@ -234,6 +238,7 @@ def _identify_batch(args: argparse.Namespace, paths: list[Path]) -> int:
         drop_nan=args.drop_nan,
         resample=not args.no_resample,
         repair=tuple(args.repair or ()),
+        units=args.units,
         workers=args.workers,
         on_message=message,
         progress=sys.stderr.isatty(),
@@ -275,6 +280,7 @@ def _identify_one(args: argparse.Namespace, path: Path) -> int:
             repair=tuple(args.repair or ()) or None,
             drop_nan=args.drop_nan,
             resample=not args.no_resample,
+            units=args.units,
         )
     for w in caught:
         print(f"tvist identify: warning: {w.message}", file=sys.stderr)
@@ -367,6 +373,7 @@ def add_identify_command(sub: argparse._SubParsersAction) -> None:
         help="do not fill skipped samples by interpolation (default: fill, with a warning)",
     )
     p.add_argument("--resample", action="store_true", help=argparse.SUPPRESS)  # the default
+    add_units(p, ("q", "qd", "qdd", "acc"))
     p.add_argument("--json", action="store_true", help="print a single log's fit as JSON")
     p.add_argument("--out", help="write one pose record per line here (JSON lines)")
     p.add_argument(
@@ -405,6 +412,7 @@ def _cmd_fit_map(args: argparse.Namespace) -> int:
     output_file(args.out, "--out")
     if not results:
         return _error("fit-map", f"{args.results}: no pose records")
+    _check_pose_angles(args.results, results)
     print(f"payload from the pose records: {_payload_summary(results)}")
     if args.kind == "modal":
         from tvist.ident.modal_fit import fit_map_command
@@ -450,6 +458,23 @@ def _payload_summary(records) -> str:
         f"{float(r['payload_kg']):g} kg" if "payload_kg" in r else "not recorded" for r in records
     )
     return ", ".join(f"{k} ({n} poses)" for k, n in sorted(counts.items()))
+
+
+def _check_pose_angles(path: str, results: list[dict]) -> None:
+    """Refuse pose records whose joint angles ``q`` are not radians (identified from logs in
+    degrees read as radians: their inertias and gravity torques are those of other poses)."""
+    import numpy as np
+
+    from tvist.units import UnitError, angle_unit
+
+    for line, record in enumerate(results, start=1):
+        q = np.asarray(record.get("q", []), dtype=float)
+        if angle_unit(q) != "rad":
+            raise UnitError(
+                f"{path}: record {line} ({record.get('key', '?')}): q = "
+                f"{np.round(q, 3).tolist()} is beyond ±2π rad: a pose in degrees; identify its "
+                "logs again with --units q=deg"
+            )
 
 
 def add_fit_map_command(sub: argparse._SubParsersAction) -> None:

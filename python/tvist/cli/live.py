@@ -28,11 +28,12 @@ def _shaper(args: argparse.Namespace, n_dof: int):
         provider = tvist.ConstantModes(parse_modes(args.modes))
     else:
         dynmap = map_from_args(args)
-        payload_from_args(
-            args,
-            (f"the controller at {args.robot_ip}", lambda: _controller_payload(args.robot_ip)),
-            needed_for="shaping with a map",
+        controller = (
+            [(f"the controller at {args.robot_ip}", lambda: _controller_payload(args.robot_ip))]
+            if args.robot_ip
+            else []
         )
+        payload_from_args(args, *controller, needed_for="shaping with a map")
         robot = robot_from_args(args)
         if robot.n_dof != n_dof:
             raise ValueError(f"the file has {n_dof} joints, the {args.robot} has {robot.n_dof}")
@@ -52,24 +53,44 @@ def _controller_payload(robot_ip: str):
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from tvist.cli.shape import read_joint_csv
-    from tvist.live import residual_vibration, run_shaped_move
+    from tvist.live import (
+        APPROACH_ACCEL_RAD_S2,
+        APPROACH_SPEED_RAD_S,
+        residual_vibration,
+        run_shaped_move,
+    )
 
     if not (args.unshaped or args.modes or args.map or args.paper_map):
         return _error("run", "give the modes: --map FILE, --paper-map or --modes (or --unshaped)")
+    if not (args.dry_run or args.robot_ip):
+        return _error(
+            "run", "give the robot's address with --robot-ip (or check the move: --dry-run)"
+        )
     from tvist.cli.args import existing_file, output_file
+    from tvist.units import parse_units, to_si
 
     try:
-        Q, _ = read_joint_csv(existing_file(args.move, "move"))
-        log_path = output_file(args.log or Path(args.move).with_suffix(".rtde.csv"), "--log")
+        Q, names = read_joint_csv(existing_file(args.move, "move"))
+        Q = to_si(Q, "q", parse_units(args.units, ("q",))["q"])
+        if not args.dry_run:
+            log_path = output_file(args.log or Path(args.move).with_suffix(".rtde.csv"), "--log")
         shaper = _shaper(args, Q.shape[1])  # after the files: it may ask the controller
+        shaped = _checked_reference(args, Q, names, shaper)
+    except (OSError, ValueError, RuntimeError) as exc:
+        return _error("run", str(exc))
+    if args.dry_run:
+        return _dry_run(args, Q, shaped)
+    try:
+        state = _controller_ready(args.robot_ip)
     except (OSError, ValueError) as exc:
         return _error("run", str(exc))
-    from tvist.live import APPROACH_ACCEL_RAD_S2, APPROACH_SPEED_RAD_S
-
+    travel = abs(Q[0] - state.actual_q)
+    joint = int(travel.argmax())
     print(
         f"approach: moveJ to the first row at {APPROACH_SPEED_RAD_S:g} rad/s, "
-        f"{APPROACH_ACCEL_RAD_S2:g} rad/s² (not shaped, not logged), then the move at "
-        f"--dt-s {args.dt_s:g} s",
+        f"{APPROACH_ACCEL_RAD_S2:g} rad/s² (not shaped, not logged): joint {joint} turns "
+        f"{travel[joint]:.3f} rad, the longest way; then {shaped.shape[0]} servoJ periods at "
+        f"--dt-s {args.dt_s:g} s. Ctrl-C stops the arm; keep the emergency stop at hand",
         flush=True,
     )
     try:
@@ -84,12 +105,13 @@ def _cmd_run(args: argparse.Namespace) -> int:
             tail_s=args.tail,
         )
     except ConnectionError as exc:
-        return _error("run", f"{exc} (check --robot-ip)")
+        return _error("run", _with_controller_reason(args.robot_ip, str(exc), "check --robot-ip"))
     except KeyboardInterrupt:
         print("tvist run: interrupted; the arm was stopped (servoStop, stopScript)")
         return 130
     except RuntimeError as exc:
-        print(f"tvist run: error: {exc}; the arm was stopped (servoStop, stopScript)")
+        reason = _with_controller_reason(args.robot_ip, str(exc), "")
+        print(f"tvist run: error: {reason}; the arm was stopped (servoStop, stopScript)")
         return 1
     print(
         f"sent {result.n_commands} servoJ commands over "
@@ -106,6 +128,146 @@ def _cmd_run(args: argparse.Namespace) -> int:
         rms = residual_vibration(result.log_path)
         print(f"residual vibration (accelerometer RMS, 1 s after the move): {rms:.2e} m/s²")
     return 0
+
+
+def _checked_reference(args: argparse.Namespace, Q, names, shaper):  # noqa: N803
+    """The shaped reference ``tvist run`` would stream, after checking the file's rows and
+    the shaped periods against the ``--robot`` model's units, joint limits and speed limits."""
+    import math
+
+    from tvist.live import shaped_reference
+    from tvist.robots import params
+    from tvist.units import check_trajectory
+
+    if not (math.isfinite(args.dt_s) and args.dt_s > 0):
+        raise ValueError(f"--dt-s must be > 0; got {args.dt_s}")
+    robot = params(args.robot)
+    if Q.shape[1] != robot.n_dof:
+        raise ValueError(
+            f"{args.move}: {Q.shape[1]} joint columns, the {args.robot} has {robot.n_dof} "
+            "(choose the robot with --robot)"
+        )
+    first = 2 if names else 1  # file rows as read_joint_csv counts them
+    check_trajectory(
+        Q, args.dt_s, robot, columns=names, row_label=lambda i: f"row {i + first}", what=args.move
+    )
+    shaped = shaped_reference(Q, shaper, args.dt_s)
+    check_trajectory(
+        shaped,
+        args.dt_s,
+        robot,
+        columns=names,
+        row_label=lambda i: f"period {i} (t = {i * args.dt_s:.3f} s)",
+        what="the shaped reference",
+    )
+    return shaped
+
+
+def _controller_ready(robot_ip: str):
+    """The controller's state, if the arm can move; ``ValueError`` with the controller's own
+    account and the recovery if it cannot, ``OSError`` if it cannot be reached."""
+    from tvist.controller_state import read_state
+
+    try:
+        state = read_state(robot_ip)
+    except OSError as exc:
+        raise OSError(
+            f"cannot reach the controller at {robot_ip}: {exc} (check --robot-ip)"
+        ) from None
+    if not state.can_move:
+        raise ValueError(
+            f"the controller at {robot_ip} cannot move the arm: {state.describe()}; to recover, "
+            f"{state.recovery()}; nothing was moved"
+        )
+    return state
+
+
+def _with_controller_reason(robot_ip: str, message: str, otherwise: str) -> str:
+    """``message`` with the controller's account of a stop and how to recover, if it reports
+    one; else with ``otherwise`` (a hint) in parentheses."""
+    from tvist.controller_state import read_state
+
+    try:
+        state = read_state(robot_ip)
+    except (OSError, ValueError):
+        state = None
+    if state is not None and not state.can_move:
+        return (
+            f"{message}: the controller reports {state.describe()}; to recover, {state.recovery()}"
+        )
+    return f"{message} ({otherwise})" if otherwise else message
+
+
+def _dry_run(args: argparse.Namespace, Q, shaped) -> int:  # noqa: N803
+    """Print (and with ``--plot`` plot) what ``tvist run`` would stream; move nothing."""
+    import numpy as np
+
+    from tvist.analysis.path import path_deviation
+    from tvist.cli.args import kinematic_robot
+    from tvist.live import APPROACH_SPEED_RAD_S
+    from tvist.units import joint_peaks
+
+    robot = kinematic_robot(args)  # speed limits and the flange path: no payload needed
+    dt = args.dt_s
+    print(f"dry run of {args.move}: nothing is sent to a robot")
+    print(
+        f"the run would first move to row 1 with moveJ at {APPROACH_SPEED_RAD_S:g} rad/s, then "
+        f"stream {shaped.shape[0]} servoJ periods ({shaped.shape[0] * dt:.3f} s; the file's "
+        f"{Q.shape[0]} rows {'unshaped' if args.unshaped else 'shaped'}, "
+        f"+{(shaped.shape[0] - Q.shape[0]) * dt * 1e3:.0f} ms)"
+    )
+    peaks = joint_peaks(shaped, dt)
+    limits = robot.params.max_velocity_rad_s
+    print("joint  peak speed / limit, rad/s    peak acceleration, rad/s²   peak jerk, rad/s³")
+    for j in range(shaped.shape[1]):
+        speed, share = peaks["speed"][j], 100 * peaks["speed"][j] / limits[j]
+        print(
+            f"  {j}    {speed:7.3f} / {limits[j]:.3f} ({share:3.0f} %)"
+            f"    {peaks['acceleration'][j]:12.3f}              {peaks['jerk'][j]:12.1f}"
+        )
+    print(
+        f"the {args.robot} model has speed limits only: judge the acceleration and jerk "
+        "against your arm and payload"
+    )
+    planned = np.vstack([Q, np.repeat(Q[-1:], max(shaped.shape[0] - Q.shape[0], 0), axis=0)])
+    dev = path_deviation(robot, planned, shaped)
+    print(
+        f"path deviation ({args.robot} flange): {dev.max_m * 1e3:.3f} mm at "
+        f"{100 * dev.path_fraction:.0f} % of the planned path"
+    )
+    if args.plot:
+        from tvist.cli.args import output_file
+
+        plot = output_file(args.plot, "--plot")
+        print(f"plot written to {_plot_reference(plot, Q, shaped, dt, limits)}")
+    return 0
+
+
+def _plot_reference(path: Path, Q, shaped, dt: float, limits) -> Path:  # noqa: N803
+    """Joint positions (planned and shaped) and the shaped joint speeds against the limits."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    t_plan, t_shaped = dt * np.arange(Q.shape[0]), dt * np.arange(shaped.shape[0])
+    speed = np.diff(shaped, axis=0) / dt
+    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(8, 6))
+    for j in range(shaped.shape[1]):
+        (line,) = top.plot(t_shaped, shaped[:, j], label=f"joint {j}")
+        top.plot(t_plan, Q[:, j], "--", color=line.get_color(), linewidth=0.8)
+        bottom.plot(t_shaped[1:], speed[:, j], color=line.get_color())
+        bottom.axhline(limits[j], color=line.get_color(), linestyle=":", linewidth=0.8)
+        bottom.axhline(-limits[j], color=line.get_color(), linestyle=":", linewidth=0.8)
+    top.set_ylabel("position, rad (dashed: planned)")
+    bottom.set_ylabel("speed, rad/s (dotted: limits)")
+    bottom.set_xlabel("time, s")
+    top.legend(loc="best", fontsize="small")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
 
 
 def _cmd_record(args: argparse.Namespace) -> int:
@@ -148,7 +310,7 @@ def _add_payload(p: argparse.ArgumentParser) -> None:
 
 
 def add_run_command(sub: argparse._SubParsersAction) -> None:
-    from tvist.cli.args import add_dt_s
+    from tvist.cli.args import add_dt_s, add_units
     from tvist.live import SERVO_GAIN, SERVO_LOOKAHEAD_S
 
     p = sub.add_parser(
@@ -160,7 +322,7 @@ def add_run_command(sub: argparse._SubParsersAction) -> None:
         "are in Hz on the command line, rad/s in the Python API.",
     )
     p.add_argument("move", help="CSV of joint positions (rad), one row per control period")
-    p.add_argument("--robot-ip", required=True, help="robot (or twin server) address")
+    p.add_argument("--robot-ip", help="robot (or twin server) address (not with --dry-run)")
     modes = p.add_mutually_exclusive_group()
     modes.add_argument("--map", help="map file, paper10 or modal (tvist fit-map)")
     modes.add_argument("--paper-map", action="store_true", help="the paper's UR5e map")
@@ -190,6 +352,14 @@ def add_run_command(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--tail", type=float, default=3.0, help="recording after the last command, s (default 3)"
     )
+    p.add_argument(
+        "--dry-run",
+        action="store_true",
+        help="check and describe the shaped reference (peak speed, acceleration, jerk, path "
+        "deviation) without connecting to a robot",
+    )
+    p.add_argument("--plot", metavar="PNG", help="with --dry-run: plot the shaped reference here")
+    add_units(p, ("q",))
     p.set_defaults(func=_cmd_run)
 
 

@@ -42,6 +42,7 @@ from tvist.cli.args import (
     add_allow_other_robot,
     add_dt_s,
     add_robot_and_payload,
+    add_units,
     existing_dir,
     existing_file,
     kinematic_robot,
@@ -228,9 +229,12 @@ def _describe_modes(end_modes: list[tuple[float, float]]) -> str:
 def _cmd_shape_csv(args: argparse.Namespace, robot, dynamics) -> int:
     from tvist.analysis.path import path_deviation
     from tvist.trajectory import resample
+    from tvist.units import UNITS, check_trajectory, parse_units
 
     f = read_trajectory_csv(existing_file(args.input, "input"))
     output_file(args.out, "--out")
+    unit = parse_units(args.units, ("q",))["q"]
+    factor = UNITS["q"][unit]  # the output is written in the input's unit
     n_joints = f.Q.shape[1]
     uses_map = not args.modes
     if uses_map and n_joints != robot.n_dof:
@@ -242,7 +246,18 @@ def _cmd_shape_csv(args: argparse.Namespace, robot, dynamics) -> int:
     if f.names is not None and n_joints == robot.n_dof:
         order, how = joint_order(f.names, robot.n_dof)
     print(f"joint columns matched {how}" + (f": {[f.names[i] for i in order]}" if f.names else ""))
-    Q = f.Q[:, order]
+    Q = f.Q[:, order] * factor
+    limits = robot.params if n_joints == robot.n_dof else None
+    joint_names = None if f.names is None else [f.names[i] for i in order]
+    first = 1 if f.names is None else 2  # file rows as read_trajectory_csv counts them
+    check_trajectory(
+        Q,
+        None if f.times_s is not None else args.dt_s,
+        limits,
+        columns=joint_names,
+        row_label=lambda i: f"row {i + first}",
+        what=str(args.input),
+    )
     if f.times_s is not None:
         t, Q = resample(f.times_s, Q, args.dt_s)
         print(
@@ -256,11 +271,29 @@ def _cmd_shape_csv(args: argparse.Namespace, robot, dynamics) -> int:
             f"no time column (time, t, time_s or time_from_start): rows taken as samples "
             f"every --dt-s {args.dt_s:g} s"
         )
+        check_trajectory(
+            Q,
+            args.dt_s,
+            limits,
+            columns=joint_names,
+            row_label=lambda i: f"sample {i} (t = {t[i]:.4g} s)",
+            what="the resampled waypoints",
+        )
     shaped_q, added, end_modes, alpha, counts = shape_samples(
         Q, args.dt_s, dynamics, method=args.method, shaper=args.shaper
     )
+    check_trajectory(
+        shaped_q,
+        args.dt_s,
+        limits,
+        columns=joint_names,
+        row_label=lambda i: f"output row {i + first}",
+        what=f"the {args.method}-shaped trajectory",
+    )
+    if unit != "rad":
+        print(f"--units q={unit}: the joint columns are read and written in {unit}")
     inverse = np.argsort(order)
-    columns = shaped_q[:, inverse]
+    columns = shaped_q[:, inverse] / factor
     names = None if f.names is None else list(f.names)
     if t is not None:
         t_out = t[0] + args.dt_s * np.arange(shaped_q.shape[0])
@@ -368,4 +401,5 @@ def add_shape_command(sub: argparse._SubParsersAction) -> None:
     source.add_argument("--paper-map", action="store_true", help="the paper's UR5e map")
     add_allow_other_robot(p)
     add_robot_and_payload(p, payload_from="with a map: required unless the map file names one")
+    add_units(p, ("q",))
     p.set_defaults(func=_cmd_shape)

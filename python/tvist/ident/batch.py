@@ -81,12 +81,19 @@ class LoadedLog:
 
 
 def load_log(
-    path: Path, drop_nan: bool = False, resample: bool = True, repair: tuple[str, ...] = ()
+    path: Path,
+    drop_nan: bool = False,
+    resample: bool = True,
+    repair: tuple[str, ...] = (),
+    units: str | None = None,
 ) -> LoadedLog:
-    """Read ``path`` and find its excited joint and pose (warnings are kept, not shown)."""
+    """Read ``path`` (declared ``units``, see :func:`~tvist.ident.logs.read_rtde_csv`) and find
+    its excited joint and pose (warnings are kept, not shown)."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        record = read_rtde_csv(path, repair=repair or None, drop_nan=drop_nan, resample=resample)
+        record = read_rtde_csv(
+            path, repair=repair or None, drop_nan=drop_nan, resample=resample, units=units
+        )
     return LoadedLog(
         path=Path(path),
         record=record,
@@ -204,10 +211,10 @@ def _identify_pair(pair: PosePair, job: _Job) -> dict[str, Any]:
 
 
 def _load_safely(
-    path: Path, drop_nan: bool, resample: bool, repair: tuple[str, ...]
+    path: Path, drop_nan: bool, resample: bool, repair: tuple[str, ...], units: str | None
 ) -> LoadedLog | str:
     try:
-        return load_log(path, drop_nan, resample, repair)
+        return load_log(path, drop_nan, resample, repair, units)
     except (ValueError, OSError) as exc:
         return f"{path}: {exc}"
 
@@ -224,6 +231,7 @@ def identify_logs(
     drop_nan: bool = False,
     resample: bool = True,
     repair: tuple[str, ...] = (),
+    units: str | None = None,
     workers: int | None = None,
     on_message: Callable[[str], None] = lambda _: None,
     progress: bool = False,
@@ -234,6 +242,7 @@ def identify_logs(
     every log, or with ``payload_kg=None`` the one each log names (its payload columns, written
     by ``tvist record`` and ``tvist run``); a pose whose logs name none gets an ``error``.
     ``on_message`` receives the log warnings and the logs that were skipped (one line each).
+    ``units`` declares the logs' units where they are not SI (``"q=deg,acc=g"``).
     ``workers`` processes (default: the number of CPUs) run the reading and the fits.
     """
     job = _Job(
@@ -252,7 +261,8 @@ def identify_logs(
         with ProcessPoolExecutor(max_workers=n_workers) as pool:
             loaded: list[LoadedLog] = []
             futures = [
-                pool.submit(_load_safely, p, drop_nan, resample, tuple(repair)) for p in paths
+                pool.submit(_load_safely, p, drop_nan, resample, tuple(repair), units)
+                for p in paths
             ]
             for future in futures:
                 item = future.result()

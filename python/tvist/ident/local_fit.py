@@ -97,13 +97,19 @@ class FitOptions:
     max_wn_rel_se
         Above this relative standard error of ``ω_n``, the result is flagged.
     max_zeta_rel_se
-        Above this relative standard error of ``ζ`` (and above ``0.005`` absolute), flagged.
+        Above this relative standard error of ``ζ`` (and above ``0.005`` absolute), flagged;
+        so is a ``ζ`` less than 2 standard errors above zero, whatever the floor.
     max_saturated_fraction
         More saturated samples than this fraction is an error; fewer are excluded from the
         fit and flagged.
     min_ringing_snr_db
         The residual energy the mode removes beyond a response without a mode, relative to
         the energy left (dB); below it the result is flagged :data:`NO_RINGING`.
+    min_confident_snr_db
+        Below this ringing SNR (dB) a mode is reported but flagged: the residual is as large
+        as the ringing it explains, so the result rests on the residual being white noise
+        (measured on logs whose model is right at 20 dB noise: 7.6 dB and more; a log with a
+        misplaced accelerometer column: -0.7 to 1.7 dB).
     """
 
     f_min_hz: float = 1.0
@@ -117,6 +123,7 @@ class FitOptions:
     max_zeta_rel_se: float = 0.1
     max_saturated_fraction: float = 0.05
     min_ringing_snr_db: float = -10.0
+    min_confident_snr_db: float = 3.0
 
 
 @dataclass(frozen=True)
@@ -529,12 +536,21 @@ def fit_local(
             f"{NO_RINGING}: the mode's ringing is {-ringing_snr_db:.1f} dB below the "
             f"residual noise (needs at least {opts.min_ringing_snr_db:.0f} dB)"
         )
+    elif ringing_snr_db < opts.min_confident_snr_db:
+        reasons.append(
+            f"weak ringing: the mode's ringing is {ringing_snr_db:+.1f} dB against the "
+            f"residual noise (needs at least {opts.min_confident_snr_db:+.0f} dB)"
+        )
     if fit < opts.min_fit_percent:
         reasons.append(f"poor fit: {fit:.1f} % < {opts.min_fit_percent:.0f} %")
     if not wn_se <= opts.max_wn_rel_se * wn:
         reasons.append(f"uncertain frequency: standard error {100 * wn_se / wn:.2f} % of ω_n")
     if not zeta_se <= max(opts.max_zeta_rel_se * zeta, 0.005):
         reasons.append(f"uncertain damping: standard error {zeta_se:.4f}")
+    elif not zeta >= 2.0 * zeta_se:
+        reasons.append(
+            f"uncertain damping: ζ = {zeta:.4f} ± {zeta_se:.4f} is not 2 standard errors above zero"
+        )
     if wn < wn_lo * 1.02 or wn > wn_hi / 1.02:
         reasons.append(
             f"frequency {wn / (2 * math.pi):.2f} Hz at the edge of the searched band "

@@ -30,7 +30,12 @@ rows, i.e. not counting the header):
 - skipped samples (a step longer than 1.5 sampling periods) are filled by linear
   interpolation onto a uniform grid, with a :class:`LogWarning` that says how many samples
   were filled (``resample=False`` only reports them); a log that would be more than half
-  filled is refused.
+  filled is refused;
+- units (:func:`tvist.units.check_log`): declared units (``units="q=deg,acc=g"``) are
+  converted to SI; joint angles beyond ±2π rad, velocities that are not the rate of change of
+  the positions, ``actual_q`` that does not follow ``target_q`` or an accelerometer that does
+  not read 9.81 m/s² at rest are a :class:`tvist.units.UnitError` (a ``ValueError``) naming
+  the column, the likely unit and the ``--units`` that declares it.
 """
 
 from __future__ import annotations
@@ -45,6 +50,7 @@ import numpy as np
 
 from tvist.ident.csv_table import LogFormatError, read_table
 from tvist.trajectory.resample import MAX_GRID_SAMPLES
+from tvist.units import UnitError, check_log
 
 __all__ = [
     "PAYLOAD_COLUMNS",
@@ -273,6 +279,8 @@ def read_rtde_csv(
     repair: str | tuple[str, ...] | None = None,
     drop_nan: bool = False,
     resample: bool = True,
+    units: str | dict[str, str] | None = None,
+    check_units: bool = True,
 ) -> Record:
     """Read a UR RTDE log written by ur_rtde or by UR's ``record.py`` (format auto-detected).
 
@@ -291,6 +299,12 @@ def read_rtde_csv(
         If samples were skipped, interpolate all channels linearly onto a uniform grid at the
         median sampling period (default; with a :class:`LogWarning` that says how many
         samples were filled). ``False`` only reports the gaps.
+    units
+        Units of the log's columns where they are not SI, ``"q=deg,qd=deg/s,acc=g"`` or
+        ``{"q": "deg"}`` (:func:`tvist.units.parse_units`); converted to SI.
+    check_units
+        Refuse a log whose values do not look like SI once converted (default); ``False``
+        skips the check (synthetic data that is not a physical log).
 
     Returns
     -------
@@ -305,8 +319,11 @@ def read_rtde_csv(
         (unless repaired), NaN rows (unless ``drop_nan``), timestamps that go backwards, do
         not advance or are corrupt, fewer than 2 samples, or a resampling grid over the cap or
         cells too large to interpolate.
+    UnitError
+        (a ``ValueError``) A column that does not look like SI once the declared ``units``
+        are converted: the message names it, its likely unit and the ``--units`` to declare.
     ValueError
-        An unknown ``repair`` option.
+        An unknown ``repair`` option or unit.
     """
     path = Path(path)
     required = ["timestamp"]
@@ -393,6 +410,7 @@ def read_rtde_csv(
         tool_accel=_take(data, index, "actual_tool_accelerometer", 3),
         actual_TCP_pose=_take(data, index, "actual_TCP_pose", 6) if has_pose else None,
     )
+    record = _in_si_units(path, record, rows, units, check_units)
     gaps = find_gaps(record.t_s)
     if gaps.size:
         dt = record.dt_s
@@ -458,6 +476,21 @@ def log_payload(path: str | Path):
             f"{values[:, 0].max():g} kg); give the payload explicitly"
         )
     return Payload(float(values[0, 0]), tuple(float(v) for v in values[0, 1:]))
+
+
+def _in_si_units(path: Path, record: Record, rows: np.ndarray, units: Any, check: bool) -> Record:
+    """``record`` converted to SI from the declared ``units``, checked unless ``check`` is
+    False (:func:`tvist.units.check_log`; ``rows`` are the samples' data rows)."""
+    columns = {
+        rtde: getattr(record, name)
+        for name, (rtde, _) in _FIELDS.items()
+        if getattr(record, name) is not None
+    }
+    try:
+        si = check_log(record.t_s, columns, units, rows, check=check)
+    except UnitError as exc:
+        raise UnitError(f"{path}: {exc}") from None
+    return Record(t_s=record.t_s, **{name: si.get(rtde) for name, (rtde, _) in _FIELDS.items()})
 
 
 def _take(data: np.ndarray, index: dict[str, int], rtde_name: str, width: int) -> np.ndarray:

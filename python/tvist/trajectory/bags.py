@@ -18,6 +18,7 @@ import numpy as np
 
 from tvist.trajectory.joint_names import joint_order
 from tvist.trajectory.shaping import shape_waypoints
+from tvist.units import check_trajectory
 
 __all__ = ["JOINT_TRAJECTORY", "ShapedMessage", "shape_bag"]
 
@@ -86,6 +87,11 @@ def _shape_message(msg, typestore, dt_s: float, dynamics, n_dof: int | None, rob
     if arrays["positions"] is None:
         raise ValueError("JointTrajectory points without positions")
     ordered = {k: (None if v is None else v[:, order]) for k, v in arrays.items()}
+    limits = None if robot is None else robot.params
+    columns = [names[i] for i in order]
+    check_trajectory(
+        ordered["positions"], None, limits, columns=columns, row_label=lambda i: f"point {i}"
+    )
     shaped = shape_waypoints(
         times,
         ordered["positions"],
@@ -94,6 +100,14 @@ def _shape_message(msg, typestore, dt_s: float, dynamics, n_dof: int | None, rob
         velocities=ordered["velocities"],
         accelerations=ordered["accelerations"],
         **kwargs,
+    )
+    check_trajectory(
+        shaped.q,
+        dt_s,
+        limits,
+        columns=columns,
+        row_label=lambda i: f"shaped point {i}",
+        what="the shaped trajectory",
     )
     deviation = None
     if robot is not None:
