@@ -342,7 +342,9 @@ impl ModeMap {
             Domain::of(self.frequency_range),
             Domain::of(self.damping_range),
         );
-        if !(c.k_g >= 0.0) {
+        // The coefficients are finite (checked first); a least value may still overflow to
+        // NaN, which fails its rule.
+        if c.k_g < 0.0 {
             return Err(format!(
                 "k_g = {} must be >= 0 (gears stiffen under load; a negative k_g makes the \
                  stiffness negative at a large enough gravity torque)",
@@ -351,7 +353,7 @@ impl ModeMap {
         }
         // K = k_0 + k_J J_f + k_g |τ|_s, least at τ = 0 (k_g >= 0).
         let (k, at) = f.least_linear(c.k_0, c.k_j);
-        if !(k > 0.0) {
+        if k.is_nan() || k <= 0.0 {
             return Err(format!(
                 "the stiffness k_0 + k_j J_f must be > 0 for every J_f in {f}, but with k_0 = \
                  {}, k_j = {} it is {k} N m/rad at J_f = {at} kg m²",
@@ -369,7 +371,7 @@ impl ModeMap {
             }
         }
         let (damping, at) = d.least_root_quadratic(c.c_0, c.c_1, c.c_2);
-        if !(damping >= 0.0) {
+        if damping.is_nan() || damping < 0.0 {
             return Err(format!(
                 "the damping c_0 + c_1 √J_d + c_2 J_d must be >= 0 for every J_d in {d}, but \
                  with c_0 = {}, c_1 = {}, c_2 = {} it is {damping} N m s/rad at J_d = {at} kg m²",
@@ -377,7 +379,7 @@ impl ModeMap {
             ));
         }
         let (factor, at) = d.least_linear(1.0, c.c_tau);
-        if !(factor >= 0.0) {
+        if factor.is_nan() || factor < 0.0 {
             return Err(format!(
                 "the torque factor 1 + c_tau J_d must be >= 0 for every J_d in {d}, but with \
                  c_tau = {} it is {factor} at J_d = {at} kg m²",
