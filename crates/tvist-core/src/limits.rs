@@ -18,13 +18,14 @@ pub const MAX_DELAY_LINE_BYTES: usize = 256 * 1024 * 1024;
 /// per mode, evaluated every cycle). A robot arm has one structural mode per flexible joint
 /// worth shaping (at most [`crate::modal_map::MAX_FLEX_JOINTS`] = 6 in the modal map, 2 in
 /// the published map); 64 leaves an order of magnitude of room while keeping the cycle cost
-/// bounded (each mode costs one filter update per channel per cycle).
+/// bounded (each mode costs one filter update per channel per cycle: 64 constant modes on 6
+/// channels take about 2.5 µs per cycle on a desktop core, where 10,000 took 0.94 ms).
 pub const MAX_MODES: usize = 64;
 
-/// Largest map file read, bytes (1 MiB). A `paper10` mode takes about 0.8 kB of indented
-/// JSON, so [`MAX_MODES`] modes with their fit statistics stay far below; a larger file is
-/// not a map, and is refused after reading at most this many bytes (a device such as
-/// `/dev/zero` or a huge file is never read whole).
+/// Largest map file read, bytes (1 MiB). A `paper10` mode takes about 0.4 kB of the indented
+/// JSON tvist writes ([`MAX_MODES`] modes: 25 kB), fit statistics a few kB more: 1 MiB is
+/// some 40 times the largest map. A longer file is not a map and is refused after reading at
+/// most this many bytes (a device such as `/dev/zero` or a huge file is never read whole).
 pub const MAX_MAP_FILE_BYTES: u64 = 1 << 20;
 
 /// Refuses `n_dof` above [`MAX_DOF`].
