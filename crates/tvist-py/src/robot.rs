@@ -263,12 +263,6 @@ fn map_from_document<'py>(
     map_parts(py, map_file_from(doc)?)
 }
 
-/// Parses and validates map-file text (strict JSON): `(DynamicMap or ModalMap, metadata)`.
-#[pyfunction]
-fn parse_map<'py>(py: Python<'py>, text: &str) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-    map_parts(py, MapFile::parse(text).map_err(value_error)?)
-}
-
 /// Reads and validates the map file at `path` (the core's reader: size limit, UTF-8, strict
 /// JSON): `(DynamicMap or ModalMap, metadata)`; errors start with the path.
 #[pyfunction]
@@ -578,7 +572,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(map_from_document, m)?)?;
     m.add_function(wrap_pyfunction!(load_map_file, m)?)?;
     m.add_function(wrap_pyfunction!(evaluate_trial_mode, m)?)?;
-    m.add_function(wrap_pyfunction!(parse_map, m)?)?;
     m.add_function(wrap_pyfunction!(write_map, m)?)?;
     m.add_function(wrap_pyfunction!(map_document, m)?)?;
     m.add_function(wrap_pyfunction!(robot_names, m)?)?;
