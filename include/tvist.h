@@ -45,12 +45,13 @@ typedef enum TvistError {
     TVIST_ERR_UNKNOWN_ROBOT = -6,
     /* An internal error was caught at the boundary (a bug). Only free the handle after it. */
     TVIST_ERR_INTERNAL = -7,
-    /* A map file that cannot be read or is not a valid map (the message names the field). */
+    /* A map file that cannot be read or is not a valid map: not a physical map, more than
+     * TVIST_MAX_MODES modes, longer than 1 MiB, a repeated key (the message names the field). */
     TVIST_ERR_MAP_FILE = -8,
     /* A map identified on another robot than the one named (the message names both). */
     TVIST_ERR_ROBOT_MISMATCH = -9,
-    /* A request beyond a setup limit (TVIST_MAX_DOF channels, TVIST_MAX_DELAY_LINE_BYTES of
-     * delay lines): refused before anything is allocated. */
+    /* A request beyond a setup limit (TVIST_MAX_DOF channels, TVIST_MAX_MODES modes,
+     * TVIST_MAX_DELAY_LINE_BYTES of delay lines): refused before anything is allocated. */
     TVIST_ERR_TOO_LARGE = -10
 } TvistError;
 
@@ -75,7 +76,8 @@ typedef enum TvistError {
 
 /* Largest number of joint channels of a handle. */
 #define TVIST_MAX_DOF 4096
-/* Largest number of modes of tvist_shaper_new_constant. */
+/* Largest number of modes of a shaper: tvist_shaper_new_constant (more: TVIST_ERR_TOO_LARGE)
+ * and a map file (more: TVIST_ERR_MAP_FILE naming "modes"). */
 #define TVIST_MAX_MODES 64
 /* Largest total size of a handle's delay lines in bytes (256 MiB): a larger request (many
  * channels, a very slow mode, a very short dt_s) returns TVIST_ERR_TOO_LARGE. */

@@ -241,3 +241,33 @@ def test_reset_accepts_non_contiguous_and_integer_arrays() -> None:
     np.testing.assert_allclose(out, np.ones((4, 3)), rtol=1e-15)
     with pytest.raises(ValueError, match="q0 has 2 values"):
         shaper.reset(np.zeros(2, dtype=int))
+
+
+@pytest.mark.parametrize(
+    "complex_input",
+    [
+        np.array([1.0 + 2.0j, 3.0 + 0.0j]),
+        np.array([1.0, 2.0], dtype=np.complex64),  # zero imaginary part: still complex data
+        [np.complex128(1.0 + 2.0j), 3.0],  # numpy would make this a complex array
+        [1.0 + 2.0j, 3.0],
+    ],
+    ids=["complex128", "complex64", "list-of-numpy-complex", "list-of-python-complex"],
+)
+def test_complex_input_is_refused_not_truncated(complex_input) -> None:
+    """Converting complex data to float64 drops the imaginary part (with only a numpy warning,
+    or none); step, shape and reset refuse it, and the refused call leaves no trace."""
+    shaper = tvist.TvShaper(MODES, dt_s=0.002, n_dof=2)
+    reference = tvist.TvShaper(MODES, dt_s=0.002, n_dof=2)
+    for call, arg, name in [
+        (shaper.step, complex_input, "q"),
+        (shaper.reset, complex_input, "q0"),
+        (shaper.shape, [complex_input, complex_input], "Q"),
+    ]:
+        with pytest.raises(
+            TypeError, match=rf"^{name} must hold real numbers, got complex\d+ values"
+        ):
+            call(arg)
+    # Nothing was shaped: the next real samples come out as from a fresh shaper.
+    q = np.array([[0.1, 0.2], [0.3, 0.4], [0.5, 0.6]])
+    np.testing.assert_array_equal(shaper.shape(q), reference.shape(q))
+    np.testing.assert_array_equal(shaper.step([1.0, 2.0]), reference.step([1.0, 2.0]))

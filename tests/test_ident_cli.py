@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -45,6 +46,28 @@ def test_identify_reads_both_formats(twin_log, fmt, capsys):
     assert main(["identify", str(paths[fmt]), "--joint", "1", "--payload-kg", "3"]) == 0
     text = capsys.readouterr().out
     assert f"f_n = {fit['wn_rad_s'] / (2 * math.pi):.3f} Hz" in text
+
+
+@pytest.mark.parametrize("column", ["actual_tool_accelerometer_0", "target_qd_1"])
+def test_a_huge_cell_gives_the_one_line_error_and_no_numpy_warning(
+    twin_log, tmp_path, column, capsys
+):
+    """A cell of 1e300 (finite, so the reader keeps it) overflows the fit: the error is one
+    line, and no RuntimeWarning of numpy or scipy is printed before it."""
+    paths, _ = twin_log
+    lines = paths["ur_rtde"].read_text().splitlines()
+    at = lines[0].split(",").index(column)
+    cells = lines[100].split(",")
+    cells[at] = "1e300"
+    lines[100] = ",".join(cells)
+    log = tmp_path / "huge.csv"
+    log.write_text("\n".join(lines) + "\n")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        code = main(["identify", str(log), "--joint", "1", "--payload-kg", "3"])
+    assert [w.message for w in caught if issubclass(w.category, RuntimeWarning)] == []
+    err = capsys.readouterr().err
+    assert code == 2 and err.startswith("tvist identify: error: ") and err.count("\n") == 1
 
 
 def test_campaign_on_the_twin(tmp_path, capsys):

@@ -20,6 +20,8 @@ from tvist.ztdis import ZeroDelayResult, zero_delay
 __all__ = [
     "MAX_DELAY_LINE_BYTES",
     "MAX_DOF",
+    "MAX_MAP_FILE_BYTES",
+    "MAX_MODES",
     "SHAPERS",
     "ConstantModes",
     "DynamicMap",
@@ -72,6 +74,10 @@ Status = _StatusFlags("Status", {"OK": 0, **_core.STATUS_FLAGS})
 #: larger requests raise ``ValueError`` (limits of the core, shared with the C API).
 MAX_DOF: int = _core.MAX_DOF
 MAX_DELAY_LINE_BYTES: int = _core.MAX_DELAY_LINE_BYTES
+#: Most modes of a shaper, a map or a map file (the core's limit, shared by Python, C, Rust).
+MAX_MODES: int = _core.MAX_MODES
+#: Longest map file read, bytes (1 MiB): a longer file or a device is refused unread.
+MAX_MAP_FILE_BYTES: int = _core.MAX_MAP_FILE_BYTES
 
 
 def shaper(

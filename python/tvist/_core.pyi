@@ -1,5 +1,6 @@
 """Type stubs of the compiled extension tvist._core (kept in sync with crates/tvist-py)."""
 
+import os
 from collections.abc import Sequence
 from typing import Any
 
@@ -53,7 +54,12 @@ MAP_KIND_MODAL: str
 ROBOT_DATA_JSON: str
 
 def map_from_document(doc: Any) -> tuple[DynamicMap | ModalMap, dict[str, Any]]: ...
-def parse_map(text: str) -> tuple[DynamicMap | ModalMap, dict[str, Any]]: ...
+def load_map_file(path: str | os.PathLike[str]) -> tuple[DynamicMap | ModalMap, dict[str, Any]]: ...
+def evaluate_trial_mode(
+    mode: dict[str, Any],
+    inertia_kg_m2: npt.NDArray[np.float64],
+    gravity_torque_nm: npt.NDArray[np.float64] | None = None,
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
 def write_map(map: DynamicMap | ModalMap, metadata: Any) -> str: ...
 def map_document(map: DynamicMap | ModalMap, metadata: Any) -> dict[str, Any]: ...
 def robot_names() -> list[str]: ...
@@ -167,6 +173,8 @@ class ModalDynamics:
 SHAPERS: list[str]
 STATUS_FLAGS: dict[str, int]
 MAX_DOF: int
+MAX_MODES: int
+MAX_MAP_FILE_BYTES: int
 MAX_DELAY_LINE_BYTES: int
 
 class Impulses:

@@ -44,7 +44,13 @@ Python, Rust and C; errors name the field path, e.g. ``modes[1].k_0``)::
 ten-coefficient map above; files written before (``"tvist.dynamic_map"`` or no ``kind``) read
 as ``"paper10"``. ``metadata.robot`` names the robot the map was identified on:
 :class:`MapDynamics` refuses the map for another robot unless ``allow_other_robot=True``.
-The gain exponents must lie within ±2 (the published forms use −½, 0, ½, 1). No ``NaN`` or
+The gain exponents must lie within ±2 (the published forms use −½, 0, ½, 1). Every mode must
+be physical at every inertia it reads (its ranges, or ``(0, ∞)`` without them) and every
+gravity torque: ``k_g >= 0``, ``k_0 + k_J J_f > 0``, ``1 + k_p/J > 0``,
+``c_0 + c_1 √J_d + c_2 J_d >= 0`` and ``1 + c_τ J_d >= 0``, so its modes are finite with
+``ω_n > 0`` and ``ζ >= 0`` (``ζ < 1`` over a robot's poses is checked by
+:class:`MapDynamics`). At most ``tvist.MAX_MODES`` (64) modes; a file of at most 1 MiB, no
+repeated key (a UTF-8 byte-order mark is accepted). No ``NaN`` or
 ``Infinity`` tokens are read or written: ``null`` means unbounded for a range and "not
 available" for metadata (a statistic that could not be computed is written as ``null``).
 The range fields are optional, so files written before they existed load unchanged.
@@ -112,9 +118,10 @@ class DynamicMap(MapDocument):
     Raises
     ------
     ValueError
-        Naming the offending field, for missing, unknown or non-finite values and for bad
+        Naming the offending field, for missing, unknown or non-finite values, for bad
         ranges (non-finite, ``min <= 0``, ``min >= max``, too narrow for the soft clamp,
-        different for one joint).
+        different for one joint), for a mode that is not physical (see the module docstring)
+        and for more than ``tvist.MAX_MODES`` modes.
     """
 
     def __init__(

@@ -118,15 +118,11 @@ class RobotModesMixin:
 
 def parse_map_file(path: str | Path) -> tuple[Any, dict[str, Any]]:
     """The core map (``_core.DynamicMap`` or ``_core.ModalMap``, by the file's ``kind``) and
-    its metadata; a malformed file raises ValueError naming the file and the field."""
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"{path}: not UTF-8 text ({exc})") from None
-    try:
-        return _core.parse_map(text)
-    except ValueError as exc:
-        raise ValueError(f"{path}: {exc}") from None
+    its metadata, read by the core (as from C and Rust). A file that is not a valid map (not
+    UTF-8, not strict JSON, a repeated key, more than ``_core.MAX_MODES`` modes, a mode that is
+    not physical, longer than ``_core.MAX_MAP_FILE_BYTES``) raises ValueError naming the file
+    and the field."""
+    return _core.load_map_file(path)
 
 
 def load_map(path: str | Path) -> DynamicMap | ModalMap:

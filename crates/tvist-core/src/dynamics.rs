@@ -41,13 +41,15 @@ pub struct ConstantModes {
 }
 
 impl ConstantModes {
-    /// Validates every mode (finite, `ω_n > 0`, `0 <= ζ < 1`); at least one is required.
+    /// Validates every mode (finite, `ω_n > 0`, `0 <= ζ < 1`); at least one is required, at
+    /// most [`crate::limits::MAX_MODES`].
     pub fn new(modes: Vec<Mode>) -> Result<ConstantModes, Error> {
         if modes.is_empty() {
             return Err(Error::InvalidParameter(
                 "at least one mode is required".into(),
             ));
         }
+        crate::limits::check_n_modes(modes.len(), "a constant-mode provider")?;
         for (i, m) in modes.iter().enumerate() {
             m.validate(i)?;
         }

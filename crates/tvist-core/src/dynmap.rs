@@ -20,6 +20,18 @@
 //! `1 + k_p/J <= 0`, non-finite values, or `ζ >= 1`) yields a mode that fails
 //! [`Mode::is_valid`], which a [`crate::ModeFilter`] holds over.
 //!
+//! # Physical sign rules
+//!
+//! A [`DynamicMap`] (whether built in Rust, from Python or C, or read from a map file) holds
+//! only modes that are physical at every inertia they read (their range, `(0, ∞)` without
+//! one) and every gravity torque ([`ModeMap::check_physical`]): `k_g >= 0`, the stiffness
+//! `k_0 + k_J J_f > 0` (without a range: `k_0 > 0`, `k_J >= 0`), `1 + k_p/J > 0` (without a
+//! range: `k_p >= 0`), and `c_0 + c_1 √J_d + c_2 J_d >= 0`, `1 + c_τ J_d >= 0` (without a
+//! range: `c_0 >= 0` and neither turns negative at large `J_d`). So a map gives a finite
+//! `ω_n > 0` and `ζ >= 0` at every positive inertia. `ζ < 1` is not a rule of the map alone:
+//! the published map is overdamped at small inertias no arm reaches;
+//! [`crate::MapDynamics::new`] checks it over the poses of the robot.
+//!
 //! # Validity ranges
 //!
 //! A map fitted to measurements is only known where it was measured. Each [`ModeMap`] may
@@ -317,6 +329,66 @@ impl ModeMap {
         self.frequency_joint.max(self.damping_joint) + 1
     }
 
+    /// Checks the physical sign rules of the mode (see [`DynamicMap::new`]): over every
+    /// inertia it reads (its range, or `(0, ∞)` without one) and every gravity torque, the
+    /// stiffness `K` and both gain terms `1 + k_p/J` are positive and the damping
+    /// `(c_0 + c_1 √J_d + c_2 J_d)(1 + c_τ J_d)` is not negative, so that every evaluation
+    /// gives a finite `ω_n > 0` and `ζ >= 0`. Whether `ζ < 1` at the inertias a robot
+    /// reaches is the robot's question ([`crate::MapDynamics::new`]). The text says which
+    /// rule fails, with the coefficient and the inertia.
+    pub fn check_physical(&self) -> Result<(), String> {
+        let c = &self.coefficients;
+        let (f, d) = (
+            Domain::of(self.frequency_range),
+            Domain::of(self.damping_range),
+        );
+        // The coefficients are finite (checked first); a least value may still overflow to
+        // NaN, which fails its rule.
+        if c.k_g < 0.0 {
+            return Err(format!(
+                "k_g = {} must be >= 0 (gears stiffen under load; a negative k_g makes the \
+                 stiffness negative at a large enough gravity torque)",
+                c.k_g
+            ));
+        }
+        // K = k_0 + k_J J_f + k_g |τ|_s, least at τ = 0 (k_g >= 0).
+        let (k, at) = f.least_linear(c.k_0, c.k_j);
+        if k.is_nan() || k <= 0.0 {
+            return Err(format!(
+                "the stiffness k_0 + k_j J_f must be > 0 for every J_f in {f}, but with k_0 = \
+                 {}, k_j = {} it is {k} N m/rad at J_f = {at} kg m²",
+                c.k_0, c.k_j
+            ));
+        }
+        for (name, domain) in [("J_f", f), ("J_d", d)] {
+            // 1 + k_p/J > 0 for J > 0 in the domain: J + k_p > 0 at its least J.
+            if !(c.k_p >= 0.0 || domain.lo + c.k_p > 0.0) {
+                return Err(format!(
+                    "the gain 1 + k_p/{name} must be > 0 for every {name} in {domain}, but \
+                     k_p = {} makes it <= 0 for {name} <= {} kg m²",
+                    c.k_p, -c.k_p
+                ));
+            }
+        }
+        let (damping, at) = d.least_root_quadratic(c.c_0, c.c_1, c.c_2);
+        if damping.is_nan() || damping < 0.0 {
+            return Err(format!(
+                "the damping c_0 + c_1 √J_d + c_2 J_d must be >= 0 for every J_d in {d}, but \
+                 with c_0 = {}, c_1 = {}, c_2 = {} it is {damping} N m s/rad at J_d = {at} kg m²",
+                c.c_0, c.c_1, c.c_2
+            ));
+        }
+        let (factor, at) = d.least_linear(1.0, c.c_tau);
+        if factor.is_nan() || factor < 0.0 {
+            return Err(format!(
+                "the torque factor 1 + c_tau J_d must be >= 0 for every J_d in {d}, but with \
+                 c_tau = {} it is {factor} at J_d = {at} kg m²",
+                c.c_tau
+            ));
+        }
+        Ok(())
+    }
+
     /// True if the gravity-torque term is active (`k_g != 0`).
     pub fn uses_gravity(&self) -> bool {
         self.coefficients.k_g != 0.0
@@ -432,6 +504,81 @@ impl ModeMap {
     }
 }
 
+/// The inertias a mode reads in one role (`J_f` or `J_d`), kg m²: `[min, max]` of its range,
+/// or `(0, ∞)` without one (`lo = 0`, `hi = ∞`; the bounds of a closure, for the least values
+/// below).
+#[derive(Debug, Clone, Copy)]
+struct Domain {
+    lo: f64,
+    hi: f64,
+}
+
+impl Domain {
+    fn of(range: Option<InertiaRange>) -> Domain {
+        range.map_or(
+            Domain {
+                lo: 0.0,
+                hi: f64::INFINITY,
+            },
+            |r| Domain {
+                lo: r.min_kg_m2,
+                hi: r.max_kg_m2,
+            },
+        )
+    }
+
+    /// The least value of `a + b J` over the domain and the `J` where it is taken
+    /// (`−∞` at `J = ∞` when it decreases without bound).
+    fn least_linear(&self, a: f64, b: f64) -> (f64, f64) {
+        if b >= 0.0 {
+            (a + b * self.lo, self.lo)
+        } else if self.hi.is_finite() {
+            (a + b * self.hi, self.hi)
+        } else {
+            (f64::NEG_INFINITY, f64::INFINITY)
+        }
+    }
+
+    /// The least value of `a + b √J + c J` over the domain and the `J` where it is taken: a
+    /// quadratic in `u = √J`, least at an end or at its vertex `u = −b/(2c)` (`c > 0`).
+    fn least_root_quadratic(&self, a: f64, b: f64, c: f64) -> (f64, f64) {
+        let at = |u: f64| a + b * u + c * u * u;
+        let (u_lo, u_hi) = (self.lo.sqrt(), self.hi.sqrt());
+        let mut least = (at(u_lo), self.lo);
+        if u_hi.is_finite() {
+            least = min_of(least, (at(u_hi), self.hi));
+        } else if c < 0.0 || (c == 0.0 && b < 0.0) {
+            return (f64::NEG_INFINITY, f64::INFINITY);
+        }
+        if c > 0.0 {
+            let u = -b / (2.0 * c);
+            if u > u_lo && u < u_hi {
+                least = min_of(least, (at(u), u * u));
+            }
+        }
+        least
+    }
+}
+
+/// The pair with the smaller value.
+fn min_of(a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
+    if b.0 < a.0 {
+        b
+    } else {
+        a
+    }
+}
+
+impl core::fmt::Display for Domain {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        if self.hi.is_finite() {
+            write!(f, "[{}, {}] kg m²", self.lo, self.hi)
+        } else {
+            write!(f, "(0, ∞) kg m² (no inertia range)")
+        }
+    }
+}
+
 /// What of a [`ModeMap`]'s evaluation its definition fixes, resolved once instead of tested
 /// every cycle.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -478,16 +625,20 @@ pub struct DynamicMap {
 }
 
 impl DynamicMap {
-    /// Validates (at least one mode, finite coefficients, exponents within
-    /// ±[`MAX_GAIN_EXPONENT`], joint indices up to [`MAX_JOINT_INDEX`], and equal ranges for a
-    /// joint that drives both frequency and damping). The robot is unknown until
-    /// [`Self::for_robot`].
+    /// Validates (1 to [`crate::limits::MAX_MODES`] modes, finite coefficients, exponents
+    /// within ±[`MAX_GAIN_EXPONENT`], joint indices up to [`MAX_JOINT_INDEX`], equal ranges
+    /// for a joint that drives both frequency and damping, and the physical sign rules of
+    /// [`ModeMap::check_physical`]). So a map, however it was made (a file, Python, C, Rust),
+    /// gives a finite `ω_n > 0` and `ζ >= 0` at every inertia; `ζ < 1` over the poses of a
+    /// robot is checked with the robot ([`crate::MapDynamics::new`]). The robot is unknown
+    /// until [`Self::for_robot`].
     pub fn new(modes: Vec<ModeMap>) -> Result<DynamicMap, Error> {
         if modes.is_empty() {
             return Err(Error::InvalidParameter(
                 "a dynamic map needs at least one mode".into(),
             ));
         }
+        crate::limits::check_n_modes(modes.len(), "a dynamic map")?;
         for (m, mode) in modes.iter().enumerate() {
             for (name, value) in mode.coefficients.as_array() {
                 if !value.is_finite() {
@@ -527,6 +678,8 @@ impl DynamicMap {
                     mode.frequency_joint, mode.frequency_range, mode.damping_range
                 )));
             }
+            mode.check_physical()
+                .map_err(|why| Error::InvalidParameter(format!("dynamic map mode {m}: {why}")))?;
         }
         Ok(DynamicMap::of(modes, None))
     }
@@ -927,6 +1080,213 @@ mod tests {
         // Different joints may have different ranges.
         let (_, ranged) = ranged_base();
         assert!(DynamicMap::new(vec![ranged]).is_ok());
+    }
+
+    /// `mode` evaluated at every inertia of `j_grid` in both roles and at gravity torques of
+    /// either sign: the first evaluation that is not a finite `ω_n > 0` with `ζ >= 0`.
+    fn first_unphysical(mode: &ModeMap, j_grid: &[f64]) -> Option<([f64; 2], f64, Mode)> {
+        for &j_d in j_grid {
+            for &j_f in j_grid {
+                for tau in [0.0, 40.0, -3000.0] {
+                    let m = mode.evaluate(&[j_d, j_f], &[0.0, tau]);
+                    if !(m.wn_rad_s.is_finite() && m.wn_rad_s > 0.0 && m.zeta >= 0.0) {
+                        return Some(([j_d, j_f], tau, m));
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    /// Inertias from 1e-6 to 1e8 kg m², 4 per decade: well beyond any arm on both sides.
+    fn wide_grid() -> Vec<f64> {
+        (0..=56)
+            .map(|k| 10f64.powf(-6.0 + k as f64 / 4.0))
+            .collect()
+    }
+
+    /// The base-mode form (frequency from joint 1, damping from joint 0) with `c` and ranges.
+    fn base_form(c: MapCoefficients, f: Option<(f64, f64)>, d: Option<(f64, f64)>) -> ModeMap {
+        let r = |b: Option<(f64, f64)>| b.map(|(lo, hi)| range(lo, hi));
+        ModeMap::base_from_shoulder(c, 0, 1).with_ranges(r(f), r(d))
+    }
+
+    #[test]
+    fn each_physical_rule_refuses_a_map_that_gives_an_unphysical_mode() {
+        let paper = DynamicMap::paper_ur5e().mode_maps()[0].coefficients;
+        let grid = wide_grid();
+        for (change, rule) in [
+            (MapCoefficients { k_0: -1e4, ..paper }, "the stiffness"),
+            (
+                MapCoefficients {
+                    k_j: -10.0,
+                    ..paper
+                },
+                "the stiffness",
+            ),
+            (
+                MapCoefficients { k_g: -5.0, ..paper },
+                "k_g = -5 must be >= 0",
+            ),
+            (
+                MapCoefficients { k_p: -0.1, ..paper },
+                "the gain 1 + k_p/J_f",
+            ),
+            (MapCoefficients { c_0: -5.0, ..paper }, "the damping"),
+            (
+                MapCoefficients {
+                    c_2: -0.01,
+                    ..paper
+                },
+                "the damping",
+            ),
+            (
+                MapCoefficients {
+                    c_0: 1.0,
+                    c_1: -3.0,
+                    c_2: 2.0,
+                    ..paper
+                },
+                "the damping",
+            ),
+            (
+                MapCoefficients {
+                    c_tau: -0.5,
+                    ..paper
+                },
+                "the torque factor",
+            ),
+        ] {
+            let mode = base_form(change, None, None);
+            // Before the rule, this map was built and evaluated to NaN or a negative ζ.
+            assert!(
+                first_unphysical(&mode, &grid).is_some(),
+                "{rule}: {change:?}"
+            );
+            let err = DynamicMap::new(vec![mode]).expect_err(rule).to_string();
+            assert!(
+                err.contains("dynamic map mode 0") && err.contains(rule),
+                "{err}"
+            );
+        }
+        // c_0 + c_1 √J + c_2 J = 1 − 3u + 2u² (u = √J) is −1/8 at its vertex u = 3/4: between
+        // the roots u = ½ and 1, a gap the ends of no range outside it can show.
+        let dip = MapCoefficients {
+            c_0: 1.0,
+            c_1: -3.0,
+            c_2: 2.0,
+            ..paper
+        };
+        let err = DynamicMap::new(vec![base_form(dip, None, Some((0.2, 1.5)))])
+            .expect_err("negative inside the range")
+            .to_string();
+        assert!(err.contains("at J_d = 0.5625 kg m²"), "{err}");
+        assert!(DynamicMap::new(vec![base_form(dip, None, Some((1.1, 4.0)))]).is_ok());
+    }
+
+    #[test]
+    fn a_range_admits_coefficients_that_are_physical_only_inside_it() {
+        // k_J < 0: K = 1e4 − 500 J_f > 0 for J_f < 20; k_p < 0: 1 + k_p/J > 0 for J > 0.3;
+        // c_0 < 0: c_0 + c_2 J_d >= 0 for J_d >= 0.5; c_τ < 0: 1 + c_τ J_d >= 0 for J_d <= 10.
+        let c = MapCoefficients {
+            k_0: 1e4,
+            k_j: -500.0,
+            k_g: 0.0,
+            k_p: -0.3,
+            c_0: -1.0,
+            c_1: 0.0,
+            c_2: 2.0,
+            c_tau: -0.1,
+        };
+        let inside = base_form(c, Some((0.5, 19.0)), Some((0.5, 9.0)));
+        let map = DynamicMap::new(vec![inside]).expect("physical over its ranges");
+        let grid: Vec<f64> = (0..200).map(|k| 0.01 * 1.05f64.powi(k)).collect();
+        assert_eq!(first_unphysical(&map.mode_maps()[0], &grid), None);
+        for (f, d, rule) in [
+            ((0.5, 21.0), (0.5, 9.0), "the stiffness"),
+            ((0.25, 19.0), (0.5, 9.0), "the gain 1 + k_p/J_f"),
+            ((0.5, 19.0), (0.25, 9.0), "the gain 1 + k_p/J_d"),
+            ((0.5, 19.0), (0.4, 9.0), "the damping"),
+            ((0.5, 19.0), (0.5, 11.0), "the torque factor"),
+        ] {
+            let mode = base_form(c, Some(f), Some(d));
+            assert!(first_unphysical(&mode, &grid).is_some(), "{rule}");
+            let err = DynamicMap::new(vec![mode]).expect_err(rule).to_string();
+            assert!(err.contains(rule), "{err}");
+        }
+    }
+
+    #[test]
+    fn the_paper_map_obeys_the_physical_rules() {
+        let paper = DynamicMap::paper_ur5e();
+        for m in paper.mode_maps() {
+            assert_eq!(m.check_physical(), Ok(()));
+        }
+        assert!(DynamicMap::new(paper.mode_maps().to_vec()).is_ok());
+    }
+
+    #[test]
+    fn more_modes_than_the_limit_are_refused() {
+        let one = DynamicMap::paper_ur5e().mode_maps()[1];
+        let limit = crate::limits::MAX_MODES;
+        assert!(DynamicMap::new(vec![one; limit]).is_ok());
+        let err = DynamicMap::new(vec![one; limit + 1]).expect_err("too many");
+        assert!(matches!(err, Error::TooLarge(_)), "{err}");
+        assert!(err.to_string().contains("65 modes"), "{err}");
+    }
+
+    /// Soundness of the rules: a map they admit gives a finite ω_n > 0 and ζ >= 0 at every
+    /// inertia from 1e-6 to 1e8 kg m² (both roles) and every sampled torque. 1000 random base
+    /// modes: each coefficient 0 (1 in 8), or ±10^e with e uniform in [−3, 4) and a negative
+    /// sign 1 in 6; each role with a random range (1 in 2) or none. Both outcomes must occur
+    /// often, or the test would not test the rules.
+    #[test]
+    fn an_admitted_map_never_gives_an_unphysical_mode() {
+        let mut state = 0x2545_F491_4F6C_DD1D_u64;
+        let mut uniform = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let grid = wide_grid();
+        let (mut admitted, mut refused) = (0, 0);
+        for _ in 0..1000 {
+            let mut value = || {
+                if uniform() < 0.125 {
+                    return 0.0;
+                }
+                let x = 10f64.powf(-3.0 + 7.0 * uniform());
+                if uniform() < 1.0 / 6.0 {
+                    -x
+                } else {
+                    x
+                }
+            };
+            let c = MapCoefficients {
+                k_0: value(),
+                k_j: value(),
+                k_g: value(),
+                k_p: value(),
+                c_0: value(),
+                c_1: value(),
+                c_2: value(),
+                c_tau: value(),
+            };
+            let mut bounds = || {
+                let lo = 0.05 + 5.0 * uniform();
+                (uniform() < 0.5).then(|| (lo, lo * (1.2 + 40.0 * uniform())))
+            };
+            let (f, d) = (bounds(), bounds());
+            let mode = base_form(c, f, d);
+            if DynamicMap::new(vec![mode]).is_ok() {
+                admitted += 1;
+                assert_eq!(first_unphysical(&mode, &grid), None, "{mode:?}");
+            } else {
+                refused += 1;
+            }
+        }
+        assert!(admitted > 150 && refused > 150, "{admitted} / {refused}");
     }
 
     #[test]

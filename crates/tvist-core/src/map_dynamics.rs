@@ -73,28 +73,22 @@ impl ModeLaw for DynamicMap {
 
     fn lower_frequency_bound(&self, robot: &Robot, inertia: &[f64], slowest: &mut [Mode]) {
         let j_max = robot.joint_inertia_upper_bound();
-        let tau_max = robot.gravity_torque_upper_bound();
         let zero_tau = vec![0.0; inertia.len()];
         for (mode_map, s) in self.mode_maps().iter().zip(slowest) {
             let c = &mode_map.coefficients;
             // ω_n² = (1 + k_p/J)(k_0 + k_g|τ|)/J + (1 + k_p/J) k_J is non-increasing in J when
-            // k_p, k_0 >= 0 and k_g|τ| >= 0 is least at τ = 0 (k_g >= 0); then the value at
-            // the inertia bound is a sound lower bound of ω_n over every configuration. With a
-            // range, J is clamped (a non-decreasing function of J) before the map sees it, so
-            // the clamped value at the bound still bounds every clamped evaluation.
-            let at_bound = if c.k_p >= 0.0 && c.k_0 >= 0.0 && c.k_g >= 0.0 {
-                let mut j_bound = inertia.to_vec();
-                j_bound[mode_map.frequency_joint] = j_max[mode_map.frequency_joint];
-                j_bound[mode_map.damping_joint] = j_max[mode_map.damping_joint];
-                mode_map.evaluate(&j_bound, &zero_tau)
-            } else if c.k_g < 0.0 {
-                // Stiffness is lowest at the largest gravity torque: evaluate there too.
-                let mut j_bound = inertia.to_vec();
-                j_bound[mode_map.frequency_joint] = j_max[mode_map.frequency_joint];
-                mode_map.evaluate(&j_bound, &tau_max)
-            } else {
+            // k_p, k_0 >= 0, and k_g|τ| >= 0 is least at τ = 0 (k_g >= 0 in every map:
+            // `ModeMap::check_physical`); then the value at the inertia bound is a sound lower
+            // bound of ω_n over every configuration. With a range, J is clamped (a
+            // non-decreasing function of J) before the map sees it, so the clamped value at
+            // the bound still bounds every clamped evaluation.
+            if !(c.k_p >= 0.0 && c.k_0 >= 0.0) {
                 continue;
-            };
+            }
+            let mut j_bound = inertia.to_vec();
+            j_bound[mode_map.frequency_joint] = j_max[mode_map.frequency_joint];
+            j_bound[mode_map.damping_joint] = j_max[mode_map.damping_joint];
+            let at_bound = mode_map.evaluate(&j_bound, &zero_tau);
             if at_bound.wn_rad_s.is_finite() && at_bound.wn_rad_s > 0.0 {
                 s.wn_rad_s = s.wn_rad_s.min(at_bound.wn_rad_s);
             }

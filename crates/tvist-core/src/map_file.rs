@@ -34,8 +34,14 @@
 //!   "com_m", "inertia_kg_m2"}` (inertia `null` for a point mass).
 //! - Strict JSON: no `NaN` or `Infinity` tokens are read or written. `null` means "none" for a
 //!   range (unbounded) and "not available" for metadata; a statistic that could not be
-//!   computed (NaN) is written as `null`. Numbers that overflow a double and documents nested
-//!   deeper than 128 levels are refused with an error naming the problem.
+//!   computed (NaN) is written as `null`. Numbers that overflow a double, documents nested
+//!   deeper than 128 levels and an object with a repeated key are refused with an error naming
+//!   the problem (the key). A leading UTF-8 byte-order mark is accepted.
+//! - A `paper10` map has at most [`crate::limits::MAX_MODES`] modes, each physical at every
+//!   inertia it reads ([`crate::dynmap::ModeMap::check_physical`]: the rules of every
+//!   [`DynamicMap`]); a `modal` map's laws follow the signs of [`ModalMap::new`].
+//! - A file is at most [`crate::limits::MAX_MAP_FILE_BYTES`] (1 MiB) long; a longer one, or a
+//!   device such as `/dev/zero`, is refused without being read whole.
 //!
 //! Every error is an [`Error::Document`] whose path names the field (`modes[1].k_0`,
 //! `metadata.payload.com_m`, `schema_version`) and whose reason says what is wrong.
@@ -43,7 +49,9 @@
 use crate::dynmap::{DynamicMap, InertiaRange, MapCoefficients, ModeMap, MAX_JOINT_INDEX};
 use crate::error::Error;
 use crate::modal_map::{FlexJoint, LoadLaw, ModalMap};
+use serde::de::{Deserialize, Deserializer, Error as _, MapAccess, SeqAccess, Visitor};
 use serde_json::{Map, Number, Value};
+use std::io::Read;
 use std::path::Path;
 
 /// The `schema_version` of the files this module reads and writes.
@@ -206,19 +214,22 @@ impl MapFile {
         Ok(MapFile { form, metadata })
     }
 
-    /// Parses and validates a map document (strict JSON text).
+    /// Parses and validates a map document (strict JSON text, optionally after a UTF-8
+    /// byte-order mark).
     pub fn parse(text: &str) -> Result<MapFile, Error> {
-        let doc: Value = serde_json::from_str(text)
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        let UniqueKeys(doc) = serde_json::from_str(text)
             .map_err(|e| Error::document("(document)", format!("not valid JSON: {e}")))?;
         Self::from_value(&doc)
     }
 
-    /// Reads and validates the map file at `path`; errors start with the path.
+    /// Reads and validates the map file at `path`; errors start with the path. A file longer
+    /// than [`crate::limits::MAX_MAP_FILE_BYTES`] is refused after reading at most that many
+    /// bytes.
     pub fn load(path: &Path) -> Result<MapFile, Error> {
         let in_file = |path_in_doc: &str| format!("{}: {path_in_doc}", path.display());
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            Error::document(path.display().to_string(), format!("cannot read: {e}"))
-        })?;
+        let text = read_limited(path)
+            .map_err(|reason| Error::document(path.display().to_string(), reason))?;
         Self::parse(&text).map_err(|e| match e {
             Error::Document { path, reason } => Error::Document {
                 path: in_file(&path),
@@ -322,6 +333,107 @@ impl MapFile {
     }
 }
 
+/// The UTF-8 text of the file at `path`, at most [`crate::limits::MAX_MAP_FILE_BYTES`] long;
+/// the error says why not. A regular file is judged by its size before anything is read;
+/// anything else (a device, a pipe) is read up to one byte past the limit, never further.
+fn read_limited(path: &Path) -> Result<String, String> {
+    let limit = crate::limits::MAX_MAP_FILE_BYTES;
+    let too_long = |size: &str| {
+        format!(
+            "{size} is more than the {} MiB a map file may have: not a map file",
+            limit >> 20
+        )
+    };
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?;
+    if let Ok(meta) = file.metadata() {
+        if meta.is_file() && meta.len() > limit {
+            return Err(too_long(&format!("{} bytes", meta.len())));
+        }
+    }
+    let mut bytes = Vec::new();
+    file.take(limit + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| format!("cannot read: {e}"))?;
+    if bytes.len() as u64 > limit {
+        return Err(too_long("its content"));
+    }
+    String::from_utf8(bytes).map_err(|e| format!("not UTF-8 text ({e})"))
+}
+
+/// A JSON value parsed as [`Value`] is, except that an object with a repeated key is an
+/// error naming the key ([`Value`] silently keeps the last one, so a file could say two
+/// things and mean one).
+struct UniqueKeys(Value);
+
+impl<'de> Deserialize<'de> for UniqueKeys {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        deserializer
+            .deserialize_any(UniqueKeysVisitor)
+            .map(UniqueKeys)
+    }
+}
+
+struct UniqueKeysVisitor;
+
+impl<'de> Visitor<'de> for UniqueKeysVisitor {
+    type Value = Value;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+
+    fn visit_unit<E>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+
+    fn visit_bool<E>(self, b: bool) -> Result<Value, E> {
+        Ok(Value::Bool(b))
+    }
+
+    fn visit_i64<E>(self, i: i64) -> Result<Value, E> {
+        Ok(Value::from(i))
+    }
+
+    fn visit_u64<E>(self, u: u64) -> Result<Value, E> {
+        Ok(Value::from(u))
+    }
+
+    fn visit_f64<E>(self, x: f64) -> Result<Value, E> {
+        // The parser gives finite values only (overflow is its own error).
+        Ok(float(x))
+    }
+
+    fn visit_str<E>(self, s: &str) -> Result<Value, E> {
+        Ok(Value::String(s.to_owned()))
+    }
+
+    fn visit_string<E>(self, s: String) -> Result<Value, E> {
+        Ok(Value::String(s))
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Value, A::Error> {
+        let mut items = Vec::new();
+        while let Some(UniqueKeys(item)) = seq.next_element()? {
+            items.push(item);
+        }
+        Ok(Value::Array(items))
+    }
+
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Value, A::Error> {
+        let mut out = Map::new();
+        while let Some(key) = map.next_key::<String>()? {
+            if out.contains_key(&key) {
+                return Err(A::Error::custom(format!(
+                    "the key {key:?} appears twice in one object"
+                )));
+            }
+            let UniqueKeys(value) = map.next_value()?;
+            out.insert(key, value);
+        }
+        Ok(Value::Object(out))
+    }
+}
+
 fn paper10_from(doc: &Map<String, Value>) -> Result<DynamicMap, Error> {
     let modes = match doc.get("modes") {
         None => return Err(Error::document("modes", "missing")),
@@ -333,18 +445,28 @@ fn paper10_from(doc: &Map<String, Value>) -> Result<DynamicMap, Error> {
             ))
         }
     };
+    // The count first: nothing is parsed per mode beyond the limit.
+    crate::limits::check_n_modes(modes.len(), "the map")
+        .map_err(|e| Error::document("modes", reason(e)))?;
     let maps = modes
         .iter()
         .enumerate()
-        .map(|(i, m)| mode_from(m, &format!("modes[{i}]")))
-        .collect::<Result<Vec<_>, _>>()?;
+        .map(|(i, m)| {
+            let path = format!("modes[{i}]");
+            let mode = mode_from(m, &path)?;
+            // The map's own rule (checked again by `DynamicMap::new`), here to name the mode.
+            mode.check_physical()
+                .map_err(|why| Error::document(path, why))?;
+            Ok(mode)
+        })
+        .collect::<Result<Vec<_>, Error>>()?;
     DynamicMap::new(maps).map_err(|e| Error::document("modes", reason(e)))
 }
 
 /// The text of a core error without its kind prefix ("invalid parameter: ").
 fn reason(e: Error) -> String {
     match e {
-        Error::InvalidParameter(msg) => msg,
+        Error::InvalidParameter(msg) | Error::TooLarge(msg) => msg,
         other => other.to_string(),
     }
 }
@@ -397,7 +519,10 @@ fn range(value: Option<&Value>, path: &str) -> Result<Option<InertiaRange>, Erro
     }
 }
 
-fn mode_from(value: &Value, path: &str) -> Result<ModeMap, Error> {
+/// One `paper10` mode of a map document, checked for form (its fields, finite numbers, joint
+/// indices, exponents, ranges); `path` names it in errors (`modes[1]`). The physical rules
+/// are the map's ([`DynamicMap::new`]); a mode alone may break them (a trial point of a fit).
+pub fn mode_from(value: &Value, path: &str) -> Result<ModeMap, Error> {
     let mode = value.as_object().ok_or_else(|| {
         Error::document(
             path,
@@ -848,6 +973,136 @@ mod tests {
     }
 
     #[test]
+    fn a_physically_invalid_map_is_refused_at_load_naming_the_mode_and_the_rule() {
+        let text = paper_file().to_json();
+        // Each was read before, and its modes came out as (NaN, NaN) or with ζ < 0.
+        for (from, to, expected) in [
+            (
+                r#""k_0": 10000.0"#,
+                r#""k_0": -10000.0"#,
+                "modes[0]: the stiffness k_0 + k_j J_f must be > 0",
+            ),
+            (
+                r#""c_0": 0.27"#,
+                r#""c_0": -5.0"#,
+                "modes[1]: the damping c_0 + c_1 √J_d + c_2 J_d must be >= 0",
+            ),
+            (r#""k_p": 1.73"#, r#""k_p": -1.73"#, "modes[1]: the gain"),
+            (
+                r#""k_g": 0.0"#,
+                r#""k_g": -2.0"#,
+                "modes[0]: k_g = -2 must be >= 0",
+            ),
+            (
+                r#""c_tau": 47.2"#,
+                r#""c_tau": -47.2"#,
+                "modes[1]: the torque factor",
+            ),
+        ] {
+            let bad = text.replacen(from, to, 1);
+            assert_ne!(bad, text, "{from}");
+            let msg = reason_of(&bad);
+            assert!(msg.contains(expected), "{msg:?} lacks {expected:?}");
+        }
+    }
+
+    /// The paper map's file with its modes repeated to `n` (cycling base, shoulder).
+    fn file_with_modes(n: usize) -> String {
+        let mut doc = paper_file().to_value();
+        let modes = doc["modes"].as_array().expect("modes").clone();
+        doc["modes"] = Value::Array(modes.iter().cycle().take(n).cloned().collect());
+        serde_json::to_string(&doc).expect("json")
+    }
+
+    #[test]
+    fn more_modes_than_the_shared_limit_are_refused_before_they_are_parsed() {
+        let limit = crate::limits::MAX_MODES;
+        let file = MapFile::parse(&file_with_modes(limit)).expect("at the limit");
+        assert_eq!(
+            file.form().as_paper10().map(DynamicMap::n_modes),
+            Some(limit)
+        );
+        for n in [limit + 1, 10_000] {
+            let msg = reason_of(&file_with_modes(n));
+            let expected = format!("modes: the map has {n} modes, more than the limit of {limit}");
+            assert!(msg.contains(&expected), "{msg}");
+        }
+    }
+
+    #[test]
+    fn a_repeated_key_is_refused_naming_it() {
+        let text = paper_file().to_json();
+        for (from, to, key) in [
+            (r#""k_0": 10000.0"#, r#""k_0": 10000.0, "k_0": -1.0"#, "k_0"),
+            (
+                r#""robot": "ur5e""#,
+                r#""robot": "ur5e", "robot": "ur10e""#,
+                "robot",
+            ),
+            (
+                r#""kind": "paper10""#,
+                r#""kind": "paper10", "kind": "modal""#,
+                "kind",
+            ),
+        ] {
+            let doubled = text.replacen(from, to, 1);
+            assert_ne!(doubled, text);
+            let msg = reason_of(&doubled);
+            let expected = format!("(document): not valid JSON: the key \"{key}\" appears twice");
+            assert!(msg.contains(&expected), "{msg}");
+        }
+        // The same key in different objects is no repetition.
+        assert!(text.matches(r#""k_0""#).count() == 2 && MapFile::parse(&text).is_ok());
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_accepted() {
+        let file = paper_file();
+        let with_bom = format!("\u{feff}{}", file.to_json());
+        assert_eq!(MapFile::parse(&with_bom), Ok(file.clone()));
+        let path = std::env::temp_dir().join(format!("tvist-bom-{}.json", std::process::id()));
+        std::fs::write(&path, with_bom.as_bytes()).expect("write");
+        let loaded = MapFile::load(&path);
+        let _ = std::fs::remove_file(&path);
+        assert_eq!(loaded, Ok(file));
+    }
+
+    #[test]
+    fn a_file_beyond_the_size_limit_is_refused() {
+        let limit = crate::limits::MAX_MAP_FILE_BYTES as usize;
+        let text = paper_file().to_json();
+        let path = std::env::temp_dir().join(format!("tvist-size-{}.json", std::process::id()));
+        // A valid map padded with trailing whitespace: exactly at the limit it loads, one
+        // byte more and it is refused by its size.
+        let padded = |len: usize| format!("{text}{}", " ".repeat(len - text.len()));
+        std::fs::write(&path, padded(limit)).expect("write");
+        let at_limit = MapFile::load(&path);
+        std::fs::write(&path, padded(limit + 1)).expect("write");
+        let beyond = MapFile::load(&path);
+        let _ = std::fs::remove_file(&path);
+        assert!(at_limit.is_ok(), "{at_limit:?}");
+        let msg = beyond.expect_err("beyond the limit").to_string();
+        assert!(
+            msg.contains(&format!("{} bytes is more than the 1 MiB", limit + 1)),
+            "{msg}"
+        );
+    }
+
+    /// An endless device is refused after at most the limit plus one byte (reading it whole
+    /// would never end).
+    #[cfg(unix)]
+    #[test]
+    fn an_endless_device_is_refused() {
+        let msg = MapFile::load(Path::new("/dev/zero"))
+            .expect_err("not a map")
+            .to_string();
+        assert!(
+            msg.contains("/dev/zero: its content is more than the 1 MiB"),
+            "{msg}"
+        );
+    }
+
+    #[test]
     fn non_finite_metadata_is_written_as_null() {
         let mut meta = Map::new();
         meta.insert("robot".into(), Value::from("ur10e"));
@@ -996,16 +1251,21 @@ mod tests {
         #![proptest_config(proptest::test_runner::Config::with_cases(500))]
 
         /// Every finite coefficient reads back bit-identical (the serde_json parser is set to
-        /// round-trip floats exactly; its default is not correctly rounded).
+        /// round-trip floats exactly; its default is not correctly rounded). The sign bit is
+        /// cleared (and `k_0 = 0` made 1) so that the map is physical; the other 63 bits are
+        /// arbitrary.
         #[test]
         fn every_double_reads_back_bit_identical(
             bits in proptest::collection::vec(proptest::prelude::any::<u64>(), 8),
         ) {
-            let finite: Vec<f64> = bits
+            let mut finite: Vec<f64> = bits
                 .iter()
-                .map(|&b| f64::from_bits(b))
+                .map(|&b| f64::from_bits(b).abs())
                 .map(|x| if x.is_finite() { x } else { 1.0 })
                 .collect();
+            if finite[0] == 0.0 {
+                finite[0] = 1.0;
+            }
             let c = MapCoefficients {
                 k_0: finite[0], k_j: finite[1], k_g: finite[2], k_p: finite[3],
                 c_0: finite[4], c_1: finite[5], c_2: finite[6], c_tau: finite[7],

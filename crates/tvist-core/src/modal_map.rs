@@ -66,6 +66,8 @@ use num_complex::Complex64;
 
 /// Largest number of flexible joints.
 pub const MAX_FLEX_JOINTS: usize = MAX_DIM;
+// A modal map shapes at most one mode per flexible joint: within the shared mode limit.
+const _: () = assert!(MAX_FLEX_JOINTS <= crate::limits::MAX_MODES);
 
 /// A quantity that grows with a joint's static load: `v_0 + v_1 |L|_s + v_2 L²`.
 #[derive(Debug, Clone, Copy, PartialEq)]

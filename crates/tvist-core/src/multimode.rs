@@ -100,6 +100,7 @@ impl<D: Dynamics> TvShaper<D> {
                 "the dynamics provider has no modes; at least one is required".into(),
             ));
         }
+        crate::limits::check_n_modes(n_modes, "the dynamics provider")?;
         let mut max_delays_s = Vec::with_capacity(n_modes);
         for m in 0..n_modes {
             if let Some(slowest) = dynamics.slowest_mode(m) {

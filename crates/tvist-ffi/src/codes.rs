@@ -30,8 +30,8 @@ pub const TVIST_ERR_INTERNAL: i32 = -7;
 pub const TVIST_ERR_MAP_FILE: i32 = -8;
 /// A map identified on another robot than the one named (the message names both).
 pub const TVIST_ERR_ROBOT_MISMATCH: i32 = -9;
-/// A request beyond a setup limit (`TVIST_MAX_DOF` channels, `TVIST_MAX_DELAY_LINE_BYTES` of
-/// delay lines): refused before anything is allocated.
+/// A request beyond a setup limit (`TVIST_MAX_DOF` channels, `TVIST_MAX_MODES` modes,
+/// `TVIST_MAX_DELAY_LINE_BYTES` of delay lines): refused before anything is allocated.
 pub const TVIST_ERR_TOO_LARGE: i32 = -10;
 
 /// Every error code with its C name, for the header-consistency test and documentation.

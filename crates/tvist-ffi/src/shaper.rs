@@ -25,8 +25,9 @@ use tvist_core::{
 
 /// Largest number of joint channels a handle accepts (the core's limit).
 pub const TVIST_MAX_DOF: usize = tvist_core::limits::MAX_DOF;
-/// Largest number of modes of a constant-mode shaper (one cascaded filter each).
-pub const TVIST_MAX_MODES: usize = 64;
+/// Largest number of modes of a shaper (one cascaded filter each; the core's limit, shared
+/// by constant modes and map files).
+pub const TVIST_MAX_MODES: usize = tvist_core::limits::MAX_MODES;
 /// Largest total size of a handle's delay lines, bytes (the core's limit).
 pub const TVIST_MAX_DELAY_LINE_BYTES: usize = tvist_core::limits::MAX_DELAY_LINE_BYTES;
 /// Number of status flags (`tvist_shaper_status_counts`).
@@ -325,12 +326,9 @@ pub unsafe extern "C" fn tvist_shaper_new_constant_ex(
                     "wn_rad_s, zeta and shaper_name must be non-null (and aligned)",
                 ));
             }
-            if n_modes > TVIST_MAX_MODES {
-                return Err(fail(
-                    TVIST_ERR_INVALID_PARAMETER,
-                    format!("n_modes = {n_modes} exceeds the limit of {TVIST_MAX_MODES}"),
-                ));
-            }
+            // Before the arrays are read: the limit also bounds their byte size.
+            tvist_core::limits::check_n_modes(n_modes, "the constant-mode request")
+                .map_err(|e| fail_with(&e))?;
             let options = read_options(options)?;
             // SAFETY: `shaper_name` is non-null and NUL-terminated (caller).
             let config = config(shaper_name, dt_s, n_dof, &options)?;

@@ -239,8 +239,15 @@ fn wrong_lengths_are_rejected_without_touching_the_arrays() {
     let too_many = vec![(20.0, 0.05); TVIST_MAX_MODES + 1];
     assert_eq!(
         new_constant(&too_many, DT_S, 1, "zv").0,
-        TVIST_ERR_INVALID_PARAMETER
+        TVIST_ERR_TOO_LARGE
     );
+    assert!(
+        last_error().contains("65 modes, more than the limit of 64"),
+        "{}",
+        last_error()
+    );
+    let (code, _) = new_constant(&too_many[1..], DT_S, 1, "zv");
+    assert_eq!(code, TVIST_OK, "{}", last_error());
 }
 
 #[test]

@@ -9,8 +9,8 @@ use tvist::{
     tvist_shaper_new_constant_ex, tvist_shaper_new_map, tvist_shaper_new_map_ex,
     tvist_shaper_reset, tvist_shaper_status_counts, tvist_shaper_step, TvistShaper,
     TvistShaperOptions, TVIST_ERR_INVALID_PARAMETER, TVIST_ERR_MAP_FILE, TVIST_ERR_ROBOT_MISMATCH,
-    TVIST_ERR_TOO_LARGE, TVIST_ERR_UNKNOWN_ROBOT, TVIST_INTERP_CUBIC, TVIST_N_STATUS_FLAGS,
-    TVIST_OK,
+    TVIST_ERR_TOO_LARGE, TVIST_ERR_UNKNOWN_ROBOT, TVIST_INTERP_CUBIC, TVIST_MAX_MODES,
+    TVIST_N_STATUS_FLAGS, TVIST_OK,
 };
 use tvist_core::map_file::{MapFile, MapForm};
 use tvist_core::robot_data::ur_e_series;
@@ -304,6 +304,73 @@ fn bad_robots_and_bad_files_have_their_codes_and_name_the_problem() {
         assert_eq!((code, h.0.is_null()), (TVIST_ERR_MAP_FILE, true), "{tag}");
         let msg = last_error();
         assert!(msg.contains(field) && msg.contains(".json"), "{tag}: {msg}");
+    }
+}
+
+/// The paper map's file text with its modes repeated to `n` (base, shoulder, base, ...).
+fn paper_text_with_modes(n: usize) -> String {
+    let meta = serde_json::json!({"robot": "ur5e", "source": "test"});
+    let file = MapFile::new(MapForm::Paper10(DynamicMap::paper_ur5e()), &meta).expect("map");
+    let mut doc = file.to_value();
+    let modes = doc["modes"].as_array().expect("modes").clone();
+    doc["modes"] = serde_json::Value::Array(modes.iter().cycle().take(n).cloned().collect());
+    serde_json::to_string_pretty(&doc).expect("json")
+}
+
+#[test]
+fn map_files_the_core_refuses_are_refused_from_c_naming_the_problem() {
+    let text = paper_text_with_modes(2);
+    let limit = TVIST_MAX_MODES;
+    for (tag, bad, problem) in [
+        (
+            "negative-k0",
+            text.replacen("\"k_0\": 10000.0", "\"k_0\": -10000.0", 1),
+            "modes[0]: the stiffness",
+        ),
+        (
+            "negative-c0",
+            text.replacen("\"c_0\": 0.27", "\"c_0\": -5.0", 1),
+            "modes[1]: the damping",
+        ),
+        (
+            "many-modes",
+            paper_text_with_modes(limit + 1),
+            "modes: the map has 65 modes, more than the limit of 64",
+        ),
+        (
+            "repeated-key",
+            text.replacen("\"k_0\": 10000.0", "\"k_0\": 10000.0, \"k_0\": 1.0", 1),
+            "the key \"k_0\" appears twice",
+        ),
+        (
+            "too-long",
+            format!("{text}{}", " ".repeat(1 << 20)),
+            "is more than the 1 MiB a map file may have",
+        ),
+    ] {
+        assert!(bad != text, "{tag}");
+        let file = TempMap::new(tag, &bad);
+        let (code, h) = new_map("ur5e", &file, "zv", None);
+        assert_eq!((code, h.0.is_null()), (TVIST_ERR_MAP_FILE, true), "{tag}");
+        let msg = last_error();
+        assert!(
+            msg.contains(problem) && msg.contains(".json"),
+            "{tag}: {msg}"
+        );
+    }
+    // At the limit, and with a byte-order mark: accepted.
+    for (tag, good) in [
+        ("max-modes", paper_text_with_modes(limit)),
+        ("bom", format!("\u{feff}{text}")),
+    ] {
+        let file = TempMap::new(tag, &good);
+        let (code, h) = new_map("ur5e", &file, "zv", None);
+        assert_eq!(
+            (code, h.0.is_null()),
+            (TVIST_OK, false),
+            "{tag}: {}",
+            last_error()
+        );
     }
 }
 

@@ -1,8 +1,11 @@
 //! numpy <-> Rust conversions shared by the bindings, with the error messages users see.
 
 use numpy::ndarray::{ArrayD, IxDyn};
-use numpy::{IntoPyArray, PyArrayDyn, PyReadonlyArray2, PyUntypedArrayMethods};
-use pyo3::exceptions::PyValueError;
+use numpy::{
+    IntoPyArray, PyArrayDescrMethods, PyArrayDyn, PyReadonlyArray2, PyUntypedArray,
+    PyUntypedArrayMethods,
+};
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 
 /// The rows of a `(n, cols)` array, row-major whatever its memory layout (`as_slice` also
@@ -54,4 +57,29 @@ pub fn array<'py>(
 /// A setup error of the core as a Python `ValueError`.
 pub fn value_error(e: tvist_core::Error) -> PyErr {
     PyValueError::new_err(e.to_string())
+}
+
+/// `obj` if it holds real numbers, as a numpy array for a sequence (numpy's own conversion,
+/// which tells what it holds). A complex array, scalar or element is refused: converting it to
+/// float64 would silently drop the imaginary part. `what` names the argument in the error.
+pub fn real_input<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<Bound<'py, PyAny>> {
+    let array = match obj.cast::<PyUntypedArray>() {
+        Ok(array) => array.clone(),
+        Err(_) => {
+            let numpy = obj.py().import("numpy")?;
+            numpy
+                .call_method1("asarray", (obj,))?
+                .cast_into::<PyUntypedArray>()
+                .map_err(PyErr::from)?
+        }
+    };
+    let dtype = array.dtype();
+    if dtype.kind() == b'c' {
+        return Err(PyTypeError::new_err(format!(
+            "{what} must hold real numbers, got {} values (their imaginary part would be \
+             dropped)",
+            dtype.str()?
+        )));
+    }
+    Ok(array.into_any())
 }

@@ -327,13 +327,14 @@ impl PyTvShaper {
         })
     }
 
-    /// One control cycle: q (n_dof,) -> shaped q (n_dof,). Any 1-D array-like of numbers
-    /// (converted to float64, any memory layout).
+    /// One control cycle: q (n_dof,) -> shaped q (n_dof,). Any 1-D array-like of real numbers
+    /// (converted to float64, any memory layout); complex input is a TypeError.
     fn step<'py>(
         &mut self,
         py: Python<'py>,
-        q: PyArrayLike1<'py, f64, AllowTypeChange>,
+        q: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let q: PyArrayLike1<'py, f64, AllowTypeChange> = convert::real_input(q, "q")?.extract()?;
         let q: Vec<f64> = q.as_array().iter().copied().collect();
         if q.len() != self.inner.n_dof() {
             return Err(PyValueError::new_err(format!(
@@ -350,12 +351,14 @@ impl PyTvShaper {
         Ok(out.into_pyarray(py))
     }
 
-    /// Shapes a (n_samples, n_dof) array, continuing the streaming state. Releases the GIL.
+    /// Shapes a (n_samples, n_dof) array of real numbers, continuing the streaming state.
+    /// Releases the GIL.
     fn shape<'py>(
         &mut self,
         py: Python<'py>,
-        q: PyArrayLike2<'py, f64, AllowTypeChange>,
+        q: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let q: PyArrayLike2<'py, f64, AllowTypeChange> = convert::real_input(q, "Q")?.extract()?;
         let shape = q.shape();
         let (n, d) = (shape[0], shape[1]);
         if d != self.inner.n_dof() {
@@ -414,9 +417,11 @@ impl PyTvShaper {
     /// Puts the filter at rest at q0, or (None) forgets history so the next sample starts it.
     /// Accepts what `step` accepts (any 1-D array-like of numbers, any memory layout).
     #[pyo3(signature = (q0=None))]
-    fn reset(&mut self, q0: Option<PyArrayLike1<'_, f64, AllowTypeChange>>) -> PyResult<()> {
+    fn reset(&mut self, q0: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
         match q0 {
             Some(q0) => {
+                let q0: PyArrayLike1<'_, f64, AllowTypeChange> =
+                    convert::real_input(q0, "q0")?.extract()?;
                 let q0: Vec<f64> = q0.as_array().iter().copied().collect();
                 convert::check_start_pose(&q0, self.inner.n_dof())?;
                 self.inner.reset(&q0);
@@ -501,6 +506,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     }
     m.add("STATUS_FLAGS", flags)?;
     m.add("MAX_DOF", core::limits::MAX_DOF)?;
+    m.add("MAX_MODES", core::limits::MAX_MODES)?;
+    m.add("MAX_MAP_FILE_BYTES", core::limits::MAX_MAP_FILE_BYTES)?;
     m.add("MAX_DELAY_LINE_BYTES", core::limits::MAX_DELAY_LINE_BYTES)?;
     Ok(())
 }

@@ -263,10 +263,64 @@ fn map_from_document<'py>(
     map_parts(py, map_file_from(doc)?)
 }
 
-/// Parses and validates map-file text (strict JSON): `(DynamicMap or ModalMap, metadata)`.
+/// Reads and validates the map file at `path` (the core's reader: size limit, UTF-8, strict
+/// JSON): `(DynamicMap or ModalMap, metadata)`; errors start with the path.
 #[pyfunction]
-fn parse_map<'py>(py: Python<'py>, text: &str) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-    map_parts(py, MapFile::parse(text).map_err(value_error)?)
+fn load_map_file(
+    py: Python<'_>,
+    path: std::path::PathBuf,
+) -> PyResult<(Bound<'_, PyAny>, Bound<'_, PyAny>)> {
+    map_parts(py, MapFile::load(&path).map_err(value_error)?)
+}
+
+/// A numpy array of doubles.
+type NdArray<'py> = Bound<'py, PyArrayDyn<f64>>;
+
+/// `(wn_rad_s, zeta)` arrays of one `paper10` mode (a dict as in a map file, checked for
+/// form only) at every row of `inertia_kg_m2` (n_poses, n_j) and of `gravity_torque_nm`
+/// (same shape, or None when k_g = 0). The physical rules of a map are not applied: a
+/// fit evaluates trial coefficients this way (NaN where they give no mode).
+#[pyfunction]
+#[pyo3(signature = (mode, inertia_kg_m2, gravity_torque_nm=None))]
+fn evaluate_trial_mode<'py>(
+    py: Python<'py>,
+    mode: &Bound<'py, PyAny>,
+    inertia_kg_m2: PyReadonlyArray2<'py, f64>,
+    gravity_torque_nm: Option<PyReadonlyArray2<'py, f64>>,
+) -> PyResult<(NdArray<'py>, NdArray<'py>)> {
+    let value = json::to_value(mode, "mode", NonFinite::Refuse)?;
+    let mode = map_file::mode_from(&value, "mode").map_err(value_error)?;
+    let cols = inertia_kg_m2.shape()[1];
+    if cols < mode.required_joints() {
+        return Err(PyValueError::new_err(format!(
+            "the mode reads {} joint inertias per row, got {cols}",
+            mode.required_joints()
+        )));
+    }
+    let (n, j) = rows(&inertia_kg_m2, cols, "inertia_kg_m2")?;
+    let tau = match gravity_torque_nm {
+        Some(t) => {
+            let (tn, tau) = rows(&t, cols, "gravity_torque_nm")?;
+            check_len("gravity_torque_nm rows", tn, n)?;
+            tau
+        }
+        None if mode.uses_gravity() => {
+            return Err(PyValueError::new_err(
+                "the mode uses gravity torques (k_g != 0): pass them",
+            ));
+        }
+        None => vec![0.0; n * cols],
+    };
+    let (mut wn, mut zeta) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    for (j_row, tau_row) in j.chunks_exact(cols).zip(tau.chunks_exact(cols)) {
+        let m = mode.evaluate(j_row, tau_row);
+        wn.push(m.wn_rad_s);
+        zeta.push(m.zeta);
+    }
+    Ok((
+        convert::array(py, &[n], wn)?,
+        convert::array(py, &[n], zeta)?,
+    ))
 }
 
 /// The map file of `map` (DynamicMap or ModalMap) with `metadata`, as strict JSON text
@@ -516,7 +570,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MAP_KIND_MODAL", map_file::KIND_MODAL)?;
     m.add("ROBOT_DATA_JSON", robot_data::UR_E_SERIES_JSON)?;
     m.add_function(wrap_pyfunction!(map_from_document, m)?)?;
-    m.add_function(wrap_pyfunction!(parse_map, m)?)?;
+    m.add_function(wrap_pyfunction!(load_map_file, m)?)?;
+    m.add_function(wrap_pyfunction!(evaluate_trial_mode, m)?)?;
     m.add_function(wrap_pyfunction!(write_map, m)?)?;
     m.add_function(wrap_pyfunction!(map_document, m)?)?;
     m.add_function(wrap_pyfunction!(robot_names, m)?)?;

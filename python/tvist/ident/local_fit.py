@@ -398,6 +398,10 @@ def _refine(
     return float(2.0 * res.cost), math.exp(res.x[0]), float(res.x[1]), delay
 
 
+# Values that overflow the fit's arithmetic (a corrupt cell of 1e300 is finite, so it gets
+# here) make it fail with a ValueError (a singular system, a non-finite cost); numpy's
+# RuntimeWarnings on the way would only be printed before that one-line error.
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")
 def fit_local(
     u: np.ndarray,
     y: np.ndarray,

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 from scipy import optimize
 
+from tvist import _core
 from tvist.dynmap import DynamicMap
 
 __all__ = [
@@ -199,19 +200,18 @@ def data_range(table: PoseTable, joint: int) -> list[float]:
 def evaluate_mode(
     mode: Mapping[str, Any], inertia_kg_m2: np.ndarray, gravity_torque_nm: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``(ω_n, ζ)`` of one mode at every pose, through :class:`tvist.DynamicMap`.
+    """``(ω_n, ζ)`` of one mode at every pose, by the core's map equations.
 
-    Returns two arrays of shape (n_poses,); NaN where the map gives no valid mode.
+    The mode is a trial point of the fit: checked for form, not for the physical rules a
+    :class:`tvist.DynamicMap` obeys (the fitted map is). Returns two arrays of shape
+    (n_poses,); NaN where the coefficients give no mode.
     """
-    core = DynamicMap([mode]).core
-    # Plain lists once, then one core call per pose (the core's scalar entry point).
-    inertia = np.asarray(inertia_kg_m2, dtype=float).tolist()
-    if core.uses_gravity:
-        tau = np.asarray(gravity_torque_nm, dtype=float).tolist()
-    else:
-        tau = [None] * len(inertia)
-    out = np.array([core.modes_from_inertia(j, t)[0] for j, t in zip(inertia, tau, strict=True)])
-    return out[:, 0], out[:, 1]
+    wn, zeta = _core.evaluate_trial_mode(
+        dict(mode),
+        np.ascontiguousarray(inertia_kg_m2, dtype=float),
+        np.ascontiguousarray(gravity_torque_nm, dtype=float),
+    )
+    return wn, zeta
 
 
 @dataclass
