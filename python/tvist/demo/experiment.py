@@ -44,14 +44,6 @@ from tvist.demo.measure import (
     zv_delay_s,
 )
 from tvist.demo.methods import Method, MotionContext, default_methods
-from tvist.demo.settle import (
-    SettleTimes,
-    settle_config,
-    flange_error_m,
-    measure_settle,
-    rest_flange_position,
-)
-from tvist.demo.slow_down import ACCEL_SCALES, JERK_TIMES_S, Candidate, SlowDown, slow_down
 from tvist.demo.motions import (
     A_MAX_RAD_S2,
     DT_S,
@@ -62,6 +54,14 @@ from tvist.demo.motions import (
     V_MAX_RAD_S,
     Motion,
 )
+from tvist.demo.settle import (
+    SettleTimes,
+    flange_error_m,
+    measure_settle,
+    rest_flange_position,
+    settle_config,
+)
+from tvist.demo.slow_down import ACCEL_SCALES, JERK_TIMES_S, Candidate, SlowDown, slow_down
 from tvist.sim import Twin
 from tvist.trajectory import Trajectory
 

@@ -1,4 +1,4 @@
-""""Slow down instead": the obvious alternative to any shaper.
+""" "Slow down instead": the obvious alternative to any shaper.
 
 A softer jerk ramp or a lower acceleration limit excites the arm less; the move takes longer
 but may settle sooner. For a move, every profile of a small grid (:data:`JERK_TIMES_S` ×
