@@ -376,15 +376,15 @@ def run_motion(
     slow = None
     if with_slow_down:
         start = time.perf_counter()
-        planned = Candidate(JERK_TIME_S, 1.0, runs[0].settle)
+        planned = Candidate(motion.jerk_time_s, 1.0, runs[0].settle)
         slow = slow_down(
             motion.q_start,
             motion.q_end,
             twin,
             rest_m,
             planned,
-            v_max=V_MAX_RAD_S,
-            a_max=A_MAX_RAD_S2,
+            v_max=motion.v_max_rad_s,
+            a_max=motion.a_max_rad_s2,
             pre_s=traj.t_motion_start_s,
             tail_s=tail_s,
             dt_s=traj.dt_s,
