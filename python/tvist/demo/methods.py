@@ -204,7 +204,7 @@ def map_use(dynmap: DynamicMap, robot: Robot, q: np.ndarray) -> dict[str, list]:
 #: Why the rows on the twin's exact modes cannot run on a robot.
 ORACLE_TRUE_MODES = "reads the twin's exact modes every cycle (no robot offers them)"
 ORACLE_END_POSE_MODES = (
-    "designed on the twin's exact modes at the end pose, before the arm gets there "
+    "is designed on the twin's exact modes at the end pose, before the arm gets there "
     "(on a robot they come from a map)"
 )
 
