@@ -376,14 +376,9 @@ def plot_cycle(result: PickPlaceResult, path: Path, key: str = CRITERIA[0].key) 
     return path
 
 
-def _md_table(header: list[str], rows: list[list[str]]) -> str:
-    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
-    return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in rows])
-
-
 def write_pick_place(result: PickPlaceResult, out_dir: str | Path) -> dict[str, Any]:
     """Write ``results.json``, ``report.md`` and ``cycle.png`` to ``out_dir``."""
-    from tvist.demo.report import _json_safe
+    from tvist.demo.report import _json_safe, _md_table
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
