@@ -16,6 +16,7 @@ from tvist.demo import default_methods, fd_tvist_map, run_demo, run_experiment
 from tvist.demo.identified import QUICK_PLAN, _prepare_cache, identify_map
 from tvist.demo.measure import stop_time_s, tool_acceleration
 from tvist.demo.motions import DT_S, MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
+from tvist.demo.settle import CRITERIA
 from tvist.sim import GRAVITY_M_S2, Twin
 from tvist.trajectory import PAPER_POSES
 from twin_calibration import TWIN_CALIBRATION
@@ -39,7 +40,7 @@ def test_quick_demo_writes_results_report_and_figures(quick_run):
     for name in ("acceleration_Q1-Q2.png", "modes_Q1-Q2.png"):
         assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
     report = (out / "report.md").read_text()
-    assert "| FD-TVIST ZV, true modes |" in report and "(acceleration_Q1-Q2.png)" in report
+    assert "| FD-TVIST ZV, true modes (oracle) |" in report and "(acceleration_Q1-Q2.png)" in report
 
     assert list(results["motions"]) == ["Q1->Q2"]
     motion = results["motions"]["Q1->Q2"]
@@ -80,13 +81,29 @@ def test_quick_demo_writes_results_report_and_figures(quick_run):
         if key != "unshaped":
             want = 100.0 * (1.0 - row["residual_vibration_m_s2"] / baseline)
             assert row["reduction_percent"] == pytest.approx(want, rel=1e-12), key
+        label = row["label"] + (" (oracle)" if row["oracle"] else "")
+        settle = row["settle"]["settle_s"]
         cells = (
-            f"| {row['label']} | {1e3 * row['delay_s']:.0f} |",
+            f"| {label} | {1e3 * row['delay_s']:.0f} |",
             f"| {row['residual_vibration_m_s2']:.4f} |",
-            f"| {row['peak_jerk_rad_s3']:.0f} |",
+            # The settle columns, in the order of the criteria, then the peak jerk.
+            "| " + " | ".join(f"{settle[c.key]:.3f}" for c in CRITERIA) + " | "
+            f"{row['peak_jerk_rad_s3']:.0f} |",
         )
-        line = next(x for x in report.splitlines() if x.startswith(f"| {row['label']} |"))
+        line = next(x for x in report.splitlines() if x.startswith(f"| {label} |"))
         assert all(cell in line for cell in cells), (line, cells)
+    # Oracle rows are those that read the twin's exact modes.
+    assert {k for k, r in rows.items() if r["oracle"]} == {"fd-tvist-truth", "ztdis", "modified"}
+    # The slow-down row: the best of its profiles per criterion, each settle time a real run.
+    slow = motion["slow_down"]
+    assert len(slow["candidates"]) == len(slow["grid"]["jerk_times_s"]) * len(
+        slow["grid"]["accel_scales"]
+    )
+    for c in CRITERIA:
+        times = [x["settle_s"][c.key] for x in slow["candidates"] if x["settle_s"][c.key]]
+        assert slow["best"][c.key]["settle_s"] == min(times)
+    # The planned move itself is the first candidate: the unshaped row's numbers.
+    assert slow["candidates"][0]["settle_s"] == rows["unshaped"]["settle"]["settle_s"]
     assert motion["analytic_zv_delay_s"] > 0.0
 
 

@@ -19,7 +19,9 @@ from tvist.demo.fixed import (
 )
 from tvist.demo.methods import Method, MotionContext, default_methods
 from tvist.demo.motions import DT_S, MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
+from tvist.demo.report import _rows as report_rows
 from tvist.demo.report import format_reduction, recommendation
+from tvist.demo.settle import CRITERIA
 from tvist.sim import Twin
 
 
@@ -145,27 +147,56 @@ def test_reductions_never_round_to_100(percent, text):
     assert format_reduction(percent) == text
 
 
-def test_recommendation_prefers_the_shortest_delay_among_good_reductions(quick_fixed):
+def test_recommendation_takes_the_row_that_settles_first(quick_fixed):
     motion = quick_fixed.motions[0]
-    # fixed-start ~99.98 % / 132 ms, fixed-robust ~97 % / 96 ms: both >= 95 %, so the
-    # shorter one wins.
+    key = CRITERIA[0].key
+    # Computed from the simulated signals: the pick is the runnable row (or the best
+    # slow-down profile) whose |ψ| leaves 0.05 m/s² for good first.
+    settles = {r.method.label: r.settle.get(key) for r in motion.runs}
+    best_slow = motion.slow_down.best(key)
+    fastest = min(v for v in settles.values() if v is not None)
+    assert best_slow.settle.get(key) > fastest  # on Q1 -> Q2 a shaper beats slowing down
+    winner = min(settles, key=lambda k: settles[k] if settles[k] is not None else math.inf)
     line = recommendation(motion)
-    assert "**Fixed robust shaper over the move**" in line
+    assert f"**{winner}**" in line
+    assert f"{settles[winner]:.3f} s" in line
 
 
-def test_recommendation_takes_the_better_row_within_one_sample_of_the_shortest(quick_fixed):
-    # Two usable rows a sample apart (50 and 52 ms), 95.8 % and 99.26 %: one sample of delay
-    # is a tie, so the higher reduction wins (as on the demo's Q1→Q3); three samples are not.
+def _with_settle(run, first_s, second_s):
+    times = dict(run.settle.times_s)
+    times[CRITERIA[0].key], times[CRITERIA[1].key] = first_s, second_s
+    return dataclasses.replace(run, settle=dataclasses.replace(run.settle, times_s=times))
+
+
+def test_recommendation_breaks_a_one_sample_tie_at_the_stricter_band(quick_fixed):
+    # Two runnable rows one sample apart at 0.05 m/s²: a tie, so the faster to 0.01 m/s²
+    # wins; three samples apart, the faster at 0.05 m/s² wins.
     motion = quick_fixed.motions[0]
-    shorter, longer = motion.runs[1], motion.runs[2]
-    for gap_samples, winner in ((1, longer), (3, shorter)):
+    a, b = motion.runs[1], motion.runs[2]
+    for gap_samples, winner in ((1, b), (3, a)):
         runs = [
             motion.runs[0],
-            dataclasses.replace(shorter, delay_s=25 * DT_S, reduction_percent=95.8),
-            dataclasses.replace(longer, delay_s=(25 + gap_samples) * DT_S, reduction_percent=99.26),
+            _with_settle(a, 1.800, 2.100),
+            _with_settle(b, 1.800 + gap_samples * DT_S, 1.900),
         ]
-        line = recommendation(dataclasses.replace(motion, runs=runs))
+        line = recommendation(dataclasses.replace(motion, runs=runs, slow_down=None))
         assert f"**{winner.method.label}**" in line, (gap_samples, line)
+
+
+def test_recommendation_never_picks_an_oracle_row(quick_fixed):
+    # An oracle row that settles well before every other is shown, marked, and never picked.
+    motion = quick_fixed.motions[0]
+    fixed = motion.runs[1]
+    oracle = dataclasses.replace(
+        _with_settle(fixed, 0.5, 0.6),
+        method=dataclasses.replace(fixed.method, label="Oracle row", oracle="reads the twin"),
+    )
+    changed = dataclasses.replace(motion, runs=[*motion.runs, oracle])
+    line = recommendation(changed)
+    assert "**Oracle row**" not in line
+    assert "Oracle row (0.500 s), an oracle row" in line
+    assert recommendation(motion).split(" Not recommended")[0] == line.split(" Not recommended")[0]
+    assert ["(oracle)" in row[0] for row in report_rows(changed)][-2:] == [True, False]
 
 
 def test_methods_keep_their_keys():

@@ -21,8 +21,18 @@ __all__ = [
 ]
 
 
-def settling_time(t_s: ArrayLike, signal: ArrayLike, t_stop_s: float, threshold: float) -> float:
+def settling_time(
+    t_s: ArrayLike,
+    signal: ArrayLike,
+    t_stop_s: float,
+    threshold: float,
+    *,
+    hold_s: float = 0.0,
+) -> float:
     """Time after ``t_stop_s`` until the signal magnitude stays at or below ``threshold``.
+
+    Measured from the start of a move (``t_stop_s`` = when the move starts), this is the
+    time to settled: until the tool is still enough, for good.
 
     Parameters
     ----------
@@ -35,30 +45,51 @@ def settling_time(t_s: ArrayLike, signal: ArrayLike, t_stop_s: float, threshold:
         When the motion stops, s.
     threshold
         Settling band, same unit as ``signal`` (> 0).
+    hold_s
+        The record must show the signal inside the band for at least this long after the
+        crossing (s, >= 0); a signal that only dips into the band at the end of the record
+        (a zero crossing of a ringing axis) has not been seen to settle.
 
     Returns
     -------
     float
         Seconds from ``t_stop_s`` to the last downward crossing of ``threshold`` (linearly
-        interpolated between samples); 0.0 if the magnitude never exceeds it after the stop;
-        ``math.inf`` if it still exceeds it at the last sample.
+        interpolated between samples); 0.0 if the magnitude never exceeds it after the stop
+        (already settled);
+        ``math.inf`` (not settled within the record) if it still exceeds it at the last
+        sample or the record ends less than ``hold_s`` after the crossing.
+
+    Notes
+    -----
+    The crossing is found on the samples: it lies between the last sample above the band
+    and the next one, and the chord between them sets it (for a convex decay such as
+    ``A e^(-σt)`` it is late by at most ``σ dt²/8``). An excursion above the band that
+    peaks between two samples and exceeds the band by less than the sampling misses of it
+    (``1 − cos(π f dt)`` of the peak for a ringing at ``f`` Hz: 0.13 % at 8 Hz and 500 Hz)
+    is not seen.
     """
     t = as_time(t_s)
     level = magnitude(as_channels("signal", signal, t.size))
     band = positive("threshold", threshold)
+    hold = float(hold_s)
+    if not (math.isfinite(hold) and hold >= 0.0):
+        raise ValueError(f"hold_s must be finite and >= 0, got {hold_s!r}")
     t_stop = float(t_stop_s)
     if not (math.isfinite(t_stop) and t[0] <= t_stop <= t[-1]):
         raise ValueError(f"t_stop_s = {t_stop_s!r} must lie in [{t[0]}, {t[-1]}]")
     first = int(np.searchsorted(t, t_stop, side="left"))
     above = np.flatnonzero(level[first:] > band)
     if above.size == 0:
-        return 0.0
+        return 0.0 if t[-1] - t_stop >= hold else math.inf
     last = first + int(above[-1])
     if last == t.size - 1:
         return math.inf
     # Linear interpolation of the crossing between the last sample above and the next one.
     frac = (level[last] - band) / (level[last] - level[last + 1])
-    return float(t[last] + frac * (t[last + 1] - t[last]) - t_stop)
+    crossing = float(t[last] + frac * (t[last + 1] - t[last]))
+    if t[-1] - crossing < hold:
+        return math.inf
+    return crossing - t_stop
 
 
 def _joint_array(name: str, q: ArrayLike, min_samples: int) -> np.ndarray:

@@ -18,6 +18,10 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         from tvist.demo.flexible_payload import run_from_args
 
         return run_from_args(args)
+    if args.experiment == "pick-place":
+        from tvist.demo.pick_place import run_from_args as run_pick_place
+
+        return run_pick_place(args)
     if args.linear:
         from tvist.demo.linear import run_linear_demo
 
@@ -84,11 +88,13 @@ def add_demo_command(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--experiment",
-        choices=("ur5e-motions", "flexible-payload"),
+        choices=("ur5e-motions", "flexible-payload", "pick-place"),
         default="ur5e-motions",
         help="ur5e-motions: the FD-TVIST paper's three test motions (default); "
         "flexible-payload: the zero-delay paper's experiment, a flexible payload on the twin "
-        "moved rapidly along X (default out/demo-payload)",
+        "moved rapidly along X (default out/demo-payload); pick-place: a cycle of eight short "
+        "fast moves of a cobot cell, cycle time to settled per method (default "
+        "out/demo-pick-place)",
     )
     p.add_argument(
         "--payload-hz",

@@ -9,7 +9,10 @@ the gravity-free tool acceleration after the stop is reduced to the paper's numb
   peaks after it, extrapolated back to the stop;
 - **reduction**: ``1 − RV / RV_unshaped`` of the same motion, %;
 - **peak jerk** of the reference (third difference), rad/s³;
-- **spectrum** of the acceleration after the stop (eq. 56).
+- **spectrum** of the acceleration after the stop (eq. 56);
+- **time to settled** from the start of the move (:mod:`tvist.demo.settle`), beside the
+  move's own duration, and the same for the best "slow down instead" profile
+  (:mod:`tvist.demo.slow_down`).
 """
 
 from __future__ import annotations
@@ -51,6 +54,14 @@ from tvist.demo.motions import (
     V_MAX_RAD_S,
     Motion,
 )
+from tvist.demo.settle import (
+    SettleTimes,
+    flange_error_m,
+    measure_settle,
+    rest_flange_position,
+    settle_config,
+)
+from tvist.demo.slow_down import ACCEL_SCALES, JERK_TIMES_S, Candidate, SlowDown, slow_down
 from tvist.sim import Twin
 from tvist.trajectory import Trajectory
 
@@ -118,6 +129,8 @@ class MethodRun:
         (:func:`tvist.analysis.path_deviation`).
     details
         How the reference was made (from :class:`~tvist.demo.methods.Reference`).
+    settle
+        Time to settled from the start of the move (:mod:`tvist.demo.settle`).
     """
 
     method: Method
@@ -131,6 +144,7 @@ class MethodRun:
     spectrum: EnergySpectrum
     details: dict[str, Any] = field(default_factory=dict)
     path_deviation_m: float = math.nan
+    settle: SettleTimes | None = None
 
     def to_json(self) -> dict[str, Any]:
         """The row as stored in ``results.json``."""
@@ -145,6 +159,8 @@ class MethodRun:
             "peak_acceleration_rad_s2": peak_acceleration(self.q, DT_S),
             "t_stop_s": self.t_stop_s,
             "path_deviation_m": self.path_deviation_m,
+            "oracle": self.method.oracle,
+            "settle": None if self.settle is None else self.settle.to_json(),
             "residual_fit": {
                 "method": rv.method,
                 "reliable": rv.reliable,
@@ -178,6 +194,8 @@ class MotionRun:
         One per method that applies to the motion, unshaped first.
     tracks
         Inertias and modes along the planned move.
+    slow_down
+        The "slow down instead" profiles of the move (``None`` if not run).
     """
 
     motion: Motion
@@ -187,6 +205,7 @@ class MotionRun:
     map_end_modes: dict[str, list[tuple[float, float]]]
     runs: list[MethodRun]
     tracks: ModeTracks
+    slow_down: SlowDown | None = None
 
     @property
     def analytic_zv_delay_s(self) -> float:
@@ -215,6 +234,7 @@ class MotionRun:
                 label: zv_delay_s(m) for label, m in self.map_end_modes.items()
             },
             "methods": {r.method.key: r.to_json() for r in self.runs},
+            "slow_down": None if self.slow_down is None else self.slow_down.to_json(),
         }
 
 
@@ -283,6 +303,7 @@ def run_motion(
     tail_s: float = TAIL_S,
     spectrum_window_s: float = SPECTRUM_WINDOW_S,
     log: Any = None,
+    with_slow_down: bool = True,
 ) -> MotionRun:
     """Run every method of ``methods`` that applies to ``motion`` on the twin.
 
@@ -300,6 +321,8 @@ def run_motion(
         Length of the spectrum window after each stop, s.
     log
         Optional ``log(text)`` for progress lines.
+    with_slow_down
+        Also run the "slow down instead" grid (:mod:`tvist.demo.slow_down`).
     """
     if not methods or methods[0].key != "unshaped":
         raise ValueError("the first method must be the 'unshaped' baseline")
@@ -311,6 +334,8 @@ def run_motion(
     # One-mode ZV delay 1/(2 f_d) along the move: sizes the callable provider's delay lines.
     max_mode_delay = float(np.max(0.5 / true_modes[:, :, 0]))
     ctx = MotionContext(motion, traj, twin, robot, max_mode_delay)
+    rest_m = rest_flange_position(twin, motion.q_end)
+    move_s = traj.t_motion_end_s - traj.t_motion_start_s
 
     runs: list[MethodRun] = []
     baseline_rv = math.nan
@@ -338,11 +363,35 @@ def run_motion(
                 spectrum=residual_spectrum(psi, t, t_stop, spectrum_window_s, traj.dt_s),
                 details=ref.details,
                 path_deviation_m=path_deviation(robot, traj.q, ref.q).max_m,
+                settle=measure_settle(
+                    t, psi, flange_error_m(record, rest_m), traj.t_motion_start_s, move_s
+                ),
             )
         )
         if log is not None:
             log(
                 f"{motion.name:8} {method.label:36} RV {residual.amplitude:8.4f} m/s²  "
+                f"({time.perf_counter() - start:.1f} s)"
+            )
+    slow = None
+    if with_slow_down:
+        start = time.perf_counter()
+        planned = Candidate(motion.jerk_time_s, 1.0, runs[0].settle)
+        slow = slow_down(
+            motion.q_start,
+            motion.q_end,
+            twin,
+            rest_m,
+            planned,
+            v_max=motion.v_max_rad_s,
+            a_max=motion.a_max_rad_s2,
+            pre_s=traj.t_motion_start_s,
+            tail_s=tail_s,
+            dt_s=traj.dt_s,
+        )
+        if log is not None:
+            log(
+                f"{motion.name:8} {'slow down instead':36} {len(slow.candidates) - 1} profiles "
                 f"({time.perf_counter() - start:.1f} s)"
             )
     map_end = {
@@ -358,6 +407,7 @@ def run_motion(
         map_end_modes=map_end,
         runs=runs,
         tracks=tracks,
+        slow_down=slow,
     )
 
 
@@ -418,5 +468,8 @@ def run_experiment(
         "quick": quick,
         "accelerometer_noise_std_m_s2": 0.0,
         "methods": {m.key: m.label for m in rows},
+        "oracle_methods": {m.key: m.oracle for m in rows if m.oracle is not None},
+        "settle_criteria": settle_config(),
+        "slow_down_grid": {"jerk_times_s": list(JERK_TIMES_S), "accel_scales": list(ACCEL_SCALES)},
     }
     return DemoResult(motions=runs, config=config, wall_time_s=time.perf_counter() - start)

@@ -94,6 +94,9 @@ class Method:
         Names of the motions the row is run for (``"Q1->Q2"``); ``None`` is all.
     dynmap
         The dynamic map the method uses, if any (its modes are plotted along each motion).
+    oracle
+        Why a user cannot run this row on a robot (it reads what only the twin knows), or
+        ``None`` for a row a user can run. Oracle rows are references, never recommended.
     """
 
     key: str
@@ -101,6 +104,7 @@ class Method:
     build: Callable[[MotionContext], Reference]
     motions: tuple[str, ...] | None = None
     dynmap: DynamicMap | None = None
+    oracle: str | None = None
 
     def applies_to(self, motion: Motion) -> bool:
         """Whether this row is run for ``motion``."""
@@ -197,9 +201,25 @@ def map_use(dynmap: DynamicMap, robot: Robot, q: np.ndarray) -> dict[str, list]:
     return {"inertia_clamped_percent": clamped, "gravity_sign_changes": sign_changes}
 
 
-def zero_delay_row(key: str, label: str, method: str, motions: Sequence[str]) -> Method:
-    """A zero-delay row (``method`` ``"modified"`` or ``"ztdis"``) with the twin's modes at the
-    end pose, two modes, :data:`ZERO_DELAY_SHAPER`.
+#: Why the rows on the twin's exact modes cannot run on a robot.
+ORACLE_TRUE_MODES = "reads the twin's exact modes every cycle (no robot offers them)"
+ORACLE_END_POSE_MODES = (
+    "is designed on the twin's exact modes at the end pose, before the arm gets there "
+    "(on a robot they come from a map)"
+)
+
+
+def zero_delay_row(
+    key: str,
+    label: str,
+    method: str,
+    motions: Sequence[str] | None,
+    dynmap: DynamicMap | None = None,
+) -> Method:
+    """A zero-delay row (``method`` ``"modified"`` or ``"ztdis"``) with two modes at the end
+    pose, :data:`ZERO_DELAY_SHAPER`: the twin's exact modes (an oracle row), or those of
+    ``dynmap`` (anything with ``modes(robot, q)``, e.g. an identified map: a row a user can
+    run). ``motions=None`` runs it on every motion.
 
     Only the move itself (without the rest padding) is compressed; the rest before and after
     is kept, so the reference stops when the planned one does.
@@ -209,7 +229,13 @@ def zero_delay_row(key: str, label: str, method: str, motions: Sequence[str]) ->
         traj = ctx.trajectory
         first = int(round(traj.t_motion_start_s / traj.dt_s))
         last = int(round(traj.t_motion_end_s / traj.dt_s))
-        modes = ctx.twin.modes(ctx.motion.q_end)
+        if dynmap is None:
+            modes = ctx.twin.modes(ctx.motion.q_end)
+            provider = "twin eigen-analysis at the end pose (time-invariant)"
+        else:
+            modes = dynmap.modes(ctx.robot, ctx.motion.q_end)
+            source = dynmap.metadata.get("source") or "dynamic map"
+            provider = f"{source}, at the end pose (time-invariant)"
         result = tvist.zero_delay(
             traj.q[first : last + 1], traj.dt_s, modes, shaper=ZERO_DELAY_SHAPER, method=method
         )
@@ -222,7 +248,7 @@ def zero_delay_row(key: str, label: str, method: str, motions: Sequence[str]) ->
             q,
             {
                 "shaper": f"{ZERO_DELAY_SHAPER} x {len(modes)} modes ({method})",
-                "provider": "twin eigen-analysis at the end pose (time-invariant)",
+                "provider": provider,
                 "alpha": result.alpha,
                 "shaper_delay_removed_s": result.delay_s,
                 "tail_error_rad": result.tail_error,
@@ -230,7 +256,13 @@ def zero_delay_row(key: str, label: str, method: str, motions: Sequence[str]) ->
             },
         )
 
-    return Method(key=key, label=label, build=build, motions=tuple(motions))
+    return Method(
+        key=key,
+        label=label,
+        build=build,
+        motions=None if motions is None else tuple(motions),
+        oracle=ORACLE_END_POSE_MODES if dynmap is None else None,
+    )
 
 
 #: Motions with zero-delay rows: the two that end in the low-frequency pose Q1/Q2.
@@ -241,7 +273,12 @@ def default_methods() -> list[Method]:
     """The rows of the experiment, unshaped first (the baseline of the reduction)."""
     return [
         Method("unshaped", "Unshaped", _unshaped),
-        Method("fd-tvist-truth", "FD-TVIST ZV, true modes", _fd_tvist_truth),
+        Method(
+            "fd-tvist-truth",
+            "FD-TVIST ZV, true modes",
+            _fd_tvist_truth,
+            oracle=ORACLE_TRUE_MODES,
+        ),
         fd_tvist_map("fd-tvist-paper-map", "FD-TVIST ZV, paper map", DynamicMap.paper_ur5e()),
         zero_delay_row(
             "modified",

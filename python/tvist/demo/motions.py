@@ -1,8 +1,10 @@
-"""The test motions of the UR5e experiment (paper section 6.1, Table 3) on the 500 Hz grid."""
+"""The test motions of the UR5e experiment (paper section 6.1, Table 3) on the 500 Hz grid,
+and the :class:`Motion` every experiment's moves are made of."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -23,10 +25,27 @@ PRE_S = 0.2
 
 @dataclass(frozen=True)
 class Motion:
-    """A rest-to-rest joint-space move between two named poses of :data:`PAPER_POSES`."""
+    """A rest-to-rest joint-space double-S move between two named poses.
+
+    Attributes
+    ----------
+    start, end
+        Names of the poses in ``poses``.
+    poses
+        Where the names are looked up (default :data:`PAPER_POSES`), rad.
+    v_max_rad_s, a_max_rad_s2, jerk_time_s
+        The double-S limits: speed, acceleration and acceleration ramp (default: the paper's
+        test motions).
+    """
 
     start: str
     end: str
+    poses: Mapping[str, Sequence[float]] = field(
+        default_factory=lambda: PAPER_POSES, compare=False, repr=False
+    )
+    v_max_rad_s: float = V_MAX_RAD_S
+    a_max_rad_s2: float = A_MAX_RAD_S2
+    jerk_time_s: float = JERK_TIME_S
 
     @property
     def name(self) -> str:
@@ -41,12 +60,12 @@ class Motion:
     @property
     def q_start(self) -> np.ndarray:
         """Start pose, rad, ``(6,)``."""
-        return np.array(PAPER_POSES[self.start])
+        return np.array(self.poses[self.start], dtype=float)
 
     @property
     def q_end(self) -> np.ndarray:
         """End pose, rad, ``(6,)``."""
-        return np.array(PAPER_POSES[self.end])
+        return np.array(self.poses[self.end], dtype=float)
 
     def reference(self, tail_s: float, dt_s: float = DT_S) -> Trajectory:
         """The unshaped double-S reference with :data:`PRE_S` rest before and ``tail_s`` after.
@@ -57,9 +76,9 @@ class Motion:
             self.q_start,
             self.q_end,
             dt_s=dt_s,
-            v_max=V_MAX_RAD_S,
-            a_max=A_MAX_RAD_S2,
-            jerk_time_s=JERK_TIME_S,
+            v_max=self.v_max_rad_s,
+            a_max=self.a_max_rad_s2,
+            jerk_time_s=self.jerk_time_s,
             t_pre_s=PRE_S,
             t_post_s=tail_s,
         )

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -13,6 +14,8 @@ from tvist.analysis import peak_acceleration, peak_velocity
 from tvist.demo.experiment import DemoResult, MotionRun
 from tvist.demo.measure import damped_frequency_hz, zv_delay_s
 from tvist.demo.motions import DT_S
+from tvist.demo.settle import CRITERIA, SETTLE_HOLD_S, format_settle
+from tvist.demo.slow_down import ACCEL_SCALES, JERK_TIMES_S
 
 #: Paper Table 4 (real UR5e, average of 10 repetitions): unshaped RV, shaped RV (m/s²),
 #: measured delay (ms) and reduction (%), for comparison in the report.
@@ -61,6 +64,17 @@ def write_json(result: DemoResult, path: Path) -> Path:
     return path
 
 
+def row_label(run: Any) -> str:
+    """A row's label, marked when a user cannot run it."""
+    return run.method.label + (" (oracle)" if run.method.oracle else "")
+
+
+def _settle_cells(settle: Any) -> list[str]:
+    if settle is None:
+        return ["-"] * len(CRITERIA)
+    return [format_settle(settle.get(c.key), settle.record_s) for c in CRITERIA]
+
+
 def _rows(motion: MotionRun) -> list[list[str]]:
     analytic_ms = f"{1e3 * motion.analytic_zv_delay_s:.1f}"
     rows = []
@@ -68,25 +82,34 @@ def _rows(motion: MotionRun) -> list[list[str]]:
         baseline = r.method.key == "unshaped"
         rows.append(
             [
-                r.method.label,
+                row_label(r),
                 f"{1e3 * r.delay_s:.0f}",
                 "-" if baseline else analytic_ms,
                 f"{r.residual.amplitude:.4f}",
                 "-" if baseline else format_reduction(r.reduction_percent),
+                *_settle_cells(r.settle),
                 f"{r.peak_jerk_rad_s3:.0f}",
                 RV_ESTIMATES.get(r.residual.method, r.residual.method)
                 + ("" if r.residual.reliable else " (unreliable)"),
             ]
         )
+    if motion.slow_down is not None:
+        cells = []
+        for c in CRITERIA:
+            best = motion.slow_down.best(c.key)
+            cells.append("not settled" if best is None else format_settle(best.settle.get(c.key)))
+        rows.append(["Slow down instead (best of the grid)", "-", "-", "-", "-", *cells, "-", "-"])
     return rows
 
 
+_SETTLE_HEADER = [f"Settled, {c.text} [s]" for c in CRITERIA]
 _HEADER = [
     "Method",
     "Delay [ms]",
     "ZV delay at end, true modes [ms]",
     "Res. vibration [m/s²]",
     "Reduction [%]",
+    *_SETTLE_HEADER,
     "Peak jerk [rad/s³]",
     "RV estimate",
 ]
@@ -97,6 +120,9 @@ _CONSOLE_HEADER = [
     "Analytic ZV\ndelay [ms]",
     "RV\n[m/s²]",
     "Reduction\n[%]",
+    "Settled\n0.05 m/s²\n[s]",
+    "Settled\n0.01 m/s²\n[s]",
+    "Settled\n0.1 mm\n[s]",
     "Peak jerk\n[rad/s³]",
     "RV estimate",
 ]
@@ -110,8 +136,8 @@ def print_table(result: DemoResult, console: Any = None) -> None:
 
     if console is None:
         console = Console()
-    if not console.is_terminal and console.width < 120:
-        console.width = 120  # a log file or pipe: keep each row on one line
+    if not console.is_terminal and console.width < 160:
+        console.width = 160  # a log file or pipe: keep each row on one line
     for motion in result.motions:
         modes = ", ".join(
             f"{name} damped f_d {damped_frequency_hz(w, z):.2f} Hz ζ {z:.3f}"
@@ -119,11 +145,15 @@ def print_table(result: DemoResult, console: Any = None) -> None:
         )
         table = Table(
             title=f"{motion.motion.name}: analytic two-mode ZV delay at {motion.motion.end} "
-            f"(true modes) = {1e3 * motion.analytic_zv_delay_s:.1f} ms",
+            f"(true modes) = {1e3 * motion.analytic_zv_delay_s:.1f} ms; settle times from the "
+            f"start of the move, which itself lasts {_move_s(motion):.3f} s (the limit)",
             caption=f"true modes at {motion.motion.end}: {modes}",
         )
         for i, name in enumerate(_CONSOLE_HEADER):
-            table.add_column(Text(name), justify="left" if i in (0, 6) else "right", no_wrap=i == 0)
+            last = len(_CONSOLE_HEADER) - 1
+            table.add_column(
+                Text(name), justify="left" if i in (0, last) else "right", no_wrap=i == 0
+            )
         for row in _rows(motion):
             table.add_row(*(Text(cell) for cell in row))
         console.print(table)
@@ -198,6 +228,25 @@ def _move_start(motion: MotionRun) -> float:
     q = motion.runs[0].q
     moving = np.flatnonzero(np.any(q != q[0], axis=1))
     return float(motion.t_s[moving[0] - 1]) if moving.size else float(motion.t_s[0])
+
+
+def _slow_down_text(motion: MotionRun) -> str:
+    """The move's own duration and the best slow-down profile per band."""
+    text = f"The planned move lasts **{_move_s(motion):.3f} s** (the limit of every settle time)."
+    if motion.slow_down is None:
+        return text
+    parts = []
+    for c in CRITERIA:
+        best = motion.slow_down.best(c.key)
+        if best is None:
+            parts.append(f"{c.text}: no profile settles within the record")
+        else:
+            parts.append(
+                f"{c.text}: {best.text()} (move {best.settle.move_s:.3f} s, settled "
+                f"{best.settle.get(c.key):.3f} s)"
+            )
+    n = len(motion.slow_down.candidates)
+    return f"{text} Slow down instead, best of {n} profiles: " + "; ".join(parts) + "."
 
 
 def _md_table(header: list[str], rows: list[list[str]]) -> str:
@@ -277,6 +326,18 @@ def write_markdown(result: DemoResult, path: Path, figures: dict[str, list[Path]
         "end pose (to 1e-9 rad). Reduction: 1 − RV/RV_unshaped of the same motion. Peak jerk: "
         "largest third difference of the reference over all joints.",
         "",
+        "Settled: time from the start of the move until the gravity-free tool acceleration "
+        "|ψ| stays below 0.05 or 0.01 m/s², or the flange stays within 0.1 mm of where it "
+        "comes to rest (the twin's flange at rest under gravity at the end pose), for good "
+        f"(the record must show it inside the band for {SETTLE_HOLD_S:g} s); interpolated "
+        "between the 2 ms samples. Its physical limit is the move's own duration: a perfect "
+        "shaper adds nothing to it. *Slow down instead*: the planned move run unshaped with a "
+        f"softer jerk ramp ({', '.join(f'{1e3 * j:g}' for j in JERK_TIMES_S)} ms) and "
+        f"acceleration limit (×{', ×'.join(f'{a:g}' for a in ACCEL_SCALES)}), every "
+        "profile simulated on the twin; per band the one that settles first. Rows marked "
+        "*(oracle)* read what only the twin knows (its exact modes); they are references, "
+        "never recommended.",
+        "",
         f"Wall time (identification, simulations, analysis): {result.wall_time_s:.1f} s"
         + (" (quick run: first motion only, shorter tail)." if result.config["quick"] else "."),
         "",
@@ -286,6 +347,8 @@ def write_markdown(result: DemoResult, path: Path, figures: dict[str, list[Path]
         name = motion.motion.name
         lines += [f"## {name.replace('->', ' → ')}", ""]
         lines.append(_md_table(_HEADER, _rows(motion)))
+        lines.append("")
+        lines.append(_slow_down_text(motion))
         lines.append("")
         lines.append(
             "Flange path deviation from the planned path (distance to its nearest point; the "
@@ -632,57 +695,107 @@ def _jerk_spike(result: DemoResult) -> bool:
     return False
 
 
-#: Rows a user cannot run on a real robot (they read the twin's own modes every cycle); they
-#: are references, never recommended.
-REFERENCE_ONLY = ("fd-tvist-truth",)
-#: A method is "good enough" when its reduction is at least this (%) ...
-GOOD_REDUCTION = 95.0
-#: ... or within this many percentage points of the best usable row.
-GOOD_MARGIN = 1.0
+#: Recommendations rank by time to settled at this criterion (the first of CRITERIA) ...
+RANK_CRITERION = CRITERIA[0]
+#: ... rows within this much of the fastest tie (s: one 2 ms sample, the grid of the stop),
+#: and the tie goes to the faster one at the stricter band (the second criterion), then to
+#: the higher reduction.
+SETTLE_TIE_S = 1.5 * DT_S
+
+
+@dataclass(frozen=True)
+class _Option:
+    """A runnable choice of the recommendation: a row, or the best slow-down profile."""
+
+    label: str
+    settle: Any
+    reduction_percent: float
+    run: Any = None
+
+
+def _move_s(motion: MotionRun) -> float:
+    """The planned move's duration (the physical limit of every settle time), s."""
+    return float(motion.runs[0].settle.move_s)
+
+
+def _options(motion: MotionRun) -> list[_Option]:
+    """The runnable rows (no oracle) and the best slow-down profile at the ranking criterion."""
+    out = [
+        _Option(r.method.label, r.settle, r.reduction_percent, r)
+        for r in motion.runs
+        if r.method.oracle is None and r.settle is not None
+    ]
+    if motion.slow_down is not None:
+        best = motion.slow_down.best(RANK_CRITERION.key)
+        # The grid's first candidate is the planned move: already the unshaped row.
+        if best is not None and best is not motion.slow_down.candidates[0]:
+            out.append(_Option(f"Slow down instead ({best.text()})", best.settle, math.nan))
+    return out
+
+
+def _rank_key(option: _Option) -> tuple[float, float]:
+    second = option.settle.get(CRITERIA[1].key)
+    reduction = option.reduction_percent if math.isfinite(option.reduction_percent) else 0.0
+    return (math.inf if second is None else second, -reduction)
 
 
 def recommendation(motion: MotionRun) -> str:
-    """One line: which usable method to run on this motion and why.
+    """One line: which runnable method settles first on this motion, and by how much.
 
-    Usable rows are all but :data:`REFERENCE_ONLY`. Among those whose reduction is at least
-    :data:`GOOD_REDUCTION` % or within :data:`GOOD_MARGIN` points of the best, the one with
-    the shortest delay wins (ties within one 2 ms sample: the higher reduction).
+    Rows a user can run are those without :attr:`~tvist.demo.methods.Method.oracle`, the
+    unshaped move and the best "slow down instead" profile included. The one that settles
+    first at :data:`RANK_CRITERION` wins; rows within :data:`SETTLE_TIE_S` of it tie, and
+    the tie goes to the faster at the stricter band, then to the higher reduction.
     """
     name = motion.motion.name.replace("->", " → ")
-    usable = [r for r in motion.runs[1:] if r.method.key not in REFERENCE_ONLY]
-    if not usable:
-        return f"{name}: no shaped row to compare."
-    best = max(r.reduction_percent for r in usable)
-    good = [r for r in usable if r.reduction_percent >= min(GOOD_REDUCTION, best - GOOD_MARGIN)]
-    # The shortest delay, and among the rows within one sample of it the higher reduction.
-    shortest = min(r.delay_s for r in good)
-    pick = max(
-        (r for r in good if r.delay_s <= shortest + 1.5 * DT_S),
-        key=lambda r: r.reduction_percent,
+    key = RANK_CRITERION.key
+    options = [o for o in _options(motion) if o.settle.get(key) is not None]
+    if not options:
+        return f"{name}: no runnable row settles to {RANK_CRITERION.text} within the record."
+    fastest = min(o.settle.get(key) for o in options)
+    pick = min((o for o in options if o.settle.get(key) <= fastest + SETTLE_TIE_S), key=_rank_key)
+    t_pick = pick.settle.get(key)
+    why = (
+        f"settled ({RANK_CRITERION.text}) {t_pick:.3f} s after the move starts; the move "
+        f"itself lasts {_move_s(motion):.3f} s"
     )
-    others = sorted((r for r in usable if r is not pick), key=lambda r: -r.reduction_percent)[:2]
-    why = f"{format_reduction(pick.reduction_percent)} % less residual vibration"
-    why += f" for {1e3 * pick.delay_s:.0f} ms of delay"
+    unshaped = motion.runs[0].settle.get(key)
+    if pick.run is not motion.runs[0] and unshaped is not None:
+        why += f", unshaped {unshaped:.3f} s ({100 * (1 - t_pick / unshaped):.0f} % sooner)"
+    others = sorted(
+        (o for o in options if o is not pick and o.run is not motion.runs[0]),
+        key=lambda o: o.settle.get(key),
+    )[:2]
     if others:
-        why += "; next: " + ", ".join(
-            f"{r.method.label} {format_reduction(r.reduction_percent)} % / {1e3 * r.delay_s:.0f} ms"
-            for r in others
-        )
+        why += "; next: " + ", ".join(f"{o.label} {o.settle.get(key):.3f} s" for o in others)
     caveat = ""
-    if "alpha" in pick.details:
+    if pick.run is not None and "alpha" in pick.run.details:
         caveat = (
             " (zero-delay shaping needs the whole rest-to-rest move in advance and the modes "
             "at its end pose)"
         )
-    return f"{name}: use **{pick.method.label}**: {why}{caveat}."
+    line = f"{name}: use **{pick.label}**: {why}{caveat}."
+    oracles = [
+        r for r in motion.runs if r.method.oracle is not None and r.settle and r.settle.get(key)
+    ]
+    if oracles:
+        best_oracle = min(oracles, key=lambda r: r.settle.get(key))
+        if best_oracle.settle.get(key) < t_pick:
+            line += (
+                f" Not recommended although faster: {best_oracle.method.label} "
+                f"({best_oracle.settle.get(key):.3f} s), an oracle row: it "
+                f"{best_oracle.method.oracle}."
+            )
+    return line
 
 
 def _recommendation_lines(result: DemoResult) -> list[str]:
     lines = [f"- {recommendation(m)}" for m in result.motions]
     lines.append(
-        f"- (Rule: among the rows a user can run, those with at least {GOOD_REDUCTION:g} % "
-        f"reduction or within {GOOD_MARGIN:g} point of the best, the shortest delay. The "
-        "true-modes row reads the twin's own modes every cycle and is only a reference.)"
+        f"- (Rule: among the rows a user can run, the unshaped move and the best slow-down "
+        f"profile included, the one that settles first to {RANK_CRITERION.text}; within one "
+        f"2 ms sample of it, the faster to {CRITERIA[1].text}, then the higher reduction. "
+        "Rows marked *(oracle)* read what only the twin knows and are references only.)"
     )
     return lines
 

@@ -46,8 +46,8 @@ def run_demo(
     from tvist.demo.report import print_table, write_outputs
 
     console = Console(quiet=not verbose)
-    if not console.is_terminal and console.width < 120:
-        console.width = 120  # a log file or pipe: keep table rows on one line
+    if not console.is_terminal and console.width < 160:
+        console.width = 160  # a log file or pipe: keep table rows on one line
     start = time.perf_counter()
     rows = list(default_methods() if methods is None else methods)
     identification = None
