@@ -317,9 +317,8 @@ def test_a_client_that_reads_no_replies_does_not_stop_the_clock(server, subscrib
     """A streaming client stops reading and asks for replies: the server's send to it blocks
     (its socket is full), and the tick, which sends that client's data packages on the same
     connection, must not wait for it: the other subscribers go on."""
-    hostile = RawRtde()
+    hostile = RawRtde(rcvbuf=4096)
     try:
-        hostile.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
         hostile.version()
         names = ["timestamp", "actual_q", "actual_qd", "target_q", "target_qd", "actual_TCP_pose"]
         assert hostile.setup_outputs(names * 6)[0] == 1
@@ -428,3 +427,145 @@ def test_set_payload_refuses_what_no_arm_carries(server, mass, cog, safety, erro
         control.disconnect()
         receive.disconnect()
     assert_serves_clients()
+
+
+# ----------------------------------------------------------------------------- 6. the tick
+
+
+def _free_ports(n: int) -> list[int]:
+    sockets = [socket.socket() for _ in range(n)]
+    for sock in sockets:
+        sock.bind((HOST, 0))
+    ports = [sock.getsockname()[1] for sock in sockets]
+    for sock in sockets:
+        sock.close()
+    return ports
+
+
+@pytest.fixture
+def local_server():
+    """A twin server in this process (tests that reach inside it), on free ports of HOST;
+    only raw clients talk to it (ur_rtde's calls hold the interpreter while they wait)."""
+    from tvist.sim import Twin
+    from tvist.trajectory import PAPER_POSES
+    from tvist.urserver import ServerPorts, TwinServer
+    from tvist.urserver.controller import TwinController
+
+    ports = _free_ports(5)
+    twin = Twin("ur5e", payload_kg=5.0, payload_com_m=(0.0, 0.0, 0.05))
+    controller = TwinController(twin, np.array(PAPER_POSES["Q1"]))
+    local = TwinServer(controller, host=HOST, ports=ServerPorts(ports[0], ports[1], ports[2:]))
+    local.start()
+    yield local
+    local.close()
+
+
+@pytest.mark.parametrize("part", ["motion", "outputs"])
+def test_a_fault_in_the_tick_protective_stops_and_the_tick_goes_on(local_server, part) -> None:
+    """An exception inside the tick (the motion, inside the controller's step; the outputs,
+    after it) protective-stops the arm with the reason; packages keep coming and ``unlock
+    protective stop`` releases the arm."""
+    controller = local_server.controller
+    dash = local_server.ports.dashboard
+    sub = Subscriber(HOST, port=local_server.ports.rtde)
+    owner, name = (controller.motion, "advance") if part == "motion" else (controller, "_outputs")
+    original = getattr(owner, name)
+    faults = []
+
+    def fail_once(*args):
+        if not faults:
+            faults.append(name)
+            raise RuntimeError(f"injected fault in {name}")
+        return original(*args)
+
+    try:
+        sub.wait_for(10)
+        setattr(owner, name, fail_once)
+        reply = wait_dashboard("safetystatus", "PROTECTIVE", port=dash)
+        assert reply == "Safetystatus: PROTECTIVE_STOP"
+        (error,) = dashboard("get last error", port=dash)
+        assert f"injected fault in {name}" in error
+        assert_streaming(sub)
+        assert dashboard("unlock protective stop", "safetystatus", port=dash) == [
+            "Protective stop releasing",
+            "Safetystatus: NORMAL",
+        ]
+        assert_streaming(sub)
+    finally:
+        vars(owner).pop(name, None)
+        sub.close()
+
+
+def test_subscribers_that_do_not_read_cost_the_tick_no_packing(local_server, monkeypatch) -> None:
+    """50 subscribers stop reading (each with a recipe of its own): once their sockets are
+    full the tick drops their packages without packing them, so it packs one package per
+    tick, the reading subscriber's, not 51 (which made the simulated clock run at 72 % of
+    the wall clock)."""
+    from tvist.urserver import rtde
+
+    packed = [0]
+    pack = rtde.Recipe.pack
+
+    def counting_pack(self, values):
+        packed[0] += 1
+        return pack(self, values)
+
+    monkeypatch.setattr(rtde.Recipe, "pack", counting_pack)
+    names = [n for n in rtde.OUTPUTS if not n.startswith(("input_", "output_"))]
+    stalled = []
+    try:
+        for i in range(50):
+            client = RawRtde(HOST, local_server.ports.rtde, rcvbuf=4096)
+            client.version()
+            assert client.setup_outputs(names[i:] + names[:i])[0] == 1  # no two alike
+            client.start()
+            stalled.append(client)
+        sub = Subscriber(HOST, port=local_server.ports.rtde)
+        sub.wait_for(500)  # the stalled sockets fill within ~100 packages (~1 kB each)
+        start, n0 = packed[0], len(sub.samples)
+        samples = sub.wait_for(500)
+        packings = packed[0] - start
+        ticks = round((samples[-1][0] - sub.samples[n0 - 1][0]) / DT_S)
+        print(f"\n{packings} packings in {ticks} ticks with 50 stalled subscribers")
+        assert packings < 2 * ticks
+        sub.close()
+    finally:
+        for client in stalled:
+            client.close()
+
+
+# ----------------------------------------------------------------------------- 7. timestamps
+
+
+def test_a_campaign_log_has_every_package_once(server, tmp_path) -> None:
+    """A campaign's excitation recorded from the twin server (~5 s): the log's timestamp
+    advances by exactly one 2 ms period per row, none repeated or skipped (ur_rtde's file
+    recorder, on a timer of its own, repeated and skipped 3-14 % of them). The timestamps
+    are k * 2 ms written with 6 decimals: compared to 1e-9 s."""
+    from tvist.ident.campaign_robots import URRobot
+    from tvist.ident.excitation import random_excitation
+
+    receive = rtde_receive.RTDEReceiveInterface(HOST, 500.0, ["target_q"])
+    q0 = np.array(receive.getTargetQ())
+    receive.disconnect()
+    excitation = random_excitation(q0, 0, seed=3, duration_s=4.0, max_delta_rad=0.05)
+    robot = URRobot(HOST, log_dir=tmp_path, confirm=None)
+    try:
+        robot.record_excitation(excitation)
+    finally:
+        robot.close()
+    (log,) = tmp_path.glob("excitation_*.csv")
+    t = np.genfromtxt(log, delimiter=",", names=True)["timestamp"]
+    assert t[-1] - t[0] >= 4.5
+    np.testing.assert_allclose(np.diff(t), DT_S, rtol=0, atol=1e-9)
+
+
+def test_a_recording_below_500_hz_is_evenly_spaced_from_its_first_package(server, tmp_path) -> None:
+    """At 125 Hz every package is 4 ticks after the previous one, the first two included
+    (the first interval was 3 ticks)."""
+    from tvist.live import record
+
+    out = record(HOST, tmp_path / "log.csv", frequency_hz=125.0, duration_s=0.5)
+    t = np.genfromtxt(out, delimiter=",", names=True)["timestamp"]
+    assert len(t) > 20
+    np.testing.assert_allclose(np.diff(t), 4 * DT_S, rtol=0, atol=1e-9)

@@ -121,8 +121,14 @@ def upload_script(host: str = HOST, float_offset: int | str = 0, int_offset: int
 class RawRtde:
     """An RTDE client on a raw socket: every package a test wants, well-formed or not."""
 
-    def __init__(self, host: str = HOST, port: int = 30004, timeout_s: float = 10.0) -> None:
-        self.sock = socket.create_connection((host, port), timeout=timeout_s)
+    def __init__(
+        self, host: str = HOST, port: int = 30004, timeout_s: float = 10.0, rcvbuf: int = 0
+    ) -> None:
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        if rcvbuf:  # before connecting: the window the server sees
+            self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, rcvbuf)
+        self.sock.settimeout(timeout_s)
+        self.sock.connect((host, port))
         self.messages: list[bytes] = []  # text messages received (payloads)
 
     def send(self, kind: int | str, payload: bytes = b"") -> None:
@@ -204,8 +210,8 @@ class Subscriber:
     """A raw RTDE subscriber that collects ``(timestamp, target_q)`` of every data package
     in a thread (fields: ``timestamp``, ``target_q``)."""
 
-    def __init__(self, host: str = HOST, frequency_hz: float = 500.0) -> None:
-        self.client = RawRtde(host)
+    def __init__(self, host: str = HOST, frequency_hz: float = 500.0, port: int = 30004) -> None:
+        self.client = RawRtde(host, port)
         self.client.version()
         reply = self.client.setup_outputs(["timestamp", "target_q"], frequency_hz)
         assert reply[0] != 0, reply
@@ -237,9 +243,9 @@ class Subscriber:
         self._thread.join(timeout=10)
 
 
-def dashboard(*commands: str, host: str = HOST) -> list[str]:
+def dashboard(*commands: str, host: str = HOST, port: int = 29999) -> list[str]:
     """The dashboard's replies to ``commands`` (one connection)."""
-    with socket.create_connection((host, 29999), timeout=10) as sock:
+    with socket.create_connection((host, port), timeout=10) as sock:
         reader = sock.makefile("rb")
         reader.readline()  # the greeting
         replies = []
@@ -250,11 +256,13 @@ def dashboard(*commands: str, host: str = HOST) -> list[str]:
         return replies
 
 
-def wait_dashboard(command: str, expected: str, host: str = HOST, max_wait_s: float = 30.0) -> str:
+def wait_dashboard(
+    command: str, expected: str, host: str = HOST, port: int = 29999, max_wait_s: float = 30.0
+) -> str:
     """Poll a dashboard command until its reply contains ``expected``; the last reply."""
     reply = ""
     for _ in range(int(max_wait_s / 0.02)):
-        (reply,) = dashboard(command, host=host)
+        (reply,) = dashboard(command, host=host, port=port)
         if expected in reply:
             return reply
         time.sleep(0.02)

@@ -11,9 +11,10 @@ Every resource a client can make the server hold is bounded: simultaneous connec
 (:data:`MAX_CLIENTS`), a dashboard line (:data:`DASHBOARD_MAX_LINE_BYTES`), a program on a
 script port (:data:`MAX_PROGRAM_BYTES`), recipes per RTDE connection (:data:`MAX_RECIPES`,
 ids are one byte) and the variable names of one (:data:`MAX_RECIPE_NAMES_BYTES`), a reply
-(one package), the data queued for a subscriber (the rest of one package: a subscriber that
-does not read loses packages, the clock does not wait for it) and a blocked send
-(:data:`SEND_TIMEOUT_S`). A connection's thread and buffers are freed when it closes.
+(one package), the data queued for a subscriber (:data:`SEND_BUFFER_BYTES` in the kernel,
+the rest of one package in the server: a subscriber that does not read loses packages, the
+clock does not wait for it) and a blocked send (:data:`SEND_TIMEOUT_S`). A connection's
+thread and buffers are freed when it closes.
 """
 
 from __future__ import annotations
@@ -59,6 +60,10 @@ MAX_CLIENTS = 256
 #: A send to a client that does not read blocks its connection's thread this long at most
 #: (s); then that connection is closed.
 SEND_TIMEOUT_S = 10.0
+#: The kernel's send queue of a client connection (bytes; Linux doubles it): ~0.1 s of
+#: ur_rtde's default recipe at 500 Hz, so a subscriber that stops reading is found out (and
+#: costs the tick nothing) within a fraction of a second, not after megabytes.
+SEND_BUFFER_BYTES = 1 << 16
 #: Longest dashboard command (bytes, newline excluded); a longer line is refused unread.
 DASHBOARD_MAX_LINE_BYTES = 4096
 #: Largest program a script port buffers (bytes); ur_rtde's control script is 42 kB.
@@ -298,6 +303,7 @@ class TwinServer:
             try:
                 conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
                 conn.setsockopt(socket.SOL_SOCKET, socket.SO_SNDTIMEO, _timeval(SEND_TIMEOUT_S))
+                conn.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SEND_BUFFER_BYTES)
                 # Not kept: the thread ends with its connection and leaves nothing behind.
                 threading.Thread(
                     target=self._guard, args=(handler, conn, name), name="client", daemon=True
