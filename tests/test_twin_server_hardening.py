@@ -27,6 +27,7 @@ from twin_server_fixture import (
     Commander,
     RawRtde,
     Subscriber,
+    assert_serves_clients,
     dashboard,
     twin_server,
     upload_script,
@@ -47,27 +48,6 @@ MOVEJ, SPEEDJ, SERVOJ, SPEED_STOP, SET_PAYLOAD, STOPJ = 1, 9, 11, 15, 17, 34
 def server():
     with twin_server() as proc:
         yield proc
-
-
-def assert_serves_clients() -> None:
-    """Release the arm as an operator would (dashboard ``stop``, ``unlock protective
-    stop``); then a fresh ur_rtde client connects, reads advancing timestamps and moves."""
-    dashboard("stop", "unlock protective stop")
-    assert dashboard("safetystatus") == ["Safetystatus: NORMAL"]
-    receive = rtde_receive.RTDEReceiveInterface(HOST, 500.0, ["timestamp", "target_q"])
-    control = rtde_control.RTDEControlInterface(HOST)
-    try:
-        t0 = receive.getTimestamp()
-        q = receive.getTargetQ()
-        q[5] += 0.05
-        assert control.moveJ(q, 1.0, 4.0)
-        q[5] -= 0.05
-        assert control.moveJ(q, 1.0, 4.0)
-        assert receive.getTimestamp() > t0
-    finally:
-        control.stopScript()
-        control.disconnect()
-        receive.disconnect()
 
 
 def assert_streaming(subscriber: Subscriber, n: int = 100) -> np.ndarray:

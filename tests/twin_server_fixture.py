@@ -105,10 +105,12 @@ CONTROL_SCRIPT = """def rtde_control():
     end
 end
 """
-#: ur_rtde's input registers of the control script: command, async flag, 11 arguments.
-CONTROL_INPUTS = ["input_int_register_0", "input_int_register_1"] + [
-    f"input_double_register_{i}" for i in range(11)
-]
+
+
+def control_inputs(offset: int = 0) -> list[str]:
+    """ur_rtde's input registers of the control script: command, async flag, 11 arguments."""
+    ints = [f"input_int_register_{offset + i}" for i in range(2)]
+    return ints + [f"input_double_register_{offset + i}" for i in range(11)]
 
 
 def upload_script(host: str = HOST, float_offset: int | str = 0, int_offset: int | str = 0) -> None:
@@ -185,12 +187,13 @@ class RawRtde:
 
 
 class Commander(RawRtde):
-    """Writes ur_rtde's command registers of a running :data:`CONTROL_SCRIPT` directly."""
+    """Writes ur_rtde's command registers of a running :data:`CONTROL_SCRIPT` directly (those
+    of register ``offset``: 0, or 24 for the upper range)."""
 
-    def __init__(self, host: str = HOST) -> None:
+    def __init__(self, host: str = HOST, offset: int = 0) -> None:
         super().__init__(host)
         self.version()
-        self.recipe = self.setup_inputs(CONTROL_INPUTS)
+        self.recipe = self.setup_inputs(control_inputs(offset))
         assert self.recipe != 0, "the command registers are taken"
         self.start()
 
@@ -241,6 +244,34 @@ class Subscriber:
     def close(self) -> None:
         self.client.close()
         self._thread.join(timeout=10)
+
+
+def assert_serves_clients(host: str = HOST) -> None:
+    """Release the arm as an operator would (dashboard ``stop``, ``unlock protective
+    stop``); then a fresh ur_rtde client connects, reads advancing timestamps and moves the
+    wrist (0.05 rad towards the middle of its range and back)."""
+    import rtde_control
+    import rtde_receive
+
+    dashboard("stop", "unlock protective stop", host=host)
+    assert dashboard("safetystatus", host=host) == ["Safetystatus: NORMAL"]
+    receive = rtde_receive.RTDEReceiveInterface(host, 500.0, ["timestamp", "target_q"])
+    try:
+        control = rtde_control.RTDEControlInterface(host)
+        try:
+            t0 = receive.getTimestamp()
+            q = receive.getTargetQ()
+            step = -0.05 if q[5] > 0.0 else 0.05
+            q[5] += step
+            assert control.moveJ(q, 1.0, 4.0)
+            q[5] -= step
+            assert control.moveJ(q, 1.0, 4.0)
+            assert receive.getTimestamp() > t0
+        finally:
+            control.stopScript()
+            control.disconnect()
+    finally:
+        receive.disconnect()
 
 
 def dashboard(*commands: str, host: str = HOST, port: int = 29999) -> list[str]:
