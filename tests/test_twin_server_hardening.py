@@ -16,6 +16,7 @@ import math
 import socket
 import struct
 import subprocess
+import threading
 import time
 
 import numpy as np
@@ -294,19 +295,32 @@ def test_listen_backlog_queues_64_connections(server) -> None:
 
 
 def test_a_client_that_reads_no_replies_does_not_stop_the_clock(server, subscriber) -> None:
-    """A streaming client stops reading and asks for replies: the server's send to it blocks
-    (its socket is full), and the tick, which sends that client's data packages on the same
-    connection, must not wait for it: the other subscribers go on."""
+    """A streaming client stops reading and keeps asking for long replies (setups of 1,000
+    unknown names at 0 Hz: 10 kB each, no recipe made): the server's send of a reply blocks
+    once its socket is full, and the tick, which sends that client's data packages on the
+    same connection, must not wait for it: the other subscribers go on."""
     hostile = RawRtde(rcvbuf=4096)
+    hostile.version()
+    assert hostile.setup_outputs(["timestamp"])[0] == 1
+    hostile.start()
+    request = struct.pack(">d", 0.0) + b",".join([b"x"] * 1000)
+    request = struct.pack(">HB", 3 + len(request), ord("O")) + request
+
+    def flood() -> None:  # blocks once the server stops reading; ends when closed
+        try:
+            for _ in range(2000):  # 20 MB of replies: more than any socket buffers
+                hostile.sock.sendall(request)
+        except OSError:
+            pass
+
+    flooding = threading.Thread(target=flood, daemon=True)
+    flooding.start()
     try:
-        hostile.version()
-        names = ["timestamp", "actual_q", "actual_qd", "target_q", "target_qd", "actual_TCP_pose"]
-        assert hostile.setup_outputs(names * 6)[0] == 1
-        hostile.start()
-        hostile.sock.sendall(struct.pack(">HBH", 5, ord("V"), 2) * 2000)
-        assert_streaming(subscriber, 500)
+        assert_streaming(subscriber, 1000)
     finally:
+        hostile.sock.shutdown(socket.SHUT_RDWR)
         hostile.close()
+        flooding.join(timeout=30)
     assert_serves_clients()
 
 
