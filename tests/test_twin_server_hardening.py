@@ -565,3 +565,29 @@ def test_a_recording_below_500_hz_is_evenly_spaced_from_its_first_package(server
             count = recorder.wait_newer(count, timeout_s=10.0)
     t = np.genfromtxt(recorder.path, delimiter=",", names=True)["timestamp"]
     np.testing.assert_allclose(np.diff(t), 4 * DT_S, rtol=0, atol=1e-9)
+
+
+def test_a_reply_never_splits_a_data_package(server) -> None:
+    """A subscriber that reads slowly gets part of a data package now and the rest later;
+    a reply sent meanwhile must wait for that rest: the stream stays a sequence of whole
+    packages (each reply to the version request is its own ``V`` package saying yes)."""
+    client = RawRtde(rcvbuf=4096)
+    try:
+        client.version()
+        names = ["timestamp", "actual_q", "actual_qd", "target_q", "target_qd", "actual_TCP_pose"]
+        assert client.setup_outputs(names * 4)[0] == 1  # 1 kB packages
+        client.start()
+        for _ in range(20):  # fill the socket (a partial package left over), then ask
+            time.sleep(0.02)
+            client.send("V", struct.pack(">H", 2))
+        replies = 0
+        while replies < 20:
+            kind, body = client.read()
+            assert kind in (ord("U"), ord("V")), f"stream out of step: package type {kind}"
+            if kind == ord("V"):
+                assert body == b"\x01"
+                replies += 1
+            else:
+                assert len(body) == 1 + 4 * (8 + 5 * 48)
+    finally:
+        client.close()

@@ -201,12 +201,15 @@ class TwinController:
         try:
             return self.plant.step(q_next)
         except Exception as exc:
-            if not isinstance(exc, SimulationDiverged):
+            if isinstance(exc, SimulationDiverged):
+                reason = str(exc)
+            else:
                 log.exception("twin step failed")
-            log.error("%s: the twin restarts at rest", exc)
+                reason = f"twin step failed: {exc!r}"
+            log.error("%s: the twin restarts at rest", reason)
             self.plant = TwinPlant(self.twin, q_start, self.dt_s)
             self.motion.hold_at(q_start)
-            self._protective_stop(str(exc))
+            self._protective_stop(reason)
             return self.plant.step(q_start)
 
     def fault(self, reason: str) -> None:

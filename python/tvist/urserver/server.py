@@ -105,7 +105,12 @@ class _RtdeSession:
     send_lock: threading.Lock = field(default_factory=threading.Lock)
 
     def send(self, data: bytes) -> None:
+        """Send a reply (blocking), after the rest of a data package the socket did not take
+        at once: packages never interleave."""
         with self.send_lock:
+            if self.pending:
+                self.sock.sendall(self.pending)
+                self.pending = b""
             self.sock.sendall(data)
 
     def ready(self) -> bool:
