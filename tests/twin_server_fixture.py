@@ -255,6 +255,11 @@ def assert_serves_clients(host: str = HOST) -> None:
 
     dashboard("stop", "unlock protective stop", host=host)
     assert dashboard("safetystatus", host=host) == ["Safetystatus: NORMAL"]
+    probe = Subscriber(host)  # fails (ur_rtde would wait forever) if no data comes
+    try:
+        probe.wait_for(10)
+    finally:
+        probe.close()
     receive = rtde_receive.RTDEReceiveInterface(host, 500.0, ["timestamp", "target_q"])
     try:
         control = rtde_control.RTDEControlInterface(host)
