@@ -56,7 +56,7 @@ def assert_streaming(subscriber: Subscriber, n: int = 100) -> np.ndarray:
     subscriber was too slow for is dropped, never repeated), with finite targets."""
     samples = subscriber.wait_for(n)
     t = np.array([s[0] for s in samples])
-    ticks = np.diff(t) / DT_S
+    ticks = np.diff(t) / DT_S  # timestamps are k * 2 ms: whole numbers to rounding (1e-6)
     assert np.all(ticks >= 1.0 - 1e-6) and np.allclose(ticks, np.round(ticks), atol=1e-6)
     q = np.array([s[1] for s in samples])
     assert np.all(np.isfinite(q))
@@ -64,7 +64,7 @@ def assert_streaming(subscriber: Subscriber, n: int = 100) -> np.ndarray:
 
 
 @pytest.fixture
-def subscriber():
+def subscriber(server):
     sub = Subscriber()
     sub.wait_for(1)
     yield sub
