@@ -204,3 +204,38 @@ def test_server_names_a_taken_port(twin) -> None:
         with pytest.raises(PortInUse, match=f"port {port} "):
             server.start()
         assert all(s.fileno() == -1 for s in server._listeners)
+
+
+def test_motion_lets_no_number_that_is_not_finite_through(twin) -> None:
+    """Every number a command takes is checked before any clamp could pass it on: NaN or
+    infinite protective-stops (SafetyViolation), a finite one out of URScript's range is
+    refused (CommandRefused); either way the motion keeps its finite target."""
+    motion = _motion(twin)
+    nan, inf = float("nan"), float("inf")
+    calls = {
+        "servoj: time": lambda: motion.servoj(Q1, nan, 0.1, 300.0),
+        "servoj: lookahead_time": lambda: motion.servoj(Q1, 0.002, nan, 300.0),
+        "servoj: gain": lambda: motion.servoj(Q1, 0.002, 0.1, inf),
+        "speedj: acceleration": lambda: motion.speedj(np.zeros(6), nan),
+        "stop: deceleration": lambda: motion.stop(-inf),
+        "movej: speed": lambda: motion.movej(Q1, nan, 1.0),
+        "movej: acceleration": lambda: motion.movej(Q1, 1.0, inf),
+    }
+    for what, call in calls.items():
+        with pytest.raises(SafetyViolation, match=f"{what} is .*not a finite number"):
+            call()
+    from tvist.urserver.motion import CommandRefused
+
+    refused = {
+        "servoj: lookahead_time = 0.01": lambda: motion.servoj(Q1, 0.002, 0.01, 300.0),
+        "servoj: gain = 50": lambda: motion.servoj(Q1, 0.002, 0.1, 50.0),
+        "servoj: time = -0.1": lambda: motion.servoj(Q1, -0.1, 0.1, 300.0),
+        "speedj: acceleration = 0": lambda: motion.speedj(np.zeros(6), 0.0),
+        "movej: speed = -1": lambda: motion.movej(Q1, -1.0, 1.0),
+    }
+    for what, call in refused.items():
+        with pytest.raises(CommandRefused, match=what):
+            call()
+    for _ in range(10):
+        motion.advance()
+    np.testing.assert_array_equal(motion.q, Q1)

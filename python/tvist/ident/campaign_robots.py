@@ -128,9 +128,12 @@ class TwinRobot:
 class URRobot:
     """A real UR e-Series arm through ur_rtde (``pip install ur-rtde``), imported lazily.
 
-    Each excitation: ``moveJ`` to the start pose, start RTDE file recording at 500 Hz, stand
+    Each excitation: ``moveJ`` to the start pose, start recording every RTDE package at 500 Hz
+    (:class:`tvist.live.RtdeRecorder`; ur_rtde's ``startFileRecording`` writes the latest
+    state on a timer of its own, so a late or early wake-up repeats or skips samples), stand
     still, run every bang-coast-bang move as ``moveJ(q, speed, acceleration)`` followed by the
-    wait, stop recording and read the log back with :func:`read_rtde_csv`.
+    wait, stop recording and read the log back with :func:`read_rtde_csv`. :meth:`close`
+    ends the control script.
 
     Make sure the workspace is clear: the campaign moves the arm through the whole workspace
     and jerks the base and shoulder. Payload changes are manual: :meth:`set_payload` declares
@@ -162,14 +165,14 @@ class URRobot:
     ) -> None:
         try:
             import rtde_control
-            import rtde_receive
         except ImportError as exc:  # pragma: no cover - needs the optional dependency
             raise ImportError(
                 "a real robot needs ur_rtde: pip install 'tvist[robot]' (or ur-rtde)"
             ) from exc
         self.robot_name = robot_name
         self._control = rtde_control.RTDEControlInterface(ip)
-        self._receive = rtde_receive.RTDEReceiveInterface(ip, frequency_hz)
+        self._ip = ip
+        self._frequency_hz = float(frequency_hz)
         self._log_dir = Path(log_dir or tempfile.mkdtemp(prefix="tvist-campaign-"))
         self._log_dir.mkdir(parents=True, exist_ok=True)
         self._confirm = confirm
@@ -184,24 +187,26 @@ class URRobot:
         self._control.setPayload(float(payload_kg), [float(v) for v in payload_com_m])
 
     def record_excitation(self, excitation: Excitation) -> Record:
+        from tvist.live import RtdeRecorder
+
         c = self._control
         c.moveJ(list(excitation.q0), 0.5, 0.5)
-        # The receive connection may still be a few packages behind the control connection
-        # that reported the move done: let it catch up so the log starts at rest.
-        time.sleep(0.1)
         path = self._log_dir / f"excitation_{self._count:04d}_joint{excitation.joint}.csv"
         self._count += 1
-        self._receive.startFileRecording(str(path), list(RECORDED_FIELDS))
-        try:
+        # The recording starts with the package after the move was reported done: at rest.
+        with RtdeRecorder(self._ip, path, RECORDED_FIELDS, self._frequency_hz):
             time.sleep(excitation.standstill_s)
             q = np.array(excitation.q0, dtype=float)
             for move in excitation.moves:
                 q[excitation.joint] = move.q_to_rad
                 c.moveJ(list(q), move.speed_rad_s, move.accel_rad_s2)
                 time.sleep(move.wait_s)
-        finally:
-            self._receive.stopFileRecording()
         return read_rtde_csv(path, resample=True)
+
+    def close(self) -> None:
+        """Stop the control script and disconnect."""
+        self._control.stopScript()
+        self._control.disconnect()
 
     def true_modes(self, q: np.ndarray) -> list[tuple[float, float]] | None:
         return None

@@ -49,6 +49,26 @@ if TYPE_CHECKING:
 #: (eq. 22 fitted around the rated torque) is not meant far beyond it.
 PAYLOAD_LIMIT_FACTOR = 1.5
 
+
+def check_payload_mass(params: robots.RobotParams, payload_kg, what: str = "payload_kg") -> float:
+    """``payload_kg`` as a float if the twin of ``params`` carries it:
+    ``0 <= payload_kg <= PAYLOAD_LIMIT_FACTOR * params.max_payload_kg``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``what``, if it is not finite or outside that range.
+    """
+    mass_kg = _finite_float(payload_kg, what)
+    limit_kg = PAYLOAD_LIMIT_FACTOR * params.max_payload_kg
+    if not 0.0 <= mass_kg <= limit_kg:
+        raise ValueError(
+            f"{what} = {mass_kg:g} is outside [0, {limit_kg:g}] kg "
+            f"({PAYLOAD_LIMIT_FACTOR:g} x the {params.name} rated payload)"
+        )
+    return mass_kg
+
+
 #: A reference may exceed the joint speed limits by this factor (finite differences of a
 #: profile that touches the limit overshoot it slightly; a jump in the reference does not).
 SPEED_LIMIT_MARGIN = 1.05
@@ -134,13 +154,7 @@ class Twin:
         import mujoco
 
         self._params = robots.params(robot_name)
-        mass_kg = _finite_float(payload_kg, "payload_kg")
-        limit_kg = PAYLOAD_LIMIT_FACTOR * self._params.max_payload_kg
-        if not 0.0 <= mass_kg <= limit_kg:
-            raise ValueError(
-                f"payload_kg = {mass_kg:g} is outside [0, {limit_kg:g}] kg "
-                f"({PAYLOAD_LIMIT_FACTOR:g} x the {robot_name} rated payload)"
-            )
+        mass_kg = check_payload_mass(self._params, payload_kg)
         self._payload = robots.Payload(mass_kg, tuple(payload_com_m), payload_inertia_kg_m2)
         self._flex = default_flex(robot_name) if flex is None else flex
         self._flex.validate(self._params.n_dof)

@@ -6,7 +6,8 @@ main loop does (the twin recognizes the program; it does not interpret URScript)
 
 - ``input_int_register_0`` holds the command id, ``input_int_register_1`` an integer argument
   (``async``), ``input_double_register_0..10`` the numeric arguments, all shifted by the
-  register offset the client injected (0, or 24 for the upper range).
+  register offset the client injected (0, or 24 for the upper range: the only two values
+  ur_rtde injects; a program with another is refused).
 - ``output_int_register_0`` is the script's state: 1 ready for a command, 2 done with it.
   Real-time commands (servoj, speedj, ...) are processed at once and answered "ready"; every
   other command is processed once (until the client writes command 0 again) and answered
@@ -15,8 +16,10 @@ main loop does (the twin recognizes the program; it does not interpret URScript)
   write counter, bits 24-30 the operation id).
 - Command 255 ends the program.
 
-A command the twin does not implement stops the program with an error, as a URScript runtime
-error stops a UR's program: the client sees the program stop and its call returns ``False``.
+A command the twin does not implement, or one with an argument outside URScript's range,
+stops the program with an error, as a URScript runtime error stops a UR's program: the client
+sees the program stop and its call returns ``False``. An argument that is not a finite number
+protective-stops the arm (:class:`~tvist.urserver.motion.SafetyViolation`).
 """
 
 from __future__ import annotations
@@ -28,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tvist.urserver.motion import JointMotion, SafetyViolation
+from tvist.urserver.motion import CommandRefused, JointMotion, SafetyViolation, finite_value
 
 log = logging.getLogger("tvist.urserver")
 
@@ -70,6 +73,8 @@ REALTIME_COMMANDS = frozenset({24, 11, 9, 10, 6, 25, 26, 27, 38, 58})
 SCRIPT_READY = 1
 SCRIPT_DONE = 2
 STOP_SCRIPT = 255
+#: Register offsets ur_rtde injects into the script: 0, or 24 with its upper-range flag.
+REGISTER_OFFSETS = (0, 24)
 
 
 def is_control_script(program: str) -> bool:
@@ -78,15 +83,25 @@ def is_control_script(program: str) -> bool:
 
 
 def register_offsets(program: str) -> tuple[int, int]:
-    """``(int_offset, float_offset)`` the client injected into the control script."""
+    """``(int_offset, float_offset)`` the client injected into the control script.
+
+    Raises
+    ------
+    ValueError
+        If one is missing or not one of :data:`REGISTER_OFFSETS`.
+    """
 
     def find(name: str) -> int:
         # The client injects the value after the comment that ends the line, so it
         # continues the assignment on the next line.
-        match = re.search(rf"global\s+{name}\s*=\s*(?:#[^\n]*\n)?\s*(\d+)", program)
+        match = re.search(rf"global\s+{name}\s*=\s*(?:#[^\n]*\n)?[ \t]*(\S+)", program)
         if match is None:
             raise ValueError(f"control script without a value for {name}")
-        return int(match.group(1))
+        text = match.group(1)
+        if text not in {str(offset) for offset in REGISTER_OFFSETS}:
+            allowed = " or ".join(str(offset) for offset in REGISTER_OFFSETS)
+            raise ValueError(f"control script with {name} = {text[:20]!r} (ur_rtde uses {allowed})")
+        return int(text)
 
     return find("reg_offset_int"), find("reg_offset_float")
 
@@ -209,6 +224,9 @@ class ControlScript:
             return
         try:
             blocking = handler(self)
+        except CommandRefused as exc:
+            self.fail(str(exc))
+            return
         except SafetyViolation as exc:
             self.fail(str(exc))
             raise
@@ -261,8 +279,8 @@ class ControlScript:
         return True
 
     def _set_payload(self) -> bool:
-        mass = self._in_double(0)
-        cog = [self._in_double(i) for i in (1, 2, 3)]
+        mass = finite_value(self._in_double(0), "set_payload: mass")
+        cog = [finite_value(self._in_double(i), "set_payload: cog") for i in (1, 2, 3)]
         self._set_payload(mass, None if cog == [0.0, 0.0, 0.0] else cog)
         return False
 

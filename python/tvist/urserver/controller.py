@@ -4,6 +4,11 @@ Each :meth:`TwinController.tick` runs one pass of the loaded program (ur_rtde's 
 script), advances the joint motion by one tick, moves the twin's motors to the new target over
 the tick (:class:`tvist.sim.plant.TwinPlant`) and returns the RTDE output values measured at
 the tick's start. Not thread-safe: the server calls it under its lock.
+
+Nothing a client commands stops the tick: a command's bad number protective-stops the arm or
+stops the program (see :mod:`tvist.urserver.motion`), and any other failure inside a tick
+protective-stops the arm where the tick started, with the reason in :attr:`last_error` and
+the log. The tick goes on publishing; dashboard ``unlock protective stop`` releases the arm.
 """
 
 from __future__ import annotations
@@ -16,6 +21,7 @@ import numpy as np
 
 from tvist.sim import SimulationDiverged, Twin
 from tvist.sim.plant import TwinPlant
+from tvist.sim.twin import check_payload_mass
 from tvist.urserver import rtde
 from tvist.urserver.control_script import (
     ControlScript,
@@ -23,7 +29,7 @@ from tvist.urserver.control_script import (
     is_control_script,
     register_offsets,
 )
-from tvist.urserver.motion import JointMotion, SafetyViolation
+from tvist.urserver.motion import CommandRefused, JointMotion, SafetyViolation
 
 log = logging.getLogger("tvist.urserver")
 
@@ -72,6 +78,10 @@ class TwinController:
         self.protective_stop = False
         self.payload_kg = float(twin.payload.mass_kg)
         self.payload_cog_m = [float(v) for v in twin.payload.com_m]
+        #: A declared payload's centre of gravity lies within the arm's reach of the flange
+        #: (m): farther out it is no payload the arm could carry.
+        self.payload_cog_limit_m = float(np.sum(np.abs(params.a_m)) + np.sum(np.abs(params.d_m)))
+        #: Why the last protective stop or program stop happened (None: none yet).
         self.last_error: str | None = None
         self._execution_ms = 0.0
         self._q_prev = self.plant.q_motor
@@ -97,7 +107,11 @@ class TwinController:
                 f"program {first[:60]!r} not run: the twin runs ur_rtde's control script "
                 "(RTDEControlInterface), not arbitrary URScript"
             )
-        int_offset, float_offset = register_offsets(program)
+        try:
+            int_offset, float_offset = register_offsets(program)
+        except ValueError as exc:
+            self.last_error = f"program not run: {exc}"
+            return self.last_error
         self.script = ControlScript(
             self.registers, self.motion, int_offset, float_offset, self._set_payload
         )
@@ -112,8 +126,10 @@ class TwinController:
         self._on_program_end()
 
     def _on_program_end(self) -> None:
-        if self.script is not None and self.script.error:
-            self.last_error = self.script.error
+        if self.script is not None:
+            if self.script.error:
+                self.last_error = self.script.error
+            self.script = None
         if self.motion.mode not in ("hold", "stop"):
             self.motion.stop(PROGRAM_STOP_DECEL_RAD_S2)
 
@@ -125,42 +141,80 @@ class TwinController:
         return True
 
     def _set_payload(self, mass_kg: float, cog_m: list[float] | None) -> None:
-        # A controller's set_payload declares the payload; the physical one is the twin's.
-        self.payload_kg = float(mass_kg)
+        """A controller's set_payload declares the payload (the physical one is the twin's).
+
+        Raises
+        ------
+        CommandRefused
+            A mass the twin could not carry or a centre of gravity beyond the arm's reach.
+        """
+        try:
+            mass = check_payload_mass(self.twin.params, mass_kg, "set_payload: mass")
+        except ValueError as exc:
+            raise CommandRefused(str(exc)) from None
         if cog_m is not None:
+            distance = float(np.linalg.norm(cog_m))
+            if not distance <= self.payload_cog_limit_m:
+                raise CommandRefused(
+                    f"set_payload: centre of gravity {distance:g} m from the flange, beyond "
+                    f"the arm's reach {self.payload_cog_limit_m:g} m"
+                )
             self.payload_cog_m = [float(v) for v in cog_m]
+        self.payload_kg = mass
 
     # ------------------------------------------------------------------ tick
 
     def tick(self) -> dict:
         """Advance one controller tick; the RTDE output values at the tick's start."""
         t0 = time.perf_counter()
-        script = self.script
-        if script is not None and script.running:
-            try:
-                script.tick()
-            except SafetyViolation as exc:
-                self._protective_stop(str(exc))
-            if not script.running:
-                self._on_program_end()
         q_start = self.motion.q.copy()
         qd_start, qdd_start = self.motion.qd.copy(), self.motion.qdd.copy()
         try:
+            self._run_program()
             q_next = self.motion.advance()
         except SafetyViolation as exc:
             self._protective_stop(str(exc))
             q_next = self.motion.q.copy()
-        try:
-            sample = self.plant.step(q_next)
-        except SimulationDiverged as exc:  # pragma: no cover - needs an impossible motion
-            log.error("%s: the twin restarts at rest", exc)
-            self.plant = TwinPlant(self.twin, q_start, self.dt_s)
-            self.motion.hold()
-            self._protective_stop(str(exc))
-            sample = self.plant.step(q_start)
+        except Exception as exc:  # a fault of the twin's own must not end the tick
+            log.exception("controller fault")
+            self.motion.hold_at(q_start)
+            self._protective_stop(f"controller fault: {exc!r}")
+            q_next = q_start
+        sample = self._step_plant(q_start, q_next)
         values = self._outputs(sample, q_start, qd_start, qdd_start)
         self._execution_ms = (time.perf_counter() - t0) * 1e3
         return values
+
+    def _run_program(self) -> None:
+        script = self.script
+        if script is None or not script.running:
+            return
+        try:
+            script.tick()
+        finally:
+            if not script.running:
+                self._on_program_end()
+
+    def _step_plant(self, q_start: np.ndarray, q_next: np.ndarray):
+        """Step the twin to ``q_next``; if it fails, restart it at rest at ``q_start`` (a
+        finite pose within the limits: the motion's invariant) and protective-stop."""
+        try:
+            return self.plant.step(q_next)
+        except Exception as exc:
+            if isinstance(exc, SimulationDiverged):
+                reason = str(exc)
+            else:
+                log.exception("twin step failed")
+                reason = f"twin step failed: {exc!r}"
+            log.error("%s: the twin restarts at rest", reason)
+            self.plant = TwinPlant(self.twin, q_start, self.dt_s)
+            self.motion.hold_at(q_start)
+            self._protective_stop(reason)
+            return self.plant.step(q_start)
+
+    def fault(self, reason: str) -> None:
+        """Protective-stop for a failure outside :meth:`tick` (the server's own)."""
+        self._protective_stop(reason)
 
     def _protective_stop(self, reason: str) -> None:
         log.error("protective stop: %s", reason)
@@ -168,6 +222,7 @@ class TwinController:
         self.last_error = reason
         if self.script is not None and self.script.running:
             self.script.fail(reason)
+        self.script = None
         self.motion.hold()
 
     def _outputs(self, sample, q, qd, qdd) -> dict:

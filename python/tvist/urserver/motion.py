@@ -17,19 +17,69 @@ acceleration ``qdd`` (rad/s²). Modes, as URScript's functions:
 - ``speedj(qd, a)``: every joint speed ramps to ``qd`` at acceleration ``a`` and keeps it.
 - ``stopj(a)``: all joints decelerate together (the fastest at ``a``) and stop.
 
-Every mode clips the joint speed to the robot's limits; a target outside the joint limits
-raises :class:`SafetyViolation` (a UR protective-stops).
+Every mode clips the joint speed to the robot's limits (``movej`` clips its ``v`` and ``a`` so
+that no joint exceeds its speed limit nor reaches it in less than one tick). Every number a
+command takes is checked: one that is not finite, or a target outside the joint limits, raises
+:class:`SafetyViolation` (a UR protective-stops); a finite one outside the range URScript
+allows raises :class:`CommandRefused` (a UR stops the program with a runtime error). The
+joint target is finite at every tick (an invariant :meth:`JointMotion.advance` checks).
 """
 
 from __future__ import annotations
 
+import logging
 import math
 
 import numpy as np
 
+log = logging.getLogger("tvist.urserver")
+
+#: servoj's ``lookahead_time`` (s) and ``gain`` (1/s) ranges (URScript manual).
+SERVO_LOOKAHEAD_RANGE_S = (0.03, 0.2)
+SERVO_GAIN_RANGE = (100.0, 2000.0)
+
 
 class SafetyViolation(RuntimeError):
-    """A commanded motion would leave the joint limits (the controller protective-stops)."""
+    """A commanded motion would leave the joint limits, or a command's number is not finite
+    (the controller protective-stops)."""
+
+
+class CommandRefused(ValueError):
+    """A command's argument is outside the range URScript allows (the program stops with a
+    runtime error; the arm decelerates as at any program stop)."""
+
+
+def finite_value(value, what: str) -> float:
+    """``value`` as a float; :class:`SafetyViolation` naming ``what`` if it is not finite."""
+    number = float(value)
+    if not math.isfinite(number):
+        raise SafetyViolation(f"{what} is {number} (not a finite number)")
+    return number
+
+
+def value_in_range(value, what: str, lower: float, upper: float) -> float:
+    """``value`` as a float within ``[lower, upper]``.
+
+    Raises
+    ------
+    SafetyViolation
+        If it is not finite.
+    CommandRefused
+        If it is outside the range.
+    """
+    number = finite_value(value, what)
+    if not lower <= number <= upper:
+        raise CommandRefused(f"{what} = {number:g} is outside [{lower:g}, {upper:g}]")
+    return number
+
+
+def positive_value(value, what: str) -> float:
+    """``value`` as a finite float > 0 (:class:`SafetyViolation` if not finite,
+    :class:`CommandRefused` if <= 0)."""
+    number = finite_value(value, what)
+    if not number > 0.0:
+        raise CommandRefused(f"{what} = {number:g} must be > 0")
+    return number
 
 
 def trapezoid_duration(distance: float, v_max: float, a_max: float) -> tuple[float, float]:
@@ -112,34 +162,60 @@ class JointMotion:
 
     def movej(self, q, speed_rad_s: float, accel_rad_s2: float) -> None:
         """Start a movej from the current target (a UR blends nothing here: from rest or not,
-        the profile starts at the current target)."""
+        the profile starts at the current target).
+
+        The leading joint's ``speed_rad_s`` and ``accel_rad_s2`` are clipped (with a warning
+        in the log) so that every joint, moving in proportion, stays within its speed limit
+        and takes at least one tick to reach it.
+        """
         target = self._check_target(q, "movej")
-        if not (speed_rad_s > 0.0 and accel_rad_s2 > 0.0):
-            raise SafetyViolation("movej: speed and acceleration must be > 0")
+        speed = positive_value(speed_rad_s, "movej: speed")
+        accel = positive_value(accel_rad_s2, "movej: acceleration")
+        way = np.abs(target - self.q)
+        distance = float(np.max(way))
+        if distance > 0.0:
+            # Joint j moves way[j] / distance of the leading joint's way: its speed limit
+            # bounds the leading joint's speed by max_speed[j] * distance / way[j].
+            moving = way > 0.0
+            speed_limit = float(np.min(self._max_speed[moving] * distance / way[moving]))
+            accel_limit = speed_limit / self.dt_s
+            if speed > speed_limit or accel > accel_limit:
+                log.warning(
+                    "movej: speed %g rad/s, acceleration %g rad/s² clipped to the joint "
+                    "limits (%g rad/s, %g rad/s²)",
+                    speed,
+                    accel,
+                    min(speed, speed_limit),
+                    min(accel, accel_limit),
+                )
+            speed, accel = min(speed, speed_limit), min(accel, accel_limit)
         self._move_from = self.q.copy()
         self._move_to = target
-        distance = float(np.max(np.abs(target - self.q)))
-        self._move_duration, self._move_speed = trapezoid_duration(
-            distance, speed_rad_s, accel_rad_s2
-        )
-        self._move_accel = accel_rad_s2
+        self._move_duration, self._move_speed = trapezoid_duration(distance, speed, accel)
+        self._move_accel = accel
         self._move_distance = distance
         self._move_t = 0.0
         self.mode = "movej"
 
     def servoj(self, q, time_s: float, lookahead_s: float, gain: float) -> None:
-        """New servo target ``q`` (rad), reached by the target ramp within ``time_s``."""
+        """New servo target ``q`` (rad), reached by the target ramp within ``time_s`` (at
+        least one tick); ``lookahead_s`` and ``gain`` in URScript's ranges."""
         target = self._check_target(q, "servoj")
+        ramp_s = finite_value(time_s, "servoj: time")
+        if ramp_s < 0.0:
+            raise CommandRefused(f"servoj: time = {ramp_s:g} s must be >= 0")
+        lookahead = value_in_range(lookahead_s, "servoj: lookahead_time", *SERVO_LOOKAHEAD_RANGE_S)
+        gain = value_in_range(gain, "servoj: gain", *SERVO_GAIN_RANGE)
         if self.mode != "servoj":
             self._servo_ref = self.q.copy()
             self._servo_to = self.q.copy()
         ramp_now = self._servo_ramp_value()
         self._servo_from = ramp_now
         self._servo_to = target
-        self._servo_ramp_s = max(float(time_s), self.dt_s)
+        self._servo_ramp_s = max(ramp_s, self.dt_s)
         self._servo_elapsed = 0.0
-        self._lookahead_s = min(max(float(lookahead_s), 0.03), 0.2)
-        self._gain = min(max(float(gain), 100.0), 2000.0)
+        self._lookahead_s = lookahead
+        self._gain = gain
         self.mode = "servoj"
 
     def speedj(self, qd, accel_rad_s2: float) -> None:
@@ -147,18 +223,20 @@ class JointMotion:
         target = np.asarray(qd, dtype=float)
         if target.shape != self.q.shape or not np.all(np.isfinite(target)):
             raise SafetyViolation(f"speedj: speeds must be {self.q.size} finite values")
+        accel = positive_value(accel_rad_s2, "speedj: acceleration")
         if self.mode not in ("speedj", "stop"):
             self._vel = self.qd.copy()
         self._speed_target = np.clip(target, -self._max_speed, self._max_speed)
-        self._accel = max(float(accel_rad_s2), 1e-6)
+        self._accel = accel
         self.mode = "speedj"
 
     def stop(self, accel_rad_s2: float) -> None:
         """Decelerate all joints together to rest (the fastest at ``accel_rad_s2``)."""
+        accel = positive_value(accel_rad_s2, "stop: deceleration")
         if self.mode not in ("speedj", "stop"):
             self._vel = self.qd.copy()  # stop from the target's current speed
         self._speed_target = np.zeros_like(self.q)
-        self._accel = max(float(accel_rad_s2), 1e-6)
+        self._accel = accel
         self.mode = "stop"
 
     def hold(self) -> None:
@@ -166,6 +244,11 @@ class JointMotion:
         self.qd[:] = 0.0
         self.qdd[:] = 0.0
         self.mode = "hold"
+
+    def hold_at(self, q: np.ndarray) -> None:
+        """Stand still at ``q`` (rad, finite): the state after a fault left it unknown."""
+        self.q = np.array(q, dtype=float)
+        self.hold()
 
     # ----------------------------------------------------------------- tick
 
@@ -217,14 +300,15 @@ class JointMotion:
             self._vel = vel_new
             if self.mode == "stop" and not np.any(vel_new):
                 self.mode = "hold"
+        if not np.all(np.isfinite(self.q)):
+            mode = self.mode
+            self.hold_at(q_old)
+            raise SafetyViolation(f"{mode}: the joint target is not finite")
         lower, upper = self._limits.T
         outside = np.flatnonzero((self.q < lower) | (self.q > upper))
         if outside.size:
             j = int(outside[0])
-            self.q = q_old
-            self.qd[:] = 0.0
-            self.qdd[:] = 0.0
-            self.mode = "hold"
+            self.hold_at(q_old)
             raise SafetyViolation(f"joint {j} reached its position limit")
         self.qd = (self.q - q_old) / dt
         self.qdd = (self.qd - qd_old) / dt

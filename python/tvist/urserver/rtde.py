@@ -161,6 +161,8 @@ class Recipe:
         self.names = names
         self.types = types
         self.struct = struct.Struct(">B" + "".join(TYPE_FORMATS[t] for t in types))
+        #: Recipes with equal keys pack equal values into equal packages.
+        self.key = (recipe_id, *names)
 
     def pack(self, values: dict) -> bytes:
         """The data package of ``values`` (a name -> value or sequence mapping)."""

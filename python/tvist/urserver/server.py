@@ -6,6 +6,15 @@ controller to the wall clock at its 2 ms tick and publishes RTDE data packages; 
 connection has its own thread. A client's mistake (a malformed package, an unknown variable,
 a register another client owns, a dropped connection) is answered or closes that connection
 only; the server and the arm go on.
+
+Every resource a client can make the server hold is bounded: simultaneous connections
+(:data:`MAX_CLIENTS`), a dashboard line (:data:`DASHBOARD_MAX_LINE_BYTES`), a program on a
+script port (:data:`MAX_PROGRAM_BYTES`), recipes per RTDE connection (:data:`MAX_RECIPES`,
+ids are one byte) and the variable names of one (:data:`MAX_RECIPE_NAMES_BYTES`), a reply
+(one package), the data queued for a subscriber (:data:`SEND_BUFFER_BYTES` in the kernel,
+the rest of one package in the server: a subscriber that does not read loses packages, the
+clock does not wait for it) and a blocked send (:data:`SEND_TIMEOUT_S`). A connection's
+thread and buffers are freed when it closes.
 """
 
 from __future__ import annotations
@@ -43,6 +52,26 @@ TICK_PRIORITY = 20
 #: one and the simulated time slips behind the wall clock instead; the twin's physics and
 #: the published timestamps follow the simulated time.
 CLIENT_RESPONSE_S = 0.001
+#: Pending connections the kernel queues per port before the server accepts them.
+LISTEN_BACKLOG = 64
+#: Simultaneous client connections over all ports; more are closed at once. Far below the
+#: process's file limit, so accepting never runs out of files.
+MAX_CLIENTS = 256
+#: A send to a client that does not read blocks its connection's thread this long at most
+#: (s); then that connection is closed.
+SEND_TIMEOUT_S = 10.0
+#: The kernel's send queue of a client connection (bytes; Linux doubles it): ~0.1 s of
+#: ur_rtde's default recipe at 500 Hz, so a subscriber that stops reading is found out (and
+#: costs the tick nothing) within a fraction of a second, not after megabytes.
+SEND_BUFFER_BYTES = 1 << 16
+#: Longest dashboard command (bytes, newline excluded); a longer line is refused unread.
+DASHBOARD_MAX_LINE_BYTES = 4096
+#: Largest program a script port buffers (bytes); ur_rtde's control script is 42 kB.
+MAX_PROGRAM_BYTES = 1 << 20
+#: Recipes per RTDE connection and direction: ids are one byte and 0 marks a failure.
+MAX_RECIPES = 255
+#: Variable names of one recipe setup (bytes; the limit of UR's RTDE guide).
+MAX_RECIPE_NAMES_BYTES = 2048
 
 
 @dataclass
@@ -76,24 +105,47 @@ class _RtdeSession:
     send_lock: threading.Lock = field(default_factory=threading.Lock)
 
     def send(self, data: bytes) -> None:
+        """Send a reply (blocking), after the rest of a data package the socket did not take
+        at once: packages never interleave."""
         with self.send_lock:
+            if self.pending:
+                self.sock.sendall(self.pending)
+                self.pending = b""
             self.sock.sendall(data)
 
+    def ready(self) -> bool:
+        """Whether a data package can go out now without blocking the tick: nothing else is
+        sending on this connection and the rest of the previous package has left (if the
+        client is not reading, this tick's packages are dropped, never queued)."""
+        if not self.send_lock.acquire(blocking=False):
+            return False  # a reply is being sent: never wait for it
+        try:
+            if self.pending:
+                sent = self.sock.send(self.pending, socket.MSG_DONTWAIT)
+                self.pending = self.pending[sent:]
+            return not self.pending
+        except BlockingIOError:
+            return False
+        except OSError:
+            self.started = False
+            return False
+        finally:
+            self.send_lock.release()
+
     def publish(self, data: bytes) -> None:
-        """Queue a data package without blocking the tick; drop it if the client lags."""
-        with self.send_lock:
-            try:
-                if self.pending:
-                    sent = self.sock.send(self.pending, socket.MSG_DONTWAIT)
-                    self.pending = self.pending[sent:]
-                    if self.pending:
-                        return  # the client is not reading: drop this package
-                sent = self.sock.send(data, socket.MSG_DONTWAIT)
-                self.pending = data[sent:]
-            except BlockingIOError:
-                return
-            except OSError:
-                self.started = False
+        """Send a data package without blocking the tick (after :meth:`ready`); what the
+        socket does not take at once is kept and sent before the next package."""
+        if not self.send_lock.acquire(blocking=False):
+            return
+        try:
+            sent = self.sock.send(data, socket.MSG_DONTWAIT)
+            self.pending = data[sent:]
+        except BlockingIOError:
+            pass
+        except OSError:
+            self.started = False
+        finally:
+            self.send_lock.release()
 
 
 class TwinServer:
@@ -119,7 +171,9 @@ class TwinServer:
         self._sessions: list[_RtdeSession] = []
         self._owners: dict[str, _RtdeSession] = {}  # input variable -> session owning it
         self._listeners: list[socket.socket] = []
-        self._threads: list[threading.Thread] = []
+        self._threads: list[threading.Thread] = []  # the tick and the accept loops
+        self._clients: set[socket.socket] = set()  # open client connections
+        self._clients_lock = threading.Lock()
         self._stop = threading.Event()
         #: Ticks that ran late and delayed the next one (the simulated time slipped).
         self.late_ticks = 0
@@ -149,7 +203,7 @@ class TwinServer:
                     f"port {port} on {self.host} is in use ({exc.strerror}); stop whatever "
                     "listens there (another twin server, URSim, a robot driver)"
                 ) from None
-            sock.listen(8)
+            sock.listen(LISTEN_BACKLOG)
             self._listeners.append(sock)
         for sock in self._listeners:
             port = sock.getsockname()[1]
@@ -169,8 +223,10 @@ class TwinServer:
                 sock.close()
             except OSError:
                 pass
-        for session in list(self._sessions):
-            _close(session.sock)
+        with self._clients_lock:
+            clients = list(self._clients)
+        for conn in clients:
+            _close(conn)
 
     def serve_forever(self) -> None:
         """Block until :meth:`close` (or Ctrl-C)."""
@@ -187,36 +243,79 @@ class TwinServer:
             log.info("the tick runs without real-time priority (not permitted here)")
         dt = self.controller.dt_s
         deadline = time.perf_counter()
+        failing = False  # the previous tick failed (a streak of failures is logged once)
         while not self._stop.is_set():
-            with self._lock:
-                try:
-                    values = self.controller.tick()
-                except Exception:  # the tick must survive anything a client commanded
-                    log.exception("controller tick failed")
-                    values = None
-                sessions = [s for s in self._sessions if s.started] if values else []
-            for session in sessions:
-                session.phase += session.frequency_hz * dt
-                if session.phase >= 1.0 - 1e-9:
-                    session.phase -= 1.0
-                    for recipe in session.outputs:
-                        if recipe.recipe_id:
-                            session.publish(recipe.pack(values))
+            try:
+                self._tick(dt)
+                failing = False
+            except Exception as exc:  # the tick must survive anything
+                if not failing:
+                    log.exception("tick failed")
+                failing = True
+                with self._lock:
+                    self.controller.fault(f"server fault: {exc!r}")
             published = time.perf_counter()
             deadline, late = next_tick_deadline(deadline, published, dt)
             self.late_ticks += late
-            time.sleep(deadline - published)
+            time.sleep(max(deadline - published, 0.0))
+
+    def _tick(self, dt: float) -> None:
+        """One controller tick and its data packages."""
+        with self._lock:
+            values = self.controller.tick()
+            sessions = [s for s in self._sessions if s.started]
+        packed: dict[tuple, bytes] = {}  # one packing per recipe, however many subscribers
+        for session in sessions:
+            session.phase += session.frequency_hz * dt
+            if session.phase < 1.0 - 1e-9:
+                continue
+            session.phase -= 1.0
+            if not session.ready():
+                continue  # a subscriber that does not read costs no packing
+            for recipe in session.outputs:
+                try:
+                    data = packed.get(recipe.key)
+                    if data is None:
+                        data = packed[recipe.key] = recipe.pack(values)
+                except Exception:  # a recipe that cannot be packed ends its stream only
+                    log.exception("RTDE %s: output recipe %d", session.address, recipe.recipe_id)
+                    session.started = False
+                    break
+                session.publish(data)
 
     # ------------------------------------------------------------------ accepting
 
     def _accept_loop(self, listener: socket.socket, handler) -> None:
+        port = listener.getsockname()[1]
         while not self._stop.is_set():
             try:
                 conn, address = listener.accept()
-            except OSError:
-                return
-            conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            self._spawn(self._guard, handler, conn, f"{address[0]}:{address[1]}", name="client")
+            except OSError as exc:
+                if self._stop.is_set():
+                    return
+                log.error("accept on port %d failed (%s)", port, exc)
+                self._stop.wait(0.05)  # e.g. out of files: retry, never give the port up
+                continue
+            name = f"{address[0]}:{address[1]}"
+            with self._clients_lock:
+                full = len(self._clients) >= MAX_CLIENTS
+                if not full:
+                    self._clients.add(conn)
+            if full:
+                log.warning("%s refused: %d connections are open", name, MAX_CLIENTS)
+                _close(conn)
+                continue
+            try:
+                conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+                conn.setsockopt(socket.SOL_SOCKET, socket.SO_SNDTIMEO, _timeval(SEND_TIMEOUT_S))
+                conn.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SEND_BUFFER_BYTES)
+                # Not kept: the thread ends with its connection and leaves nothing behind.
+                threading.Thread(
+                    target=self._guard, args=(handler, conn, name), name="client", daemon=True
+                ).start()
+            except Exception:  # no thread for it (out of resources): refuse this one
+                log.exception("client %s refused", name)
+                self._forget(conn)
 
     def _guard(self, handler, conn: socket.socket, address: str) -> None:
         try:
@@ -226,7 +325,13 @@ class TwinServer:
         except Exception:  # a client must never take the server down
             log.exception("client %s: handler failed", address)
         finally:
-            _close(conn)
+            self._forget(conn)
+
+    def _forget(self, conn: socket.socket) -> None:
+        """Close a client connection and drop the server's reference to it."""
+        _close(conn)
+        with self._clients_lock:
+            self._clients.discard(conn)
 
     # ------------------------------------------------------------------ RTDE
 
@@ -265,12 +370,13 @@ class TwinServer:
         elif kind == rtde.GET_URCONTROL_VERSION:
             session.send(rtde.package(kind, struct.pack(">IIII", *CONTROLLER_VERSION)))
         elif kind == rtde.CONTROL_PACKAGE_SETUP_OUTPUTS:
-            session.send(rtde.package(kind, self._setup_outputs(session, payload)))
+            session.send(_setup_reply(session, kind, self._setup_outputs(session, payload)))
         elif kind == rtde.CONTROL_PACKAGE_SETUP_INPUTS:
-            session.send(rtde.package(kind, self._setup_inputs(session, payload)))
+            session.send(_setup_reply(session, kind, self._setup_inputs(session, payload)))
         elif kind == rtde.CONTROL_PACKAGE_START:
-            ok = any(r.recipe_id for r in session.outputs) or bool(session.inputs)
-            session.phase = 1.0  # first package at the next tick
+            ok = bool(session.outputs) or bool(session.inputs)
+            # First package at the next tick, then one every 1 / frequency.
+            session.phase = 1.0 - session.frequency_hz * self.controller.dt_s
             session.started = ok
             session.send(rtde.package(kind, bytes([int(ok)])))
         elif kind == rtde.CONTROL_PACKAGE_PAUSE:
@@ -284,19 +390,27 @@ class TwinServer:
     def _setup_outputs(self, session: _RtdeSession, payload: bytes) -> bytes:
         if len(payload) < 8:
             return b"\x00" + b"NOT_FOUND"
+        refusal = _recipe_refusal(len(session.outputs), len(payload) - 8)
+        if refusal:
+            session.send(rtde.text_message(refusal))
+            return b"\x00"
         frequency = struct.unpack(">d", payload[:8])[0]
         names = rtde.split_names(payload[8:])
         types = [rtde.OUTPUTS.get(n, "NOT_FOUND") for n in names]
         valid = bool(names) and "NOT_FOUND" not in types and 0.0 < frequency <= MAX_FREQUENCY_HZ
         if not 0.0 < frequency <= MAX_FREQUENCY_HZ:
             session.send(rtde.text_message(f"output frequency {frequency:g} Hz not in (0, 500] Hz"))
-        recipe_id = len([r for r in session.outputs if r.recipe_id]) + 1 if valid else 0
+        recipe_id = len(session.outputs) + 1 if valid else 0
         if valid:
             session.outputs.append(rtde.Recipe(recipe_id, names, types))
             session.frequency_hz = frequency
         return bytes([recipe_id]) + ",".join(types).encode()
 
     def _setup_inputs(self, session: _RtdeSession, payload: bytes) -> bytes:
+        refusal = _recipe_refusal(len(session.inputs), len(payload))
+        if refusal:
+            session.send(rtde.text_message(refusal))
+            return b"\x00"
         names = rtde.split_names(payload)
         with self._lock:
             types = []
@@ -341,15 +455,26 @@ class TwinServer:
 
     def _serve_dashboard(self, conn: socket.socket, address: str) -> None:
         conn.sendall(b"Connected: Universal Robots Dashboard Server\n")
-        reader = conn.makefile("rb")
-        for raw in reader:
-            command = raw.decode(errors="replace").strip()
-            if not command:
-                continue
-            reply, close = self._dashboard_reply(command)
-            conn.sendall(reply.encode() + b"\n")
-            if close:
-                return
+        limit = DASHBOARD_MAX_LINE_BYTES + 1  # with the newline
+        with conn.makefile("rb") as reader:
+            while True:
+                raw = reader.readline(limit)
+                if not raw:
+                    return
+                if not raw.endswith(b"\n") and len(raw) == limit:
+                    while raw and not raw.endswith(b"\n"):  # skip the rest, unbuffered
+                        raw = reader.readline(limit)
+                    log.warning("dashboard %s: a line over %d bytes refused", address, limit - 1)
+                    reply = f"could not understand: a command longer than {limit - 1} bytes"
+                    conn.sendall(reply.encode() + b"\n")
+                    continue
+                command = raw.decode(errors="replace").strip()
+                if not command:
+                    continue
+                reply, close = self._dashboard_reply(command)
+                conn.sendall(reply.encode() + b"\n")
+                if close:
+                    return
 
     def _dashboard_reply(self, command: str) -> tuple[str, bool]:
         c = self.controller
@@ -371,6 +496,8 @@ class TwinServer:
             if lower == "safetystatus":
                 status = "PROTECTIVE_STOP" if c.protective_stop else "NORMAL"
                 return f"Safetystatus: {status}", False
+            if lower == "get last error":  # the twin's own: what a UR shows in a popup
+                return f"Last error: {c.last_error or 'none'}", False
             if lower == "running":
                 return f"Program running: {'true' if running else 'false'}", False
             if lower == "programstate":
@@ -413,6 +540,9 @@ class TwinServer:
             if not data:
                 return
             buffer += data.decode(errors="replace")
+            if len(buffer) > MAX_PROGRAM_BYTES:
+                log.error("script port %s: a program over %d bytes, closing", address, len(buffer))
+                return
             while True:
                 program, buffer = _split_program(buffer)
                 if program is None:
@@ -421,6 +551,27 @@ class TwinServer:
                     error = self.controller.load_program(program)
                 if error:
                     log.error("script port %s: %s", address, error)
+
+
+def _recipe_refusal(n_recipes: int, names_bytes: int) -> str | None:
+    """Why a recipe setup is refused (None: it is not), given the connection's recipes so
+    far and the size of the variable names asked for."""
+    if n_recipes >= MAX_RECIPES:
+        return f"recipe refused: a connection has at most {MAX_RECIPES} recipes"
+    if names_bytes > MAX_RECIPE_NAMES_BYTES:
+        return (
+            f"recipe refused: {names_bytes} bytes of variable names "
+            f"(at most {MAX_RECIPE_NAMES_BYTES})"
+        )
+    return None
+
+
+def _setup_reply(session: _RtdeSession, kind: int, reply: bytes) -> bytes:
+    """The setup reply package, or a failed one (recipe id 0) if it would not fit in one."""
+    if rtde.HEADER.size + len(reply) > rtde.MAX_PACKAGE_BYTES:
+        session.send(rtde.text_message("recipe refused: its reply does not fit in a package"))
+        return rtde.package(kind, b"\x00")
+    return rtde.package(kind, reply)
 
 
 def _split_program(buffer: str) -> tuple[str | None, str]:
@@ -461,6 +612,11 @@ def _realtime(priority: int) -> bool:
     except (AttributeError, OSError):
         return False
     return True
+
+
+def _timeval(seconds: float) -> bytes:
+    """A ``struct timeval`` for the socket time-out options."""
+    return struct.pack("ll", int(seconds), int((seconds % 1.0) * 1e6))
 
 
 def _recv_exact(conn: socket.socket, n: int) -> bytes | None:
