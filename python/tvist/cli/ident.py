@@ -49,14 +49,15 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     from tvist.ident.results_store import SettingsMismatch
 
     if args.variant:
-        from tvist.sim.variants import VARIANTS
+        from tvist.sim.variants import variant_robot
 
         if args.robot_ip:
             return _error("campaign", "--variant selects a twin: use it with --sim")
-        if args.variant not in VARIANTS:
-            return _error("campaign", f"--variant: unknown, known: {', '.join(VARIANTS)}")
-        if VARIANTS[args.variant][0] != args.robot:
-            robot_of = VARIANTS[args.variant][0]
+        try:
+            robot_of = variant_robot(args.variant)
+        except ValueError as exc:
+            return _error("campaign", f"--variant: {exc}")
+        if robot_of != args.robot:
             return _error(
                 "campaign", f"--variant {args.variant} is a {robot_of}: add --robot {robot_of}"
             )
@@ -141,7 +142,8 @@ def add_campaign_command(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--variant",
         help="with --sim: a twin variant whose flexibility the maps do not model exactly "
-        "(ur5e-soft-gears, ur5e-flex-links)",
+        "(ur5e-soft-gears, ur5e-flex-links, or family:ROBOT:SEED, e.g. family:ur5e:17, "
+        "one arm of a seeded family of plausible UR5e/UR10e variants)",
     )
     p.add_argument(
         "--payloads", type=float, nargs="+", default=[0.0, 1.0, 3.0, 5.0], help="payloads (kg)"

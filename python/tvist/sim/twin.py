@@ -425,6 +425,16 @@ class Twin:
         self._mujoco.mj_fullM(self._model, d, out)
         return out
 
+    def flange_jacobian(self, state: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Translational Jacobian of the flange (m/rad) in the base frame at the full
+        link-side ``state`` (:meth:`equilibrium_state`), ``(3, n_state)``."""
+        d = self._data
+        d.qpos[:] = np.asarray(state, dtype=float)
+        self._mujoco.mj_forward(self._model, d)
+        jac = np.zeros((3, self.n_state))
+        self._mujoco.mj_jacSite(self._model, d, jac, None, self._flange)
+        return jac
+
     # ------------------------------------------------------------------ run
 
     def _check_trajectory(self, q_ref: np.ndarray | Sequence[Sequence[float]]) -> np.ndarray:
