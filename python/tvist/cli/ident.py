@@ -393,7 +393,13 @@ def _cmd_fit_map(args: argparse.Namespace) -> int:
             **stats["frequency"]["coefficients"],
             **stats["damping"]["coefficients"],
         }
-        text = ", ".join(f"{k} = {v['value']:.4g} ± {v['se']:.2g}" for k, v in coefficients.items())
+        at_bound = stats["frequency"]["at_bound"] + stats["damping"]["at_bound"]
+        text = ", ".join(
+            f"{k} = {v['value']:.4g} (at bound >= 0)"
+            if k in at_bound
+            else f"{k} = {v['value']:.4g} ± {v['se']:.2g}"
+            for k, v in coefficients.items()
+        )
         print(
             f"{name} mode ({stats['n_poses']} poses, frequency from J_{stats['frequency_joint']}):"
         )
@@ -428,9 +434,10 @@ def add_fit_map_command(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--k0",
         type=float,
-        default=10000.0,
-        help="stiffness at zero inertia, N m/rad (fixes the scale of the stiffness terms; "
-        "default 10000)",
+        default=None,
+        help="fix the stiffness at zero inertia k_0 at this value, N m/rad (the paper's "
+        "reduced map uses 10000); default: estimated with k_J and k_p (k_0 is not a scale: "
+        "the k_p k_0/J² term of ω_n² determines it)",
     )
     p.add_argument(
         "--kind",
