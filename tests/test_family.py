@@ -42,15 +42,14 @@ def test_a_seed_always_gives_the_same_arm() -> None:
             assert x.freq_hz == y.freq_hz and x.zeta == y.zeta
             np.testing.assert_array_equal(x.flange_direction, y.flange_direction)
     # The two robots' families are independent draws, not the same factors twice.
-    assert sample_variant("ur5e", 17).stiffness_factor != sample_variant("ur10e", 17).stiffness_factor
+    ur5e, ur10e = sample_variant("ur5e", 17), sample_variant("ur10e", 17)
+    assert ur5e.stiffness_factor != ur10e.stiffness_factor
 
 
 @pytest.mark.parametrize("robot", ROBOTS)
 def test_drawn_parameters_stay_in_their_ranges(robot: str) -> None:
     nominal = default_flex(robot)
-    softest_elbow = (
-        SOFTEST_ELBOW_OF_SHOULDER * nominal.k1_nm_per_rad[1] / nominal.k1_nm_per_rad[2]
-    )
+    softest_elbow = SOFTEST_ELBOW_OF_SHOULDER * nominal.k1_nm_per_rad[1] / nominal.k1_nm_per_rad[2]
     n_beams = 0
     elbow = []
     for seed in DEVELOPMENT_SEEDS:

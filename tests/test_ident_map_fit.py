@@ -411,8 +411,10 @@ def test_k0_is_identified_not_a_scale():
             assert abs(mode[key] - true[key]) < 3 * se, (key, mode[key], true[key], se)
         assert st["frequency"]["rms_relative_error"] < 0.0115  # the 1 % noise
     guessed = [fit_map(poses, k_0=k) for k in (10000.0, 20000.0, 40000.0)]
-    rms = [[st["frequency"]["rms_relative_error"] for st in g.metadata["fit_statistics"]["modes"]]
-           for g in guessed]
+    rms = [
+        [st["frequency"]["rms_relative_error"] for st in g.metadata["fit_statistics"]["modes"]]
+        for g in guessed
+    ]
     # Base (true 25000): the misfit of a wrong fixed k_0 grows with the distance to the truth.
     assert rms[0][0] > rms[1][0] and rms[2][0] > rms[1][0]
     # Shoulder (true 4000): every guess is too stiff, and the misfit shows it.
