@@ -394,12 +394,15 @@ def _cmd_fit_map(args: argparse.Namespace) -> int:
             **stats["damping"]["coefficients"],
         }
         at_bound = stats["frequency"]["at_bound"] + stats["damping"]["at_bound"]
-        text = ", ".join(
-            f"{k} = {v['value']:.4g} (at bound >= 0)"
-            if k in at_bound
-            else f"{k} = {v['value']:.4g} ± {v['se']:.2g}"
-            for k, v in coefficients.items()
-        )
+
+        def coefficient(name: str, value: float, se: float | None, at_bound=at_bound) -> str:
+            if name in at_bound:
+                return f"{name} = {value:.4g} (at bound >= 0)"
+            if se is None:  # a singular fit (stored as null): no standard error exists
+                return f"{name} = {value:.4g} (no standard error: not separable)"
+            return f"{name} = {value:.4g} ± {se:.2g}"
+
+        text = ", ".join(coefficient(k, v["value"], v["se"]) for k, v in coefficients.items())
         print(
             f"{name} mode ({stats['n_poses']} poses, frequency from J_{stats['frequency_joint']}):"
         )
