@@ -239,7 +239,9 @@ class DynamicMap(MapDocument):
         k = int(rows[0])
         mode = int(np.flatnonzero(outside[k])[0])
         joint, (lo, hi) = next(
-            (j, r) for j, r in self.inertia_ranges[mode].items() if not r[0] <= inertia[k, j] <= r[1]
+            (j, (lo, hi))
+            for j, (lo, hi) in self.inertia_ranges[mode].items()
+            if not lo <= inertia[k, j] <= hi
         )
         pose = ", ".join(f"{v:.3f}" for v in q[k])
         return (
