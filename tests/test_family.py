@@ -229,3 +229,22 @@ def test_family_variant_from_the_cli(tmp_path, capsys) -> None:
         assert main([*args, *extra]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and message in err[0], err
+
+
+def test_the_modal_map_prior_of_a_servo_joint_is_its_series_stiffness() -> None:
+    """``modal_map_from_flex`` with a servo: ``k_e + q L²`` is the series joint's tangent
+    stiffness at the deflection carrying the load ``L`` (from the exact spring law), to the
+    order it neglects: the next term is ``O(L⁴)``, ~1e-4 relative at 30 N m here."""
+    from tvist.modal_map import modal_map_from_flex
+
+    servo = (4e4, 3e4, 2e5, 3e4, 3e4, 4e3)
+    flex = dataclasses.replace(default_flex("ur5e"), servo_nm_per_rad=servo)
+    entries = modal_map_from_flex(flex).flex_joints
+    for entry in entries:
+        j = entry["joint"]
+        k_e, _, quad = entry["stiffness_nm_per_rad"]
+        for load in (0.0, 30.0):
+            tau = np.zeros(6)
+            tau[j] = load
+            exact = flex.tangent_stiffness_nm_per_rad(flex.deflection_rad(tau))[j]
+            assert k_e + quad * load**2 == pytest.approx(exact, rel=2e-4), (j, load)
