@@ -34,7 +34,8 @@ What is drawn, per joint ``j`` (nominal: :func:`tvist.sim.default_flex`):
   within 0.005-0.9).
 - **Flexible links** (:mod:`tvist.sim.beams`): half of the variants have a bending upper arm
   and forearm, a tube of 0.85-1.15 x the robot's nominal diameter (UR5e 80 mm, UR10e
-  100 mm) with 2.5-4 mm wall and structural loss factor 0.01-0.04.
+  100 mm) with 2.5-4 mm wall and structural loss factor 0.01-0.04 (design choices, as for
+  ``ur5e-flex-links``: no measured link sections are published).
 
 The physics time step is the twin's 0.5 ms where no joint is stiffer than nominal, else
 halved (a joint's own mode is about ``√k`` faster, and the explicit spring needs ``ω dt`` well
@@ -101,19 +102,19 @@ class TrueMode(NamedTuple):
     joint_shares
         Share of the mode's strain energy stored in each joint's spring ``(n_dof,)``; with
         ``link_share`` it sums to 1.
-    link_share
-        Share stored in the bending links (0 for rigid links).
     flange_direction
         Unit vector (base frame) of the flange's translation in this mode: the major axis of
         the (generally elliptic, for a complex mode) path of ``J_p φ``, sign such that its
         largest component is positive. ``(3,)``.
+    link_share
+        Share stored in the bending links (0 for rigid links).
     """
 
     freq_hz: float
     zeta: float
     joint_shares: np.ndarray
-    link_share: float
     flange_direction: np.ndarray
+    link_share: float
 
 
 def _stiffening_k3(k1: float, rated_nm: float, growth: float) -> float:
@@ -261,8 +262,8 @@ def modes_of(
                 freq_hz=freq,
                 zeta=float(analysis.zeta[m]),
                 joint_shares=analysis.strain_energy[arm, m].copy(),
-                link_share=float(analysis.strain_energy[links, m].sum()),
                 flange_direction=direction,
+                link_share=float(analysis.strain_energy[links, m].sum()),
             )
         )
     return out
