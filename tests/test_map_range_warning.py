@@ -93,3 +93,22 @@ def test_no_range_no_warning(kind):
     with warnings.catch_warnings():
         warnings.simplefilter("error", MapRangeWarning)
         shape_samples(move("Q1", "Q3"), DT, provider)
+
+
+def test_tvist_run_warns_before_the_arm_moves(tmp_path, capsys):
+    """``tvist run`` builds its shaper from the whole move first: a map that leaves its range
+    along it is warned on one line before anything is sent to the arm."""
+    from tvist.cli import build_parser
+    from tvist.cli.live import _shaper
+
+    map_path = tmp_path / "map.json"
+    ranged_paper_map().save(map_path)
+    args = build_parser().parse_args(
+        ["run", "move.csv", "--robot-ip", "127.0.0.1", "--map", str(map_path)]
+        + ["--payload-kg", "5"]
+    )
+    assert _shaper(args, move("Q1", "Q3")) is not None
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("tvist run: warning: the map holds its mode 0")
+    _shaper(args, move("Q3", "Q3"))
+    assert capsys.readouterr().err == ""

@@ -271,16 +271,22 @@ class MapRangeWarning(UserWarning):
     the value at the bound instead of extrapolating)."""
 
 
-def warn_outside_range(dynamics: Any, q: np.ndarray) -> None:
-    """One :class:`MapRangeWarning` if ``dynamics`` (a :class:`MapDynamics` with a
-    :class:`DynamicMap`) leaves the map's identified range along ``q`` ``(n_samples, n_dof)``;
-    nothing for any other provider. Checked here, before shaping, not in the real-time path."""
-    import warnings
-
+def range_report_of(dynamics: Any, q: np.ndarray) -> str | None:
+    """:meth:`DynamicMap.range_report` of the map a provider reads along ``q``
+    ``(n_samples, n_dof)``: ``None`` if it stays in range, or for any provider other than a
+    :class:`MapDynamics` with a :class:`DynamicMap`."""
     dynmap = getattr(dynamics, "dynmap", None)
     if not isinstance(dynmap, DynamicMap):
-        return
-    report = dynmap.range_report(dynamics.robot, q)
+        return None
+    return dynmap.range_report(dynamics.robot, q)
+
+
+def warn_outside_range(dynamics: Any, q: np.ndarray) -> None:
+    """One :class:`MapRangeWarning` if ``dynamics`` leaves its map's identified range along
+    ``q`` (:func:`range_report_of`). Checked before shaping, not in the real-time path."""
+    import warnings
+
+    report = range_report_of(dynamics, q)
     if report is not None:
         warnings.warn(report, MapRangeWarning, stacklevel=3)
 

@@ -12,12 +12,16 @@ def _error(command: str, message: str) -> int:
     return 2
 
 
-def _shaper(args: argparse.Namespace, n_dof: int):
-    """The TvShaper of ``--modes`` / ``--map`` / ``--paper-map``, or None for ``--unshaped``."""
+def _shaper(args: argparse.Namespace, Q):  # noqa: N803 (the move, as elsewhere)
+    """The TvShaper of ``--modes`` / ``--map`` / ``--paper-map`` for the move ``Q``, or None
+    for ``--unshaped``; a map used outside its identified inertia range is warned here, once,
+    before the arm moves."""
     import tvist
     from tvist.cli.args import map_from_args, robot_from_args
     from tvist.cli.shape import parse_modes
+    from tvist.dynmap import range_report_of
 
+    n_dof = Q.shape[1]
     if args.unshaped:
         return None
     if args.modes:
@@ -27,6 +31,9 @@ def _shaper(args: argparse.Namespace, n_dof: int):
         if robot.n_dof != n_dof:
             raise ValueError(f"the file has {n_dof} joints, the {args.robot} has {robot.n_dof}")
         provider = tvist.MapDynamics(robot, map_from_args(args))
+        report = range_report_of(provider, Q)
+        if report is not None:
+            print(f"tvist run: warning: {report}", file=sys.stderr)
     return tvist.TvShaper(provider, dt_s=args.dt, n_dof=n_dof, shaper=args.shaper)
 
 
@@ -40,7 +47,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     try:
         Q, _ = read_joint_csv(existing_file(args.move, "move"))
-        shaper = _shaper(args, Q.shape[1])
+        shaper = _shaper(args, Q)
     except (OSError, ValueError) as exc:
         return _error("run", str(exc))
     try:
