@@ -148,7 +148,7 @@ def test_run_takes_a_modal_map_file_like_shape_does(move_file, tmp_path):
             ["run", str(path), "--robot-ip", "127.0.0.1", "--map", str(map_path)]
             + ["--payload-kg", "5", "--payload-com", "0", "0", "0.05"]
         )
-        live = _shaper(args, n_dof=6)
+        live = _shaper(args, q)
         expected = tvist.TvShaper(tvist.MapDynamics(robot, loaded), DT_S, 6, shaper="zv")
         live.reset(q[0])
         expected.reset(q[0])

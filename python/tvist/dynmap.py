@@ -222,6 +222,42 @@ class DynamicMap(MapDocument):
                 )
         return self._core.modes_from_inertia_many(j, tau)
 
+    def outside_range(self, inertia_kg_m2: np.ndarray) -> np.ndarray:
+        """Where the map holds a value at a bound: ``(n_samples, n_modes)``, True where an
+        inertia the mode reads (``J_f`` or ``J_d``, rows of ``inertia_kg_m2`` ``(n_samples,
+        n_j)``) lies outside the range it was identified on."""
+        inertia = np.atleast_2d(np.asarray(inertia_kg_m2, dtype=float))
+        out = np.zeros((len(inertia), self.n_modes), dtype=bool)
+        for m, ranges in enumerate(self.inertia_ranges):
+            for joint, (lo, hi) in ranges.items():
+                out[:, m] |= (inertia[:, joint] < lo) | (inertia[:, joint] > hi)
+        return out
+
+    def range_report(self, robot: Robot, q: np.ndarray) -> str | None:
+        """One line on where the map leaves its identified inertia range along the joint
+        positions ``q`` ``(n_samples, n_dof)`` of ``robot`` (the first such pose, the inertia
+        and the range, and how many samples); ``None`` if it never does."""
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        inertia = robot.joint_inertia_many(q)
+        outside = self.outside_range(inertia)
+        rows = np.flatnonzero(outside.any(axis=1))
+        if rows.size == 0:
+            return None
+        k = int(rows[0])
+        mode = int(np.flatnonzero(outside[k])[0])
+        joint, (lo, hi) = next(
+            (j, (lo, hi))
+            for j, (lo, hi) in self.inertia_ranges[mode].items()
+            if not lo <= inertia[k, j] <= hi
+        )
+        pose = ", ".join(f"{v:.3f}" for v in q[k])
+        return (
+            f"the map holds its mode {mode} at the bound of its identified range at "
+            f"{rows.size} of {len(q)} samples: first at sample {k}, q = [{pose}] rad, where "
+            f"J_{joint} = {inertia[k, joint]:.3g} kg m² is outside [{lo:.3g}, {hi:.3g}] kg m² "
+            "(identify poses that cover it, e.g. the start and end poses of the moves)"
+        )
+
     def modes(self, robot: Robot, q: Sequence[float] | np.ndarray) -> list[tuple[float, float]]:
         """Modes at configuration ``q`` of ``robot`` (its payload included)."""
         j = robot.joint_inertia(q)
@@ -235,6 +271,31 @@ class DynamicMap(MapDocument):
 
     def __repr__(self) -> str:
         return f"DynamicMap(n_modes={self.n_modes}, robot={self.metadata.get('robot')!r})"
+
+
+class MapRangeWarning(UserWarning):
+    """A map was evaluated outside the inertia range it was identified on (where it holds
+    the value at the bound instead of extrapolating)."""
+
+
+def range_report_of(dynamics: Any, q: np.ndarray) -> str | None:
+    """:meth:`DynamicMap.range_report` of the map a provider reads along ``q``
+    ``(n_samples, n_dof)``: ``None`` if it stays in range, or for any provider other than a
+    :class:`MapDynamics` with a :class:`DynamicMap`."""
+    dynmap = getattr(dynamics, "dynmap", None)
+    if not isinstance(dynmap, DynamicMap):
+        return None
+    return dynmap.range_report(dynamics.robot, q)
+
+
+def warn_outside_range(dynamics: Any, q: np.ndarray) -> None:
+    """One :class:`MapRangeWarning` if ``dynamics`` leaves its map's identified range along
+    ``q`` (:func:`range_report_of`). Checked before shaping, not in the real-time path."""
+    import warnings
+
+    report = range_report_of(dynamics, q)
+    if report is not None:
+        warnings.warn(report, MapRangeWarning, stacklevel=3)
 
 
 class MapDynamics(RobotModesMixin, _core.MapDynamics):

@@ -206,18 +206,22 @@ def modal_map_from_flex(
     static deflection ``δ ≈ L / k1`` that is ``k1 + (3 k3 / k1²) L²``. Its damper
     ``c0 (1 + a |L|)(1 + b |L|)`` expands to ``c0 + c0 (a + b) |L| + c0 a b L²``. Both are
     first-order approximations (the twin's smoothing width of ``|L|`` also differs), so this
-    is a physically derived prior, not an exact copy of the twin.
+    is a physically derived prior, not an exact copy of the twin. With a servo ``k_s`` in
+    series (``servo_nm_per_rad``) the joint's stiffness is ``1 / (1/k_gear + 1/k_s)``, to the
+    same order ``k_e + (k_e / k1)² (3 k3 / k1²) L²`` with ``k_e = k1 k_s / (k1 + k_s)``.
     """
     c_load2 = flex.c_load2()
     load_joint = flex.damper_load_index()
+    servo = getattr(flex, "servo_nm_per_rad", None)
     entries = []
     for j in joints:
         k1, k3 = float(flex.k1_nm_per_rad[j]), float(flex.k3_nm_per_rad3[j])
+        series = 1.0 if servo is None else float(servo[j]) / (k1 + float(servo[j]))  # k_e / k1
         c0, a, b = float(flex.c0_nms_per_rad[j]), float(flex.c_load_per_nm[j]), float(c_load2[j])
         entries.append(
             {
                 "joint": int(j),
-                "stiffness_nm_per_rad": [k1, 0.0, 3.0 * k3 / (k1 * k1)],
+                "stiffness_nm_per_rad": [k1 * series, 0.0, series**2 * 3.0 * k3 / (k1 * k1)],
                 "damping_nms_per_rad": [c0, c0 * (a + b), c0 * a * b],
                 "damping_load_joint": int(load_joint[j]),
             }

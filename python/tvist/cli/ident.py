@@ -57,14 +57,15 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     from tvist.ident.results_store import SettingsMismatch
 
     if args.variant:
-        from tvist.sim.variants import VARIANTS
+        from tvist.sim.variants import variant_robot
 
         if args.robot_ip:
             return _error("campaign", "--variant selects a twin: use it with --sim")
-        if args.variant not in VARIANTS:
-            return _error("campaign", f"--variant: unknown, known: {', '.join(VARIANTS)}")
-        if VARIANTS[args.variant][0] != args.robot:
-            robot_of = VARIANTS[args.variant][0]
+        try:
+            robot_of = variant_robot(args.variant)
+        except ValueError as exc:
+            return _error("campaign", f"--variant: {exc}")
+        if robot_of != args.robot:
             return _error(
                 "campaign", f"--variant {args.variant} is a {robot_of}: add --robot {robot_of}"
             )
@@ -149,7 +150,8 @@ def add_campaign_command(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--variant",
         help="with --sim: a twin variant whose flexibility the maps do not model exactly "
-        "(ur5e-soft-gears, ur5e-flex-links)",
+        "(ur5e-soft-gears, ur5e-flex-links, or family:ROBOT:SEED, e.g. family:ur5e:17, "
+        "one arm of a seeded family of plausible UR5e/UR10e variants)",
     )
     p.add_argument(
         "--payloads", type=float, nargs="+", default=[0.0, 1.0, 3.0, 5.0], help="payloads (kg)"
@@ -431,7 +433,16 @@ def _cmd_fit_map(args: argparse.Namespace) -> int:
             **stats["frequency"]["coefficients"],
             **stats["damping"]["coefficients"],
         }
-        text = ", ".join(f"{k} = {v['value']:.4g} ± {v['se']:.2g}" for k, v in coefficients.items())
+        at_bound = stats["frequency"]["at_bound"] + stats["damping"]["at_bound"]
+
+        def coefficient(name: str, value: float, se: float | None, at_bound=at_bound) -> str:
+            if name in at_bound:
+                return f"{name} = {value:.4g} (at bound >= 0)"
+            if se is None:  # a singular fit (stored as null): no standard error exists
+                return f"{name} = {value:.4g} (no standard error: not separable)"
+            return f"{name} = {value:.4g} ± {se:.2g}"
+
+        text = ", ".join(coefficient(k, v["value"], v["se"]) for k, v in coefficients.items())
         print(
             f"{name} mode ({stats['n_poses']} poses, frequency from J_{stats['frequency_joint']}):"
         )
@@ -495,9 +506,10 @@ def add_fit_map_command(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--k0",
         type=float,
-        default=10000.0,
-        help="stiffness at zero inertia, N m/rad (fixes the scale of the stiffness terms; "
-        "default 10000)",
+        default=None,
+        help="fix the stiffness at zero inertia k_0 at this value, N m/rad (the paper's "
+        "reduced map uses 10000); default: estimated with k_J and k_p (k_0 is not a scale: "
+        "the k_p k_0/J² term of ω_n² determines it)",
     )
     p.add_argument(
         "--kind",

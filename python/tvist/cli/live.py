@@ -15,13 +15,16 @@ def _error(command: str, message: str) -> int:
     return 2
 
 
-def _shaper(args: argparse.Namespace, n_dof: int):
-    """The TvShaper of ``--modes`` / ``--map`` / ``--paper-map``, or None for ``--unshaped``.
-    A map's payload is ``--payload-kg`` or the controller's (printed)."""
+def _shaper(args: argparse.Namespace, Q):  # noqa: N803 (the move, as elsewhere)
+    """The TvShaper of ``--modes`` / ``--map`` / ``--paper-map`` for the move ``Q``, or None
+    for ``--unshaped``. A map's payload is ``--payload-kg`` or the controller's (printed); a
+    map used outside its identified inertia range is warned here, once, before the arm moves."""
     import tvist
     from tvist.cli.args import map_dynamics, map_from_args, payload_from_args, robot_from_args
     from tvist.cli.shape import parse_modes
+    from tvist.dynmap import range_report_of
 
+    n_dof = Q.shape[1]
     if args.unshaped:
         return None
     if args.modes:
@@ -38,6 +41,9 @@ def _shaper(args: argparse.Namespace, n_dof: int):
         if robot.n_dof != n_dof:
             raise ValueError(f"the file has {n_dof} joints, the {args.robot} has {robot.n_dof}")
         provider = map_dynamics(args, robot, dynmap)
+        report = range_report_of(provider, Q)
+        if report is not None:
+            print(f"tvist run: warning: {report}", file=sys.stderr)
     return tvist.TvShaper(provider, dt_s=args.dt_s, n_dof=n_dof, shaper=args.shaper)
 
 
@@ -74,7 +80,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         Q = to_si(Q, "q", parse_units(args.units, ("q",))["q"])
         if not args.dry_run:
             log_path = output_file(args.log or Path(args.move).with_suffix(".rtde.csv"), "--log")
-        shaper = _shaper(args, Q.shape[1])  # after the files: it may ask the controller
+        shaper = _shaper(args, Q)  # after the files: it may ask the controller
         shaped = _checked_reference(args, Q, names, shaper)
     except (OSError, ValueError, RuntimeError) as exc:
         return _error("run", str(exc))

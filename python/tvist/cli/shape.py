@@ -33,6 +33,7 @@ from __future__ import annotations
 import argparse
 import csv
 import io
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -363,10 +364,25 @@ def _cmd_shape(args: argparse.Namespace) -> int:
         output_file(args.out, "--out")
     else:
         existing_dir(args.bag, "--bag")
+    import warnings
+
+    from tvist.dynmap import MapRangeWarning
+
     robot, dynamics = _robot_and_dynamics(args)
-    if args.bag is not None:
-        return _cmd_shape_bag(args, robot, dynamics)
-    return _cmd_shape_csv(args, robot, dynamics)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", MapRangeWarning)
+        if args.bag is not None:
+            code = _cmd_shape_bag(args, robot, dynamics)
+        else:
+            code = _cmd_shape_csv(args, robot, dynamics)
+    ranges = [w for w in caught if issubclass(w.category, MapRangeWarning)]
+    if ranges:  # once per run, however many trajectories (bag messages) were shaped
+        more = f" (and in {len(ranges) - 1} more trajectories)" if len(ranges) > 1 else ""
+        print(f"tvist shape: warning: {ranges[0].message}{more}", file=sys.stderr)
+    for w in caught:
+        if not issubclass(w.category, MapRangeWarning):
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    return code
 
 
 def add_shape_command(sub: argparse._SubParsersAction) -> None:

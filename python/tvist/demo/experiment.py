@@ -419,6 +419,7 @@ def run_experiment(
     log: Any = None,
     flex: Any = None,
     beams: Any = None,
+    physics_dt_s: float | None = None,
 ) -> DemoResult:
     """Run the experiment without writing anything.
 
@@ -438,6 +439,10 @@ def run_experiment(
         :mod:`tvist.sim.variants`).
     beams
         The twin's bending links (:class:`~tvist.sim.beams.LinkBeams`, default none).
+    physics_dt_s
+        The twin's time step (default: the twin's own choice); a variant with joints stiffer
+        than the default twin's needs a shorter one
+        (:func:`tvist.sim.variants.variant_twin_kwargs`).
     """
     start = time.perf_counter()
     rows = list(default_methods() if methods is None else methods)
@@ -447,7 +452,14 @@ def run_experiment(
     chosen = list(motions) if motions is not None else list(MOTIONS[:1] if quick else MOTIONS)
     tail_s = QUICK_TAIL_S if quick else TAIL_S
     window_s = QUICK_SPECTRUM_WINDOW_S if quick else SPECTRUM_WINDOW_S
-    twin = Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M, flex=flex, beams=beams)
+    twin = Twin(
+        "ur5e",
+        payload_kg=PAYLOAD_KG,
+        payload_com_m=PAYLOAD_COM_M,
+        flex=flex,
+        beams=beams,
+        physics_dt_s=physics_dt_s,
+    )
     robot = robots.ur5e(payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M)
     runs = [
         run_motion(motion, rows, twin, robot, tail_s=tail_s, spectrum_window_s=window_s, log=log)

@@ -180,18 +180,9 @@ def map_use(dynmap: DynamicMap, robot: Robot, q: np.ndarray) -> dict[str, list]:
     q = np.ascontiguousarray(q, dtype=float)
     inertia = robot.joint_inertia_many(q)
     tau = robot.gravity_torque_many(q) if dynmap.uses_gravity else None
-    clamped, sign_changes = [], []
+    clamped = [float(v) for v in 100.0 * np.mean(dynmap.outside_range(inertia), axis=0)]
+    sign_changes = []
     for mode in dynmap.mode_maps:
-        outside = np.zeros(len(q), dtype=bool)
-        for joint_key, range_key in (
-            ("frequency_joint", "frequency_inertia_range_kg_m2"),
-            ("damping_joint", "damping_inertia_range_kg_m2"),
-        ):
-            if mode[range_key] is not None:
-                lo, hi = mode[range_key]
-                j = inertia[:, mode[joint_key]]
-                outside |= (j < lo) | (j > hi)
-        clamped.append(float(100.0 * np.mean(outside)))
         changes = 0
         if tau is not None and mode["k_g"] != 0.0:
             sign = np.sign(tau[:, mode["frequency_joint"]])

@@ -87,21 +87,24 @@ def compare_on_variant(variant: str, records_path: str | Path) -> list[tuple[str
     """Both identified map forms on the twin variant ``variant`` (:mod:`tvist.sim.variants`),
     fitted to that variant's campaign records: ``(motion, row label, reduction %)`` for the
     experiment's three motions, e.g.
-    ``compare_on_variant("ur5e-soft-gears", "out/campaign_variant.jsonl")``."""
+    ``compare_on_variant("ur5e-soft-gears", "out/campaign_variant.jsonl")`` (or a family
+    variant, ``"family:ur5e:17"``)."""
     from tvist.demo.experiment import run_experiment
     from tvist.demo.methods import default_methods, fd_tvist_map
     from tvist.ident.campaign import load_results
     from tvist.ident.map_fit import fit_map
     from tvist.ident.modal_fit import fit_modal_map
-    from tvist.sim.variants import variant_beams, variant_flex
+    from tvist.sim.variants import variant_robot, variant_twin_kwargs
 
+    if variant_robot(variant) != "ur5e":
+        raise ValueError(f"the demo's motions are the UR5e's; {variant!r} is not a UR5e")
     records = load_results(records_path)
     rows = [m for m in default_methods() if m.key == "unshaped"]
     rows.append(
         fd_tvist_map("fd-tvist-identified-map", "identified published map", fit_map(records))
     )
     rows.append(fd_tvist_modal(KEY, "identified modal map", fit_modal_map(records, "ur5e")))
-    result = run_experiment(methods=rows, flex=variant_flex(variant), beams=variant_beams(variant))
+    result = run_experiment(methods=rows, **variant_twin_kwargs(variant))
     return [
         (m.motion.name, run.method.label, float(run.to_json()["reduction_percent"]))
         for m in result.motions

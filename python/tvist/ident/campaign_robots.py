@@ -59,7 +59,7 @@ class TwinRobot:
         Seed of the accelerometer noise; combined with each excitation's seed (if it has
         one), so each excitation's noise is reproducible on its own.
     variant
-        A twin variant of :data:`tvist.sim.variants.VARIANTS` (its gears and bending links;
+        A twin variant of :mod:`tvist.sim.variants` (a named one or ``family:<robot>:<seed>``;
         its robot must be ``robot_name``), or ``None`` for the standard twin.
 
     Raises
@@ -79,14 +79,14 @@ class TwinRobot:
         self.accel_noise_std = float(accel_noise_std)
         self.seed = int(seed)
         self.variant = variant
-        self._flex = self._beams = None
+        self._twin_kwargs: dict = {}
         if variant is not None:
-            from tvist.sim.variants import VARIANTS, variant_beams, variant_flex
+            from tvist.sim.variants import variant_robot, variant_twin_kwargs
 
-            self._flex, self._beams = variant_flex(variant), variant_beams(variant)
-            if VARIANTS[variant][0] != robot_name:
+            self._twin_kwargs = variant_twin_kwargs(variant)
+            if variant_robot(variant) != robot_name:
                 raise ValueError(
-                    f"twin variant {variant!r} is a {VARIANTS[variant][0]}, not a {robot_name}"
+                    f"twin variant {variant!r} is a {variant_robot(variant)}, not a {robot_name}"
                 )
         self._twin = None
         self._payload: tuple[float, tuple[float, ...]] | None = None
@@ -101,8 +101,7 @@ class TwinRobot:
             self.robot_name,
             payload_kg=key[0],
             payload_com_m=key[1],
-            flex=self._flex,
-            beams=self._beams,
+            **self._twin_kwargs,
             accel_noise_std=self.accel_noise_std,
             seed=self.seed,
         )

@@ -2,11 +2,35 @@
 
 Per mode, by nonlinear least squares on relative errors:
 
-1. **Frequency** (``k_J``, ``k_p`` and the gravity term ``k_g``; ``k_0`` fixed, default
-   10000 N m/rad, because ``ω_n`` only fixes ratios of the stiffness terms). For a mode with
+1. **Frequency** (``k_0``, ``k_J``, ``k_p`` and the gravity term ``k_g``). For a mode with
    several candidate frequency joints (the base mode: ``J_0`` or ``J_1``), each is fitted and
    the one with the smaller residual is kept.
 2. **Damping** (``c_0``, ``c_1``, ``c_2``, ``c_τ``) with the stiffness terms fixed.
+
+**``k_0`` is not a scale.** The paper fixes ``k_0`` (eqs. 44-45) as if ``ω_n`` fixed only ratios
+of the stiffness terms, but with ``x = 1/J`` (and ``k_g = 0``)
+``ω_n² = (1 + k_p x)(k_0 x + k_J) = k_J + (k_0 + k_p k_J) x + k_p k_0 x²``: three coefficients
+for three unknowns, so poses with different inertias determine ``k_0``; a wrong fixed value
+biases ``k_J`` and ``k_p`` and leaves a misfit. It is estimated here. What the frequencies
+cannot tell apart is the swap ``(k_0, k_p) ↔ (k_p k_J, k_0 / k_J)``, which leaves all three
+coefficients (so every ``ω_n``) unchanged: the fit reports the branch with ``k_0 >= k_p k_J``,
+the one both published UR5e modes are on (10000 against 2692 and 1320 N m/rad). Passing
+``k_0`` fixes it instead (the paper's reduced map).
+
+**Physical signs.** Every coefficient is constrained to be ``>= 0``:
+
+- ``ω_n² = (1 + k_p/J)(k_0 + k_J J + k_g |τ|)/J`` must stay positive for every inertia and
+  load: ``k_p >= 0`` (else ``1 + k_p/J < 0`` for ``J < −k_p``), ``k_0 >= 0`` (the stiffness with
+  no inertia and no load), ``k_J >= 0`` (for ``J → ∞``, ``ω_n² → k_J``) and ``k_g >= 0`` (the
+  gear stiffens with load, eqs. 22-23 with ``k_3 >= 0``; a negative ``k_g`` makes the stiffness
+  fall to zero at a finite torque).
+- ``(c_0 + c_1 √J + c_2 J)(1 + c_τ J)`` is a viscous damping coefficient, friction that grows
+  with the load (eq. 35, ``c (1 + c_load |L|)``): ``c_0 >= 0`` and ``c_1, c_2, c_τ >= 0``;
+  a negative ``c_2`` or ``c_τ`` makes it negative beyond some inertia, a mode that grows.
+
+A coefficient that ends on its bound is reported **at bound** (``fit_statistics``:
+``at_bound``, its value exactly 0 and its standard error ``NaN``, ``null`` in a map file): it
+is a constraint, not an estimate.
 
 A term whose estimate is smaller than ``drop_t`` standard errors (``k_g`` and ``c_1`` on the
 UR5e) is dropped (set to 0) and the step refitted, as the paper did.
@@ -50,8 +74,10 @@ __all__ = [
     "pose_table",
 ]
 
-#: The paper's fixed stiffness at zero inertia, N m/rad.
+#: The paper's fixed stiffness at zero inertia, N m/rad (eqs. 44-45; pass ``k_0`` to use it).
 K_0_FIXED = 10000.0
+#: Lower bound of every coefficient (see the module docstring: physical signs).
+_LOWER_BOUND = 0.0
 #: Tight tolerances: the damping valley along c_0, c_τ is flat (see :func:`fit_map`).
 _LSQ = {"x_scale": "jac", "xtol": 1e-14, "ftol": 1e-14, "gtol": 1e-14, "max_nfev": 2000}
 #: A term whose removal changes no prediction by more than this (relative) is negligible; the
@@ -159,7 +185,7 @@ def _mode_dict(
     forms."""
     same = frequency_joint == damping_joint
     mode: dict[str, Any] = {
-        "k_0": K_0_FIXED,
+        "k_0": 0.0,
         "k_j": 0.0,
         "k_g": 0.0,
         "k_p": 0.0,
@@ -221,12 +247,45 @@ class _StepResult:
     rms_rel_error: float
     dropped: dict[str, dict[str, float]]
     n_poses: int
+    at_bound: list[str]
+
+
+def _at_bound(res: optimize.OptimizeResult, terms: Sequence[str]) -> list[str]:
+    """The coefficients that end on their lower bound (a constraint, not an estimate): those
+    the solver reports active, and those within 1e-6 of their own standard error (computed
+    as if free) of the bound (the solver's iterates stay strictly inside the bounds, so an
+    active bound can be reported as a value of ~1e-12 instead)."""
+    se = _free_se(res.jac, res.fun, terms, raise_if_singular=False)
+    return [
+        t
+        for t, x, active in zip(terms, res.x, res.active_mask, strict=True)
+        if active != 0 or (math.isfinite(se[t]) and x - _LOWER_BOUND <= 1e-6 * se[t])
+    ]
 
 
 def _covariance_se(
-    jac: np.ndarray, residual: np.ndarray, names: Sequence[str], *, raise_if_singular: bool
+    jac: np.ndarray,
+    residual: np.ndarray,
+    names: Sequence[str],
+    *,
+    raise_if_singular: bool,
+    at_bound: Sequence[str] = (),
 ) -> dict[str, float]:
-    """Standard errors ``√diag(σ² (JᵀJ)⁻¹)``; infinite (or an error) for a singular ``J``."""
+    """Standard errors ``√diag(σ² (JᵀJ)⁻¹)`` of the coefficients off their bounds (those at
+    a bound are held there: ``NaN``); infinite (or an error) for a singular ``J``."""
+    free = [i for i, name in enumerate(names) if name not in at_bound]
+    out = {name: math.nan for name in names if name in at_bound}
+    if not free:
+        return out
+    return {
+        **out,
+        **_free_se(jac[:, free], residual, [names[i] for i in free], raise_if_singular),
+    }
+
+
+def _free_se(
+    jac: np.ndarray, residual: np.ndarray, names: Sequence[str], raise_if_singular: bool
+) -> dict[str, float]:
     n, p = jac.shape
     sigma2 = float(residual @ residual) / max(n - p, 1)
     _, sv, vt = np.linalg.svd(jac, full_matrices=False)
@@ -244,58 +303,92 @@ def _covariance_se(
     return {name: float(math.sqrt(max(cov[i, i], 0.0))) for i, name in enumerate(names)}
 
 
-def _refine(residual, starts, terms: list[str], nonnegative: str, what: str):
-    """Bounded least squares of ``residual`` from the best of the ``starts`` (smallest sum of
-    squared residuals); the coefficient ``nonnegative`` is kept >= 0."""
+def _refine(residual, starts, what: str):
+    """Least squares of ``residual`` with every coefficient ``>= 0`` (see the module
+    docstring), from the best of the ``starts`` (smallest sum of squared residuals, each
+    start moved onto the bounds first)."""
     best: tuple[float, np.ndarray] | None = None
     for x in starts:
+        x = np.maximum(np.asarray(x, dtype=float), _LOWER_BOUND)
         cost = float(np.sum(residual(x) ** 2))
         if best is None or cost < best[0]:
             best = (cost, x)
     if best is None:
         raise ValueError(f"map fit: no valid starting point for the {what} coefficients")
-    lower = [0.0 if t == nonnegative else -np.inf for t in terms]
-    return optimize.least_squares(residual, best[1], bounds=(lower, np.inf), **_LSQ)
+    return optimize.least_squares(residual, best[1], bounds=(_LOWER_BOUND, np.inf), **_LSQ)
+
+
+def _cost(res: optimize.OptimizeResult) -> float:
+    return float(res.fun @ res.fun)
 
 
 def _fit_frequency(
-    table: PoseTable, f_joint: int, d_joint: int, terms: list[str], k_0: float
+    table: PoseTable, f_joint: int, d_joint: int, terms: list[str], k_0: float | None
 ) -> _StepResult:
+    """Frequency coefficients ``terms``; ``k_0`` among them unless fixed (``k_0`` given)."""
     j, tau, w_meas = table.inertia_kg_m2, table.gravity_torque_nm, table.wn_rad_s
+    fixed = {} if k_0 is None else {"k_0": k_0}
 
     def mode_for(values: Mapping[str, float]) -> dict[str, float | int]:
-        return _mode_dict({"k_0": k_0, **values}, f_joint, d_joint)
+        return _mode_dict({**fixed, **values}, f_joint, d_joint)
 
     def residual(x: np.ndarray) -> np.ndarray:
         wn, _ = evaluate_mode(mode_for(dict(zip(terms, x, strict=True))), j, tau)
         r = wn / w_meas - 1.0
         return np.where(np.isfinite(r), r, _INVALID_RESIDUAL)
 
-    # Start: for fixed k_p, ω_n² is affine in (k_J, k_g); columns from map evaluations.
+    # Start: for fixed k_p, ω_n² is affine in (k_0, k_J, k_g); columns from map evaluations
+    # about a base point with a positive stiffness (k_0 = 1 N m/rad if k_0 is fitted).
     linear = [t for t in terms if t != "k_p"]
 
     def starts():
         for k_p in (0.0, 0.3, 1.0, 2.0, 4.0, 8.0, 16.0):
             base = {"k_p": k_p, **{t: 0.0 for t in linear}}
+            if k_0 is None:
+                base["k_0"] = 1.0
             w0, _ = evaluate_mode(mode_for(base), j, tau)
             cols = []
             for t in linear:
-                w1, _ = evaluate_mode(mode_for({**base, t: 1.0}), j, tau)
+                w1, _ = evaluate_mode(mode_for({**base, t: base[t] + 1.0}), j, tau)
                 cols.append((w1**2 - w0**2) / w_meas**2)
             if not np.all(np.isfinite(w0)) or not all(np.all(np.isfinite(c)) for c in cols):
                 continue
             coef, *_ = np.linalg.lstsq(np.column_stack(cols), 1.0 - w0**2 / w_meas**2, rcond=None)
-            values = dict(zip(linear, coef, strict=True))
+            values = {t: base[t] + c for t, c in zip(linear, coef, strict=True)}
             yield np.array([k_p if t == "k_p" else values[t] for t in terms])
 
-    res = _refine(residual, starts(), terms, "k_p", "frequency")
-    se = _covariance_se(res.jac, res.fun, terms, raise_if_singular=True)
+    res = _refine(residual, starts(), "frequency")
+    if {"k_0", "k_p"} <= set(terms):
+        # The swap (k_0, k_p) -> (k_p k_J, k_0 / k_J) leaves every ω_n unchanged (without
+        # k_g exactly): keep the branch with k_0 >= k_p k_J (module docstring).
+        values = dict(zip(terms, res.x, strict=True))
+        if values["k_j"] > 0.0 and values["k_0"] < values["k_p"] * values["k_j"]:
+            swapped = {
+                **values,
+                "k_0": values["k_p"] * values["k_j"],
+                "k_p": values["k_0"] / values["k_j"],
+            }
+            other = _refine(residual, [np.array([swapped[t] for t in terms])], "frequency")
+            # Equal costs up to rounding (relative residuals of 1e-12 per pose): the swap.
+            if _cost(other) <= _cost(res) * (1.0 + 1e-9) + res.fun.size * 1e-24:
+                res = other
+    at_bound = _at_bound(res, terms)
+    values = dict(zip(terms, (float(v) for v in res.x), strict=True))
+    values.update(dict.fromkeys(at_bound, _LOWER_BOUND))
+    # Where the two branches meet (k_0 = k_p k_J) the Jacobian is singular although the
+    # coefficients are unique (data whose curvature no real pair (k_0, k_p) reaches end
+    # there): infinite standard errors, not an error.
+    fold = "k_0" in values and math.isclose(
+        values["k_0"], values["k_p"] * values["k_j"], rel_tol=1e-4
+    )
+    se = _covariance_se(res.jac, res.fun, terms, raise_if_singular=not fold, at_bound=at_bound)
     return _StepResult(
-        values=dict(zip(terms, (float(v) for v in res.x), strict=True)),
+        values=values,
         se=se,
         rms_rel_error=float(np.sqrt(np.mean(res.fun**2))),
         dropped={},
         n_poses=int(res.fun.size),
+        at_bound=at_bound,
     )
 
 
@@ -328,7 +421,7 @@ def _fit_damping(
             values = dict(zip(linear, coef, strict=True))
             yield np.array([c_tau if t == "c_tau" else values[t] for t in terms])
 
-    res = _refine(residual, starts(), terms, "c_tau", "damping")
+    res = _refine(residual, starts(), "damping")
     values = dict(zip(terms, (float(v) for v in res.x), strict=True))
     if "c_1" not in terms and _other_branch_is_canonical(values):
         # Without c_1, (c_0 + c_2 J)(1 + c_τ J) = (c_0 + c_0 c_τ J)(1 + (c_2/c_0) J): the two
@@ -336,17 +429,20 @@ def _fit_damping(
         swapped = {**values, "c_2": values["c_0"] * values["c_tau"]}
         swapped["c_tau"] = values["c_2"] / values["c_0"]
         x0 = np.array([swapped[t] for t in terms])
-        res = _refine(residual, [x0], terms, "c_tau", "damping")
+        res = _refine(residual, [x0], "damping")
         values = dict(zip(terms, (float(v) for v in res.x), strict=True))
     # The frequency step has already rejected poses without inertia variation; here an
     # ill-conditioned Jacobian means c_0 and c_τ trade off (reported as poorly determined).
-    se = _covariance_se(res.jac, res.fun, terms, raise_if_singular=False)
+    at_bound = _at_bound(res, terms)
+    values.update(dict.fromkeys(at_bound, _LOWER_BOUND))
+    se = _covariance_se(res.jac, res.fun, terms, raise_if_singular=False, at_bound=at_bound)
     return _StepResult(
         values=values,
         se=se,
         rms_rel_error=float(np.sqrt(np.mean(res.fun**2))),
         dropped={},
         n_poses=int(res.fun.size),
+        at_bound=at_bound,
     )
 
 
@@ -409,8 +505,14 @@ def _stats(step: _StepResult) -> dict[str, Any]:
         "coefficients": {k: {"value": v, "se": step.se[k]} for k, v in step.values.items()},
         "rms_relative_error": step.rms_rel_error,
         "dropped": step.dropped,
+        # On its bound: held by a sign constraint, not estimated (its "se" is NaN).
+        "at_bound": list(step.at_bound),
         # A coefficient known to worse than ±50 %: the data cannot separate it from the others.
-        "poorly_determined": [k for k, v in step.values.items() if not step.se[k] < 0.5 * abs(v)],
+        "poorly_determined": [
+            k
+            for k, v in step.values.items()
+            if k not in step.at_bound and not step.se[k] < 0.5 * abs(v)
+        ],
     }
 
 
@@ -418,7 +520,7 @@ def fit_map(
     poses: Sequence[Mapping[str, Any]],
     *,
     mode_specs: Sequence[ModeSpec] = DEFAULT_MODE_SPECS,
-    k_0: float = K_0_FIXED,
+    k_0: float | None = None,
     drop_negligible: bool = True,
     drop_t: float = 3.0,
     include_low_confidence: bool = False,
@@ -434,7 +536,9 @@ def fit_map(
     mode_specs
         One entry per mode, in cascade order (default: base, shoulder).
     k_0
-        Fixed stiffness at zero inertia, N m/rad.
+        ``None`` (default): the stiffness at zero inertia is estimated with the other
+        frequency coefficients (see the module docstring). A value fixes it (N m/rad; the
+        paper's reduced map: :data:`K_0_FIXED`).
     drop_negligible
         Drop ``k_g`` and ``c_1`` when smaller than ``drop_t`` standard errors; otherwise
         ``k_g`` and ``c_1`` are fixed at 0 (the reduced map, eqs. 44-45).
@@ -461,14 +565,15 @@ def fit_map(
     ValueError
         Too few usable poses for the parameters, or a singular (non-identifiable) problem.
     """
-    if not (math.isfinite(k_0) and k_0 > 0):
+    if k_0 is not None and not (math.isfinite(k_0) and k_0 > 0):
         raise ValueError(f"k_0 must be finite and > 0, got {k_0}")
     modes = []
     stats: dict[str, Any] = {"k_0_fixed": k_0, "drop_t": drop_t, "modes": []}
     for spec in mode_specs:
         table = pose_table(poses, spec.joint, include_low_confidence=include_low_confidence)
         use_gravity = drop_negligible and table.has_gravity
-        freq_terms = ["k_j", "k_p"] + (["k_g"] if use_gravity else [])
+        freq_terms = (["k_0"] if k_0 is None else []) + ["k_j", "k_p"]
+        freq_terms += ["k_g"] if use_gravity else []
         damp_terms = ["c_0", "c_2", "c_tau"] + (["c_1"] if drop_negligible else [])
         needed = max(len(freq_terms), len(damp_terms)) + 2
         if table.n_poses < needed:
@@ -485,7 +590,7 @@ def fit_map(
                 return _fit_frequency(table, f, d, terms, k_0)
 
             def predict_freq(values, f=f_joint, table=table, d=spec.damping_joint):
-                mode = _mode_dict({"k_0": k_0, **values}, f, d)
+                mode = _mode_dict({**({} if k_0 is None else {"k_0": k_0}), **values}, f, d)
                 return evaluate_mode(mode, table.inertia_kg_m2, table.gravity_torque_nm)[0]
 
             try:
@@ -498,7 +603,7 @@ def fit_map(
             raise ValueError(f"mode of joint {spec.joint}: " + "; ".join(failed.values()))
         f_joint = min(candidates, key=lambda f: candidates[f].rms_rel_error)
         freq = candidates[f_joint]
-        stiffness = {"k_0": k_0, **freq.values}
+        stiffness = {**({} if k_0 is None else {"k_0": k_0}), **freq.values}
 
         def fit_damp(terms, table=table, stiffness=stiffness, f=f_joint, d=spec.damping_joint):
             return _fit_damping(table, stiffness, f, d, terms)

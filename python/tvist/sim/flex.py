@@ -19,6 +19,15 @@ a load-dependent damper. With the deflection ``delta = q_motor - q_link`` (rad):
 
 The stiffness is an *effective* joint stiffness: it lumps the gear with the compliance of the
 bearings and the links, which the paper also folds into the joint modes (section 4.1).
+
+Servo stiffness (optional, ``servo_nm_per_rad``): a position servo of finite stiffness ``k_s``
+in series with the gear. The servo's rotor is taken massless (its reflected inertia is small
+beside the link's and its own mode lies far above the arm's), so servo and gear carry the same
+torque and the joint's deflection is the sum of theirs,
+``delta = tau / k_s + delta_gear(tau)`` with ``tau = k1 delta_gear + k3 delta_gear**3``: a
+softer joint whose stiffening is diluted by the linear servo. The damper acts across the
+series pair (the gear's friction and the servo's velocity loop lumped into one law). ``None``
+is the ideal, infinitely stiff servo of the paper (``q_m / N ≈ q_c``).
 """
 
 from __future__ import annotations
@@ -60,6 +69,9 @@ class FlexParams:
         load: the coefficient is ``c0 (1 + c_load |L|_s) (1 + c_load2 |L|_s)``, the form of the
         paper's measured damping map (eq. 48, ``(c_0 + c_2 J)(1 + c_τ J)``) with the load in
         place of the inertia. ``None``: zero for every joint (damping linear in the load).
+    servo_nm_per_rad
+        Stiffness ``k_s`` (N m/rad), > 0, of a position servo in series with each gear (see the
+        module docstring). ``None``: an infinitely stiff servo.
     """
 
     k1_nm_per_rad: tuple[float, ...]
@@ -70,6 +82,7 @@ class FlexParams:
     max_deflection_rad: float = 0.1
     damper_load_joint: tuple[int, ...] | None = None
     c_load2_per_nm: tuple[float, ...] | None = None
+    servo_nm_per_rad: tuple[float, ...] | None = None
 
     def validate(self, n_dof: int) -> None:
         """Raise ValueError unless every field is finite, has ``n_dof`` entries and a valid sign."""
@@ -81,6 +94,8 @@ class FlexParams:
         }
         if self.c_load2_per_nm is not None:
             per_joint["c_load2_per_nm"] = (self.c_load2_per_nm, False)
+        if self.servo_nm_per_rad is not None:
+            per_joint["servo_nm_per_rad"] = (self.servo_nm_per_rad, True)
         for name, (values, strictly_positive) in per_joint.items():
             arr = np.asarray(values, dtype=float)
             if arr.shape != (n_dof,):
@@ -120,15 +135,46 @@ class FlexParams:
             return np.arange(len(self.c0_nms_per_rad))
         return np.asarray(self.damper_load_joint, dtype=np.intp)
 
-    def spring_torque_nm(self, delta_rad: np.ndarray) -> np.ndarray:
-        """Gear spring torque ``k1 delta + k3 delta³`` (N m) for deflections ``(..., n_dof)``."""
+    def gear_torque_nm(self, gear_delta_rad: np.ndarray) -> np.ndarray:
+        """Gear spring torque ``k1 d + k3 d³`` (N m) for gear deflections ``d`` ``(..., n_dof)``."""
+        d = np.asarray(gear_delta_rad, dtype=float)
+        return np.asarray(self.k1_nm_per_rad) * d + np.asarray(self.k3_nm_per_rad3) * d**3
+
+    def gear_deflection_rad(self, delta_rad: np.ndarray) -> np.ndarray:
+        """The gear's share of the joint deflection ``delta_rad`` ``(..., n_dof)`` (rad).
+
+        Without a servo this is ``delta_rad``; with one, the root of
+        ``d + (k1 d + k3 d³) / k_s = delta`` (Newton from the linear guess: the left side is
+        odd, monotone and convex for ``d > 0``, so the iterates approach the root from one side).
+        """
         delta = np.asarray(delta_rad, dtype=float)
-        return np.asarray(self.k1_nm_per_rad) * delta + np.asarray(self.k3_nm_per_rad3) * delta**3
+        if self.servo_nm_per_rad is None:
+            return delta
+        k1 = np.asarray(self.k1_nm_per_rad)
+        k3 = np.asarray(self.k3_nm_per_rad3)
+        ks = np.asarray(self.servo_nm_per_rad, dtype=float)
+        d = delta * ks / (ks + k1)
+        for _ in range(60):
+            step = (d + (k1 * d + k3 * d**3) / ks - delta) / (1.0 + (k1 + 3.0 * k3 * d * d) / ks)
+            d = d - step
+            if np.all(np.abs(step) <= 1e-15 * np.maximum(1e-6, np.abs(d))):
+                break
+        return d
+
+    def spring_torque_nm(self, delta_rad: np.ndarray) -> np.ndarray:
+        """Joint spring torque (N m) for joint deflections ``(..., n_dof)``: the gear's
+        ``k1 d + k3 d³`` at its share ``d`` of the deflection (all of it without a servo)."""
+        return self.gear_torque_nm(self.gear_deflection_rad(delta_rad))
 
     def tangent_stiffness_nm_per_rad(self, delta_rad: np.ndarray) -> np.ndarray:
-        """Tangent gear stiffness ``k1 + 3 k3 delta²`` (N m/rad), eq. 23."""
-        delta = np.asarray(delta_rad, dtype=float)
-        return np.asarray(self.k1_nm_per_rad) + 3.0 * np.asarray(self.k3_nm_per_rad3) * delta**2
+        """Tangent joint stiffness (N m/rad): the gear's ``k1 + 3 k3 d²`` (eq. 23), in series
+        with the servo's ``k_s`` if there is one."""
+        d = self.gear_deflection_rad(delta_rad)
+        gear = np.asarray(self.k1_nm_per_rad) + 3.0 * np.asarray(self.k3_nm_per_rad3) * d**2
+        if self.servo_nm_per_rad is None:
+            return gear
+        ks = np.asarray(self.servo_nm_per_rad, dtype=float)
+        return gear * ks / (gear + ks)
 
     def damping_nms_per_rad(self, spring_torque_nm: np.ndarray) -> np.ndarray:
         """Load-dependent gear damping ``c0 (1 + c_load |L|_s) (1 + c_load2 |L|_s)`` (N m s/rad).
@@ -147,7 +193,8 @@ class FlexParams:
         return c0 * (1.0 + np.asarray(self.c_load_per_nm) * load) * (1.0 + self.c_load2() * load)
 
     def deflection_rad(self, torque_nm: np.ndarray) -> np.ndarray:
-        """Deflection that carries ``torque_nm`` (inverse of eq. 22, the real root; Newton)."""
+        """Joint deflection that carries ``torque_nm``: the inverse of eq. 22 (the real root;
+        Newton) plus the servo's ``tau / k_s`` if there is one."""
         tau = np.asarray(torque_nm, dtype=float)
         k1 = np.asarray(self.k1_nm_per_rad)
         k3 = np.asarray(self.k3_nm_per_rad3)
@@ -160,6 +207,8 @@ class FlexParams:
             delta = delta - step
             if np.all(np.abs(step) <= 1e-15 * np.maximum(1.0, np.abs(delta))):
                 break
+        if self.servo_nm_per_rad is not None:
+            delta = delta + tau / np.asarray(self.servo_nm_per_rad, dtype=float)
         return delta
 
 

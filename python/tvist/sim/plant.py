@@ -67,6 +67,8 @@ class FlexIntegrator:
         self._quadratic = bool(np.any(self._c_load2 != 0.0))  # skip the factor when it is 1
         self._load_index = flex.damper_load_index()
         self._smoothing = flex.load_smoothing_nm
+        # With a servo in series the spring law has no closed form (FlexParams solves it).
+        self._series = flex if flex.servo_nm_per_rad is not None else None
         self.max_deflection_rad = flex.max_deflection_rad
         self._flange = flange
         self._accel_slice = accel_slice
@@ -121,11 +123,14 @@ class FlexIntegrator:
             np.multiply(vel_ref, self._fractions[s] * dt, out=theta)
             theta += base_ref
             np.subtract(theta, qpos, out=delta)
-            # tau = k1 delta + k3 delta^3
-            np.multiply(delta, delta, out=tau)
-            tau *= k3
-            tau += k1
-            tau *= delta
+            if self._series is None:
+                # tau = k1 delta + k3 delta^3
+                np.multiply(delta, delta, out=tau)
+                tau *= k3
+                tau += k1
+                tau *= delta
+            else:
+                tau[:] = self._series.spring_torque_nm(delta)
             # Gear damping c (q_motor' - q_link') with
             # c = c0 (1 + c_load |L|_s) (1 + c_load2 |L|_s) and
             # the trapezoidal link velocity (v_n + v_{n+1}) / 2: c (q_motor' - v_n / 2)

@@ -12,10 +12,12 @@ file, plus the payload); each hinge carries the gear torque of :class:`~tvist.si
 ``tau_j = k1 delta_j + k3 delta_j³ + c_j(tau) (d/dt)delta_j``,  ``delta_j = q_motor,j - q_j``,
 
 which acts between link ``j-1`` and link ``j`` and therefore is the generalized force of hinge
-``j``. The damping coefficient ``c_j`` grows with the load on joint ``j``'s gear and bearing, a
-spring torque (:meth:`~tvist.sim.FlexParams.damping_nms_per_rad`; for the base, the shoulder's,
-i.e. the arm's tilting moment on the base bearing). Rotor inertia does not enter: the motor's
-motion is prescribed.
+``j``. With a servo of finite stiffness in series (``FlexParams.servo_nm_per_rad``), the
+spring torque is that of the series pair (:mod:`tvist.sim.flex`). The damping coefficient
+``c_j`` grows with the load on joint ``j``'s gear and bearing, a spring torque
+(:meth:`~tvist.sim.FlexParams.damping_nms_per_rad`; for the base, the shoulder's, i.e. the
+arm's tilting moment on the base bearing). Rotor inertia does not enter: the motor's motion
+is prescribed.
 
 With bending links (``beams``, :mod:`tvist.sim.beams`) the link side also has the links'
 bending hinges, whose springs and dampers MuJoCo applies itself (MJCF ``stiffness`` and
@@ -438,6 +440,16 @@ class Twin:
         out = np.zeros((self.n_state, self.n_state))
         self._mujoco.mj_fullM(self._model, d, out)
         return out
+
+    def flange_jacobian(self, state: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Translational Jacobian of the flange (m/rad) in the base frame at the full
+        link-side ``state`` (:meth:`equilibrium_state`), ``(3, n_state)``."""
+        d = self._data
+        d.qpos[:] = np.asarray(state, dtype=float)
+        self._mujoco.mj_forward(self._model, d)
+        jac = np.zeros((3, self.n_state))
+        self._mujoco.mj_jacSite(self._model, d, jac, None, self._flange)
+        return jac
 
     # ------------------------------------------------------------------ run
 

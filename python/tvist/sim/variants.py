@@ -33,6 +33,10 @@ by construction. A variant changes the plant, not the map:
     and 7.67), at folded poses it couples with them (Q3 18.21 and 18.15 Hz instead of 20.16
     and 19.22), by amounts that depend on the pose.
 
+``"family:<robot>:<seed>"``
+    Variant ``seed`` of the seeded family of :mod:`tvist.sim.family` (UR5e and UR10e): gear
+    and servo stiffness, stiffening, damping and link bending drawn from plausible ranges.
+
 Run a campaign on a variant with :func:`run_variant_campaign` (the twin campaign's records,
 with ``true_modes`` from the variant's own eigen-analysis), or build the twin directly:
 ``Twin("ur5e", flex=variant_flex(name), beams=variant_beams(name))``.
@@ -54,6 +58,8 @@ __all__ = [
     "run_variant_campaign",
     "variant_beams",
     "variant_flex",
+    "variant_robot",
+    "variant_twin_kwargs",
 ]
 
 
@@ -90,6 +96,50 @@ _BEAMS: dict[str, LinkBeams] = {
 }
 
 
+def _family(name: str):
+    """The family variant named ``name``, or ``None`` for any other name."""
+    from tvist.sim.family import parse_family_name
+
+    return parse_family_name(name)
+
+
+def _unknown(name: str) -> ValueError:
+    return ValueError(
+        f"unknown, known: {', '.join(VARIANTS)}, family:<robot>:<seed> (twin variant {name!r})"
+    )
+
+
+def variant_robot(name: str) -> str:
+    """The robot (parameter-file name) of variant ``name``.
+
+    Raises
+    ------
+    ValueError
+        Unknown variant.
+    """
+    family = _family(name)
+    if family is not None:
+        return family.robot
+    if name not in VARIANTS:
+        raise _unknown(name)
+    return VARIANTS[name][0]
+
+
+def variant_twin_kwargs(name: str) -> dict:
+    """The :class:`~tvist.sim.Twin` keywords (``flex``, ``beams`` and, for a family variant,
+    ``physics_dt_s``) that make variant ``name``.
+
+    Raises
+    ------
+    ValueError
+        Unknown variant.
+    """
+    family = _family(name)
+    if family is not None:
+        return family.twin_kwargs()
+    return {"flex": variant_flex(name), "beams": variant_beams(name)}
+
+
 def variant_beams(name: str) -> LinkBeams | None:
     """The bending links of variant ``name``, ``None`` if its links are rigid.
 
@@ -98,6 +148,9 @@ def variant_beams(name: str) -> LinkBeams | None:
     ValueError
         Unknown variant.
     """
+    family = _family(name)
+    if family is not None:
+        return family.beams
     variant_flex(name)
     return _BEAMS.get(name)
 
@@ -110,10 +163,13 @@ def variant_flex(name: str) -> FlexParams:
     ValueError
         Unknown variant.
     """
+    family = _family(name)
+    if family is not None:
+        return family.flex
     try:
         return VARIANTS[name][1]
     except KeyError:
-        raise ValueError(f"unknown twin variant {name!r}; known: {', '.join(VARIANTS)}") from None
+        raise _unknown(name) from None
 
 
 def run_variant_campaign(
@@ -134,8 +190,7 @@ def run_variant_campaign(
     """
     from tvist.ident.campaign import campaign_poses, run_campaign
 
-    variant_flex(variant)  # an unknown name is refused here, naming the known ones
-    robot_name = VARIANTS[variant][0]
+    robot_name = variant_robot(variant)  # an unknown name is refused here, naming the known ones
     poses = campaign_poses(robot_name, seed=seed)[::every]
     return run_campaign(
         poses[part[0] :: part[1]],

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from tvist.dynmap import warn_outside_range
 from tvist.trajectory.resample import resample
 
 __all__ = ["METHODS", "ShapedTrajectory", "modes_at", "shape_samples", "shape_waypoints"]
@@ -130,6 +131,8 @@ def shape_samples(
     q = np.ascontiguousarray(Q, dtype=float)
     if q.ndim != 2:
         raise ValueError(f"Q must have shape (n_samples, n_dof); got {q.shape}")
+    # A map identified on other inertias holds its modes at a bound: say so, once per call.
+    warn_outside_range(dynamics, q)
     end_modes = modes_at(dynamics, q[-1])
     if method == "tvist":
         if interp not in _STENCIL_LEAD:
