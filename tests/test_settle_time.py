@@ -89,3 +89,31 @@ def test_never_settled_and_already_settled():
     assert settling_time(t, quiet, t[-1] - 0.05, 0.05, hold_s=0.1) == math.inf
     with pytest.raises(ValueError, match="hold_s"):
         settling_time(t, quiet, 0.2, 0.05, hold_s=-1.0)
+
+
+def test_a_logged_moves_settle_times_match_the_analytic_decay():
+    """:func:`tvist.live.settle_times` on a log-shaped record: the target leaves its start on
+    the grid at ``t0``, the tool acceleration rings in quadrature after the stop (so its
+    magnitude is exactly ``A e^(-σ τ)``) on top of gravity; the settle time from ``t0`` is
+    ``t_stop - t0 + ln(A / band) / σ`` for each band. Tolerance: the chord between samples
+    (late by at most ``σ dt² / 8`` = 1.25 µs here) plus 1 ns for the rest estimate, whose
+    bias (the decay left in the last 0.2 s, < 1e-12 m/s²) moves the crossing by less."""
+    from tvist.analysis import SETTLE_BANDS_M_S2
+    from tvist.live import settle_times
+
+    dt, t0, t_stop, amp, sigma, wd = 0.002, 0.5, 1.3, 0.8, 2.5, 2 * math.pi * 9.0
+    t = np.arange(0.0, 14.0, dt)
+    ramp = np.clip((t - t0) / (t_stop - t0), 0.0, 1.0)
+    target = np.outer(ramp, [0.4, -0.2, 0, 0, 0, 0])
+    tau = np.maximum(t - t_stop, 0.0)
+    ring = amp * np.exp(-sigma * tau) * (t >= t_stop)
+    accel = np.column_stack([ring * np.cos(wd * tau), ring * np.sin(wd * tau), np.zeros_like(t)])
+    accel += [0.3, -0.1, 9.81]
+    times = settle_times(t, target, accel)
+    for band in SETTLE_BANDS_M_S2:
+        want = t_stop - t0 + math.log(amp / band) / sigma
+        assert want <= times[band] <= want + sigma * dt**2 / 8 + 1e-9, band
+    # A log that ends ringing has not settled; a target that never moves is no move.
+    assert settle_times(t[:1500], target[:1500], accel[:1500])[SETTLE_BANDS_M_S2[-1]] == math.inf
+    with pytest.raises(ValueError, match="never moves"):
+        settle_times(t, np.zeros_like(target), accel)

@@ -544,3 +544,29 @@ def residual_vibration(log_path: str | Path, window_s: float = 1.0) -> float:
     window = (t >= t_rest) & (t < t_rest + window_s)
     deviation = np.linalg.norm(accel[window] - rest, axis=1)
     return float(np.sqrt(np.mean(deviation**2)))
+
+
+def settle_times(
+    t_s: np.ndarray, target_q: np.ndarray, accel: np.ndarray, rest_window_s: float = 0.2
+) -> dict[float, float]:
+    """Time to settled of a logged move, s from the move's start, per band of
+    :data:`tvist.analysis.SETTLE_BANDS_M_S2` (``math.inf``: not settled within the log).
+
+    The move starts at the first sample whose servo target ``target_q`` (rad,
+    ``(n, n_dof)``) is more than 1e-7 rad from the first one. The tool acceleration ``accel``
+    (m/s², ``(n, 3)``) is taken relative to its mean over the log's last ``rest_window_s``
+    (gravity at the end pose, the arm at rest), and has settled once it stays inside the band
+    for :data:`tvist.analysis.SETTLE_HOLD_S` or longer.
+    """
+    from tvist.analysis import SETTLE_BANDS_M_S2, SETTLE_HOLD_S, settling_time
+
+    t, target, acc = np.asarray(t_s, float), np.asarray(target_q, float), np.asarray(accel, float)
+    moved = np.flatnonzero(np.max(np.abs(target - target[0]), axis=1) > 1e-7)
+    if moved.size == 0:
+        raise ValueError("the servo target never moves: no move to settle")
+    t_start = t[max(int(moved[0]) - 1, 0)]
+    dynamic = acc - acc[t >= t[-1] - rest_window_s].mean(axis=0)
+    return {
+        band: settling_time(t, dynamic, t_start, band, hold_s=SETTLE_HOLD_S)
+        for band in SETTLE_BANDS_M_S2
+    }

@@ -14,6 +14,8 @@ Signals are ``(n_samples,)`` or ``(n_samples, k)``, time along rows.
 from __future__ import annotations
 
 from tvist.analysis.metrics import (
+    SETTLE_BANDS_M_S2,
+    SETTLE_HOLD_S,
     count_velocity_peaks,
     peak_acceleration,
     peak_jerk,
@@ -26,6 +28,8 @@ from tvist.analysis.sensitivity import sensitivity_grid
 from tvist.analysis.spectrum import EnergySpectrum, energy_spectrum
 
 __all__ = [
+    "SETTLE_BANDS_M_S2",
+    "SETTLE_HOLD_S",
     "EnergySpectrum",
     "PathDeviation",
     "ResidualVibration",

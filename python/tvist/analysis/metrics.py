@@ -13,12 +13,22 @@ from numpy.typing import ArrayLike
 from tvist.analysis._signals import as_channels, as_time, magnitude, positive
 
 __all__ = [
+    "SETTLE_BANDS_M_S2",
+    "SETTLE_HOLD_S",
     "count_velocity_peaks",
     "peak_acceleration",
     "peak_jerk",
     "peak_velocity",
     "settling_time",
 ]
+
+#: The tool-acceleration bands (m/s², gravity removed) that time to settled is reported at:
+#: still enough to place (0.05) and to measure or take a picture (0.01).
+SETTLE_BANDS_M_S2 = (0.05, 0.01)
+#: A signal has settled once it is seen inside the band for at least this long (s): several
+#: periods of a robot arm's lowest modes (~5-10 Hz), so a zero crossing of the ringing near
+#: the end of a record does not count.
+SETTLE_HOLD_S = 0.2
 
 
 def settling_time(

@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -133,7 +134,27 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.tail >= 1.2:
         rms = residual_vibration(result.log_path)
         print(f"residual vibration (accelerometer RMS, 1 s after the move): {rms:.2e} m/s²")
+        _print_settle(result.log_path, Q.shape[0] * args.dt_s)
     return 0
+
+
+def _print_settle(log_path: Path, move_s: float) -> None:
+    """Time to settled of the logged move, beside the move's own duration (the limit)."""
+    from tvist.ident import read_rtde_csv
+    from tvist.live import settle_times
+
+    record = read_rtde_csv(log_path)
+    times = settle_times(record.t_s, record.target_q, record.tool_accel)
+    text = ", ".join(
+        f"{band:g} m/s² after {t:.3f} s"
+        if math.isfinite(t)
+        else f"{band:g} m/s² not within the log"
+        for band, t in times.items()
+    )
+    print(
+        f"settled (tool acceleration, from the move's start): {text}; "
+        f"the move itself {move_s:.3f} s"
+    )
 
 
 def _checked_reference(args: argparse.Namespace, Q, names, shaper):  # noqa: N803

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from tvist.analysis import settling_time
+from tvist.analysis import SETTLE_BANDS_M_S2, SETTLE_HOLD_S, settling_time
 from tvist.sim import SimRecord, Twin
 
 __all__ = [
@@ -62,14 +62,12 @@ class Criterion:
 
 #: The settling bands every run is measured against; the first decides recommendations.
 CRITERIA: tuple[Criterion, ...] = (
-    Criterion("accel_0.05_m_s2", "acceleration", 0.05, "|ψ| < 0.05 m/s²"),
-    Criterion("accel_0.01_m_s2", "acceleration", 0.01, "|ψ| < 0.01 m/s²"),
+    *(
+        Criterion(f"accel_{band:g}_m_s2", "acceleration", band, f"|ψ| < {band:g} m/s²")
+        for band in SETTLE_BANDS_M_S2
+    ),
     Criterion("flange_0.1_mm", "flange", 1e-4, "flange within 0.1 mm"),
 )
-#: A run has settled once the record shows it inside the band for at least this long (s):
-#: several periods of the arm's lowest mode (~8 Hz), so a zero crossing near the end of the
-#: record does not count.
-SETTLE_HOLD_S = 0.2
 
 
 @dataclass(frozen=True)
