@@ -99,7 +99,7 @@ def test_a_logged_moves_settle_times_match_the_analytic_decay():
     (late by at most ``σ dt² / 8`` = 1.25 µs here) plus 1 ns for the rest estimate, whose
     bias (the decay left in the last 0.2 s, < 1e-12 m/s²) moves the crossing by less."""
     from tvist.analysis import SETTLE_BANDS_M_S2
-    from tvist.live import settle_times
+    from tvist.live import moving_span, settle_times
 
     dt, t0, t_stop, amp, sigma, wd = 0.002, 0.5, 1.3, 0.8, 2.5, 2 * math.pi * 9.0
     t = np.arange(0.0, 14.0, dt)
@@ -110,6 +110,8 @@ def test_a_logged_moves_settle_times_match_the_analytic_decay():
     accel = np.column_stack([ring * np.cos(wd * tau), ring * np.sin(wd * tau), np.zeros_like(t)])
     accel += [0.3, -0.1, 9.81]
     times = settle_times(t, target, accel)
+    start, end = moving_span(target)  # the move itself: t0 to t_stop, on the grid
+    assert (t[start], t[end]) == pytest.approx((t0, t_stop), abs=1e-12)
     for band in SETTLE_BANDS_M_S2:
         want = t_stop - t0 + math.log(amp / band) / sigma
         assert want <= times[band] <= want + sigma * dt**2 / 8 + 1e-9, band

@@ -546,6 +546,24 @@ def residual_vibration(log_path: str | Path, window_s: float = 1.0) -> float:
     return float(np.sqrt(np.mean(deviation**2)))
 
 
+def moving_span(q: np.ndarray) -> tuple[int, int]:
+    """Sample indices ``(start, end)`` of the move in joint positions ``q`` (rad,
+    ``(n, n_dof)``): the last sample at the first row's position, and the first sample at the
+    last row's, each within 1e-7 rad; ``(end - start) * dt`` is the move's own duration.
+
+    Raises
+    ------
+    ValueError
+        If ``q`` never moves.
+    """
+    q = np.asarray(q, dtype=float)
+    left = np.flatnonzero(np.max(np.abs(q - q[0]), axis=1) > 1e-7)
+    if left.size == 0:
+        raise ValueError("the servo target never moves: no move to settle")
+    arriving = np.flatnonzero(np.max(np.abs(q - q[-1]), axis=1) > 1e-7)
+    return max(int(left[0]) - 1, 0), int(arriving[-1]) + 1
+
+
 def settle_times(
     t_s: np.ndarray, target_q: np.ndarray, accel: np.ndarray, rest_window_s: float = 0.2
 ) -> dict[float, float]:
@@ -561,10 +579,8 @@ def settle_times(
     from tvist.analysis import SETTLE_BANDS_M_S2, SETTLE_HOLD_S, settling_time
 
     t, target, acc = np.asarray(t_s, float), np.asarray(target_q, float), np.asarray(accel, float)
-    moved = np.flatnonzero(np.max(np.abs(target - target[0]), axis=1) > 1e-7)
-    if moved.size == 0:
-        raise ValueError("the servo target never moves: no move to settle")
-    t_start = t[max(int(moved[0]) - 1, 0)]
+    start, _ = moving_span(target)
+    t_start = t[start]
     dynamic = acc - acc[t >= t[-1] - rest_window_s].mean(axis=0)
     return {
         band: settling_time(t, dynamic, t_start, band, hold_s=SETTLE_HOLD_S)

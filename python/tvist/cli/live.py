@@ -63,6 +63,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from tvist.live import (
         APPROACH_ACCEL_RAD_S2,
         APPROACH_SPEED_RAD_S,
+        moving_span,
         residual_vibration,
         run_shaped_move,
     )
@@ -134,7 +135,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.tail >= 1.2:
         rms = residual_vibration(result.log_path)
         print(f"residual vibration (accelerometer RMS, 1 s after the move): {rms:.2e} m/s²")
-        _print_settle(result.log_path, Q.shape[0] * args.dt_s)
+        start, end = moving_span(Q)
+        _print_settle(result.log_path, (end - start) * args.dt_s)
     return 0
 
 
