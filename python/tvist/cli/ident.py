@@ -270,9 +270,9 @@ def _identify_one(args: argparse.Namespace, path: Path) -> int:
     import warnings
 
     from tvist.cli.args import payload_from_args
-    from tvist.ident.batch import excited_joint
     from tvist.ident.local_fit import identify_local
     from tvist.ident.logs import LogWarning, log_payload, read_rtde_csv
+    from tvist.ident.segment import excitation_segment
     from tvist.robots import Robot, params
 
     with warnings.catch_warnings(record=True) as caught:
@@ -292,7 +292,18 @@ def _identify_one(args: argparse.Namespace, path: Path) -> int:
         needed_for="identification (the joint inertias)",
         out=sys.stderr if args.json else None,
     )
-    joint = excited_joint(record) if args.joint is None else args.joint
+    if args.joint is None:
+        segment = excitation_segment(record)
+        joint, n_rows = segment.joint, record.n_samples
+        record = segment.of(record)
+        if segment.trimmed and not args.json:
+            print(
+                f"{path}: excitation of joint {joint} in rows {segment.start}-"
+                f"{segment.stop - 1} of {n_rows} ({segment.n_moves} moves; the rest of the "
+                "log is left out, --joint fits the whole log)"
+            )
+    else:
+        joint = args.joint
     robot = Robot(params(args.robot), payload)
     fit = identify_local(
         record,
@@ -345,7 +356,9 @@ def add_identify_command(sub: argparse._SubParsersAction) -> None:
         "--joint",
         type=int,
         default=None,
-        help="excited joint of a single log (0 base, 1 shoulder; default: detected)",
+        help="excited joint of a single log (0 base, 1 shoulder), fitted over the whole log "
+        "(default: the excitation and its joint are found in the log, approach moves and "
+        "rests around it left out)",
     )
     _add_payload_args(p)
     p.add_argument(
