@@ -37,7 +37,7 @@ def _log_with_approach(joint: int, seed: int, folder) -> tuple[str, Twin, int, i
 
 @pytest.mark.parametrize("joint", [0, 1])
 def test_identify_finds_the_excitation_after_an_approach_move(joint, tmp_path, capsys):
-    path, twin, n_approach, n_excitation = _log_with_approach(joint, seed=3 + joint, folder=tmp_path)
+    path, twin, n_approach, n_excitation = _log_with_approach(joint, 3 + joint, tmp_path)
     assert main(["identify", path, "--payload-kg", "5", "--json"]) == 0
     fit = json.loads(capsys.readouterr().out)
     wn_true, zeta_true = twin.modes(Q_POSE)[joint]

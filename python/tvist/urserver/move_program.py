@@ -13,9 +13,11 @@ excitation programs of ``tvist plan``)::
 
 ``movej`` blocks until the move has ended, as on a UR (a target outside the joint limits
 protective-stops the arm, an argument outside URScript's range stops the program, see
-:mod:`tvist.urserver.motion`); ``sleep`` waits whole controller ticks. The script ports split the trailing call ``NAME()`` off the definition; the controller
-takes it as the start of the program it has just received. A program with any other statement is refused before it moves anything, naming the
-line, so a program the twin would run differently from a UR never starts.
+:mod:`tvist.urserver.motion`); ``sleep`` waits whole controller ticks. The script ports split
+the trailing call ``NAME()`` off the definition; the controller takes it as the start of the
+program it has just received. A program with any other statement is refused before it moves
+anything, naming the line, so a program the twin would run differently from a UR never
+starts.
 """
 
 from __future__ import annotations
