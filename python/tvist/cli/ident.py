@@ -23,6 +23,7 @@ from tvist.cli.args import (
     output_file,
     payload_from_args,
 )
+from tvist.cli.plan import add_plan_options
 
 __all__ = [
     "add_campaign_command",
@@ -53,7 +54,9 @@ def _add_payload_args(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_campaign(args: argparse.Namespace) -> int:
-    from tvist.ident.campaign import URRobot, campaign_poses, run_campaign
+    from tvist.cli.plan import checked_plan
+    from tvist.ident.campaign import URRobot, run_campaign
+    from tvist.ident.campaign_robots import new_run_folder
     from tvist.ident.results_store import SettingsMismatch
 
     if args.variant:
@@ -72,13 +75,16 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     output_file(args.out, "--out")
     if args.map:
         output_file(args.map, "--map")
-    poses = campaign_poses(
-        args.robot, payloads_kg=args.payloads, payload_com_m=args.payload_com, seed=args.seed
-    )
-    poses = poses[:: args.every]
+    # A plan the map fit cannot succeed on is refused before a robot moves (on the twin it
+    # only matters when a map is asked for).
+    poses = checked_plan(args, require_fittable=bool(args.robot_ip or args.map))
     robot = None
     if args.robot_ip:
-        robot = URRobot(args.robot_ip, args.robot, log_dir=Path(args.out).parent / "logs")
+        log_dir = new_run_folder(Path(args.out).parent / "logs")
+        print(f"RTDE logs of this run: {log_dir}", flush=True)
+        robot = URRobot(
+            args.robot_ip, args.robot, log_dir=log_dir, confirm=None if args.yes else input
+        )
     try:
         results = run_campaign(
             poses,
@@ -139,38 +145,33 @@ def add_campaign_command(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "campaign",
         help="identify base and shoulder modes over the workspace (paper Algorithm 1)",
-        description="Move through the campaign poses, excite base and shoulder, identify "
-        "their modes and append one JSON line per pose to --out (reruns resume).",
+        description="Move through the campaign poses payload by payload (on a robot: one "
+        "prompt per payload change, or none with --yes; each run's RTDE logs in a new "
+        "logs/run-NNN next to --out), excite base and shoulder, identify their modes and "
+        "append one JSON line per pose to --out (reruns resume). A plan the map fit cannot "
+        "succeed on is refused before the robot moves.",
     )
     target = p.add_mutually_exclusive_group(required=True)
     target.add_argument("--sim", action="store_true", help="use the MuJoCo twin")
     target.add_argument("--robot-ip", help="use a real UR at this address (needs ur-rtde)")
     p.add_argument("--out", default="out/campaign.jsonl", help="results file (JSON lines)")
-    p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
+    add_plan_options(p)
+    p.add_argument(
+        "--yes",
+        action="store_true",
+        help="with --robot-ip: do not ask before each payload change (mount the payloads in "
+        "the plan's order, lightest first, as the campaign reaches them)",
+    )
     p.add_argument(
         "--variant",
         help="with --sim: a twin variant whose flexibility the maps do not model exactly "
         "(ur5e-soft-gears, ur5e-flex-links, or family:ROBOT:SEED, e.g. family:ur5e:17, "
         "one arm of a seeded family of plausible UR5e/UR10e variants)",
     )
-    p.add_argument(
-        "--payloads", type=float, nargs="+", default=[0.0, 1.0, 3.0, 5.0], help="payloads (kg)"
-    )
-    p.add_argument(
-        "--payload-com",
-        type=float,
-        nargs=3,
-        default=(0.0, 0.0, 0.05),
-        metavar=("X", "Y", "Z"),
-        help="payload centre of mass in the flange frame (m)",
-    )
-    p.add_argument("--every", type=int, default=1, help="run every N-th pose only")
     p.add_argument("--workers", type=int, default=1, help="processes for the twin")
-    p.add_argument("--seed", type=int, default=0, help="seed of wrists, excitations, noise")
     p.add_argument(
         "--accel-noise", type=float, default=0.05, help="twin accelerometer noise (m/s²)"
     )
-    p.add_argument("--duration", type=float, default=8.0, help="excitation length per joint (s)")
     p.add_argument(
         "--single-mode",
         action="store_true",

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -25,6 +26,7 @@ __all__ = [
     "Excitation",
     "random_excitation",
     "to_urscript",
+    "write_trajectory_csv",
 ]
 
 #: Sampling period of e-Series RTDE and of the controller, s.
@@ -311,3 +313,15 @@ def to_urscript(
         lines.append(f"  sleep({move.wait_s:.6f})")
     lines += ["end", f"{name}()", ""]
     return "\n".join(lines)
+
+
+def write_trajectory_csv(excitation: Excitation, path: str | Path) -> Path:
+    """Write the excitation's sampled reference as a trajectory CSV: a header ``time_s,
+    q0..q5`` and one row per sample (s, rad; 9 decimals), the format ``tvist shape`` and
+    ``tvist run`` read (``tvist run --unshaped`` streams it with servoJ)."""
+    path = Path(path)
+    n_dof = excitation.q.shape[1]
+    header = ",".join(["time_s", *(f"q{j}" for j in range(n_dof))])
+    table = np.column_stack([excitation.t_s, excitation.q])
+    np.savetxt(path, table, fmt="%.9f", delimiter=",", header=header, comments="")
+    return path
