@@ -6,6 +6,8 @@ from __future__ import annotations
 import argparse
 import math
 
+import numpy as np
+
 from tvist.cli.args import DEFAULT_PAYLOAD_COM_M, existing_file
 
 __all__ = ["add_plan_command", "add_plan_options", "checked_plan"]
@@ -60,14 +62,7 @@ def checked_plan(args: argparse.Namespace, require_fittable: bool = True) -> lis
         raise ValueError(f"--every {args.every}: give 1 or more")
     if not (math.isfinite(args.duration) and args.duration > 0):
         raise ValueError(f"--duration {args.duration}: give a length > 0 s")
-    cover_q = None
-    if args.cover:
-        from tvist.cli.shape import read_joint_csv
-
-        try:
-            cover_q, _ = read_joint_csv(existing_file(args.cover, "--cover"))
-        except ValueError as exc:
-            raise ValueError(f"--cover {args.cover}: {exc}") from None
+    cover_q = _read_poses(args.cover) if args.cover else None
     poses = plan_poses(
         args.robot,
         payloads_kg=args.payloads,
@@ -83,6 +78,22 @@ def checked_plan(args: argparse.Namespace, require_fittable: bool = True) -> lis
             "--cover or payloads with --payloads)"
         )
     return poses
+
+
+def _read_poses(path: str) -> np.ndarray:
+    """``--cover``: joint angles (rad), one pose per row, comma-separated, an optional
+    header line."""
+    text = existing_file(path, "--cover").read_text().splitlines()
+    rows = [line for line in text if line.strip()]
+    if rows and not rows[0].lstrip()[:1].isdigit() and rows[0].lstrip()[:1] not in "+-.":
+        rows = rows[1:]  # a header
+    try:
+        q = np.array([[float(v) for v in line.split(",")] for line in rows], ndmin=2)
+    except ValueError:
+        raise ValueError(f"--cover {path}: not comma-separated numbers") from None
+    if q.size == 0 or q.ndim != 2:
+        raise ValueError(f"--cover {path}: one pose per row (joint angles, rad)")
+    return q
 
 
 def _cmd_plan(args: argparse.Namespace) -> int:
