@@ -4,8 +4,9 @@
 the demo's Q1 -> Q2 with the map.
 
 Every step is a ``tvist`` subprocess; the programs go to the robot's script port as
-``nc ROBOT 30002 < PROGRAM`` sends them. The plan is small (7 poses at the server's 5 kg,
-2 s excitations, approach moves at 1 rad/s) to keep the test near two minutes.
+``nc ROBOT 30002 < PROGRAM`` sends them. The plan is small (every 9th pose and the move's
+two poses: 8 poses at the server's 5 kg, 3 s excitations, approach moves at 1.5 rad/s) to
+keep the test short.
 """
 
 from __future__ import annotations
@@ -15,11 +16,13 @@ import socket
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from tvist.demo.motions import motion_by_name
+from tvist.live import residual_vibration
 from twin_server_fixture import HOST, PAYLOAD_COM_M, PAYLOAD_KG, twin_server
 
 pytest.importorskip("rtde_receive")
@@ -27,8 +30,8 @@ pytest.importorskip("rtde_receive")
 #: The script port a program is sent to (the secondary interface).
 SCRIPT_PORT = 30002
 DASHBOARD_PORT = 29999
-#: Polls of the dashboard's program state, 0.05 s apart: bounds a program's run (a 2 s
-#: excitation and its approach take ~5 s of simulated time; a loaded machine slips).
+#: Polls of the dashboard's program state, 0.05 s apart: bounds a program's run (a 3 s
+#: excitation and its approach take ~6 s of simulated time; a loaded machine slips).
 MAX_POLLS = 2400
 
 
@@ -81,56 +84,32 @@ def _timestamp_steps(log) -> np.ndarray:
 
 
 def test_plan_record_identify_fit_run_on_the_twin(tmp_path) -> None:
-    plan = tmp_path / "plan"
-    logs = tmp_path / "logs"
+    plan, logs = tmp_path / "plan", tmp_path / "logs"
     logs.mkdir()
-    com = [str(v) for v in PAYLOAD_COM_M]
+    motion = motion_by_name("Q1->Q2")
+    move = tmp_path / "q1q2.csv"
+    np.savetxt(move, motion.reference(0.0).q, delimiter=",", fmt="%.12f")
+    # The user covers the poses of the move the map is for, besides the plan's own.
+    cover = tmp_path / "my_poses.csv"
+    np.savetxt(cover, [motion.q_start, motion.q_end], delimiter=",", fmt="%.12f")
+    payload = ["--payload-kg", str(PAYLOAD_KG), "--payload-com", *map(str, PAYLOAD_COM_M)]
     _tvist(
-        "plan",
-        "--payloads",
-        str(PAYLOAD_KG),
-        "--payload-com",
-        *com,
-        "--every",
-        "8",
-        "--duration",
-        "2",
-        "--approach-speed",
-        "1.0",
-        "--approach-accel",
-        "2.0",
-        "--out",
-        str(plan),
+        *("plan", "--payloads", str(PAYLOAD_KG), *payload[2:], "--every", "9"),
+        *("--cover", str(cover), "--duration", "3", "--out", str(plan)),
+        *("--approach-speed", "1.5", "--approach-accel", "3.0"),
     )
     programs = sorted(plan.glob("*.script"))
-    assert len(programs) == 14  # 7 poses, base and shoulder
-    move = tmp_path / "q1q2.csv"
-    motion = motion_by_name("Q1->Q2")
-    np.savetxt(move, motion.reference(0.0).q, delimiter=",", fmt="%.12f")
+    assert len(programs) == 16  # 6 + 2 poses, base and shoulder
     with twin_server():
         for program in programs:
             _run_while_recording(program.read_text(), logs / f"{program.stem}.csv")
-        _tvist(
-            "identify",
-            str(logs),
-            "--out",
-            str(tmp_path / "poses.jsonl"),
-            "--payload-kg",
-            str(PAYLOAD_KG),
-            "--payload-com",
-            *com,
-            "--workers",
-            "2",
-        )
-        _tvist("fit-map", str(tmp_path / "poses.jsonl"), "--out", str(tmp_path / "map.json"))
-        runs = {}
-        for name, flags in (
-            ("unshaped", ["--unshaped"]),
-            ("map", ["--map", str(tmp_path / "map.json")]),
-        ):
+        poses, dynmap = tmp_path / "poses.jsonl", tmp_path / "map.json"
+        _tvist("identify", str(logs), "--out", str(poses), *payload, "--workers", "2")
+        _tvist("fit-map", str(poses), "--out", str(dynmap))
+
+        def run(name: str, *flags: str) -> tuple[Path, str]:
             log = tmp_path / f"run_{name}.csv"
             # The payload is given as the server's (5 kg, 5 cm beyond the flange).
-            payload = ["--payload-kg", str(PAYLOAD_KG), "--payload-com", *com]
             done = _tvist(
                 "run",
                 str(move),
@@ -143,15 +122,23 @@ def test_plan_record_identify_fit_run_on_the_twin(tmp_path) -> None:
                 *flags,
                 *payload,
             )
-            runs[name] = (log, done.stdout + done.stderr)
-    from tvist.live import residual_vibration
+            return log, done.stdout + done.stderr
 
-    unshaped = residual_vibration(runs["unshaped"][0])
-    shaped = residual_vibration(runs["map"][0])
+        unshaped_log, _ = run("unshaped", "--unshaped")
+        unshaped = residual_vibration(unshaped_log)
+        # A servo loop that woke too late jumps over samples (tvist run warns), and the
+        # jumps excite the arm: such a run does not measure the shaping and is run again (at
+        # most twice), as in tests/test_twin_server.py.
+        for attempt in range(3):
+            shaped_log, output = run(f"map{attempt}", "--map", str(dynmap))
+            shaped = residual_vibration(shaped_log)
+            if shaped <= 0.05 * unshaped or "woke too late" not in output:
+                break
     # The identified map must do what the paper's map does on the twin: >= 95 % less
-    # residual vibration than the unshaped move.
-    assert shaped <= 0.05 * unshaped, (shaped, unshaped, runs["map"][1])
+    # residual vibration than the unshaped move (offline, with the twin run directly, the
+    # same plan's map gives 99.5 %).
+    assert shaped <= 0.05 * unshaped, (shaped, unshaped, output)
     # Every log, the excitations' and the runs', has every 2 ms sample once.
-    for log in [*sorted(logs.glob("*.csv")), runs["unshaped"][0], runs["map"][0]]:
+    for log in [*sorted(logs.glob("*.csv")), unshaped_log, shaped_log]:
         steps = _timestamp_steps(log)
         np.testing.assert_allclose(steps, 0.002, atol=1e-6, err_msg=str(log))

@@ -77,7 +77,8 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
         output_file(args.map, "--map")
     # A plan the map fit cannot succeed on is refused before a robot moves (on the twin it
     # only matters when a map is asked for).
-    poses = checked_plan(args, require_fittable=bool(args.robot_ip or args.map))
+    fit_check = bool(args.robot_ip or args.map) and not args.no_fit_check
+    poses = checked_plan(args, require_fittable=fit_check)
     robot = None
     if args.robot_ip:
         log_dir = new_run_folder(Path(args.out).parent / "logs")
@@ -161,6 +162,11 @@ def add_campaign_command(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="with --robot-ip: do not ask before each payload change (mount the payloads in "
         "the plan's order, lightest first, as the campaign reaches them)",
+    )
+    p.add_argument(
+        "--no-fit-check",
+        action="store_true",
+        help="run a plan the map fit cannot succeed on (to identify a few poses only)",
     )
     p.add_argument(
         "--variant",

@@ -63,14 +63,19 @@ def checked_plan(args: argparse.Namespace, require_fittable: bool = True) -> lis
     if not (math.isfinite(args.duration) and args.duration > 0):
         raise ValueError(f"--duration {args.duration}: give a length > 0 s")
     cover_q = _read_poses(args.cover) if args.cover else None
-    poses = plan_poses(
-        args.robot,
-        payloads_kg=args.payloads,
-        payload_com_m=args.payload_com,
-        every=args.every,
-        seed=args.seed,
-        cover_q=cover_q,
-    )
+    try:
+        poses = plan_poses(
+            args.robot,
+            payloads_kg=args.payloads,
+            payload_com_m=args.payload_com,
+            every=args.every,
+            seed=args.seed,
+            cover_q=cover_q,
+        )
+    except ValueError as exc:
+        if cover_q is None:
+            raise
+        raise ValueError(f"--cover {args.cover}: {exc}") from None
     shortfall = plan_shortfall(poses) if require_fittable else None
     if shortfall:
         raise ValueError(
