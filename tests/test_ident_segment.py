@@ -22,11 +22,13 @@ Q_FROM = np.array(PAPER_POSES["Q1"], dtype=float)
 APPROACH_SPEED_RAD_S, APPROACH_ACCEL_RAD_S2 = 0.3, 0.5
 
 
-def _log_with_approach(joint: int, seed: int, folder) -> tuple[str, Twin, int, int]:
+def _log_with_approach(
+    joint: int, seed: int, folder, q_from: np.ndarray = Q_FROM
+) -> tuple[str, Twin, int, int]:
     """Approach, the excitation of ``joint`` (its 0.5 s standstill first), 2 s of rest: the
     twin (5 kg, accelerometer noise) run on it, written as ur_rtde CSV."""
     twin = Twin("ur5e", payload_kg=5.0, payload_com_m=(0.0, 0.0, 0.05), accel_noise_std=0.05)
-    approach = trapezoid(Q_FROM, Q_POSE, APPROACH_SPEED_RAD_S, APPROACH_ACCEL_RAD_S2, t_pre_s=0.3)
+    approach = trapezoid(q_from, Q_POSE, APPROACH_SPEED_RAD_S, APPROACH_ACCEL_RAD_S2, t_pre_s=0.3)
     excitation = random_excitation(Q_POSE, joint, seed=seed, duration_s=4.0)
     rest = np.tile(excitation.q[-1], (1000, 1))
     q_ref = np.vstack([approach.q, excitation.q[1:], rest])
@@ -53,3 +55,19 @@ def test_identify_finds_the_excitation_after_an_approach_move(joint, tmp_path, c
     assert segment.joint == joint
     assert segment.start >= n_approach - 1
     assert n_approach + n_excitation <= segment.stop <= n_approach + n_excitation + 500
+
+
+def test_a_long_move_of_the_excited_joint_is_an_approach(tmp_path):
+    """An approach that turns the base by 1.2 rad (and the shoulder by 0.01 rad, too little
+    to count at that speed) before a base excitation: longer than any move of Algorithm 2
+    (two targets within ±10°), so it is left out, and the log's pose is the excitation's."""
+    from tvist.ident.pose import pose_of
+
+    q_from = Q_POSE + np.array([-1.2, 0.01, 0.0, 0.0, 0.0, 0.0])
+    path, _, n_approach, _ = _log_with_approach(0, 7, tmp_path, q_from=q_from)
+    log = read_rtde_csv(path)
+    segment = excitation_segment(log)
+    assert segment.joint == 0 and segment.start >= n_approach - 1
+    # The pose that pairs the log with its shoulder log: the excitation's (the arm sags
+    # under gravity by a few mrad on the link side).
+    np.testing.assert_allclose(pose_of(segment.of(log)), Q_POSE, atol=5e-3)

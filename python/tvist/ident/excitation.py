@@ -31,6 +31,8 @@ __all__ = [
 
 #: Sampling period of e-Series RTDE and of the controller, s.
 DEFAULT_DT_S = 0.002
+#: Algorithm 2's targets lie within this of the start position, rad (±10°).
+MAX_DELTA_RAD = math.pi / 18.0
 
 
 @dataclass(frozen=True)
@@ -136,7 +138,7 @@ def random_excitation(
     duration_s: float = 8.0,
     dt_s: float = DEFAULT_DT_S,
     standstill_s: float = 0.5,
-    max_delta_rad: float = math.pi / 18.0,
+    max_delta_rad: float = MAX_DELTA_RAD,
     speed_range_rad_s: tuple[float, float] = (0.5, 2.0),
     accel_range_rad_s2: tuple[float, float] = (0.3, 7.0),
     wait_range_s: tuple[float, float] = (0.1, 1.0),

@@ -4,9 +4,11 @@ A log recorded while an excitation program runs also holds what came before and 
 the approach move to the pose (usually several joints at once, or the joint excited just
 before returning to the pose) and rests. The excitation (paper Algorithm 2) is a series of
 moves of *one* joint separated by short waits. So the log is cut into bouts of motion
-separated by quiet stretches (:func:`~tvist.ident.preprocess.quiet_samples`); each bout moves
-one joint or several; the excitation is the longest run of consecutive bouts that each move
-the same single joint (the later one on a tie: an excitation follows its approach). The
+separated by quiet stretches (:func:`~tvist.ident.preprocess.quiet_samples`); a bout is a
+move of the excitation if it moves one joint only, by at most the width of Algorithm 2's
+target range (``2 * MAX_DELTA_RAD``: a longer move of one joint is an approach); the
+excitation is the longest run of consecutive such bouts of the same joint (the later one on
+a tie: an excitation follows its approach). The
 segment keeps at most :data:`MAX_REST_S` of the rest before its first move (the gravity
 estimate's standstill) and after its last move (the last ringing).
 """
@@ -17,11 +19,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tvist.ident.excitation import MAX_DELTA_RAD
 from tvist.ident.logs import Record
 from tvist.ident.preprocess import QUIET_FRACTION, quiet_samples
 
 __all__ = ["MAX_REST_S", "ExcitationSegment", "excitation_segment"]
 
+#: The longest move of an excitation: between two targets of Algorithm 2's range, rad
+#: (with 1 mrad for the 6 decimals of an exported program).
+MAX_EXCITATION_SPAN_RAD = 2.0 * MAX_DELTA_RAD + 1e-3
 #: Rest kept before the first and after the last move of the excitation, s: Algorithm 2's
 #: longest wait (the ringing of a 20 Hz mode with ζ = 0.05 decays 100-fold in 0.7 s).
 MAX_REST_S = 1.0
@@ -84,7 +90,11 @@ def excitation_segment(record: Record) -> ExcitationSegment:
     labels = []
     for a, b in bouts:
         moving = np.flatnonzero(np.max(speed[a:b], axis=0) > v_tol)
-        labels.append(int(moving[0]) if moving.size == 1 else None)
+        single = moving.size == 1
+        if single:
+            span = float(np.ptp(record.target_q[a:b, moving[0]]))
+            single = span <= MAX_EXCITATION_SPAN_RAD
+        labels.append(int(moving[0]) if single else None)
     runs: list[tuple[int, int, int]] = []  # (first bout, last bout, joint)
     for i, label in enumerate(labels):
         if label is None:
