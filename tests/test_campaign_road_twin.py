@@ -11,6 +11,7 @@ keep the test short.
 
 from __future__ import annotations
 
+import json
 import signal
 import socket
 import subprocess
@@ -92,9 +93,9 @@ def test_plan_record_identify_fit_run_on_the_twin(tmp_path) -> None:
     # The user covers the poses of the move the map is for, besides the plan's own.
     cover = tmp_path / "my_poses.csv"
     np.savetxt(cover, [motion.q_start, motion.q_end], delimiter=",", fmt="%.12f")
-    payload = ["--payload-kg", str(PAYLOAD_KG), "--payload-com", *map(str, PAYLOAD_COM_M)]
+    com = [str(v) for v in PAYLOAD_COM_M]
     _tvist(
-        *("plan", "--payloads", str(PAYLOAD_KG), *payload[2:], "--every", "9"),
+        *("plan", "--payloads", str(PAYLOAD_KG), "--payload-com", *com, "--every", "9"),
         *("--cover", str(cover), "--duration", "3", "--out", str(plan)),
         *("--approach-speed", "1.5", "--approach-accel", "3.0"),
     )
@@ -104,12 +105,15 @@ def test_plan_record_identify_fit_run_on_the_twin(tmp_path) -> None:
         for program in programs:
             _run_while_recording(program.read_text(), logs / f"{program.stem}.csv")
         poses, dynmap = tmp_path / "poses.jsonl", tmp_path / "map.json"
-        _tvist("identify", str(logs), "--out", str(poses), *payload, "--workers", "2")
+        # The payload of each log: the controller's, which tvist record recorded.
+        _tvist("identify", str(logs), "--out", str(poses), "--workers", "2")
+        assert {json.loads(line)["payload_kg"] for line in poses.read_text().splitlines()} == {
+            PAYLOAD_KG
+        }
         _tvist("fit-map", str(poses), "--out", str(dynmap))
 
         def run(name: str, *flags: str) -> tuple[Path, str]:
             log = tmp_path / f"run_{name}.csv"
-            # The payload is given as the server's (5 kg, 5 cm beyond the flange).
             done = _tvist(
                 "run",
                 str(move),
@@ -120,7 +124,6 @@ def test_plan_record_identify_fit_run_on_the_twin(tmp_path) -> None:
                 "--tail",
                 "5",
                 *flags,
-                *payload,
             )
             return log, done.stdout + done.stderr
 
@@ -131,6 +134,8 @@ def test_plan_record_identify_fit_run_on_the_twin(tmp_path) -> None:
         # most twice), as in tests/test_twin_server.py.
         for attempt in range(3):
             shaped_log, output = run(f"map{attempt}", "--map", str(dynmap))
+            # With a map, the payload is the controller's (the server's 5 kg).
+            assert f"payload {PAYLOAD_KG:g} kg" in output and "from the controller" in output
             shaped = residual_vibration(shaped_log)
             if shaped <= 0.05 * unshaped or "woke too late" not in output:
                 break

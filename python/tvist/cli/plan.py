@@ -35,7 +35,9 @@ def add_plan_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--every", type=int, default=1, help="every N-th pose of the 52 per payload (default 1)"
     )
-    p.add_argument("--seed", type=int, default=0, help="seed of wrists, excitations, noise")
+    p.add_argument(
+        "--seed", type=int, default=0, help="seed of wrists, excitations, noise (default 0)"
+    )
     p.add_argument(
         "--cover",
         metavar="POSES.csv",
