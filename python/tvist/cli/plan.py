@@ -33,7 +33,11 @@ def add_plan_options(p: argparse.ArgumentParser) -> None:
         help="payload centre of mass in the flange frame, m (default 0 0 0.05)",
     )
     p.add_argument(
-        "--every", type=int, default=1, help="every N-th pose of the 52 per payload (default 1)"
+        "--every",
+        type=int,
+        default=1,
+        help="keep every N-th of Algorithm 1's poses (52 per payload, counted over all "
+        "payloads; default 1)",
     )
     p.add_argument(
         "--seed", type=int, default=0, help="seed of wrists, excitations, noise (default 0)"
