@@ -95,3 +95,16 @@ def test_cover_pose_outside_the_limits_is_refused(tmp_path, capsys):
     assert main(["plan", "--cover", str(cover), "--out", str(tmp_path / "plan")]) == 2
     err = capsys.readouterr().err
     assert "pose row 2" in err and "outside the joint limits" in err
+
+
+def test_poses_at_one_radius_with_one_payload_are_refused(tmp_path, capsys):
+    """Six poses that differ only in the base angle: enough of them, but the shoulder's
+    inertia is the same in all, so the map's stiffness terms cannot be told apart."""
+    q = np.tile(PAPER_POSES["Q2"], (6, 1))
+    q[:, 0] = np.linspace(-1.0, 1.0, 6)
+    cover = tmp_path / "mine.csv"
+    np.savetxt(cover, q, delimiter=",")
+    args = ["plan", "--payloads", "5", "--every", "0", "--cover", str(cover)]  # only these
+    assert main([*args, "--out", str(tmp_path / "plan")]) == 2
+    err = capsys.readouterr().err
+    assert "from the shoulder axis with 5 kg" in err and "two radii or payloads" in err

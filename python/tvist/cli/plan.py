@@ -37,7 +37,7 @@ def add_plan_options(p: argparse.ArgumentParser) -> None:
         type=int,
         default=1,
         help="keep every N-th of Algorithm 1's poses (52 per payload, counted over all "
-        "payloads; default 1)",
+        "payloads; 0: none, only the --cover poses; default 1)",
     )
     p.add_argument(
         "--seed", type=int, default=0, help="seed of wrists, excitations, noise (default 0)"
@@ -64,8 +64,8 @@ def checked_plan(args: argparse.Namespace, require_fittable: bool = True) -> lis
     """
     from tvist.ident.pose_plan import plan_poses, plan_shortfall
 
-    if args.every < 1:
-        raise ValueError(f"--every {args.every}: give 1 or more")
+    if args.every < 0 or (args.every == 0 and not args.cover):
+        raise ValueError(f"--every {args.every}: give 1 or more (0 only with --cover)")
     if not (math.isfinite(args.duration) and args.duration > 0):
         raise ValueError(f"--duration {args.duration}: give a length > 0 s")
     cover_q = _read_poses(args.cover) if args.cover else None

@@ -262,13 +262,15 @@ def plan_poses(
     seed: int = 0,
     cover_q: np.ndarray | None = None,
 ) -> list[CampaignPose]:
-    """Every ``every``-th pose of :func:`campaign_poses` plus the user's ``cover_q`` poses
-    (:func:`cover_poses`), in :func:`campaign_order`."""
-    if every < 1:
-        raise ValueError(f"every must be >= 1, got {every}")
-    poses = campaign_poses(
-        robot_name, payloads_kg=payloads_kg, payload_com_m=payload_com_m, seed=seed
-    )[::every]
+    """Every ``every``-th pose of :func:`campaign_poses` (none for ``every = 0``) plus the
+    user's ``cover_q`` poses (:func:`cover_poses`), in :func:`campaign_order`."""
+    if every < 0:
+        raise ValueError(f"every must be >= 0, got {every}")
+    poses = []
+    if every > 0:
+        poses = campaign_poses(
+            robot_name, payloads_kg=payloads_kg, payload_com_m=payload_com_m, seed=seed
+        )[::every]
     if cover_q is not None:
         poses += cover_poses(
             robot_name, cover_q, payloads_kg=payloads_kg, payload_com_m=payload_com_m, seed=seed
@@ -281,8 +283,8 @@ def plan_shortfall(poses: Sequence[CampaignPose]) -> str | None:
     or ``None`` if it can (if every identification succeeds).
 
     The fit needs :func:`~tvist.ident.map_fit.poses_needed` usable poses per mode, and the
-    poses must lie at two radii at least: the shoulder's inertia is set by the radius (and
-    the payload), so at one radius the map's stiffness terms cannot be told apart.
+    poses must differ in radius or payload: the shoulder's inertia is set by those two, so
+    poses at one radius with one payload cannot tell the map's stiffness terms apart.
     """
     from tvist.ident.map_fit import poses_needed
 
@@ -290,11 +292,12 @@ def plan_shortfall(poses: Sequence[CampaignPose]) -> str | None:
     needed = poses_needed()
     if len(reachable) < needed:
         return f"{len(reachable)} reachable poses, the map fit needs at least {needed} per mode"
-    radii = {round(p.radius_m, 3) for p in reachable}
-    if len(radii) < 2:
+    loads = {(p.payload_kg, round(p.radius_m, 3)) for p in reachable}
+    if len(loads) < 2:
         return (
-            f"every pose is {reachable[0].radius_m:.3f} m from the shoulder axis: the map "
-            "fit needs poses at two radii at least"
+            f"every pose is {reachable[0].radius_m:.3f} m from the shoulder axis with "
+            f"{reachable[0].payload_kg:g} kg: the map fit needs poses at two radii or "
+            "payloads at least"
         )
     return None
 
