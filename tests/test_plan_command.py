@@ -89,12 +89,13 @@ def test_unfittable_plan_is_refused_with_its_reason(flags, reason, tmp_path, cap
     assert not (tmp_path / "plan").exists()
 
 
-def test_cover_pose_outside_the_limits_is_refused(tmp_path, capsys):
+def test_cover_poses_in_degrees_are_refused(tmp_path, capsys):
     cover = tmp_path / "mine.csv"
     np.savetxt(cover, [PAPER_POSES["Q2"], np.degrees(PAPER_POSES["Q2"])], delimiter=",")
     assert main(["plan", "--cover", str(cover), "--out", str(tmp_path / "plan")]) == 2
     err = capsys.readouterr().err
-    assert "pose row 2" in err and "outside the joint limits" in err
+    assert "--cover" in err and "row 2" in err and "look like degrees" in err
+    assert not (tmp_path / "plan").exists()
 
 
 def test_poses_at_one_radius_with_one_payload_are_refused(tmp_path, capsys):

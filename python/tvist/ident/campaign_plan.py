@@ -18,6 +18,8 @@ import numpy as np
 
 from tvist.ident.excitation import to_urscript, write_trajectory_csv
 from tvist.ident.pose_plan import CampaignPose, pose_excitations
+from tvist.robots import params
+from tvist.units import check_trajectory
 from tvist.urserver.motion import trapezoid_duration
 
 __all__ = ["APPROACH_ACCEL_RAD_S2", "APPROACH_SPEED_RAD_S", "PlanSummary", "write_plan"]
@@ -70,6 +72,7 @@ def write_plan(
 ) -> PlanSummary:
     """Write the programs, trajectories and ``plan.json`` of ``poses`` (in their order) into
     ``folder`` (created; files of an earlier plan with the same names are replaced)."""
+    robot_params = params(robot_name)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     entries = []
@@ -83,6 +86,8 @@ def write_plan(
         for excitation in pose_excitations(pose, duration_s):
             number += 1
             stem = f"{number:03d}_{pose.key}_joint{excitation.joint}"
+            # As every trajectory written for a robot: inside its joint and speed limits.
+            check_trajectory(excitation.q, excitation.dt_s, robot_params, what=f"excitation {stem}")
             script = folder / f"{stem}.script"
             script.write_text(
                 to_urscript(

@@ -213,10 +213,10 @@ def cover_poses(
     Raises
     ------
     ValueError
-        A row that is not 6 finite joint angles or leaves the robot's joint limits (naming
-        the row).
+        A row that is not 6 finite joint angles, looks like degrees or leaves the robot's
+        joint limits (naming the row; :func:`tvist.units.check_trajectory`).
     """
-    from tvist.trajectory.validation import check_pose_limits
+    from tvist.units import check_trajectory
 
     q_rows = np.asarray(q_rows, dtype=float)
     robot = Robot(params(robot_name))
@@ -225,7 +225,9 @@ def cover_poses(
     for i, q in enumerate(q_rows):
         if not np.all(np.isfinite(q)):
             raise ValueError(f"pose row {i + 1}: not {robot.n_dof} finite joint angles")
-        check_pose_limits(f"pose row {i + 1}: q", q, robot.params.joint_limits_rad)
+    check_trajectory(
+        q_rows, None, robot.params, row_label=lambda i: f"row {i + 1}", what="the poses"
+    )
     com = tuple(float(v) for v in payload_com_m)
     poses = []
     for payload in payloads_kg:
