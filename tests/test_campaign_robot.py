@@ -2,8 +2,9 @@
 moves, one prompt per payload change (none with ``--yes``), a one-line error without a
 terminal, and every run's logs in a folder of their own.
 
-The robot is a stand-in for ur_rtde's two interfaces that records what it is told (and
-writes a marker where it is told to record); nothing here needs a robot or a twin."""
+The robot is a stand-in for ur_rtde's control interface that records what it is told, and
+for the RTDE recorder (it writes a marker where it is told to record); nothing here needs a
+robot or a twin."""
 
 from __future__ import annotations
 
@@ -34,16 +35,17 @@ class _Control:
         return True
 
 
-class _Receive:
-    def __init__(self, ip: str, frequency: float) -> None:
-        self.recordings: list[str] = []
+class _Recorder:
+    """Stands in for tvist.live.RtdeRecorder: writes a marker where it is told to record."""
 
-    def startFileRecording(self, path, fields):  # noqa: N802
+    def __init__(self, host, path, fields, frequency_hz) -> None:
         with open(path, "w") as fh:
             fh.write(f"marker of {path}\n")
-        self.recordings.append(path)
 
-    def stopFileRecording(self):  # noqa: N802
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
         pass
 
 
@@ -59,9 +61,7 @@ def fake_robot(monkeypatch):
     monkeypatch.setitem(
         sys.modules, "rtde_control", types.SimpleNamespace(RTDEControlInterface=_Control)
     )
-    monkeypatch.setitem(
-        sys.modules, "rtde_receive", types.SimpleNamespace(RTDEReceiveInterface=_Receive)
-    )
+    monkeypatch.setattr("tvist.live.RtdeRecorder", _Recorder)
     monkeypatch.setattr(campaign_robots.time, "sleep", lambda _s: None)
     monkeypatch.setattr("tvist.ident.campaign.identify_pose", _no_identification)
     _Control.last = None
