@@ -3,7 +3,8 @@
 Each :meth:`TwinController.tick` runs one pass of the loaded program (ur_rtde's control
 script, or a movej/sleep program), advances the joint motion by one tick, moves the twin's
 motors to the new target over the tick (:class:`tvist.sim.plant.TwinPlant`) and returns the
-RTDE output values measured at the tick's start. Not thread-safe: the server calls it under its lock.
+RTDE output values measured at the tick's start. Not thread-safe: the server calls it under
+its lock.
 
 Nothing a client commands stops the tick: a command's bad number protective-stops the arm or
 stops the program (see :mod:`tvist.urserver.motion`), and any other failure inside a tick
