@@ -1,6 +1,6 @@
 """The ``tvist`` command line: one module per group of commands (``demo``, ``ident``,
-``shape``, ``live``, ``twin_server``; shared options in ``args``), each registering its
-subparsers through an ``add_*_command`` listed in ``COMMANDS``. Heavy imports happen inside
+``shape``, ``live``, ``plan``, ``twin_server``; shared options in ``args``), each registering
+its subparsers through an ``add_*_command`` listed in ``COMMANDS``. Heavy imports happen inside
 the command that needs them. :func:`main` turns user errors into one line and exit code 2."""
 
 from __future__ import annotations
@@ -17,12 +17,14 @@ from tvist.cli.ident import (
     add_sensitivity_command,
 )
 from tvist.cli.live import add_record_command, add_run_command
+from tvist.cli.plan import add_plan_command
 from tvist.cli.shape import add_shape_command
 from tvist.cli.twin_server import add_twin_server_command
 
 #: (name, adder) pairs; an adder registers one subparser and sets ``func``.
 COMMANDS = [("demo", add_demo_command), ("zero-delay", add_zero_delay_command)]
 COMMANDS += [
+    ("plan", add_plan_command),
     ("campaign", add_campaign_command),
     ("identify", add_identify_command),
     ("fit-map", add_fit_map_command),

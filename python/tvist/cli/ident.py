@@ -23,6 +23,7 @@ from tvist.cli.args import (
     output_file,
     payload_from_args,
 )
+from tvist.cli.plan import add_plan_options
 
 __all__ = [
     "add_campaign_command",
@@ -53,7 +54,9 @@ def _add_payload_args(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_campaign(args: argparse.Namespace) -> int:
-    from tvist.ident.campaign import URRobot, campaign_poses, run_campaign
+    from tvist.cli.plan import checked_plan
+    from tvist.ident.campaign import URRobot, run_campaign
+    from tvist.ident.campaign_robots import new_run_folder
     from tvist.ident.results_store import SettingsMismatch
 
     if args.variant:
@@ -72,13 +75,17 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     output_file(args.out, "--out")
     if args.map:
         output_file(args.map, "--map")
-    poses = campaign_poses(
-        args.robot, payloads_kg=args.payloads, payload_com_m=args.payload_com, seed=args.seed
-    )
-    poses = poses[:: args.every]
+    # A plan the map fit cannot succeed on is refused before a robot moves (on the twin it
+    # only matters when a map is asked for).
+    fit_check = bool(args.robot_ip or args.map) and not args.no_fit_check
+    poses = checked_plan(args, require_fittable=fit_check)
     robot = None
     if args.robot_ip:
-        robot = URRobot(args.robot_ip, args.robot, log_dir=Path(args.out).parent / "logs")
+        log_dir = new_run_folder(Path(args.out).parent / "logs")
+        print(f"RTDE logs of this run: {log_dir}", flush=True)
+        robot = URRobot(
+            args.robot_ip, args.robot, log_dir=log_dir, confirm=None if args.yes else input
+        )
     try:
         results = run_campaign(
             poses,
@@ -139,38 +146,38 @@ def add_campaign_command(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "campaign",
         help="identify base and shoulder modes over the workspace (paper Algorithm 1)",
-        description="Move through the campaign poses, excite base and shoulder, identify "
-        "their modes and append one JSON line per pose to --out (reruns resume).",
+        description="Move through the campaign poses payload by payload (on a robot: one "
+        "prompt per payload change, or none with --yes; each run's RTDE logs in a new "
+        "logs/run-NNN next to --out), excite base and shoulder, identify their modes and "
+        "append one JSON line per pose to --out (reruns resume). A plan the map fit cannot "
+        "succeed on is refused before the robot moves.",
     )
     target = p.add_mutually_exclusive_group(required=True)
     target.add_argument("--sim", action="store_true", help="use the MuJoCo twin")
     target.add_argument("--robot-ip", help="use a real UR at this address (needs ur-rtde)")
     p.add_argument("--out", default="out/campaign.jsonl", help="results file (JSON lines)")
-    p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
+    add_plan_options(p)
+    p.add_argument(
+        "--yes",
+        action="store_true",
+        help="with --robot-ip: do not ask before each payload change (mount the payloads in "
+        "the plan's order, lightest first, as the campaign reaches them)",
+    )
+    p.add_argument(
+        "--no-fit-check",
+        action="store_true",
+        help="run a plan the map fit cannot succeed on (to identify a few poses only)",
+    )
     p.add_argument(
         "--variant",
         help="with --sim: a twin variant whose flexibility the maps do not model exactly "
         "(ur5e-soft-gears, ur5e-flex-links, or family:ROBOT:SEED, e.g. family:ur5e:17, "
         "one arm of a seeded family of plausible UR5e/UR10e variants)",
     )
-    p.add_argument(
-        "--payloads", type=float, nargs="+", default=[0.0, 1.0, 3.0, 5.0], help="payloads (kg)"
-    )
-    p.add_argument(
-        "--payload-com",
-        type=float,
-        nargs=3,
-        default=(0.0, 0.0, 0.05),
-        metavar=("X", "Y", "Z"),
-        help="payload centre of mass in the flange frame (m)",
-    )
-    p.add_argument("--every", type=int, default=1, help="run every N-th pose only")
     p.add_argument("--workers", type=int, default=1, help="processes for the twin")
-    p.add_argument("--seed", type=int, default=0, help="seed of wrists, excitations, noise")
     p.add_argument(
         "--accel-noise", type=float, default=0.05, help="twin accelerometer noise (m/s²)"
     )
-    p.add_argument("--duration", type=float, default=8.0, help="excitation length per joint (s)")
     p.add_argument(
         "--single-mode",
         action="store_true",
@@ -270,9 +277,9 @@ def _identify_one(args: argparse.Namespace, path: Path) -> int:
     import warnings
 
     from tvist.cli.args import payload_from_args
-    from tvist.ident.batch import excited_joint
     from tvist.ident.local_fit import identify_local
     from tvist.ident.logs import LogWarning, log_payload, read_rtde_csv
+    from tvist.ident.segment import excitation_segment
     from tvist.robots import Robot, params
 
     with warnings.catch_warnings(record=True) as caught:
@@ -292,7 +299,18 @@ def _identify_one(args: argparse.Namespace, path: Path) -> int:
         needed_for="identification (the joint inertias)",
         out=sys.stderr if args.json else None,
     )
-    joint = excited_joint(record) if args.joint is None else args.joint
+    if args.joint is None:
+        segment = excitation_segment(record)
+        joint, n_rows = segment.joint, record.n_samples
+        record = segment.of(record)
+        if segment.trimmed and not args.json:
+            print(
+                f"{path}: excitation of joint {joint} in rows {segment.start}-"
+                f"{segment.stop - 1} of {n_rows} ({segment.n_moves} moves; the rest of the "
+                "log is left out, --joint fits the whole log)"
+            )
+    else:
+        joint = args.joint
     robot = Robot(params(args.robot), payload)
     fit = identify_local(
         record,
@@ -345,7 +363,9 @@ def add_identify_command(sub: argparse._SubParsersAction) -> None:
         "--joint",
         type=int,
         default=None,
-        help="excited joint of a single log (0 base, 1 shoulder; default: detected)",
+        help="excited joint of a single log (0 base, 1 shoulder), fitted over the whole log "
+        "(default: the excitation and its joint are found in the log, approach moves and "
+        "rests around it left out)",
     )
     _add_payload_args(p)
     p.add_argument(

@@ -1,8 +1,10 @@
 """Batch identification: many excitation logs → one pose record per pose (JSON lines).
 
 1. Every log is read (:func:`~tvist.ident.logs.read_rtde_csv`, skipped samples resampled),
-   its excited joint found (:func:`excited_joint`: the joint whose target moves most) and its
-   pose taken from ``actual_q`` (:func:`~tvist.ident.pose.pose_of`).
+   cut to its excitation and its excited joint found
+   (:func:`~tvist.ident.segment.excitation_segment`: approach moves and rests around the
+   excitation are left out), and its pose taken from ``actual_q``
+   (:func:`~tvist.ident.pose.pose_of`).
 2. Base and shoulder logs of the same pose are paired (:func:`pair_logs`): their starting
    poses (the measured joint angles before the first move) agree.
 3. Each pair (or a lone log) is identified (:func:`~tvist.ident.pose.identify_pose`) into the
@@ -29,6 +31,7 @@ import numpy as np
 from tvist.ident.local_fit import FitOptions
 from tvist.ident.logs import Record, read_rtde_csv
 from tvist.ident.pose import IDENTIFIED_JOINTS, PoseRecord, identify_pose, pose_of
+from tvist.ident.segment import excitation_segment
 
 __all__ = [
     "LoadedLog",
@@ -64,9 +67,8 @@ def expand_logs(items: Iterable[str]) -> list[Path]:
 
 
 def excited_joint(record: Record) -> int:
-    """The joint the log excites: the one whose target position spans the widest range."""
-    span = np.ptp(record.target_q, axis=0)
-    return int(np.argmax(span))
+    """The joint the log excites (see :func:`~tvist.ident.segment.excitation_segment`)."""
+    return excitation_segment(record).joint
 
 
 @dataclass(frozen=True)
@@ -87,17 +89,19 @@ def load_log(
     repair: tuple[str, ...] = (),
     units: str | None = None,
 ) -> LoadedLog:
-    """Read ``path`` (declared ``units``, see :func:`~tvist.ident.logs.read_rtde_csv`) and find
-    its excited joint and pose (warnings are kept, not shown)."""
+    """Read ``path`` (declared ``units``, see :func:`~tvist.ident.logs.read_rtde_csv`), cut
+    it to its excitation and find its excited joint and pose (warnings are kept, not shown)."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         record = read_rtde_csv(
             path, repair=repair or None, drop_nan=drop_nan, resample=resample, units=units
         )
+    segment = excitation_segment(record)
+    record = segment.of(record)
     return LoadedLog(
         path=Path(path),
         record=record,
-        joint=excited_joint(record),
+        joint=segment.joint,
         pose=pose_of(record),
         warnings=tuple(str(w.message) for w in caught),
     )

@@ -16,10 +16,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-import numpy as np
-
 from tvist.ident.campaign_robots import RECORDED_FIELDS, CampaignRobot, TwinRobot, URRobot
-from tvist.ident.excitation import random_excitation
 from tvist.ident.local_fit import FitOptions
 from tvist.ident.logs import Record
 from tvist.ident.pose import IDENTIFIED_JOINTS, identify_pose
@@ -28,8 +25,10 @@ from tvist.ident.pose_plan import (
     PAPER_PAYLOADS_KG,
     PAPER_RADII_M,
     CampaignPose,
+    campaign_order,
     campaign_poses,
     plane_coordinates,
+    pose_excitations,
     solve_plane_ik,
 )
 from tvist.ident.results_store import ResultsStore, fingerprint, load_results
@@ -85,14 +84,10 @@ def run_pose(robot: CampaignRobot, pose: CampaignPose, settings: _Settings) -> d
         }
     model = Robot(params(robot.robot_name), _Payload(pose.payload_kg, pose.payload_com_m))
     robot.set_payload(pose.payload_kg, pose.payload_com_m)
-    rng = np.random.default_rng(pose.seed)
     logs: dict[int, Record | None] = {}
     failed: dict[int, str] = {}
-    for joint in IDENTIFIED_JOINTS:
-        # An integer seed per excitation (recorded in it) also seeds a twin's sensor noise.
-        excitation = random_excitation(
-            pose.q, joint, seed=int(rng.integers(2**63)), duration_s=settings.duration_s
-        )
+    for excitation in pose_excitations(pose, settings.duration_s):
+        joint = excitation.joint
         try:
             logs[joint] = robot.record_excitation(excitation)
         except (ValueError, RuntimeError) as exc:
@@ -228,7 +223,7 @@ def run_campaign(
                     robot_name, accel_noise_std, seed=noise_seed, variant=settings.variant
                 )
                 # Payload by payload keeps manual payload changes on a real robot to a minimum.
-                for pose in sorted(todo, key=lambda p: p.payload_kg):
+                for pose in campaign_order(todo):
                     store.append(run_pose(runner, pose, settings))
                     if bar is not None:
                         bar.advance(pose.key)

@@ -17,7 +17,7 @@ import numpy as np
 from tvist.ident.excitation import Excitation, to_urscript
 from tvist.ident.logs import Record, read_rtde_csv
 
-__all__ = ["RECORDED_FIELDS", "CampaignRobot", "TwinRobot", "URRobot"]
+__all__ = ["RECORDED_FIELDS", "CampaignRobot", "TwinRobot", "URRobot", "new_run_folder"]
 
 #: RTDE fields recorded on a real robot (what :func:`read_rtde_csv` needs, plus the pose).
 RECORDED_FIELDS = (
@@ -29,6 +29,23 @@ RECORDED_FIELDS = (
     "actual_TCP_pose",
     "actual_tool_accelerometer",
 )
+
+
+def new_run_folder(parent: str | Path) -> Path:
+    """A new, empty folder ``parent/run-NNN`` (the next free number): each run of a campaign
+    keeps its own logs, and no run writes over an earlier one's."""
+    parent = Path(parent)
+    parent.mkdir(parents=True, exist_ok=True)
+    taken = [int(p.name[4:]) for p in parent.glob("run-*") if p.name[4:].isdigit()]
+    number = max(taken, default=0) + 1
+    while True:
+        folder = parent / f"run-{number:03d}"
+        try:
+            folder.mkdir()
+        except FileExistsError:  # another campaign took it meanwhile
+            number += 1
+            continue
+        return folder
 
 
 class CampaignRobot(Protocol):
@@ -136,8 +153,9 @@ class URRobot:
 
     Make sure the workspace is clear: the campaign moves the arm through the whole workspace
     and jerks the base and shoulder. Payload changes are manual: :meth:`set_payload` declares
-    the payload to the controller and, if ``confirm`` is given, calls it to let the operator
-    mount it first.
+    the payload to the controller and, when it differs from the one declared before and
+    ``confirm`` is given, calls it to let the operator mount it first (once per change, not
+    per pose).
 
     Parameters
     ----------
@@ -146,11 +164,13 @@ class URRobot:
     robot_name
         Parameter-file name of the model (for the kinematics used in identification).
     log_dir
-        Folder for the RTDE logs (kept for inspection); default a temporary folder.
+        Folder for the RTDE logs (kept for inspection; see :func:`new_run_folder`); default
+        a temporary folder.
     frequency_hz
         RTDE recording frequency (e-Series: 500 Hz).
     confirm
         Called with a message before each payload change (e.g. ``input``); None to skip.
+        End of input (``EOFError``: no terminal to answer) is a ``ValueError``.
     """
 
     def __init__(
@@ -176,14 +196,25 @@ class URRobot:
         self._log_dir.mkdir(parents=True, exist_ok=True)
         self._confirm = confirm
         self._count = 0
+        self._payload: tuple[float, tuple[float, ...]] | None = None
 
     def set_payload(self, payload_kg: float, payload_com_m: Sequence[float]) -> None:
+        payload = (float(payload_kg), tuple(float(v) for v in payload_com_m))
+        if payload == self._payload:
+            return
         if self._confirm is not None:
-            self._confirm(
-                f"Mount a {payload_kg:g} kg payload (centre of mass {list(payload_com_m)} m in "
-                "the flange frame), then press Enter"
-            )
-        self._control.setPayload(float(payload_kg), [float(v) for v in payload_com_m])
+            try:
+                self._confirm(
+                    f"Mount a {payload_kg:g} kg payload (centre of mass {list(payload[1])} m "
+                    "in the flange frame), then press Enter"
+                )
+            except EOFError:
+                raise ValueError(
+                    f"no answer to the prompt to mount the {payload_kg:g} kg payload (no "
+                    "terminal): mount the payloads in the plan's order and pass --yes"
+                ) from None
+        self._control.setPayload(payload[0], list(payload[1]))
+        self._payload = payload
 
     def record_excitation(self, excitation: Excitation) -> Record:
         from tvist.live import RtdeRecorder

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -25,10 +26,13 @@ __all__ = [
     "Excitation",
     "random_excitation",
     "to_urscript",
+    "write_trajectory_csv",
 ]
 
 #: Sampling period of e-Series RTDE and of the controller, s.
 DEFAULT_DT_S = 0.002
+#: Algorithm 2's targets lie within this of the start position, rad (±10°).
+MAX_DELTA_RAD = math.pi / 18.0
 
 
 @dataclass(frozen=True)
@@ -134,7 +138,7 @@ def random_excitation(
     duration_s: float = 8.0,
     dt_s: float = DEFAULT_DT_S,
     standstill_s: float = 0.5,
-    max_delta_rad: float = math.pi / 18.0,
+    max_delta_rad: float = MAX_DELTA_RAD,
     speed_range_rad_s: tuple[float, float] = (0.5, 2.0),
     accel_range_rad_s2: tuple[float, float] = (0.3, 7.0),
     wait_range_s: tuple[float, float] = (0.1, 1.0),
@@ -311,3 +315,15 @@ def to_urscript(
         lines.append(f"  sleep({move.wait_s:.6f})")
     lines += ["end", f"{name}()", ""]
     return "\n".join(lines)
+
+
+def write_trajectory_csv(excitation: Excitation, path: str | Path) -> Path:
+    """Write the excitation's sampled reference as a trajectory CSV: a header ``time_s,
+    q0..q5`` and one row per sample (s, rad; 9 decimals), the format ``tvist shape`` and
+    ``tvist run`` read (``tvist run --unshaped`` streams it with servoJ)."""
+    path = Path(path)
+    n_dof = excitation.q.shape[1]
+    header = ",".join(["time_s", *(f"q{j}" for j in range(n_dof))])
+    table = np.column_stack([excitation.t_s, excitation.q])
+    np.savetxt(path, table, fmt="%.9f", delimiter=",", header=header, comments="")
+    return path

@@ -71,7 +71,9 @@ __all__ = [
     "data_range",
     "evaluate_mode",
     "fit_map",
+    "fitted_terms",
     "pose_table",
+    "poses_needed",
 ]
 
 #: The paper's fixed stiffness at zero inertia, N m/rad (eqs. 44-45; pass ``k_0`` to use it).
@@ -516,6 +518,26 @@ def _stats(step: _StepResult) -> dict[str, Any]:
     }
 
 
+def fitted_terms(
+    use_gravity: bool, drop_negligible: bool, fit_k_0: bool
+) -> tuple[list[str], list[str]]:
+    """The frequency and damping coefficients :func:`fit_map` fits for each mode."""
+    freq_terms = (["k_0"] if fit_k_0 else []) + ["k_j", "k_p"]
+    freq_terms += ["k_g"] if use_gravity else []
+    damp_terms = ["c_0", "c_2", "c_tau"] + (["c_1"] if drop_negligible else [])
+    return freq_terms, damp_terms
+
+
+def poses_needed(
+    use_gravity: bool = True, drop_negligible: bool = True, fit_k_0: bool = True
+) -> int:
+    """Fewest usable poses per mode :func:`fit_map` accepts: two more than the coefficients
+    of its larger step (6 for the defaults), so every fit keeps residual degrees of freedom
+    for its standard errors."""
+    freq_terms, damp_terms = fitted_terms(use_gravity, drop_negligible, fit_k_0)
+    return max(len(freq_terms), len(damp_terms)) + 2
+
+
 def fit_map(
     poses: Sequence[Mapping[str, Any]],
     *,
@@ -572,10 +594,8 @@ def fit_map(
     for spec in mode_specs:
         table = pose_table(poses, spec.joint, include_low_confidence=include_low_confidence)
         use_gravity = drop_negligible and table.has_gravity
-        freq_terms = (["k_0"] if k_0 is None else []) + ["k_j", "k_p"]
-        freq_terms += ["k_g"] if use_gravity else []
-        damp_terms = ["c_0", "c_2", "c_tau"] + (["c_1"] if drop_negligible else [])
-        needed = max(len(freq_terms), len(damp_terms)) + 2
+        freq_terms, damp_terms = fitted_terms(use_gravity, drop_negligible, k_0 is None)
+        needed = poses_needed(use_gravity, drop_negligible, k_0 is None)
         if table.n_poses < needed:
             raise ValueError(
                 f"mode of joint {spec.joint}: {table.n_poses} usable poses, need at least "

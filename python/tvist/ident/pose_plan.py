@@ -6,6 +6,11 @@ for ``V ∈ {0, π/4, π/2, 3π/4}`` and 13 values ``R = 0.4 … 0.9`` m, for ev
 pose one wrist joint (3, 4 or 5), chosen at random, is turned to a random angle; the shoulder
 and elbow are then solved (elbow up) by numerical inverse kinematics with the robot model's
 flange position and Jacobian.
+
+A plan (:func:`plan_poses`) is every ``every``-th of these poses, plus poses the user gives
+(:func:`cover_poses`), in the order that changes the payload least (:func:`campaign_order`);
+:func:`plan_shortfall` says why the map fit could not succeed on it, before anything moves.
+Each pose's excitations (:func:`pose_excitations`) follow from its seed.
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
+from tvist.ident.excitation import Excitation, random_excitation
 from tvist.robots import Robot, params
 
 __all__ = [
@@ -24,8 +30,13 @@ __all__ = [
     "PAPER_PAYLOADS_KG",
     "PAPER_RADII_M",
     "CampaignPose",
+    "campaign_order",
     "campaign_poses",
+    "cover_poses",
+    "plan_poses",
+    "plan_shortfall",
     "plane_coordinates",
+    "pose_excitations",
     "solve_plane_ik",
 ]
 
@@ -39,6 +50,8 @@ PAPER_PAYLOADS_KG: tuple[float, ...] = (0.0, 1.0, 3.0, 5.0)
 WRIST_JOINTS = (3, 4, 5)
 #: Wrist angles the random joint is turned away from, rad (the paper's test poses' wrist).
 NOMINAL_WRIST_RAD = (-math.pi / 2, 0.0, 0.0)
+#: ``wrist_joint`` of a pose the user gave (no wrist joint was turned at random).
+GIVEN_POSE = -1
 #: The flange must land within this distance of the target, m.
 IK_TOLERANCE_M = 1e-6
 
@@ -181,3 +194,126 @@ def campaign_poses(
                 )
                 index += 1
     return poses
+
+
+# --------------------------------------------------------------------------- plans
+
+
+def cover_poses(
+    robot_name: str,
+    q_rows: np.ndarray,
+    *,
+    payloads_kg: Sequence[float] = PAPER_PAYLOADS_KG,
+    payload_com_m: Sequence[float] = (0.0, 0.0, 0.05),
+    seed: int = 0,
+) -> list[CampaignPose]:
+    """The user's poses ``q_rows`` ``(n, 6)`` (rad), each with every payload; keys
+    ``m{payload}kg-C{row}``.
+
+    Raises
+    ------
+    ValueError
+        A row that is not 6 finite joint angles, looks like degrees or leaves the robot's
+        joint limits (naming the row; :func:`tvist.units.check_trajectory`).
+    """
+    from tvist.units import check_trajectory
+
+    q_rows = np.asarray(q_rows, dtype=float)
+    robot = Robot(params(robot_name))
+    if q_rows.ndim != 2 or q_rows.shape[1] != robot.n_dof:
+        raise ValueError(f"poses must have {robot.n_dof} joint angles per row (rad)")
+    for i, q in enumerate(q_rows):
+        if not np.all(np.isfinite(q)):
+            raise ValueError(f"pose row {i + 1}: not {robot.n_dof} finite joint angles")
+    check_trajectory(
+        q_rows, None, robot.params, row_label=lambda i: f"row {i + 1}", what="the poses"
+    )
+    com = tuple(float(v) for v in payload_com_m)
+    poses = []
+    for payload in payloads_kg:
+        for i, q in enumerate(q_rows):
+            angle, radius = plane_coordinates(robot, q)
+            rng = np.random.default_rng([seed, 1_000_000 + i])
+            poses.append(
+                CampaignPose(
+                    key=f"m{payload:g}kg-C{i}",
+                    payload_kg=float(payload),
+                    payload_com_m=com,  # type: ignore[arg-type]
+                    angle_rad=angle,
+                    radius_m=radius,
+                    wrist_joint=GIVEN_POSE,
+                    q=q.copy(),
+                    seed=int(rng.integers(2**31)),
+                )
+            )
+    return poses
+
+
+def campaign_order(poses: Sequence[CampaignPose]) -> list[CampaignPose]:
+    """``poses`` payload by payload (lightest first, otherwise in their order): one payload
+    change per payload, the fewest a person has to make."""
+    return sorted(poses, key=lambda p: p.payload_kg)
+
+
+def plan_poses(
+    robot_name: str = "ur5e",
+    *,
+    payloads_kg: Sequence[float] = PAPER_PAYLOADS_KG,
+    payload_com_m: Sequence[float] = (0.0, 0.0, 0.05),
+    every: int = 1,
+    seed: int = 0,
+    cover_q: np.ndarray | None = None,
+) -> list[CampaignPose]:
+    """Every ``every``-th pose of :func:`campaign_poses` (none for ``every = 0``) plus the
+    user's ``cover_q`` poses (:func:`cover_poses`), in :func:`campaign_order`."""
+    if every < 0:
+        raise ValueError(f"every must be >= 0, got {every}")
+    poses = []
+    if every > 0:
+        poses = campaign_poses(
+            robot_name, payloads_kg=payloads_kg, payload_com_m=payload_com_m, seed=seed
+        )[::every]
+    if cover_q is not None:
+        poses += cover_poses(
+            robot_name, cover_q, payloads_kg=payloads_kg, payload_com_m=payload_com_m, seed=seed
+        )
+    return campaign_order(poses)
+
+
+def plan_shortfall(poses: Sequence[CampaignPose]) -> str | None:
+    """Why the map fit (:func:`tvist.ident.map_fit.fit_map`) cannot succeed on ``poses``,
+    or ``None`` if it can (if every identification succeeds).
+
+    The fit needs :func:`~tvist.ident.map_fit.poses_needed` usable poses per mode, and the
+    poses must differ in radius or payload: the shoulder's inertia is set by those two, so
+    poses at one radius with one payload cannot tell the map's stiffness terms apart.
+    """
+    from tvist.ident.map_fit import poses_needed
+
+    reachable = [p for p in poses if p.q is not None]
+    needed = poses_needed()
+    if len(reachable) < needed:
+        return f"{len(reachable)} reachable poses, the map fit needs at least {needed} per mode"
+    loads = {(p.payload_kg, round(p.radius_m, 3)) for p in reachable}
+    if len(loads) < 2:
+        return (
+            f"every pose is {reachable[0].radius_m:.3f} m from the shoulder axis with "
+            f"{reachable[0].payload_kg:g} kg: the map fit needs poses at two radii or "
+            "payloads at least"
+        )
+    return None
+
+
+def pose_excitations(pose: CampaignPose, duration_s: float = 8.0) -> list[Excitation]:
+    """The excitations of the base and the shoulder at ``pose`` (Algorithm 2), in that
+    order; each with an integer seed drawn from the pose's seed (which also seeds a twin's
+    sensor noise)."""
+    from tvist.ident.pose import IDENTIFIED_JOINTS
+
+    if pose.q is None:
+        raise ValueError(f"pose {pose.key} is unreachable")
+    rng = np.random.default_rng(pose.seed)
+    return [
+        random_excitation(pose.q, joint, seed=int(rng.integers(2**63)), duration_s=duration_s)
+        for joint in IDENTIFIED_JOINTS
+    ]

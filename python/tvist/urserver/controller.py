@@ -1,9 +1,10 @@
 """The twin's controller: the 2 ms tick that runs the program, the motion and the arm.
 
 Each :meth:`TwinController.tick` runs one pass of the loaded program (ur_rtde's control
-script), advances the joint motion by one tick, moves the twin's motors to the new target over
-the tick (:class:`tvist.sim.plant.TwinPlant`) and returns the RTDE output values measured at
-the tick's start. Not thread-safe: the server calls it under its lock.
+script, or a movej/sleep program), advances the joint motion by one tick, moves the twin's
+motors to the new target over the tick (:class:`tvist.sim.plant.TwinPlant`) and returns the
+RTDE output values measured at the tick's start. Not thread-safe: the server calls it under
+its lock.
 
 Nothing a client commands stops the tick: a command's bad number protective-stops the arm or
 stops the program (see :mod:`tvist.urserver.motion`), and any other failure inside a tick
@@ -30,6 +31,7 @@ from tvist.urserver.control_script import (
     register_offsets,
 )
 from tvist.urserver.motion import CommandRefused, JointMotion, SafetyViolation
+from tvist.urserver.move_program import MoveProgram, is_move_program, parse_move_program
 
 log = logging.getLogger("tvist.urserver")
 
@@ -73,7 +75,7 @@ class TwinController:
             self.plant.q_motor, self.dt_s, params.max_velocity_rad_s, params.joint_limits_rad
         )
         self.registers = Registers.zeros(rtde.N_REGISTERS)
-        self.script: ControlScript | None = None
+        self.script: ControlScript | MoveProgram | None = None
         self.program_name = ""
         self.protective_stop = False
         self.payload_kg = float(twin.payload.mass_kg)
@@ -96,16 +98,22 @@ class TwinController:
     def load_program(self, program: str) -> str | None:
         """Run a URScript program received on a script port; an error message if refused.
 
-        A program replaces the running one, as on a UR.
+        A program replaces the running one, as on a UR. The call ``NAME()`` that follows a
+        move program's definition (the script ports receive it as a statement of its own)
+        runs that program, which already runs.
         """
+        if isinstance(self.script, MoveProgram) and program.strip() == f"{self.program_name}()":
+            return None
         self.stop_program()
         if self.protective_stop:
             return "the robot is protective-stopped: unlock it first (dashboard)"
+        if is_move_program(program):
+            return self._load_move_program(program)
         if not is_control_script(program):
             first = program.strip().splitlines()[0] if program.strip() else ""
             return (
                 f"program {first[:60]!r} not run: the twin runs ur_rtde's control script "
-                "(RTDEControlInterface), not arbitrary URScript"
+                "(RTDEControlInterface) and movej/sleep programs, not arbitrary URScript"
             )
         try:
             int_offset, float_offset = register_offsets(program)
@@ -117,6 +125,19 @@ class TwinController:
         )
         self.program_name = "rtde_control"
         log.info("control script started (register offsets %d/%d)", int_offset, float_offset)
+        return None
+
+    def _load_move_program(self, program: str) -> str | None:
+        """Start a movej/sleep program (:mod:`tvist.urserver.move_program`); an error
+        message if it is outside that subset (then nothing moves)."""
+        try:
+            name, steps = parse_move_program(program)
+        except ValueError as exc:
+            self.last_error = f"program not run: {exc}"
+            return self.last_error
+        self.script = MoveProgram(steps, self.motion, self.dt_s)
+        self.program_name = name
+        log.info("program %s started (%d statements)", name, len(steps))
         return None
 
     def stop_program(self) -> None:

@@ -1,0 +1,111 @@
+"""``tvist plan``: a campaign plan for one's own robot, checked before anything moves."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from tvist.cli import main
+from tvist.cli.shape import read_trajectory_csv
+from tvist.ident.pose_plan import campaign_poses, pose_excitations
+from tvist.trajectory import PAPER_POSES
+from tvist.urserver.move_program import parse_move_program
+
+
+def test_plan_writes_programs_and_trajectories_payload_by_payload(tmp_path, capsys):
+    out = tmp_path / "plan"
+    cover = tmp_path / "mine.csv"
+    np.savetxt(cover, [PAPER_POSES["Q2"]], delimiter=",")
+    args = ["plan", "--payloads", "3", "0", "--every", "16", "--duration", "2"]
+    assert main([*args, "--cover", str(cover), "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    plan = json.loads((out / "plan.json").read_text())
+    keys = [p["key"] for p in plan["poses"]]
+    # Every 16th of the 104 poses (7), then the user's pose with each payload; lightest
+    # payload first, so the payload changes once.
+    expected = [p.key for p in campaign_poses("ur5e", payloads_kg=[3.0, 0.0])[::16]]
+    expected += ["m3kg-C0", "m0kg-C0"]
+    assert sorted(keys) == sorted(expected)
+    masses = [p["payload_kg"] for p in plan["poses"]]
+    assert masses == sorted(masses) and plan["payloads_kg"] == [0.0, 3.0]
+    assert "0 kg, 3 kg" in text and "busy" in text
+    # The pose given with --cover is kept as given.
+    mine = next(p for p in plan["poses"] if p["key"] == "m0kg-C0")
+    np.testing.assert_allclose(mine["q"], PAPER_POSES["Q2"], atol=1e-12)
+    # Each excitation: a program the twin runs (approach to the pose, then the moves) and
+    # the same excitation sampled, as the campaign draws it for the pose.
+    poses = campaign_poses("ur5e", payloads_kg=[3.0, 0.0])
+    pose = next(p for p in poses if p.key == keys[0])
+    excitations = pose_excitations(pose, 2.0)
+    for entry, excitation in zip(plan["poses"][0]["excitations"], excitations, strict=True):
+        assert entry["joint"] == excitation.joint and entry["seed"] == excitation.seed
+        _, steps = parse_move_program((out / entry["script"]).read_text())
+        np.testing.assert_allclose(steps[0].q, excitation.q0, atol=5e-7)  # 6 decimals
+        targets = [s.q[excitation.joint] for s in steps if s.q is not None][1:]
+        np.testing.assert_allclose(targets, [m.q_to_rad for m in excitation.moves], atol=5e-7)
+        trajectory = read_trajectory_csv(out / entry["trajectory"])
+        np.testing.assert_allclose(trajectory.Q, excitation.q, atol=5e-10)  # 9 decimals
+        np.testing.assert_allclose(trajectory.times_s, excitation.t_s, atol=5e-10)
+    n_excitations = sum(len(p["excitations"]) for p in plan["poses"])
+    assert n_excitations == 2 * len(keys)
+    assert len(list(out.glob("*.script"))) == n_excitations
+
+
+def test_plan_busy_time_adds_excitations_and_approaches(tmp_path):
+    """The time printed is the excitations' own length plus the approach moves between
+    them (movej trapezoids at the approach limits), recomputed here from plan.json."""
+    out = tmp_path / "plan"
+    args = ["plan", "--payloads", "5", "--every", "8", "--duration", "1"]
+    assert main([*args, "--out", str(out), "--approach-speed", "0.5"]) == 0
+    plan = json.loads((out / "plan.json").read_text())
+    excitations = [
+        (pose, e)
+        for pose in campaign_poses("ur5e", payloads_kg=[5.0])[::8]
+        for e in pose_excitations(pose, 1.0)
+    ]
+    total = sum(e.duration_s for _, e in excitations)
+    a = plan["approach_accel_rad_s2"]
+    for (_, before), (_, after) in zip(excitations, excitations[1:], strict=False):
+        distance = float(np.max(np.abs(after.q0 - before.q[-1])))
+        v = min(0.5, np.sqrt(distance * a))
+        total += distance / v + v / a if distance > 0 else 0.0
+    assert plan["busy_s"] == pytest.approx(total, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("flags", "reason"),
+    [
+        (["--every", "13", "--payloads", "5"], "4 reachable poses"),
+        (["--every", "200", "--payloads", "0", "1", "3", "5"], "2 reachable poses"),
+    ],
+)
+def test_unfittable_plan_is_refused_with_its_reason(flags, reason, tmp_path, capsys):
+    assert main(["plan", *flags, "--out", str(tmp_path / "plan")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert reason in err and "needs at least 6" in err and "--every" in err
+    assert not (tmp_path / "plan").exists()
+
+
+def test_cover_poses_in_degrees_are_refused(tmp_path, capsys):
+    cover = tmp_path / "mine.csv"
+    np.savetxt(cover, [PAPER_POSES["Q2"], np.degrees(PAPER_POSES["Q2"])], delimiter=",")
+    assert main(["plan", "--cover", str(cover), "--out", str(tmp_path / "plan")]) == 2
+    err = capsys.readouterr().err
+    assert "--cover" in err and "row 2" in err and "look like degrees" in err
+    assert not (tmp_path / "plan").exists()
+
+
+def test_poses_at_one_radius_with_one_payload_are_refused(tmp_path, capsys):
+    """Six poses that differ only in the base angle: enough of them, but the shoulder's
+    inertia is the same in all, so the map's stiffness terms cannot be told apart."""
+    q = np.tile(PAPER_POSES["Q2"], (6, 1))
+    q[:, 0] = np.linspace(-1.0, 1.0, 6)
+    cover = tmp_path / "mine.csv"
+    np.savetxt(cover, q, delimiter=",")
+    args = ["plan", "--payloads", "5", "--every", "0", "--cover", str(cover)]  # only these
+    assert main([*args, "--out", str(tmp_path / "plan")]) == 2
+    err = capsys.readouterr().err
+    assert "from the shoulder axis with 5 kg" in err and "two radii or payloads" in err
