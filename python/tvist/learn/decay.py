@@ -8,7 +8,9 @@ through eq. 17, ``G(s) = (k_a s + k_b)/(s² + k_c s + k_d)``, has exactly that r
 the pulse (the free numerator sets amplitude and phase), so the decay is fitted by the same
 output-error estimator as an excitation (:func:`tvist.ident.local_fit.fit_local`) with a pulse
 at the stop as input and the pulse sample left out of the cost; its standard errors,
-ringing SNR and low-confidence flags come with it.
+ringing SNR and low-confidence flags come with it. Where a second mode rings in the same
+direction (the shoulder mode leaks into the base direction at most poses), the two-mode fit
+of identification (:func:`tvist.ident.two_mode.fit_two_modes`) separates them.
 
 A move that does not ring (its fit is :data:`~tvist.ident.local_fit.NO_RINGING`) still says
 something: its residual amplitude bounds how wrong the map can be at that pose.
@@ -23,6 +25,7 @@ import numpy as np
 from tvist.ident.local_fit import NO_RINGING, FitOptions, LocalFit, fit_local
 from tvist.ident.logs import Record
 from tvist.ident.preprocess import KinematicModel, tangential_acceleration
+from tvist.ident.two_mode import TwoModeFit, fit_two_modes
 
 __all__ = ["DECAY_S", "Decay", "ModeObservation", "observe_decay", "stop_index"]
 
@@ -161,6 +164,32 @@ def _observation(fit: LocalFit, joint: int) -> ModeObservation:
     )
 
 
+def _split_observations(split: TwoModeFit, joint: int, options: FitOptions) -> list[ModeObservation]:
+    """Both modes of a significant two-mode fit, flagged where the frequency is uncertain
+    beyond the estimator's limit."""
+    out = []
+    for m in split.modes:
+        rel_se = m.wn_se_rad_s / m.wn_rad_s
+        reasons = (
+            (f"uncertain frequency: standard error {100 * rel_se:.2f} % of ω_n (two-mode fit)",)
+            if rel_se > options.max_wn_rel_se
+            else ()
+        )
+        out.append(
+            ModeObservation(
+                joint=joint,
+                wn_rad_s=float(m.wn_rad_s),
+                zeta=float(m.zeta),
+                wn_se_rad_s=float(m.wn_se_rad_s),
+                zeta_se=float(m.zeta_se),
+                ringing_snr_db=float(10 * np.log10(1.0 / split.rss_ratio)),
+                low_confidence=bool(reasons),
+                reasons=reasons,
+            )
+        )
+    return out
+
+
 def _robust_std(x: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(x - np.median(x))))
 
@@ -230,8 +259,12 @@ def observe_decay(
         fits[j] = fit
         if fit.no_ringing:
             continue
-        obs = _observation(fit, j)
-        (flagged if obs.low_confidence else modes).append(obs)
+        split = fit_two_modes(
+            u, psi, dt, fit, mask=mask, f_min_hz=options.f_min_hz, f_max_hz=options.f_max_hz
+        )
+        found = _split_observations(split, j, options) if split.significant else []
+        for obs in found or [_observation(fit, j)]:
+            (flagged if obs.low_confidence else modes).append(obs)
     return Decay(
         float(record.t_s[k0]),
         np.array(record.target_q[-1]),
