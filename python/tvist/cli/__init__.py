@@ -1,5 +1,5 @@
 """The ``tvist`` command line: one module per group of commands (``demo``, ``ident``,
-``shape``, ``live``, ``twin_server``; shared options in ``args``), each registering its
+``learn``, ``shape``, ``live``, ``twin_server``; shared options in ``args``), each registering its
 subparsers through an ``add_*_command`` listed in ``COMMANDS``. Heavy imports happen inside
 the command that needs them. :func:`main` turns user errors into one line and exit code 2."""
 
@@ -16,6 +16,7 @@ from tvist.cli.ident import (
     add_identify_command,
     add_sensitivity_command,
 )
+from tvist.cli.learn import add_learn_command
 from tvist.cli.live import add_record_command, add_run_command
 from tvist.cli.shape import add_shape_command
 from tvist.cli.twin_server import add_twin_server_command
@@ -27,6 +28,7 @@ COMMANDS += [
     ("identify", add_identify_command),
     ("fit-map", add_fit_map_command),
     ("sensitivity", add_sensitivity_command),
+    ("learn", add_learn_command),
     ("shape", add_shape_command),
 ]
 COMMANDS += [

@@ -4,4 +4,11 @@
 from tvist.learn.decay import Decay, ModeObservation, observe_decay
 from tvist.learn.learner import MapLearner, Observation, PayloadReport
 
-__all__ = ["Decay", "MapLearner", "ModeObservation", "Observation", "PayloadReport", "observe_decay"]
+__all__ = [
+    "Decay",
+    "MapLearner",
+    "ModeObservation",
+    "Observation",
+    "PayloadReport",
+    "observe_decay",
+]

@@ -164,7 +164,9 @@ def _observation(fit: LocalFit, joint: int) -> ModeObservation:
     )
 
 
-def _split_observations(split: TwoModeFit, joint: int, options: FitOptions) -> list[ModeObservation]:
+def _split_observations(
+    split: TwoModeFit, joint: int, options: FitOptions
+) -> list[ModeObservation]:
     """Both modes of a significant two-mode fit, flagged where the frequency is uncertain
     beyond the estimator's limit."""
     out = []

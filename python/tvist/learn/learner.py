@@ -36,7 +36,7 @@ from __future__ import annotations
 import copy
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -134,6 +134,8 @@ class Observation:
         modes of the moves seen so far, before and after this log.
     payload
         A suspected payload change, or ``None``.
+    scales
+        The learned map's log scale factors after this log (:attr:`MapLearner.names`).
     """
 
     source: str
@@ -144,6 +146,7 @@ class Observation:
     predicted_residual_before: float = math.nan
     predicted_residual_after: float = math.nan
     payload: PayloadReport | None = None
+    scales: np.ndarray | None = field(default=None, repr=False)
 
     def to_json(self) -> dict[str, Any]:
         d = self.decay
@@ -275,13 +278,23 @@ class MapLearner:
         except (UnitError, ValueError) as exc:
             return self._note(Observation(source, False, str(exc), None, False, before, before))
         if decay.problem is not None:
-            return self._note(Observation(source, False, decay.problem, decay, False, before, before))
+            return self._note(
+                Observation(source, False, decay.problem, decay, False, before, before)
+            )
         modes = self._assign(decay)
         if not modes:
             if decay.flagged:
                 reasons = "; ".join(r for m in decay.flagged for r in m.reasons)
                 return self._note(
-                    Observation(source, False, f"low-confidence fit: {reasons}", decay, False, before, before)
+                    Observation(
+                        source,
+                        False,
+                        f"low-confidence fit: {reasons}",
+                        decay,
+                        False,
+                        before,
+                        before,
+                    )
                 )
             z, h, r_diag, h_of = self._quiet_measurement(decay.q_end)
             what = (
@@ -324,6 +337,7 @@ class MapLearner:
         return self._note(Observation(source, True, what, decay, updated, before, after))
 
     def _note(self, obs: Observation) -> Observation:
+        obs = replace(obs, scales=self._published.copy())
         self.history.append(obs)
         return obs
 
@@ -431,13 +445,20 @@ class MapLearner:
         return {
             "prior_source": self.prior.metadata.get("source"),
             "logs": [
-                {"source": o.source, "accepted": o.accepted, "reason": o.reason,
-                 "map_updated": o.map_updated}
+                {
+                    "source": o.source,
+                    "accepted": o.accepted,
+                    "reason": o.reason,
+                    "map_updated": o.map_updated,
+                }
                 for o in self.history
             ],
             "scale_factors": {
-                name: {"value": float(math.exp(v)), "change_percent": 100.0 * math.expm1(v),
-                       "log_se": float(s)}
+                name: {
+                    "value": float(math.exp(v)),
+                    "change_percent": 100.0 * math.expm1(v),
+                    "log_se": float(s),
+                }
                 for name, v, s in zip(self.names, self._published, se)
             },
             "predicted_residual": _json(self.predicted_residual()),
