@@ -8,12 +8,9 @@ learner starts from that map with every stiffness 15 % low.
 from __future__ import annotations
 
 import copy
-import json
-import math
 from dataclasses import replace
 
 import numpy as np
-import pytest
 
 from tvist import robots
 from tvist.demo.experiment import run_motion
@@ -65,7 +62,7 @@ def test_free_decay_recovers_the_twins_modes_at_the_end_pose():
     decay = observe_decay(record, robot)
     truth = twin.modes(motion.q_end)
     assert decay.problem is None and len(decay.modes) == 2
-    for mode, (wn, _) in zip(decay.modes, truth):
+    for mode, (wn, _) in zip(decay.modes, truth, strict=True):
         # 2 %: the fit's standard errors here are ~0.5 %; the twin's gear springs are
         # nonlinear, so the decay's frequency drifts slightly with its amplitude.
         assert abs(mode.wn_rad_s / wn - 1.0) < 0.02
@@ -137,7 +134,9 @@ def test_corrupted_logs_are_rejected_and_never_make_the_map_worse():
     # The predicted residual on all the moves observed never increases along the sequence of
     # learned maps (up to round-off of the shaper design).
     residuals = [learner.predicted_residual(o.scales) for o in learner.history]
-    assert all(b <= a + 1e-12 for a, b in zip(residuals, residuals[1:])), residuals
+    assert all(b <= a + 1e-12 for a, b in zip(residuals[:-1], residuals[1:], strict=True)), (
+        residuals
+    )
 
 
 def test_payload_change_is_detected_within_three_moves():

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from tvist.ident.local_fit import NO_RINGING, FitOptions, LocalFit, fit_local
+from tvist.ident.local_fit import FitOptions, LocalFit, fit_local
 from tvist.ident.logs import Record
 from tvist.ident.preprocess import KinematicModel, tangential_acceleration
 from tvist.ident.two_mode import TwoModeFit, fit_two_modes
@@ -32,8 +32,8 @@ __all__ = ["DECAY_S", "Decay", "ModeObservation", "observe_decay", "stop_index"]
 #: A reference has stopped once it stays within this distance of its last sample (rad): far
 #: below any move, above the 6-7 significant digits a CSV log keeps of an angle.
 STOP_TOL_RAD = 1e-6
-#: Length of the decay fitted after the stop, s (the estimator needs 1 s besides the pulse; modes of the arm
-#: decay by ``e^{-ζω·1 s} < 1e-2`` within it).
+#: Length of the decay fitted after the stop, s (the estimator needs 1 s besides the pulse;
+#: modes of the arm decay by ``e^{-ζω·1 s} < 1e-2`` within it).
 DECAY_S = 1.02
 #: Samples from the stop that are left out of the cost (the pulse and the one after it).
 PULSE_SAMPLES = 2

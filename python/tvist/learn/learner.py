@@ -249,7 +249,9 @@ class MapLearner:
     @property
     def scales(self) -> dict[str, float]:
         """The learned map's scale factors, by name."""
-        return {name: float(math.exp(v)) for name, v in zip(self.names, self._published)}
+        return {
+            name: float(math.exp(v)) for name, v in zip(self.names, self._published, strict=True)
+        }
 
     # -- predicted residual vibration -------------------------------------------------------
     def predicted_residual(self, theta: np.ndarray | None = None) -> float:
@@ -459,7 +461,7 @@ class MapLearner:
                     "change_percent": 100.0 * math.expm1(v),
                     "log_se": float(s),
                 }
-                for name, v, s in zip(self.names, self._published, se)
+                for name, v, s in zip(self.names, self._published, se, strict=True)
             },
             "predicted_residual": _json(self.predicted_residual()),
             "predicted_residual_prior": _json(self.predicted_residual(np.zeros_like(self.theta))),
