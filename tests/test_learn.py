@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 
@@ -159,3 +160,50 @@ def test_payload_change_is_detected_within_three_moves():
     assert report.shift_percent > 0 and "payload changed?" in report.message
     # The payload estimate from one end pose's modes, through the learned map: within 1 kg.
     assert abs(report.estimate_kg - 2.0) < 1.0, report.message
+
+
+def _run_cli(*argv: str):
+    import subprocess
+    import sys
+
+    return subprocess.run(
+        [sys.executable, "-m", "tvist.cli", *argv], capture_output=True, text=True, timeout=300
+    )
+
+
+def test_learn_command_writes_a_map_with_provenance(tmp_path):
+    import json
+
+    twin, robot = _twin(31), _robot()
+    wrong = _wrong_map(twin)
+    wrong_path = tmp_path / "m.json"
+    ModalMap(
+        wrong.flex_joints,
+        wrong.mode_joints,
+        {**wrong.metadata, "payload": {"mass_kg": PAYLOAD_KG, "com_m": list(PAYLOAD_COM_M)}},
+    ).save(wrong_path)
+    motion = MOTIONS[2]
+    good = twin.run(move(motion.q_start, motion.q_end, robot)).to_csv(tmp_path / "q3-q1.csv")
+    knocked = tmp_path / "knocked.csv"
+    record = _corrupted(
+        Record.from_rtde_fields(twin.run(move(motion.q_end, motion.q_start, robot))), "contact"
+    )
+    # The knocked log, written as an RTDE CSV through the twin's record format.
+    sim = twin.run(move(motion.q_end, motion.q_start, robot))
+    sim.actual_tool_accelerometer[:] = record.tool_accel
+    sim.to_csv(knocked)
+    out = tmp_path / "m2.json"
+    done = _run_cli("learn", str(good), str(knocked), "--map", str(wrong_path), "--out", str(out))
+    assert done.returncode == 0, done.stderr
+    learned = json.loads(out.read_text())["metadata"]["learned"]
+    logs = {Path(e["source"]).name: e for e in learned["logs"]}
+    assert logs["q3-q1.csv"]["accepted"] and logs["q3-q1.csv"]["map_updated"]
+    assert not logs["knocked.csv"]["accepted"] and "outside force" in logs["knocked.csv"]["reason"]
+    # The Q1 modes show the map 15 % soft: the learned base and shoulder stiffness go up.
+    scales = learned["scale_factors"]
+    assert scales["stiffness scale, joint 0"]["change_percent"] > 3.0
+    assert scales["stiffness scale, joint 1"]["change_percent"] > 3.0
+    # A user error: one line, exit code 2.
+    same = _run_cli("learn", str(good), "--map", str(wrong_path), "--out", str(wrong_path))
+    assert same.returncode == 2 and len(same.stderr.strip().splitlines()) == 1
+    assert "--out" in same.stderr and "Traceback" not in same.stderr

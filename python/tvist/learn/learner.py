@@ -24,8 +24,9 @@ the map is right at its end pose to within what a ZV shaper tolerates
   explains it, the payload change is reported (:class:`PayloadReport`);
 - every step is bounded to :data:`MAX_LOG_STEP` per parameter (a shortened gain, whose
   covariance keeps the uncertainty of the step not taken);
-- the map (:attr:`MapLearner.map`) takes the estimate only when the change is statistically
-  significant (:data:`SIGNIFICANCE_PROBABILITY`) and the predicted residual vibration (the
+- the map (:attr:`MapLearner.map`) takes the estimate only when it is statistically
+  significant (a likelihood-ratio test on the modes observed so far,
+  :data:`SIGNIFICANCE_PROBABILITY`) and the predicted residual vibration (the
   ZV shaper of the map's modes on the observed modes, :func:`tvist.prv`) over all moves seen
   so far does not increase;
 - a log with wrong units, a misplaced column, an outside force, or only flagged fits is
@@ -68,7 +69,8 @@ QUIET_WN_REL_SIGMA = 0.10
 #: Observations with a normalised innovation squared above this chi-square quantile are not
 #: used (inconsistent with the map and its uncertainty).
 GATE_PROBABILITY = 0.999
-#: The estimate replaces the map when its change is beyond this chi-square quantile.
+#: The estimate replaces the map when it lowers the misfit of the observed modes by more than
+#: this chi-square quantile (one degree of freedom).
 SIGNIFICANCE_PROBABILITY = 0.95
 #: Largest change of any log scale factor per observation (0.1: ~10 % stiffness).
 MAX_LOG_STEP = 0.1
@@ -187,10 +189,11 @@ def _log_record(log: Any) -> tuple[Record, str]:
 
 @dataclass
 class _Seen:
-    """An accepted move: its end pose and its observed modes (mode index, ω_n, ζ)."""
+    """An accepted move: its end pose and its observed modes ``(mode index, ω_n, ζ, σ_ω,
+    σ_ζ)`` (σ: the measurement's standard deviations, model error included)."""
 
     q_end: np.ndarray
-    modes: list[tuple[int, float, float]] = field(default_factory=list)
+    modes: list[tuple[int, float, float, float, float]] = field(default_factory=list)
 
 
 class MapLearner:
@@ -264,7 +267,7 @@ class MapLearner:
             if not seen.modes:
                 continue
             modes = self._modes(theta, seen.q_end)
-            for i, wn, zeta in seen.modes:
+            for i, wn, zeta, _, _ in seen.modes:
                 design = tvist.shaper("zv", float(modes[i, 0]), float(min(modes[i, 1], 0.99)))
                 values.append(tvist.prv(design, wn, zeta))
         return float(np.mean(values)) if values else math.nan
@@ -311,9 +314,13 @@ class MapLearner:
                 f"joint {self.mode_joints[i]}: {m.wn_rad_s / (2 * math.pi):.2f} Hz, ζ {m.zeta:.3f}"
                 for i, m in modes
             )
+            sigma = np.sqrt(r_diag)
             seen = _Seen(
                 np.asarray(decay.q_end, dtype=float),
-                [(i, m.wn_rad_s, m.zeta) for i, m in modes],
+                [
+                    (i, m.wn_rad_s, m.zeta, float(sigma[2 * k]), float(sigma[2 * k + 1]))
+                    for k, (i, m) in enumerate(modes)
+                ],
             )
         jac = self._jacobian(h_of, h)
         s = jac @ self.cov @ jac.T + np.diag(r_diag)
@@ -405,12 +412,22 @@ class MapLearner:
             jac[:, k] = (h_of(theta) - h0) / _FD_STEP
         return jac
 
+    def misfit(self, theta: np.ndarray) -> float:
+        """Chi-square of the modes observed so far against the map at ``theta``."""
+        total = 0.0
+        for seen in self._seen:
+            if seen.modes:
+                modes = self._modes(theta, seen.q_end)
+                for i, wn, zeta, s_wn, s_zeta in seen.modes:
+                    total += ((wn - modes[i, 0]) / s_wn) ** 2 + ((zeta - modes[i, 1]) / s_zeta) ** 2
+        return total
+
     def _maybe_publish(self) -> bool:
-        delta = self.theta - self._published
-        significance = float(delta @ np.linalg.solve(self.cov, delta))
-        # The change along its own direction (one degree of freedom: the observations move
+        # Likelihood-ratio test on the moves seen so far: the estimate explains them better
+        # than the map by more than chance would (one degree of freedom: the observations move
         # the estimate along the few directions the observed modes depend on).
-        if significance <= stats.chi2.ppf(SIGNIFICANCE_PROBABILITY, 1):
+        gain = self.misfit(self._published) - self.misfit(self.theta)
+        if gain <= stats.chi2.ppf(SIGNIFICANCE_PROBABILITY, 1):
             return False
         new, old = self.predicted_residual(self.theta), self.predicted_residual(self._published)
         if math.isfinite(old) and not new <= old:
