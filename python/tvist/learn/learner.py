@@ -66,6 +66,10 @@ MODEL_ZETA_REL_SIGMA = 0.15
 #: (a ZV shaper leaves ~16 % of the vibration at 10 % frequency error, which at the twin's
 #: accelerometer noise can already be below the noise after an ordinary move).
 QUIET_WN_REL_SIGMA = 0.10
+#: ... and a move counts as not ringing only if its largest acceleration in the first 0.1 s
+#: after the stop is within this multiple of the noise (50 samples of white noise peak at
+#: about 2.5 standard deviations).
+QUIET_NOISE_FACTOR = 3.0
 #: Observations with a normalised innovation squared above this chi-square quantile are not
 #: used (inconsistent with the map and its uncertainty).
 GATE_PROBABILITY = 0.999
@@ -296,6 +300,20 @@ class MapLearner:
                         source,
                         False,
                         f"low-confidence fit: {reasons}",
+                        decay,
+                        False,
+                        before,
+                        before,
+                    )
+                )
+            if decay.amplitude_m_s2 > QUIET_NOISE_FACTOR * decay.noise_m_s2:
+                return self._note(
+                    Observation(
+                        source,
+                        False,
+                        f"rings ({decay.amplitude_m_s2:.3g} m/s² at the stop, "
+                        f"{decay.amplitude_m_s2 / decay.noise_m_s2:.1f} times the noise) but no "
+                        "mode was fitted",
                         decay,
                         False,
                         before,
