@@ -12,8 +12,9 @@ ringing SNR and low-confidence flags come with it. Where a second mode rings in 
 direction (the shoulder mode leaks into the base direction at most poses), the two-mode fit
 of identification (:func:`tvist.ident.two_mode.fit_two_modes`) separates them.
 
-A move that does not ring (its fit is :data:`~tvist.ident.local_fit.NO_RINGING`) still says
-something: its residual amplitude bounds how wrong the map can be at that pose.
+A move that does not ring (every fit :data:`~tvist.ident.local_fit.NO_RINGING`) still says
+something: with its acceleration at the stop at the noise level, the map that shaped it is
+right at that pose (:mod:`tvist.learn.learner` uses it so).
 """
 
 from __future__ import annotations
@@ -109,6 +110,8 @@ class Decay:
         Robust noise level of the tangential acceleration in the last half of the decay, m/s².
     problem
         Why the decay cannot be used (an outside force), or ``None``.
+    fits
+        The single-mode fit in each mode joint's direction, by joint (for inspection).
     """
 
     t_stop_s: float
