@@ -85,6 +85,8 @@ _FD_STEP = 1e-4
 CLOSE_MODES_RATIO = 1.1
 #: A payload estimate that differs from the declared one by less than this is no change, kg.
 MIN_PAYLOAD_CHANGE_KG = 0.5
+#: Step of the payload search, kg.
+PAYLOAD_GRID_KG = 0.25
 
 
 @dataclass(frozen=True)
@@ -345,7 +347,7 @@ class MapLearner:
         nu = z - h
         nis = float(nu @ np.linalg.solve(s, nu))
         if nis > stats.chi2.ppf(GATE_PROBABILITY, len(z)):
-            payload = self._payload_check(decay.q_end, modes) if modes else None
+            payload = self._payload_check(decay) if modes else None
             reason = (
                 payload.message
                 if payload is not None
@@ -455,31 +457,36 @@ class MapLearner:
         return True
 
     # -- payload ---------------------------------------------------------------------------
-    def _payload_check(
-        self, q_end: np.ndarray, modes: Sequence[tuple[int, ModeObservation]]
-    ) -> PayloadReport | None:
+    def _payload_check(self, decay: Decay) -> PayloadReport | None:
         """The payload that makes the learned map predict the observed modes, if it differs
-        from the declared one by more than :data:`MIN_PAYLOAD_CHANGE_KG`."""
-        declared = self.robot.payload
-        q = np.asarray(q_end, dtype=float)
-        idx = [i for i, _ in modes]
-        wn = np.array([m.wn_rad_s for _, m in modes])
+        from the declared one by more than :data:`MIN_PAYLOAD_CHANGE_KG`.
 
-        def robot_with(mass: float) -> Robot:
+        Which map mode an observed mode is depends on the payload (all of them move), so at
+        every candidate payload each observed mode is compared with the nearest predicted one
+        (log-frequency); a grid over the payload (:data:`PAYLOAD_GRID_KG` steps up to twice
+        the rated payload), refined around its best point.
+        """
+        declared = self.robot.payload
+        q = np.asarray(decay.q_end, dtype=float)
+        wn = np.array([m.wn_rad_s for m in decay.modes])
+
+        def log_errors(mass: float) -> np.ndarray:
             payload = Payload(mass, tuple(declared.com_m), declared.inertia_kg_m2)
-            return Robot(self.robot.params, payload)
+            pred = self._modes(self._published, q, Robot(self.robot.params, payload))[:, 0]
+            errors = np.log(wn[:, None] / pred[None, :])
+            return errors[np.arange(wn.size), np.argmin(np.abs(errors), axis=1)]
 
         def misfit(mass: float) -> float:
-            pred = self._modes(self._published, q, robot_with(mass))[idx, 0]
-            return float(np.sum(np.log(wn / pred) ** 2))
+            return float(np.sum(log_errors(mass) ** 2))
 
         upper = 2.0 * max(float(self.robot.params.max_payload_kg), declared.mass_kg)
-        best = optimize.minimize_scalar(misfit, bounds=(0.0, upper), method="bounded")
-        estimate = float(best.x)
+        grid = np.arange(0.0, upper + PAYLOAD_GRID_KG / 2, PAYLOAD_GRID_KG)
+        k = int(np.argmin([misfit(m) for m in grid]))
+        lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]
+        estimate = float(optimize.minimize_scalar(misfit, bounds=(lo, hi), method="bounded").x)
         if abs(estimate - declared.mass_kg) < MIN_PAYLOAD_CHANGE_KG:
             return None
-        pred = self._modes(self._published, q)[idx, 0]
-        shift = 100.0 * float(np.mean(wn / pred - 1.0))
+        shift = 100.0 * float(np.mean(np.expm1(log_errors(declared.mass_kg))))
         return PayloadReport(float(declared.mass_kg), estimate, shift)
 
     # -- provenance ------------------------------------------------------------------------
