@@ -96,21 +96,26 @@ class PayloadReport:
     Attributes
     ----------
     declared_kg, estimate_kg
-        The declared payload and the one that explains the observed modes, kg.
+        The declared payload and the one that explains the observed modes best, kg.
     shift_percent
         Mean relative difference of the observed natural frequencies from the map's, %.
+    alternatives_kg
+        Other payloads that explain them as well within the measurement's uncertainty (one
+        mode seen: the shoulder mode at a light payload can be the base mode at a heavy one).
     """
 
     declared_kg: float
     estimate_kg: float
     shift_percent: float
+    alternatives_kg: tuple[float, ...] = ()
 
     @property
     def message(self) -> str:
         way = "lower" if self.shift_percent < 0 else "higher"
+        fits = " or ".join(f"{m:.1f} kg" for m in (self.estimate_kg, *self.alternatives_kg))
         return (
             f"modes {abs(self.shift_percent):.0f} % {way} than the map predicts at "
-            f"{self.declared_kg:g} kg: payload changed? (the modes fit {self.estimate_kg:.1f} kg)"
+            f"{self.declared_kg:g} kg: payload changed? (the modes fit {fits})"
         )
 
     def to_json(self) -> dict[str, Any]:
@@ -118,6 +123,7 @@ class PayloadReport:
             "declared_kg": self.declared_kg,
             "estimate_kg": self.estimate_kg,
             "shift_percent": self.shift_percent,
+            "alternatives_kg": list(self.alternatives_kg),
             "message": self.message,
         }
 
@@ -469,6 +475,7 @@ class MapLearner:
         declared = self.robot.payload
         q = np.asarray(decay.q_end, dtype=float)
         wn = np.array([m.wn_rad_s for m in decay.modes])
+        sigma = np.hypot([m.wn_se_rad_s / m.wn_rad_s for m in decay.modes], MODEL_WN_REL_SIGMA)
 
         def log_errors(mass: float) -> np.ndarray:
             payload = Payload(mass, tuple(declared.com_m), declared.inertia_kg_m2)
@@ -477,17 +484,26 @@ class MapLearner:
             return errors[np.arange(wn.size), np.argmin(np.abs(errors), axis=1)]
 
         def misfit(mass: float) -> float:
-            return float(np.sum(log_errors(mass) ** 2))
+            return float(np.sum((log_errors(mass) / sigma) ** 2))
 
         upper = 2.0 * max(float(self.robot.params.max_payload_kg), declared.mass_kg)
         grid = np.arange(0.0, upper + PAYLOAD_GRID_KG / 2, PAYLOAD_GRID_KG)
-        k = int(np.argmin([misfit(m) for m in grid]))
-        lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]
-        estimate = float(optimize.minimize_scalar(misfit, bounds=(lo, hi), method="bounded").x)
-        if abs(estimate - declared.mass_kg) < MIN_PAYLOAD_CHANGE_KG:
+        values = np.array([misfit(m) for m in grid])
+        # Local minima of the grid, refined; those within the chi-square quantile of the best.
+        padded = np.concatenate(([np.inf], values, [np.inf]))
+        minima = np.flatnonzero((values <= padded[:-2]) & (values <= padded[2:]))
+        found = []
+        for k in minima:
+            lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]
+            best = optimize.minimize_scalar(misfit, bounds=(lo, hi), method="bounded")
+            found.append((float(best.fun), float(best.x)))
+        found.sort()
+        limit = found[0][0] + stats.chi2.ppf(SIGNIFICANCE_PROBABILITY, 1)
+        masses = [m for f, m in found if f <= limit]
+        if any(abs(m - declared.mass_kg) < MIN_PAYLOAD_CHANGE_KG for m in masses):
             return None
         shift = 100.0 * float(np.mean(np.expm1(log_errors(declared.mass_kg))))
-        return PayloadReport(float(declared.mass_kg), estimate, shift)
+        return PayloadReport(float(declared.mass_kg), masses[0], shift, tuple(masses[1:]))
 
     # -- provenance ------------------------------------------------------------------------
     def provenance(self) -> dict[str, Any]:
