@@ -1,7 +1,7 @@
 """The ``tvist`` command line: one module per group of commands (``demo``, ``ident``,
-``shape``, ``live``, ``plan``, ``twin_server``; shared options in ``args``), each registering
-its subparsers through an ``add_*_command`` listed in ``COMMANDS``. Heavy imports happen inside
-the command that needs them. :func:`main` turns user errors into one line and exit code 2."""
+``learn``, ``shape``, ``live``, ``plan``, ``twin_server``; shared options in ``args``), each
+registering its subparsers through an ``add_*_command`` listed in ``COMMANDS``. Heavy imports
+happen inside the command that needs them. :func:`main` turns user errors into one line and exit code 2."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ from tvist.cli.ident import (
     add_identify_command,
     add_sensitivity_command,
 )
+from tvist.cli.learn import add_learn_command
 from tvist.cli.live import add_record_command, add_run_command
 from tvist.cli.plan import add_plan_command
 from tvist.cli.shape import add_shape_command
@@ -29,6 +30,7 @@ COMMANDS += [
     ("identify", add_identify_command),
     ("fit-map", add_fit_map_command),
     ("sensitivity", add_sensitivity_command),
+    ("learn", add_learn_command),
     ("shape", add_shape_command),
 ]
 COMMANDS += [

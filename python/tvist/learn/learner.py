@@ -1,0 +1,541 @@
+"""Learn the modal map from the ringing after ordinary moves: a bounded, gated recursive
+estimate of per-joint stiffness and damping scale factors.
+
+**What is estimated.** An ordinary move shows the modes at its end pose only, and only those
+that ring: the base and shoulder modes (:mod:`tvist.learn.decay`). A handful of such moves
+cannot determine the 3 load-law coefficients of every flexible joint (30 numbers for the
+demo's five joints), but they do determine how much stiffer or softer each joint is than the
+map says. The state is therefore ``θ = [ln s_k(j) for every flexible joint j] +
+[ln s_c(j) for every mode joint j]``: joint ``j``'s stiffness law is ``s_k(j) k_j(L)`` and its
+damping law ``s_c(j) c_j(L)`` (whole laws scaled, their load shape kept from the prior map).
+Joints that no observed mode depends on keep their prior scale: the estimator's prior holds
+them.
+
+**How.** An extended Kalman filter on ``θ`` with the prior map at ``θ = 0`` and
+:data:`PRIOR_LOG_SIGMA`; each observed mode gives ``ω_n`` and ``ζ`` with the estimator's
+standard errors widened by the map form's own error (:data:`MODEL_WN_REL_SIGMA`,
+:data:`MODEL_ZETA_REL_SIGMA`); the measurement function is the map's modes at the end pose
+(the Rust eigenproblem), its Jacobian by finite differences. A move that does not ring says
+the map is right at its end pose to within what a ZV shaper tolerates
+(:data:`QUIET_WN_REL_SIGMA`). Safety:
+
+- an observation whose innovation is implausible (normalised innovation squared above the
+  :data:`GATE_PROBABILITY` quantile) is not used; if a payload other than the declared one
+  explains it, the payload change is reported (:class:`PayloadReport`);
+- every step is bounded to :data:`MAX_LOG_STEP` per parameter (a shortened gain, whose
+  covariance keeps the uncertainty of the step not taken);
+- the map (:attr:`MapLearner.map`) takes the estimate only when it is statistically
+  significant (a likelihood-ratio test on the modes observed so far,
+  :data:`SIGNIFICANCE_PROBABILITY`) and the predicted residual vibration (the
+  ZV shaper of the map's modes on the observed modes, :func:`tvist.prv`) over all moves seen
+  so far does not increase;
+- a log with wrong units, a misplaced column, an outside force, or only flagged fits is
+  rejected with its reason and never touches the estimate.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy import optimize, stats
+
+import tvist
+from tvist.ident.logs import Record, read_rtde_csv
+from tvist.learn.decay import Decay, ModeObservation, observe_decay
+from tvist.modal_map import ModalMap
+from tvist.robots import Payload, Robot
+from tvist.units import UnitError, check_log
+
+__all__ = ["MapLearner", "Observation", "PayloadReport"]
+
+#: Prior uncertainty of every log scale factor (0.2: a map may be ~20 % off in stiffness,
+#: e.g. identified on another arm of the same type; 7-10 % in frequency).
+PRIOR_LOG_SIGMA = 0.2
+#: Relative error of the map form itself at a pose, added to the estimator's standard errors:
+#: the gear laws' first-order modal map of the twin is 2 % off in the base frequency at the
+#: folded pose Q3 with exact stiffness; ζ is 20 % off there.
+MODEL_WN_REL_SIGMA = 0.01
+MODEL_ZETA_REL_SIGMA = 0.15
+#: A move that does not ring: the map's frequencies at its end pose are right to within this
+#: (a ZV shaper leaves ~16 % of the vibration at 10 % frequency error, which at the twin's
+#: accelerometer noise can already be below the noise after an ordinary move).
+QUIET_WN_REL_SIGMA = 0.10
+#: ... and a move counts as not ringing only if its largest acceleration in the first 0.1 s
+#: after the stop is within this multiple of the noise (50 samples of white noise peak at
+#: about 2.5 standard deviations).
+QUIET_NOISE_FACTOR = 3.0
+#: Observations with a normalised innovation squared above this chi-square quantile are not
+#: used (inconsistent with the map and its uncertainty).
+GATE_PROBABILITY = 0.999
+#: The estimate replaces the map when it lowers the misfit of the observed modes by more than
+#: this chi-square quantile (one degree of freedom).
+SIGNIFICANCE_PROBABILITY = 0.95
+#: Largest change of any log scale factor per observation (0.1: ~10 % stiffness).
+MAX_LOG_STEP = 0.1
+#: Relative finite-difference step of the Jacobian.
+_FD_STEP = 1e-4
+#: Two predicted modes closer than this frequency ratio are told apart by the direction they
+#: ring in, farther ones by frequency.
+CLOSE_MODES_RATIO = 1.1
+#: A payload estimate that differs from the declared one by less than this is no change, kg.
+MIN_PAYLOAD_CHANGE_KG = 0.5
+#: Step of the payload search, kg.
+PAYLOAD_GRID_KG = 0.25
+
+
+@dataclass(frozen=True)
+class PayloadReport:
+    """Observed modes that the map explains only with another payload.
+
+    Attributes
+    ----------
+    declared_kg, estimate_kg
+        The declared payload and the one that explains the observed modes best, kg.
+    shift_percent
+        Mean relative difference of the observed natural frequencies from the map's, %.
+    alternatives_kg
+        Other payloads that explain them as well within the measurement's uncertainty (one
+        mode seen: the shoulder mode at a light payload can be the base mode at a heavy one).
+    """
+
+    declared_kg: float
+    estimate_kg: float
+    shift_percent: float
+    alternatives_kg: tuple[float, ...] = ()
+
+    @property
+    def message(self) -> str:
+        way = "lower" if self.shift_percent < 0 else "higher"
+        fits = " or ".join(f"{m:.1f} kg" for m in (self.estimate_kg, *self.alternatives_kg))
+        return (
+            f"modes {abs(self.shift_percent):.0f} % {way} than the map predicts at "
+            f"{self.declared_kg:g} kg: payload changed? (the modes fit {fits})"
+        )
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "declared_kg": self.declared_kg,
+            "estimate_kg": self.estimate_kg,
+            "shift_percent": self.shift_percent,
+            "alternatives_kg": list(self.alternatives_kg),
+            "message": self.message,
+        }
+
+
+@dataclass(frozen=True)
+class Observation:
+    """What one log taught.
+
+    Attributes
+    ----------
+    source
+        The log (a file name, or ``"<record>"``).
+    accepted
+        Whether the log was used by the estimate.
+    reason
+        Why it was rejected, or what it contributed.
+    decay
+        The fitted free decay (``None`` if the log could not be read).
+    map_updated
+        Whether :attr:`MapLearner.map` changed.
+    predicted_residual_before, predicted_residual_after
+        Mean predicted residual vibration (fraction of unshaped) of the map's ZV shaper on the
+        modes of the moves seen so far, before and after this log.
+    payload
+        A suspected payload change, or ``None``.
+    scales
+        The learned map's log scale factors after this log (:attr:`MapLearner.names`).
+    """
+
+    source: str
+    accepted: bool
+    reason: str
+    decay: Decay | None = None
+    map_updated: bool = False
+    predicted_residual_before: float = math.nan
+    predicted_residual_after: float = math.nan
+    payload: PayloadReport | None = None
+    scales: np.ndarray | None = field(default=None, repr=False)
+
+    def to_json(self) -> dict[str, Any]:
+        d = self.decay
+        return {
+            "source": self.source,
+            "accepted": self.accepted,
+            "reason": self.reason,
+            "map_updated": self.map_updated,
+            "modes": [] if d is None else [m.to_json() for m in d.modes],
+            "flagged_modes": [] if d is None else [m.to_json() for m in d.flagged],
+            "residual_amplitude_m_s2": None if d is None else d.amplitude_m_s2,
+            "predicted_residual_before": _json(self.predicted_residual_before),
+            "predicted_residual_after": _json(self.predicted_residual_after),
+            "payload": None if self.payload is None else self.payload.to_json(),
+        }
+
+
+def _json(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
+
+
+def _log_record(log: Any) -> tuple[Record, str]:
+    """A unit-checked SI record from a path, a :class:`Record` or a twin run."""
+    if isinstance(log, (str, Path)):
+        return read_rtde_csv(log), str(log)
+    record = log if isinstance(log, Record) else Record.from_rtde_fields(log)
+    columns = {
+        "target_q": record.target_q,
+        "target_qd": record.target_qd,
+        "target_qdd": record.target_qdd,
+        "actual_q": record.actual_q,
+        "actual_tool_accelerometer": record.tool_accel,
+    }
+    check_log(record.t_s, columns)
+    return record, "<record>"
+
+
+@dataclass
+class _Seen:
+    """An accepted move: its end pose and its observed modes ``(mode index, ω_n, ζ, σ_ω,
+    σ_ζ)`` (σ: the measurement's standard deviations, model error included)."""
+
+    q_end: np.ndarray
+    modes: list[tuple[int, float, float, float, float]] = field(default_factory=list)
+
+
+class MapLearner:
+    """Refine a modal map from the logs of ordinary moves (see the module docstring).
+
+    Parameters
+    ----------
+    robot
+        The rigid-body model with the declared payload.
+    modal_map
+        The prior map.
+    prior_log_sigma
+        Prior uncertainty of the log scale factors.
+    """
+
+    def __init__(
+        self, robot: Robot, modal_map: ModalMap, *, prior_log_sigma: float = PRIOR_LOG_SIGMA
+    ) -> None:
+        if not isinstance(modal_map, ModalMap):
+            raise ValueError("modal_map: the learner refines a modal map (kind 'modal')")
+        self.robot = robot
+        self.prior = modal_map
+        self.flex_joints = [int(f["joint"]) for f in modal_map.flex_joints]
+        self.mode_joints = [int(j) for j in modal_map.mode_joints]
+        self.names = [f"stiffness scale, joint {j}" for j in self.flex_joints] + [
+            f"damping scale, joint {j}" for j in self.mode_joints
+        ]
+        n = len(self.names)
+        self.theta = np.zeros(n)
+        self.cov = np.eye(n) * prior_log_sigma**2
+        self._published = np.zeros(n)
+        self._map = modal_map
+        self._seen: list[_Seen] = []
+        self.history: list[Observation] = []
+
+    # -- the map at a parameter vector -------------------------------------------------------
+    def map_at(self, theta: np.ndarray) -> ModalMap:
+        """The prior map with its laws scaled by ``exp(theta)``."""
+        n_flex = len(self.flex_joints)
+        entries = copy.deepcopy(self.prior.flex_joints)
+        for i, entry in enumerate(entries):
+            scale_k = math.exp(theta[i])
+            entry["stiffness_nm_per_rad"] = [v * scale_k for v in entry["stiffness_nm_per_rad"]]
+            if entry["joint"] in self.mode_joints:
+                scale_c = math.exp(theta[n_flex + self.mode_joints.index(entry["joint"])])
+                entry["damping_nms_per_rad"] = [v * scale_c for v in entry["damping_nms_per_rad"]]
+        return ModalMap(entries, self.mode_joints, self.prior.metadata)
+
+    def _modes(self, theta: np.ndarray, q: np.ndarray, robot: Robot | None = None) -> np.ndarray:
+        return self.map_at(theta).modes_many(robot or self.robot, q[None, :])[0]
+
+    @property
+    def map(self) -> ModalMap:
+        """The learned map (the prior until a significant, non-worsening update)."""
+        return self._map
+
+    @property
+    def scales(self) -> dict[str, float]:
+        """The learned map's scale factors, by name."""
+        return {
+            name: float(math.exp(v)) for name, v in zip(self.names, self._published, strict=True)
+        }
+
+    # -- predicted residual vibration -------------------------------------------------------
+    def predicted_residual(self, theta: np.ndarray | None = None) -> float:
+        """Mean residual vibration (fraction of unshaped) that the ZV shapers of the map at
+        ``theta`` (default: the learned map) leave on the modes observed so far."""
+        theta = self._published if theta is None else theta
+        values = []
+        for seen in self._seen:
+            if not seen.modes:
+                continue
+            modes = self._modes(theta, seen.q_end)
+            for i, wn, zeta, _, _ in seen.modes:
+                design = tvist.shaper("zv", float(modes[i, 0]), float(min(modes[i, 1], 0.99)))
+                values.append(tvist.prv(design, wn, zeta))
+        return float(np.mean(values)) if values else math.nan
+
+    # -- one log -----------------------------------------------------------------------------
+    def observe(self, log: Any) -> Observation:
+        """Learn from one move's log: a path to an RTDE CSV, a :class:`Record` or a twin run
+        (:class:`tvist.sim.SimRecord`). Never raises for a bad log: it is rejected."""
+        source = str(log) if isinstance(log, (str, Path)) else "<record>"
+        before = self.predicted_residual()
+        try:
+            record, source = _log_record(log)
+            decay = observe_decay(record, self.robot, tuple(self.mode_joints))
+        except (UnitError, ValueError) as exc:
+            return self._note(Observation(source, False, str(exc), None, False, before, before))
+        if decay.problem is not None:
+            return self._note(
+                Observation(source, False, decay.problem, decay, False, before, before)
+            )
+        modes = self._assign(decay)
+        if not modes:
+            if decay.flagged:
+                reasons = "; ".join(r for m in decay.flagged for r in m.reasons)
+                return self._note(
+                    Observation(
+                        source,
+                        False,
+                        f"low-confidence fit: {reasons}",
+                        decay,
+                        False,
+                        before,
+                        before,
+                    )
+                )
+            if decay.amplitude_m_s2 > QUIET_NOISE_FACTOR * decay.noise_m_s2:
+                return self._note(
+                    Observation(
+                        source,
+                        False,
+                        f"rings ({decay.amplitude_m_s2:.3g} m/s² at the stop, "
+                        f"{decay.amplitude_m_s2 / decay.noise_m_s2:.1f} times the noise) but no "
+                        "mode was fitted",
+                        decay,
+                        False,
+                        before,
+                        before,
+                    )
+                )
+            z, h, r_diag, h_of = self._quiet_measurement(decay.q_end)
+            what = (
+                f"no ringing above noise ({decay.amplitude_m_s2:.3g} m/s² at the stop, noise "
+                f"{decay.noise_m_s2:.3g}): the map is right here"
+            )
+            seen = _Seen(np.asarray(decay.q_end, dtype=float))
+        else:
+            z, h, r_diag, h_of = self._mode_measurement(decay.q_end, modes)
+            what = "modes " + ", ".join(
+                f"joint {self.mode_joints[i]}: {m.wn_rad_s / (2 * math.pi):.2f} Hz, ζ {m.zeta:.3f}"
+                for i, m in modes
+            )
+            sigma = np.sqrt(r_diag)
+            seen = _Seen(
+                np.asarray(decay.q_end, dtype=float),
+                [
+                    (i, m.wn_rad_s, m.zeta, float(sigma[2 * k]), float(sigma[2 * k + 1]))
+                    for k, (i, m) in enumerate(modes)
+                ],
+            )
+        jac = self._jacobian(h_of, h)
+        s = jac @ self.cov @ jac.T + np.diag(r_diag)
+        nu = z - h
+        nis = float(nu @ np.linalg.solve(s, nu))
+        if nis > stats.chi2.ppf(GATE_PROBABILITY, len(z)):
+            payload = self._payload_check(decay) if modes else None
+            reason = (
+                payload.message
+                if payload is not None
+                else f"inconsistent with the map and its uncertainty (NIS {nis:.1f}): {what}"
+            )
+            return self._note(
+                Observation(source, False, reason, decay, False, before, before, payload)
+            )
+        gain = self.cov @ jac.T @ np.linalg.inv(s)
+        # A bounded step: the gain shortened so that no scale moves by more than
+        # MAX_LOG_STEP; the Joseph form below is the exact covariance for any gain, so the
+        # estimate keeps the uncertainty of the step it did not take.
+        largest = float(np.max(np.abs(gain @ nu)))
+        if largest > MAX_LOG_STEP:
+            gain = gain * (MAX_LOG_STEP / largest)
+        self.theta = self.theta + gain @ nu
+        ikh = np.eye(len(self.theta)) - gain @ jac
+        self.cov = ikh @ self.cov @ ikh.T + gain @ np.diag(r_diag) @ gain.T
+        self._seen.append(seen)
+        updated = self._maybe_publish()
+        after = self.predicted_residual()
+        return self._note(Observation(source, True, what, decay, updated, before, after))
+
+    def _note(self, obs: Observation) -> Observation:
+        obs = replace(obs, scales=self._published.copy())
+        self.history.append(obs)
+        return obs
+
+    def _assign(self, decay: Decay) -> list[tuple[int, ModeObservation]]:
+        """The observed modes with the index of the map mode each one is, one per map mode.
+
+        A fit in the tangential direction of one mode joint may show another joint's mode (a
+        shoulder mode leaks into the base direction at most poses), so a fit is the map mode
+        nearest in frequency; where the map's modes are closer than
+        :data:`CLOSE_MODES_RATIO`, frequency cannot tell and the direction decides. Two fits
+        of one mode: the one with the higher ringing SNR.
+        """
+        if not decay.modes:
+            return []
+        predicted = self._modes(self._published, np.asarray(decay.q_end, dtype=float))[:, 0]
+        ratio = float(np.max(predicted) / np.min(predicted))
+        chosen: dict[int, ModeObservation] = {}
+        for m in decay.modes:
+            if ratio < CLOSE_MODES_RATIO:
+                i = self.mode_joints.index(m.joint)
+            else:
+                i = int(np.argmin(np.abs(np.log(m.wn_rad_s / predicted))))
+            if i not in chosen or m.ringing_snr_db > chosen[i].ringing_snr_db:
+                chosen[i] = m
+        return sorted(chosen.items())
+
+    def _mode_measurement(self, q_end: np.ndarray, modes: Sequence[tuple[int, ModeObservation]]):
+        idx = [i for i, _ in modes]
+        z = np.array([v for _, m in modes for v in (m.wn_rad_s, m.zeta)])
+        r = []
+        for _, m in modes:
+            r.append(m.wn_se_rad_s**2 + (MODEL_WN_REL_SIGMA * m.wn_rad_s) ** 2)
+            r.append(m.zeta_se**2 + (MODEL_ZETA_REL_SIGMA * m.zeta) ** 2)
+        q = np.asarray(q_end, dtype=float)
+
+        def h_of(theta: np.ndarray) -> np.ndarray:
+            modes_at = self._modes(theta, q)
+            return np.array([v for i in idx for v in (modes_at[i, 0], modes_at[i, 1])])
+
+        return z, h_of(self.theta), np.array(r), h_of
+
+    def _quiet_measurement(self, q_end: np.ndarray):
+        q = np.asarray(q_end, dtype=float)
+        published = self._modes(self._published, q)[:, 0]
+
+        def h_of(theta: np.ndarray) -> np.ndarray:
+            return self._modes(theta, q)[:, 0]
+
+        r = (QUIET_WN_REL_SIGMA * published) ** 2
+        return published, h_of(self.theta), r, h_of
+
+    def _jacobian(self, h_of, h0: np.ndarray) -> np.ndarray:
+        jac = np.empty((h0.size, self.theta.size))
+        for k in range(self.theta.size):
+            theta = self.theta.copy()
+            theta[k] += _FD_STEP
+            jac[:, k] = (h_of(theta) - h0) / _FD_STEP
+        return jac
+
+    def misfit(self, theta: np.ndarray) -> float:
+        """Chi-square of the modes observed so far against the map at ``theta``."""
+        total = 0.0
+        for seen in self._seen:
+            if seen.modes:
+                modes = self._modes(theta, seen.q_end)
+                for i, wn, zeta, s_wn, s_zeta in seen.modes:
+                    total += ((wn - modes[i, 0]) / s_wn) ** 2 + ((zeta - modes[i, 1]) / s_zeta) ** 2
+        return total
+
+    def _maybe_publish(self) -> bool:
+        # Likelihood-ratio test on the moves seen so far: the estimate explains them better
+        # than the map by more than chance would (one degree of freedom: the observations move
+        # the estimate along the few directions the observed modes depend on).
+        gain = self.misfit(self._published) - self.misfit(self.theta)
+        if gain <= stats.chi2.ppf(SIGNIFICANCE_PROBABILITY, 1):
+            return False
+        new, old = self.predicted_residual(self.theta), self.predicted_residual(self._published)
+        if math.isfinite(old) and not new <= old:
+            return False
+        self._published = self.theta.copy()
+        self._map = self.map_at(self._published)
+        return True
+
+    # -- payload ---------------------------------------------------------------------------
+    def _payload_check(self, decay: Decay) -> PayloadReport | None:
+        """The payload that makes the learned map predict the observed modes, if it differs
+        from the declared one by more than :data:`MIN_PAYLOAD_CHANGE_KG`.
+
+        Which map mode an observed mode is depends on the payload (all of them move), so at
+        every candidate payload each observed mode is compared with the nearest predicted one
+        (log-frequency); a grid over the payload (:data:`PAYLOAD_GRID_KG` steps up to twice
+        the rated payload), refined around its best point.
+        """
+        declared = self.robot.payload
+        q = np.asarray(decay.q_end, dtype=float)
+        wn = np.array([m.wn_rad_s for m in decay.modes])
+        sigma = np.hypot([m.wn_se_rad_s / m.wn_rad_s for m in decay.modes], MODEL_WN_REL_SIGMA)
+
+        def log_errors(mass: float) -> np.ndarray:
+            payload = Payload(mass, tuple(declared.com_m), declared.inertia_kg_m2)
+            pred = self._modes(self._published, q, Robot(self.robot.params, payload))[:, 0]
+            errors = np.log(wn[:, None] / pred[None, :])
+            return errors[np.arange(wn.size), np.argmin(np.abs(errors), axis=1)]
+
+        def misfit(mass: float) -> float:
+            return float(np.sum((log_errors(mass) / sigma) ** 2))
+
+        upper = 2.0 * max(float(self.robot.params.max_payload_kg), declared.mass_kg)
+        grid = np.arange(0.0, upper + PAYLOAD_GRID_KG / 2, PAYLOAD_GRID_KG)
+        values = np.array([misfit(m) for m in grid])
+        # Local minima of the grid, refined; those within the chi-square quantile of the best.
+        padded = np.concatenate(([np.inf], values, [np.inf]))
+        minima = np.flatnonzero((values <= padded[:-2]) & (values <= padded[2:]))
+        found = []
+        for k in minima:
+            lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]
+            best = optimize.minimize_scalar(misfit, bounds=(lo, hi), method="bounded")
+            found.append((float(best.fun), float(best.x)))
+        found.sort()
+        limit = found[0][0] + stats.chi2.ppf(SIGNIFICANCE_PROBABILITY, 1)
+        masses = [m for f, m in found if f <= limit]
+        if any(abs(m - declared.mass_kg) < MIN_PAYLOAD_CHANGE_KG for m in masses):
+            return None
+        shift = 100.0 * float(np.mean(np.expm1(log_errors(declared.mass_kg))))
+        return PayloadReport(float(declared.mass_kg), masses[0], shift, tuple(masses[1:]))
+
+    # -- provenance ------------------------------------------------------------------------
+    def provenance(self) -> dict[str, Any]:
+        """What the learned map was learned from: logs with their verdicts, the scale factors
+        (and their standard errors), the predicted residual."""
+        se = np.sqrt(np.diag(self.cov))
+        return {
+            "prior_source": self.prior.metadata.get("source"),
+            "logs": [
+                {
+                    "source": o.source,
+                    "accepted": o.accepted,
+                    "reason": o.reason,
+                    "map_updated": o.map_updated,
+                }
+                for o in self.history
+            ],
+            "scale_factors": {
+                name: {
+                    "value": float(math.exp(v)),
+                    "change_percent": 100.0 * math.expm1(v),
+                    "log_se": float(s),
+                }
+                for name, v, s in zip(self.names, self._published, se, strict=True)
+            },
+            "predicted_residual": _json(self.predicted_residual()),
+            "predicted_residual_prior": _json(self.predicted_residual(np.zeros_like(self.theta))),
+        }
+
+    def learned_map(self) -> ModalMap:
+        """The learned map with its provenance in ``metadata["learned"]``."""
+        meta = dict(self.prior.metadata)
+        meta["learned"] = self.provenance()
+        meta["source"] = f"learned from {len(self.history)} logs; prior: {meta.get('source')}"
+        return ModalMap(self._map.flex_joints, self.mode_joints, meta)

@@ -1,0 +1,72 @@
+"""Ordinary moves on the twin to learn from: rest-to-rest double-S moves between random poses
+with the demo's limits (:mod:`tvist.demo.motions`), unshaped or shaped with a modal map."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import tvist
+from tvist.demo.motions import A_MAX_RAD_S2, DT_S, JERK_TIME_S, PRE_S, V_MAX_RAD_S
+from tvist.modal_map import ModalMap
+from tvist.robots import Robot
+from tvist.trajectory import double_s
+
+__all__ = ["TAIL_S", "move", "random_poses"]
+
+#: Rest after a move, s: room for the shaper's delay (~0.13 s) and the decay fitted.
+TAIL_S = 1.3
+#: Ranges of the random poses, rad: any base angle; the upper arm from horizontal to 30° short
+#: of vertical (pointing up, the base mode is a torsion of the wrists); the elbow from
+#: stretched to folded like Q3; the wrists as in the test poses.
+SHOULDER_RANGE = (-np.pi, -np.pi / 2 - np.pi / 6)
+ELBOW_RANGE = (0.0, 5 * np.pi / 6)
+#: Fewest metres of the flange from the base axis (the base mode's tangential direction).
+MIN_RADIUS_M = 0.25
+
+
+def random_poses(robot: Robot, n: int, rng: np.random.Generator) -> np.ndarray:
+    """``n`` random poses ``(n, 6)`` in the ranges above, flange at least :data:`MIN_RADIUS_M`
+    from the base axis."""
+    poses: list[np.ndarray] = []
+    while len(poses) < n:
+        q = np.array(
+            [
+                rng.uniform(-np.pi, np.pi),
+                rng.uniform(*SHOULDER_RANGE),
+                rng.uniform(*ELBOW_RANGE),
+                -np.pi / 2,
+                0.0,
+                0.0,
+            ]
+        )
+        xyz = robot.flange_pose_many(q[None, :])[0, :3, 3]
+        if np.hypot(xyz[0], xyz[1]) >= MIN_RADIUS_M:
+            poses.append(q)
+    return np.array(poses)
+
+
+def move(
+    q_start: np.ndarray,
+    q_end: np.ndarray,
+    robot: Robot,
+    modal_map: ModalMap | None = None,
+    tail_s: float = TAIL_S,
+) -> np.ndarray:
+    """The reference ``(n_samples, 6)`` of a move at :data:`~tvist.demo.motions.DT_S`,
+    unshaped, or shaped by the two-mode ZV FD-TVIST cascade of ``modal_map``."""
+    traj = double_s(
+        q_start,
+        q_end,
+        dt_s=DT_S,
+        v_max=V_MAX_RAD_S,
+        a_max=A_MAX_RAD_S2,
+        jerk_time_s=JERK_TIME_S,
+        t_pre_s=PRE_S,
+        t_post_s=tail_s,
+    )
+    q = np.ascontiguousarray(traj.q)
+    if modal_map is None:
+        return np.array(q)
+    shaper = tvist.TvShaper(tvist.MapDynamics(robot, modal_map), DT_S, q.shape[1], shaper="zv")
+    shaper.reset(np.ascontiguousarray(q[0]))
+    return np.array(shaper.shape(q))

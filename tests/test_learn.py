@@ -1,0 +1,209 @@
+"""Learning the modal map from ordinary moves on the twin (tvist.learn).
+
+The twin (MuJoCo, nonlinear gear springs, load-dependent dampers, accelerometer noise) is
+more exact than the map under test (a first-order modal map of its gear laws), and the
+learner starts from that map with every stiffness 15 % low.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from tvist import robots
+from tvist.demo.experiment import run_motion
+from tvist.demo.methods import default_methods
+from tvist.demo.modal_rows import fd_tvist_modal
+from tvist.demo.motions import MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
+from tvist.ident.logs import Record
+from tvist.learn import MapLearner, observe_decay
+from tvist.learn.twin_moves import move, random_poses
+from tvist.modal_map import ModalMap, modal_map_from_flex
+from tvist.sim import Twin
+
+#: Accelerometer noise of the twin, m/s² (as in the demo's campaign).
+NOISE = 0.05
+#: The wrong prior: the twin's gear-law map with every stiffness times this.
+WRONG_SCALE = 0.85
+
+
+def _twin(seed: int, payload_kg: float = PAYLOAD_KG) -> Twin:
+    return Twin(
+        "ur5e", payload_kg=payload_kg, payload_com_m=PAYLOAD_COM_M, accel_noise_std=NOISE, seed=seed
+    )
+
+
+def _robot(payload_kg: float = PAYLOAD_KG) -> robots.Robot:
+    return robots.ur5e(payload_kg=payload_kg, payload_com_m=PAYLOAD_COM_M)
+
+
+def _wrong_map(twin: Twin) -> ModalMap:
+    prior = modal_map_from_flex(twin.flex, joints=(0, 1, 2, 3, 4))
+    entries = copy.deepcopy(prior.flex_joints)
+    for e in entries:
+        e["stiffness_nm_per_rad"] = [v * WRONG_SCALE for v in e["stiffness_nm_per_rad"]]
+    return ModalMap(entries, prior.mode_joints, {"robot": "ur5e", "source": "gear laws x0.85"})
+
+
+def _moves(twin, robot, learner, poses, n, first=0):
+    """``n`` moves around ``poses``, unshaped and shaped with the learner's map in turn."""
+    for k in range(first, first + n):
+        a, b = poses[k % len(poses)], poses[(k + 1) % len(poses)]
+        shaped = learner.map if k % 2 else None
+        yield twin.run(move(a, b, robot, shaped))
+
+
+def test_free_decay_recovers_the_twins_modes_at_the_end_pose():
+    twin, robot = _twin(21), _robot()
+    motion = MOTIONS[2]  # Q3 -> Q1: base and shoulder ring at Q1
+    record = Record.from_rtde_fields(twin.run(move(motion.q_start, motion.q_end, robot)))
+    decay = observe_decay(record, robot)
+    truth = twin.modes(motion.q_end)
+    assert decay.problem is None and len(decay.modes) == 2
+    for mode, (wn, _) in zip(decay.modes, truth, strict=True):
+        # 2 %: the fit's standard errors here are ~0.5 %; the twin's gear springs are
+        # nonlinear, so the decay's frequency drifts slightly with its amplitude.
+        assert abs(mode.wn_rad_s / wn - 1.0) < 0.02
+
+
+def test_learned_map_reaches_99_percent_on_the_demo_moves():
+    twin, robot = _twin(3), _robot()
+    wrong = _wrong_map(twin)
+    learner = MapLearner(robot, wrong)
+    poses = random_poses(robot, 10, np.random.default_rng(3))
+    for record in _moves(twin, robot, learner, poses, 20):
+        learner.observe(record)
+    assert any(o.map_updated for o in learner.history)
+    rows = [m for m in default_methods() if m.key == "unshaped"]
+    rows += [
+        fd_tvist_modal("wrong", "wrong", wrong),
+        fd_tvist_modal("learned", "learned", learner.map),
+    ]
+    quiet_twin = Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M)
+    for motion in MOTIONS:
+        run = run_motion(motion, rows, quiet_twin, robot, with_slow_down=False)
+        wrong_pct, learned_pct = (r.reduction_percent for r in run.runs[1:])
+        # The wrong map reaches 96.9-98.6 %; the floor asked of a learned map is 99 %.
+        assert learned_pct >= 99.0, (motion.name, wrong_pct, learned_pct)
+        assert learned_pct > wrong_pct
+
+
+def _corrupted(record: Record, kind: str) -> Record:
+    if kind == "g-units":
+        return replace(record, tool_accel=record.tool_accel / 9.80665)
+    if kind == "swapped column":
+        acc = record.tool_accel.copy()
+        acc[:, [0, 1]] = acc[:, [1, 0]]
+        return replace(record, tool_accel=acc)
+    # A knock on the tool 0.3 s after the stop: a 35 Hz burst of 8 m/s².
+    acc = record.tool_accel.copy()
+    k = int(np.flatnonzero(np.any(record.target_qd != 0.0, axis=1))[-1]) + 150
+    t = np.arange(acc.shape[0] - k) * record.dt_s
+    acc[k:, 2] += 8.0 * np.exp(-30.0 * t) * np.sin(2 * np.pi * 35.0 * t)
+    return replace(record, tool_accel=acc)
+
+
+def test_corrupted_logs_are_rejected_and_never_make_the_map_worse():
+    twin, robot = _twin(5), _robot()
+    wrong = _wrong_map(twin)
+    learner, clean_only = MapLearner(robot, wrong), MapLearner(robot, wrong)
+    poses = random_poses(robot, 6, np.random.default_rng(5))
+    kinds = {2: "contact", 5: "g-units", 8: "swapped column"}
+    expected = {
+        "contact": "outside force",
+        "g-units": "looks like g",
+        "swapped column": "low-confidence",
+    }
+    for k, sim in enumerate(_moves(twin, robot, learner, poses, 10)):
+        record = Record.from_rtde_fields(sim)
+        clean_only.observe(record)
+        if k in kinds:
+            before = learner.map.flex_joints
+            obs = learner.observe(_corrupted(record, kinds[k]))
+            assert not obs.accepted and expected[kinds[k]] in obs.reason, (kinds[k], obs.reason)
+            assert learner.map.flex_joints == before
+        learner.observe(record)
+    # Every rejection is logged with its reason.
+    rejected = [o for o in learner.history if not o.accepted]
+    assert len(rejected) >= len(kinds) and all(o.reason for o in rejected)
+    # Rejected logs never touch the estimate: the same map as from the clean logs alone.
+    np.testing.assert_allclose(learner.history[-1].scales, clean_only.history[-1].scales)
+    assert any(o.map_updated for o in learner.history)
+    # The predicted residual on all the moves observed never increases along the sequence of
+    # learned maps (up to round-off of the shaper design).
+    residuals = [learner.predicted_residual(o.scales) for o in learner.history]
+    assert all(b <= a + 1e-12 for a, b in zip(residuals[:-1], residuals[1:], strict=True)), (
+        residuals
+    )
+
+
+def test_payload_change_is_detected_within_three_moves():
+    robot = _robot(PAYLOAD_KG)
+    twin = _twin(7)
+    learner = MapLearner(robot, _wrong_map(twin))
+    poses = random_poses(robot, 8, np.random.default_rng(7))
+    for record in _moves(twin, robot, learner, poses, 8):
+        obs = learner.observe(record)
+        assert obs.payload is None, obs.reason  # no false alarm at the declared payload
+    light = _twin(8, payload_kg=2.0)
+    reports = []
+    for record in _moves(light, robot, learner, poses, 3, first=8):
+        obs = learner.observe(record)
+        assert not obs.accepted or obs.payload is None
+        if obs.payload is not None:
+            reports.append(obs.payload)
+    assert reports, [o.reason for o in learner.history[-3:]]
+    report = reports[0]
+    assert report.shift_percent > 0 and "payload changed?" in report.message
+    # The payload estimate from one end pose's modes, through the learned map: within 1 kg.
+    assert abs(report.estimate_kg - 2.0) < 1.0, report.message
+
+
+def _run_cli(*argv: str):
+    import subprocess
+    import sys
+
+    return subprocess.run(
+        [sys.executable, "-m", "tvist.cli", *argv], capture_output=True, text=True, timeout=300
+    )
+
+
+def test_learn_command_writes_a_map_with_provenance(tmp_path):
+    import json
+
+    twin, robot = _twin(31), _robot()
+    wrong = _wrong_map(twin)
+    wrong_path = tmp_path / "m.json"
+    ModalMap(
+        wrong.flex_joints,
+        wrong.mode_joints,
+        {**wrong.metadata, "payload": {"mass_kg": PAYLOAD_KG, "com_m": list(PAYLOAD_COM_M)}},
+    ).save(wrong_path)
+    motion = MOTIONS[2]
+    good = twin.run(move(motion.q_start, motion.q_end, robot)).to_csv(tmp_path / "q3-q1.csv")
+    knocked = tmp_path / "knocked.csv"
+    record = _corrupted(
+        Record.from_rtde_fields(twin.run(move(motion.q_end, motion.q_start, robot))), "contact"
+    )
+    # The knocked log, written as an RTDE CSV through the twin's record format.
+    sim = twin.run(move(motion.q_end, motion.q_start, robot))
+    sim.actual_tool_accelerometer[:] = record.tool_accel
+    sim.to_csv(knocked)
+    out = tmp_path / "m2.json"
+    done = _run_cli("learn", str(good), str(knocked), "--map", str(wrong_path), "--out", str(out))
+    assert done.returncode == 0, done.stderr
+    learned = json.loads(out.read_text())["metadata"]["learned"]
+    logs = {Path(e["source"]).name: e for e in learned["logs"]}
+    assert logs["q3-q1.csv"]["accepted"] and logs["q3-q1.csv"]["map_updated"]
+    assert not logs["knocked.csv"]["accepted"] and "outside force" in logs["knocked.csv"]["reason"]
+    # The Q1 modes show the map 15 % soft: the learned base and shoulder stiffness go up.
+    scales = learned["scale_factors"]
+    assert scales["stiffness scale, joint 0"]["change_percent"] > 3.0
+    assert scales["stiffness scale, joint 1"]["change_percent"] > 3.0
+    # A user error: one line, exit code 2.
+    same = _run_cli("learn", str(good), "--map", str(wrong_path), "--out", str(wrong_path))
+    assert same.returncode == 2 and len(same.stderr.strip().splitlines()) == 1
+    assert "--out" in same.stderr and "Traceback" not in same.stderr
