@@ -1,7 +1,8 @@
 """The ``tvist`` command line: one module per group of commands (``demo``, ``ident``,
 ``learn``, ``shape``, ``live``, ``plan``, ``twin_server``; shared options in ``args``), each
 registering its subparsers through an ``add_*_command`` listed in ``COMMANDS``. Heavy imports
-happen inside the command that needs them. :func:`main` turns user errors into one line and exit code 2."""
+happen inside the command that needs them. :func:`main` turns user errors into one line and
+exit code 2."""
 
 from __future__ import annotations
 
