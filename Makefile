@@ -71,7 +71,7 @@ lint: $(PY)
 	$(VENV)/bin/ruff format --check python tests benches examples
 
 pytest: build
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q --durations=15
 
 fmt: $(PY)
 	cargo fmt --all
