@@ -659,4 +659,3 @@ fn set_map_needs_a_map_driven_shaper_and_valid_pointers() {
         );
     }
 }
-
