@@ -7,10 +7,11 @@ use std::ptr;
 use tvist::{
     tvist_last_error_message, tvist_shaper_free, tvist_shaper_new_constant,
     tvist_shaper_new_constant_ex, tvist_shaper_new_map, tvist_shaper_new_map_ex,
-    tvist_shaper_reset, tvist_shaper_set_map, tvist_shaper_status_counts, tvist_shaper_step,
-    TvistShaper, TvistShaperOptions, TVIST_ERR_INVALID_PARAMETER, TVIST_ERR_MAP_FILE,
-    TVIST_ERR_MID_MOVE, TVIST_ERR_NULL, TVIST_ERR_ROBOT_MISMATCH, TVIST_ERR_TOO_LARGE,
-    TVIST_ERR_UNKNOWN_ROBOT, TVIST_INTERP_CUBIC, TVIST_MAX_MODES, TVIST_N_STATUS_FLAGS, TVIST_OK,
+    tvist_shaper_new_ur_map, tvist_shaper_reset, tvist_shaper_set_map, tvist_shaper_status_counts,
+    tvist_shaper_step, TvistShaper, TvistShaperOptions, TVIST_ERR_INVALID_PARAMETER,
+    TVIST_ERR_MAP_FILE, TVIST_ERR_MID_MOVE, TVIST_ERR_NULL, TVIST_ERR_ROBOT_MISMATCH,
+    TVIST_ERR_TOO_LARGE, TVIST_ERR_UNKNOWN_ROBOT, TVIST_INTERP_CUBIC, TVIST_MAX_MODES,
+    TVIST_N_STATUS_FLAGS, TVIST_OK,
 };
 use tvist_core::map_file::{MapFile, MapForm};
 use tvist_core::robot_data::ur_e_series;
@@ -646,6 +647,24 @@ fn set_map_needs_a_map_driven_shaper_and_valid_pointers() {
     let mut constant = Handle(out);
     assert_eq!(constant.set_map(&map), TVIST_ERR_INVALID_PARAMETER);
     assert!(last_error().contains("constant modes"), "{}", last_error());
+    // The paper's built-in map is a map too: replaced before its first step (not started).
+    let (robot, zv) = (c("ur5e"), c("zv"));
+    let mut out = ptr::null_mut();
+    // SAFETY: NUL-terminated strings, a 3-double CoM, a writable `out`.
+    let code = unsafe {
+        tvist_shaper_new_ur_map(
+            robot.as_ptr(),
+            PAYLOAD_KG,
+            PAYLOAD_COM_M.as_ptr(),
+            DT_S,
+            zv.as_ptr(),
+            &mut out,
+        )
+    };
+    assert_eq!(code, TVIST_OK, "{}", last_error());
+    let mut paper = Handle(out);
+    let modal = TempMap::modal_of_robot("kind-modal", "ur5e");
+    assert_eq!(paper.set_map(&modal), TVIST_OK, "{}", last_error());
     let path = map.c_path();
     // SAFETY: null handle and null path are checked before use.
     unsafe {
