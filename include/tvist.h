@@ -52,7 +52,9 @@ typedef enum TvistError {
     TVIST_ERR_ROBOT_MISMATCH = -9,
     /* A request beyond a setup limit (TVIST_MAX_DOF channels, TVIST_MAX_MODES modes,
      * TVIST_MAX_DELAY_LINE_BYTES of delay lines): refused before anything is allocated. */
-    TVIST_ERR_TOO_LARGE = -10
+    TVIST_ERR_TOO_LARGE = -10,
+    /* tvist_shaper_set_map on a shaper mid-move (its delay lines not at rest on the input). */
+    TVIST_ERR_MID_MOVE = -11
 } TvistError;
 
 /* Status bits of one cycle (tvist_shaper_step >= 0); 0 is a clean cycle. */
@@ -147,6 +149,18 @@ int32_t tvist_shaper_new_map_ex(const char *robot, double payload_kg,
                                 const double payload_com_m[3], const char *map_json_path,
                                 double dt_s, const char *shaper,
                                 const TvistShaperOptions *options, TvistShaper **out);
+
+/*
+ * Replaces the map of a map-driven shaper by the map in map_json_path (validated as
+ * tvist_shaper_new_map does), keeping its robot, payload, shaper, dt_s and options. A setup
+ * call (reads the file, allocates): never from the control loop. Only between moves: the
+ * shaper has not started, or its input has not changed for longer than the longest delay it
+ * can read (every delay line holds one value per channel); the next move is then shaped
+ * exactly as by a new shaper built from that file. TVIST_ERR_MID_MOVE mid-move,
+ * TVIST_ERR_INVALID_PARAMETER for constant modes, the tvist_shaper_new_map codes for a bad
+ * file; the shaper is unchanged on every error.
+ */
+int32_t tvist_shaper_set_map(TvistShaper *shaper, const char *map_json_path);
 
 /*
  * One control cycle: shapes q_in into q_out (n_dof doubles each; they may be the same array).

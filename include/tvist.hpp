@@ -129,6 +129,13 @@ public:
         return step_n(q_in.data(), q_in.size(), q_out.data(), q_out.size());
     }
 
+    /* Replaces the map by the map file map_json_path between moves (tvist_shaper_set_map):
+     * TVIST_OK, or TVIST_ERR_MID_MOVE / a map-file code with the shaper unchanged. A setup
+     * call: not from the control loop. */
+    int32_t set_map(const std::string &map_json_path) noexcept {
+        return tvist_shaper_set_map(handle_, map_json_path.c_str());
+    }
+
     /* At rest at q0 (n_dof() doubles). */
     int32_t reset(const double *q0) noexcept { return tvist_shaper_reset(handle_, q0, n_dof()); }
 

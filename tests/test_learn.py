@@ -162,6 +162,17 @@ def test_payload_change_is_detected_within_three_moves():
     assert abs(report.estimate_kg - 2.0) < 1.0, report.message
 
 
+def _save_wrong_map(twin: Twin, path: Path) -> Path:
+    """The wrong prior, with the declared payload in its metadata, saved at ``path``."""
+    wrong = _wrong_map(twin)
+    ModalMap(
+        wrong.flex_joints,
+        wrong.mode_joints,
+        {**wrong.metadata, "payload": {"mass_kg": PAYLOAD_KG, "com_m": list(PAYLOAD_COM_M)}},
+    ).save(path)
+    return path
+
+
 def _run_cli(*argv: str):
     import subprocess
     import sys
@@ -175,13 +186,7 @@ def test_learn_command_writes_a_map_with_provenance(tmp_path):
     import json
 
     twin, robot = _twin(31), _robot()
-    wrong = _wrong_map(twin)
-    wrong_path = tmp_path / "m.json"
-    ModalMap(
-        wrong.flex_joints,
-        wrong.mode_joints,
-        {**wrong.metadata, "payload": {"mass_kg": PAYLOAD_KG, "com_m": list(PAYLOAD_COM_M)}},
-    ).save(wrong_path)
+    wrong_path = _save_wrong_map(twin, tmp_path / "m.json")
     motion = MOTIONS[2]
     good = twin.run(move(motion.q_start, motion.q_end, robot)).to_csv(tmp_path / "q3-q1.csv")
     knocked = tmp_path / "knocked.csv"
@@ -207,3 +212,98 @@ def test_learn_command_writes_a_map_with_provenance(tmp_path):
     same = _run_cli("learn", str(good), "--map", str(wrong_path), "--out", str(wrong_path))
     assert same.returncode == 2 and len(same.stderr.strip().splitlines()) == 1
     assert "--out" in same.stderr and "Traceback" not in same.stderr
+
+
+def _run_against_twin(monkeypatch, twin: Twin, knock: bool = False) -> list[Path]:
+    """``tvist run`` against the twin: the live streaming is replaced by simulating the very
+    reference ``tvist run`` would stream on ``twin`` and writing its RTDE log (with a knock on
+    the tool after the stop if ``knock``). Returns the logs written."""
+    from types import SimpleNamespace
+
+    import tvist.cli.live
+    import tvist.live
+    from tvist.live import LiveRun
+
+    logs: list[Path] = []
+
+    def on_twin(robot_ip, Q, log_path, *, shaper=None, dt_s, **kwargs):  # noqa: N803
+        assert shaper is None  # the tests run --unshaped: the reference is Q itself
+        sim = twin.run(Q, dt_s=dt_s)
+        if knock:
+            knocked = _corrupted(Record.from_rtde_fields(sim), "contact")
+            sim.actual_tool_accelerometer[:] = knocked.tool_accel
+        sim.to_csv(log_path)
+        logs.append(Path(log_path))
+        end_s = len(Q) * dt_s
+        return LiveRun(Path(log_path), 0.0, end_s, len(Q), 0, end_s, Q[-1])
+
+    monkeypatch.setattr(tvist.live, "run_shaped_move", on_twin)
+    monkeypatch.setattr(
+        tvist.cli.live, "_controller_ready", lambda ip: SimpleNamespace(actual_q=np.zeros(6))
+    )
+    return logs
+
+
+def _run_learning(tmp_path, map_path: Path, *extra: str) -> int:
+    from tvist.cli import main
+
+    motion = MOTIONS[2]
+    move_csv = tmp_path / "move.csv"
+    np.savetxt(move_csv, move(motion.q_start, motion.q_end, _robot()), delimiter=",")
+    com = [str(v) for v in PAYLOAD_COM_M]
+    argv = ["run", str(move_csv), "--robot-ip", "127.0.0.1", "--unshaped", "--tail", "0"]
+    argv += ["--log", str(tmp_path / "run.csv"), "--payload-kg", str(PAYLOAD_KG)]
+    return main([*argv, "--payload-com", *com, "--learn", str(map_path), *extra])
+
+
+def test_run_learn_updates_the_map_file_and_keeps_the_previous_one(tmp_path, monkeypatch, capsys):
+    import json
+
+    twin = _twin(31)
+    map_path = _save_wrong_map(twin, tmp_path / "m.json")
+    before = map_path.read_bytes()
+    logs = _run_against_twin(monkeypatch, twin)
+    assert _run_learning(tmp_path, map_path) == 0
+    assert logs == [tmp_path / "run.csv"]
+    lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("learn:")]
+    assert len(lines) == 1 and "updated (previous map in" in lines[0], lines
+    assert (tmp_path / "m.json.bak").read_bytes() == before
+    # The file now holds the learned map with the provenance `tvist learn` writes.
+    learned = json.loads(map_path.read_text())["metadata"]["learned"]
+    assert [Path(e["source"]) for e in learned["logs"]] == logs
+    assert learned["logs"][0]["accepted"] and learned["logs"][0]["map_updated"]
+    # The Q3->Q1 decay shows the prior 15 % soft: base and shoulder stiffness go up.
+    scales = learned["scale_factors"]
+    assert scales["stiffness scale, joint 0"]["change_percent"] > 3.0
+    assert scales["stiffness scale, joint 1"]["change_percent"] > 3.0
+
+
+def test_run_learn_leaves_the_map_file_alone_when_the_log_is_rejected(
+    tmp_path, monkeypatch, capsys
+):
+    twin = _twin(31)
+    map_path = _save_wrong_map(twin, tmp_path / "m.json")
+    before = map_path.read_bytes()
+    _run_against_twin(monkeypatch, twin, knock=True)
+    assert _run_learning(tmp_path, map_path) == 0
+    lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("learn:")]
+    assert len(lines) == 1 and "unchanged, the log rejected" in lines[0], lines
+    assert "outside force" in lines[0]
+    assert map_path.read_bytes() == before
+    assert not (tmp_path / "m.json.bak").exists()
+
+
+def test_run_learn_refuses_a_paper10_map_and_dry_run_before_the_arm_moves(
+    tmp_path, monkeypatch, capsys
+):
+    import tvist
+
+    paper = tmp_path / "paper.json"
+    tvist.DynamicMap.paper_ur5e().save(paper)
+    logs = _run_against_twin(monkeypatch, _twin(31))
+    for extra, words in [((), ["--learn", "paper10"]), (("--dry-run",), ["--learn", "--dry-run"])]:
+        assert _run_learning(tmp_path, paper, *extra) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and all(w in err[0] for w in words), err
+        assert "Traceback" not in err[0]
+    assert logs == []  # never streamed

@@ -303,3 +303,46 @@ def test_fit_map_cli_writes_a_modal_map_that_shapes_a_ur10e(tmp_path, capsys):
     bad.write_text(json.dumps({"key": "x", "q": None, "error": "unreachable"}) + "\n")
     assert main(["fit-map", str(bad), "--kind", "modal", "--out", str(out)]) == 2
     assert "tvist fit-map: error:" in capsys.readouterr().err
+
+
+def _stiffer(factor: float) -> ModalMap:
+    entries = [
+        {**e, "stiffness_nm_per_rad": [v * factor for v in e["stiffness_nm_per_rad"]]}
+        for e in ENTRIES
+    ]
+    return ModalMap(entries, metadata={"robot": "ur5e"})
+
+
+def test_set_map_between_moves_shapes_as_a_new_shaper_and_is_refused_mid_move():
+    q0 = np.array([0.0, -math.pi, 0.0, -math.pi / 2, 0.0, 0.0])
+    q1 = np.array([math.pi / 2, -math.pi / 2, 5 * math.pi / 6, -math.pi / 2, 0.0, 0.0])
+    there = tvist.trajectory.double_s(q0, q1, 0.002, 1.5, 2.0, 0.02).q
+    back = tvist.trajectory.double_s(q1, q0, 0.002, 1.5, 2.0, 0.02).q
+    rest = np.repeat(there[-1:], 1000, axis=0)  # 2 s at q1: far beyond the longest delay line
+
+    def shaper(modal: ModalMap) -> tvist.TvShaper:
+        return tvist.TvShaper(tvist.MapDynamics(ROBOT, modal), 0.002, 6, shaper="zv")
+
+    old, new = _stiffer(1.0), _stiffer(1.3)
+    swapped, unchanged = shaper(old), shaper(old)
+    for s in (swapped, unchanged):
+        s.shape(there[:200])
+    # Mid-move: refused, and the output continues as if it had not been called.
+    with pytest.raises(ValueError, match="mid-move"):
+        swapped.set_map(new)
+    np.testing.assert_array_equal(swapped.shape(there[200:]), unchanged.shape(there[200:]))
+    # Right after the reference stopped the delay lines still hold the move: refused too.
+    with pytest.raises(ValueError, match="mid-move"):
+        swapped.set_map(new)
+    swapped.shape(rest)
+    unchanged.shape(rest)
+    swapped.set_map(new)
+    # The next move equals a new shaper's with the new map (to the bit: both start at rest on
+    # q1 and run the same arithmetic) and differs from the old map's.
+    fresh = shaper(new)
+    shaped = swapped.shape(back)
+    np.testing.assert_array_equal(shaped, fresh.shape(back))
+    assert np.abs(shaped - unchanged.shape(back)).max() > 1e-6
+    # A shaper of constant modes has no map to replace.
+    with pytest.raises(TypeError, match="MapDynamics"):
+        tvist.TvShaper(tvist.ConstantModes([(50.0, 0.1)]), 0.002, 6).set_map(new)

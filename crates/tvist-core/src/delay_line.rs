@@ -312,6 +312,17 @@ impl DelayLine {
         }
     }
 
+    /// Whether every stored sample (all slots and their mirrors) is within `tolerance` of `x`
+    /// (per channel): the signal has stayed at `x` for the whole line. Setup-time check,
+    /// O(capacity).
+    pub fn stays_near(&self, x: &[f64], tolerance: f64) -> bool {
+        x.len() == self.n_channels
+            && self
+                .buf
+                .chunks_exact(self.n_channels)
+                .all(|slot| slot.iter().zip(x).all(|(a, b)| (a - b).abs() <= tolerance))
+    }
+
     /// Appends one sample (all channels), overwriting the oldest.
     #[inline]
     pub fn push(&mut self, x: &[f64]) {

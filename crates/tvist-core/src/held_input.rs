@@ -76,6 +76,12 @@ impl HeldInput {
         self.started = false;
     }
 
+    /// Whether a sample has been taken (or set) since construction or [`Self::clear`].
+    #[inline]
+    pub fn started(&self) -> bool {
+        self.started
+    }
+
     /// The held sample.
     #[inline]
     pub fn value(&self) -> &[f64] {

@@ -14,6 +14,12 @@ use crate::tvist::ModeFilter;
 /// Default delay-line safety factor over the largest expected delay.
 pub const DEFAULT_SAFETY_FACTOR: f64 = 1.5;
 
+/// Largest distance (input units: rad or m) of any delay-line sample or filter output from
+/// the held input for which the shaper counts as at rest ([`TvShaper::is_at_rest`]). Far
+/// above rounding (about 1e-15 for angles of a few radians), far below any joint encoder
+/// resolution (about 1e-5 rad): the output step a replacement at rest may cause.
+pub const REST_TOLERANCE: f64 = 1e-9;
+
 /// Setup of a [`TvShaper`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct TvShaperConfig {
@@ -161,6 +167,51 @@ impl<D: Dynamics> TvShaper<D> {
             f.forget_mode();
         }
         self.designed = false;
+    }
+
+    /// Whether the shaper is between moves: not started, or every filter's whole delay line
+    /// and latest output are within [`REST_TOLERANCE`] of the held input, i.e. the input has
+    /// not moved for longer than the delay any filter can read and the output has settled on
+    /// it. Setup-time check, not for the control loop (it reads every delay line).
+    ///
+    /// Not an exact equality: with modes read at the previous output, a shaper at rest may
+    /// keep toggling the last bits of its output (the modes, and so the rounding of the
+    /// amplitude sum, follow those bits).
+    pub fn is_at_rest(&self) -> bool {
+        !self.input.started()
+            || self
+                .filters
+                .iter()
+                .all(|f| f.rests_near(self.input.value(), REST_TOLERANCE))
+    }
+
+    /// Replaces the provider between moves ([`Self::is_at_rest`]) by a new shaper built from
+    /// `dynamics` with `config` (allocates: a setup call), at rest on the held input if the
+    /// shaper has started. The next move is then shaped exactly as a new shaper built from
+    /// `dynamics` would shape it starting at that input. Refused with
+    /// [`Error::InvalidParameter`] mid-move and with the constructor's error for an invalid
+    /// provider or configuration; the shaper is unchanged on every error.
+    pub fn replace_dynamics(&mut self, dynamics: D, config: &TvShaperConfig) -> Result<(), Error> {
+        if !self.is_at_rest() {
+            return Err(Error::InvalidParameter(
+                "the shaper is mid-move (its delay lines are not at rest on the input); \
+                 replace its dynamics between moves"
+                    .into(),
+            ));
+        }
+        let mut next = TvShaper::new(dynamics, config)?;
+        if next.n_dof != self.n_dof {
+            return Err(Error::DimensionMismatch {
+                what: "n_dof of the replacement",
+                expected: self.n_dof,
+                got: next.n_dof,
+            });
+        }
+        if self.input.started() {
+            next.reset(self.input.value());
+        }
+        *self = next;
+        Ok(())
     }
 
     /// Forgets all history: the next `step` starts at rest on its input.

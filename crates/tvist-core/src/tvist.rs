@@ -116,6 +116,17 @@ impl ModeFilter {
         }
     }
 
+    /// Whether the filter is at rest near `x`: its whole delay line and its latest output are
+    /// within `tolerance` of `x`, so it has seen only `x` for longer than any delay it can read.
+    pub fn rests_near(&self, x: &[f64], tolerance: f64) -> bool {
+        self.line.stays_near(x, tolerance)
+            && self
+                .output
+                .iter()
+                .zip(x)
+                .all(|(y, x)| (y - x).abs() <= tolerance)
+    }
+
     /// Forgets the held mode (used when a shaper is reset).
     pub fn forget_mode(&mut self) {
         self.held = Mode::new(f64::NAN, f64::NAN);

@@ -33,9 +33,11 @@ pub const TVIST_ERR_ROBOT_MISMATCH: i32 = -9;
 /// A request beyond a setup limit (`TVIST_MAX_DOF` channels, `TVIST_MAX_MODES` modes,
 /// `TVIST_MAX_DELAY_LINE_BYTES` of delay lines): refused before anything is allocated.
 pub const TVIST_ERR_TOO_LARGE: i32 = -10;
+/// `tvist_shaper_set_map` on a shaper mid-move (its delay lines not at rest on the input).
+pub const TVIST_ERR_MID_MOVE: i32 = -11;
 
 /// Every error code with its C name, for the header-consistency test and documentation.
-pub const ERROR_CODES: [(&str, i32); 11] = [
+pub const ERROR_CODES: [(&str, i32); 12] = [
     ("TVIST_OK", TVIST_OK),
     ("TVIST_ERR_NULL", TVIST_ERR_NULL),
     ("TVIST_ERR_UNKNOWN_SHAPER", TVIST_ERR_UNKNOWN_SHAPER),
@@ -47,6 +49,7 @@ pub const ERROR_CODES: [(&str, i32); 11] = [
     ("TVIST_ERR_MAP_FILE", TVIST_ERR_MAP_FILE),
     ("TVIST_ERR_ROBOT_MISMATCH", TVIST_ERR_ROBOT_MISMATCH),
     ("TVIST_ERR_TOO_LARGE", TVIST_ERR_TOO_LARGE),
+    ("TVIST_ERR_MID_MOVE", TVIST_ERR_MID_MOVE),
 ];
 
 /// The C code of a core setup error.

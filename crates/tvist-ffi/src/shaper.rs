@@ -8,8 +8,8 @@
 
 use crate::codes::{
     fail, fail_with, guard, TVIST_ERR_DIMENSION_MISMATCH, TVIST_ERR_INTERNAL,
-    TVIST_ERR_INVALID_PARAMETER, TVIST_ERR_MAP_FILE, TVIST_ERR_NULL, TVIST_ERR_UNKNOWN_ROBOT,
-    TVIST_ERR_UNKNOWN_SHAPER, TVIST_OK,
+    TVIST_ERR_INVALID_PARAMETER, TVIST_ERR_MAP_FILE, TVIST_ERR_MID_MOVE, TVIST_ERR_NULL,
+    TVIST_ERR_UNKNOWN_ROBOT, TVIST_ERR_UNKNOWN_SHAPER, TVIST_OK,
 };
 use core::ffi::{c_char, CStr};
 use core::ptr;
@@ -17,6 +17,7 @@ use std::path::Path;
 use tvist_core::dynmap::PAPER_MAP_ROBOT;
 use tvist_core::error::N_STATUS_FLAGS;
 use tvist_core::map_file::{MapFile, MapForm};
+use tvist_core::robot::Robot;
 use tvist_core::robot_data::{ur_e_series_entries, RobotEntry};
 use tvist_core::{
     ConstantModes, DynamicMap, Interpolation, MapDynamics, ModalDynamics, Mode, Provider,
@@ -62,14 +63,26 @@ pub struct TvistShaper {
     /// Copy of the caller's input (`n_dof` values), so input and output may share memory.
     staging: Vec<f64>,
     counts: StatusCounter,
+    /// How a map-driven handle was built, to build it again from another map file
+    /// (`tvist_shaper_set_map`); `None` for constant modes.
+    map_setup: Option<MapSetup>,
+}
+
+/// The robot, configuration and robot check a map-driven handle was built with.
+#[derive(Debug, Clone)]
+struct MapSetup {
+    robot: Robot,
+    config: TvShaperConfig,
+    allow_other_robot: bool,
 }
 
 impl TvistShaper {
-    fn new(shaper: TvShaper<Provider>) -> TvistShaper {
+    fn new(shaper: TvShaper<Provider>, map_setup: Option<MapSetup>) -> TvistShaper {
         TvistShaper {
             staging: vec![0.0; shaper.n_dof()],
             shaper,
             counts: StatusCounter::default(),
+            map_setup,
         }
     }
 
@@ -239,9 +252,31 @@ unsafe fn construct(
 }
 
 /// A handle around a new [`TvShaper`] for `provider` (setup errors recorded).
-fn build(provider: Provider, config: &TvShaperConfig) -> Result<TvistShaper, i32> {
+fn build(
+    provider: Provider,
+    config: &TvShaperConfig,
+    map_setup: Option<MapSetup>,
+) -> Result<TvistShaper, i32> {
     let shaper = TvShaper::new(provider, config).map_err(|e| fail_with(&e))?;
-    Ok(TvistShaper::new(shaper))
+    Ok(TvistShaper::new(shaper, map_setup))
+}
+
+/// The provider of the map in file `path` for `robot` (paper10 or modal; the file is fully
+/// validated, setup errors recorded).
+fn provider_from_file(robot: Robot, path: &str, allow_other_robot: bool) -> Result<Provider, i32> {
+    let file = MapFile::load(Path::new(path)).map_err(|e| fail_with(&e))?;
+    match file.into_form() {
+        MapForm::Paper10(map) if allow_other_robot => {
+            MapDynamics::new_allowing_other_robot(robot, map).map(|d| Provider::Map(Box::new(d)))
+        }
+        MapForm::Paper10(map) => MapDynamics::new(robot, map).map(|d| Provider::Map(Box::new(d))),
+        MapForm::Modal(map) if allow_other_robot => {
+            ModalDynamics::new_allowing_other_robot(robot, map)
+                .map(|d| Provider::Modal(Box::new(d)))
+        }
+        MapForm::Modal(map) => ModalDynamics::new(robot, map).map(|d| Provider::Modal(Box::new(d))),
+    }
+    .map_err(|e| fail_with(&e))
 }
 
 /// The robot data entry (e-Series or CB-series) named by C string `robot_name` (setup errors recorded).
@@ -340,7 +375,7 @@ pub unsafe extern "C" fn tvist_shaper_new_constant_ex(
             );
             let modes = wn.iter().zip(z).map(|(&w, &z)| Mode::new(w, z)).collect();
             let dynamics = ConstantModes::new(modes).map_err(|e| fail_with(&e))?;
-            build(Provider::Constant(dynamics), &config)
+            build(Provider::Constant(dynamics), &config, None)
         })
     }
 }
@@ -398,9 +433,15 @@ pub unsafe extern "C" fn tvist_shaper_new_ur_map(
                 robot.n_dof(),
                 &TvistShaperOptions::default(),
             )?;
+            let setup = MapSetup {
+                robot: robot.clone(),
+                config,
+                allow_other_robot: false,
+            };
             let dynamics =
                 MapDynamics::new(robot, DynamicMap::paper_ur5e()).map_err(|e| fail_with(&e))?;
-            build(Provider::Map(Box::new(dynamics)), &config)
+            let config = setup.config.clone();
+            build(Provider::Map(Box::new(dynamics)), &config, Some(setup))
         })
     }
 }
@@ -488,28 +529,78 @@ pub unsafe extern "C" fn tvist_shaper_new_map_ex(
             let Some(path) = c_str(map_json_path) else {
                 return Err(fail(TVIST_ERR_MAP_FILE, "map_json_path is not valid UTF-8"));
             };
-            let file = MapFile::load(Path::new(path)).map_err(|e| fail_with(&e))?;
-            let other_robot = options.allow_other_robot != 0;
-            let provider = match file.into_form() {
-                MapForm::Paper10(map) if other_robot => {
-                    MapDynamics::new_allowing_other_robot(robot, map)
-                        .map(|d| Provider::Map(Box::new(d)))
-                }
-                MapForm::Paper10(map) => {
-                    MapDynamics::new(robot, map).map(|d| Provider::Map(Box::new(d)))
-                }
-                MapForm::Modal(map) if other_robot => {
-                    ModalDynamics::new_allowing_other_robot(robot, map)
-                        .map(|d| Provider::Modal(Box::new(d)))
-                }
-                MapForm::Modal(map) => {
-                    ModalDynamics::new(robot, map).map(|d| Provider::Modal(Box::new(d)))
-                }
-            }
-            .map_err(|e| fail_with(&e))?;
-            build(provider, &config)
+            let setup = MapSetup {
+                robot: robot.clone(),
+                config,
+                allow_other_robot: options.allow_other_robot != 0,
+            };
+            let provider = provider_from_file(robot, path, setup.allow_other_robot)?;
+            let config = setup.config.clone();
+            build(provider, &config, Some(setup))
         })
     }
+}
+
+/// Replaces the map of a map-driven shaper (`tvist_shaper_new_map`, `tvist_shaper_new_ur_map`)
+/// by the map in file `map_json_path`, keeping its robot, payload, shaper, `dt_s` and options.
+/// A setup call: it reads and validates the file as `tvist_shaper_new_map` does and allocates
+/// new delay lines; never call it from the control loop.
+///
+/// Only between moves: the shaper must not have started, or every delay line must hold one
+/// value per channel along its whole length (the input unchanged for longer than the longest
+/// delay it can read, every filter output constant). The new map then starts at rest on the
+/// held input, so the next move is shaped exactly as a new shaper built from that file would
+/// shape it.
+///
+/// Returns `TVIST_OK`; `TVIST_ERR_MID_MOVE` mid-move; `TVIST_ERR_INVALID_PARAMETER` for a
+/// shaper of constant modes; the codes of `tvist_shaper_new_map` for an invalid file
+/// (`TVIST_ERR_MAP_FILE`, `TVIST_ERR_ROBOT_MISMATCH`, …); `TVIST_ERR_NULL`. On every error
+/// the shaper is unchanged and the reason is in `tvist_last_error_message`.
+///
+/// # Safety
+/// `shaper` comes from a constructor and is not freed; `map_json_path` is a NUL-terminated
+/// string.
+#[no_mangle]
+pub unsafe extern "C" fn tvist_shaper_set_map(
+    shaper: *mut TvistShaper,
+    map_json_path: *const c_char,
+) -> i32 {
+    guard(TVIST_ERR_INTERNAL, || {
+        if !usable(shaper) || map_json_path.is_null() {
+            return fail(
+                TVIST_ERR_NULL,
+                "shaper and map_json_path must be non-null (and aligned)",
+            );
+        }
+        // SAFETY: a live handle from a constructor (caller), used by this thread only.
+        let handle = unsafe { &mut *shaper };
+        let Some(setup) = handle.map_setup.clone() else {
+            return fail(
+                TVIST_ERR_INVALID_PARAMETER,
+                "this shaper has constant modes; tvist_shaper_set_map replaces the map of a \
+                 shaper from tvist_shaper_new_map",
+            );
+        };
+        if !handle.shaper.is_at_rest() {
+            return fail(
+                TVIST_ERR_MID_MOVE,
+                "the shaper is mid-move (its delay lines are not at rest on the input); call \
+                 tvist_shaper_set_map between moves",
+            );
+        }
+        // SAFETY: non-null and NUL-terminated (caller).
+        let Some(path) = (unsafe { c_str(map_json_path) }) else {
+            return fail(TVIST_ERR_MAP_FILE, "map_json_path is not valid UTF-8");
+        };
+        let provider = match provider_from_file(setup.robot, path, setup.allow_other_robot) {
+            Ok(provider) => provider,
+            Err(code) => return code,
+        };
+        match handle.shaper.replace_dynamics(provider, &setup.config) {
+            Ok(()) => TVIST_OK,
+            Err(e) => fail_with(&e),
+        }
+    })
 }
 
 /// One control cycle: shapes `q_in` into `q_out` (each `n_dof` doubles; they may be the same

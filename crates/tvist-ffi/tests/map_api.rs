@@ -7,8 +7,9 @@ use std::ptr;
 use tvist::{
     tvist_last_error_message, tvist_shaper_free, tvist_shaper_new_constant,
     tvist_shaper_new_constant_ex, tvist_shaper_new_map, tvist_shaper_new_map_ex,
-    tvist_shaper_reset, tvist_shaper_status_counts, tvist_shaper_step, TvistShaper,
-    TvistShaperOptions, TVIST_ERR_INVALID_PARAMETER, TVIST_ERR_MAP_FILE, TVIST_ERR_ROBOT_MISMATCH,
+    tvist_shaper_new_ur_map, tvist_shaper_reset, tvist_shaper_set_map, tvist_shaper_status_counts,
+    tvist_shaper_step, TvistShaper, TvistShaperOptions, TVIST_ERR_INVALID_PARAMETER,
+    TVIST_ERR_MAP_FILE, TVIST_ERR_MID_MOVE, TVIST_ERR_NULL, TVIST_ERR_ROBOT_MISMATCH,
     TVIST_ERR_TOO_LARGE, TVIST_ERR_UNKNOWN_ROBOT, TVIST_INTERP_CUBIC, TVIST_MAX_MODES,
     TVIST_N_STATUS_FLAGS, TVIST_OK,
 };
@@ -496,4 +497,184 @@ fn status_counts_count_each_flag_of_each_step() {
     assert!(core
         .step(&[0.1, 0.2], &mut y)
         .contains(Status::MODE_ABOVE_NYQUIST));
+}
+
+impl Handle {
+    fn set_map(&mut self, map: &TempMap) -> i32 {
+        let path = map.c_path();
+        // SAFETY: live handle, NUL-terminated path.
+        unsafe { tvist_shaper_set_map(self.0, path.as_ptr()) }
+    }
+}
+
+/// The pose `a_move` ends at.
+fn move_end() -> [f64; 6] {
+    *a_move(301).last().expect("a sample")
+}
+
+/// A second move, from `move_end()` back towards Q1 over 0.6 s, then rest: `n` samples.
+fn a_move_back(n: usize) -> Vec<[f64; 6]> {
+    let (from, to) = (move_end(), Q1);
+    (0..n)
+        .map(|k| {
+            let s = (k as f64 * DT_S / 0.6).min(1.0);
+            let blend = s * s * s * (10.0 - 15.0 * s + 6.0 * s * s);
+            core::array::from_fn(|j| from[j] + (to[j] - from[j]) * blend)
+        })
+        .collect()
+}
+
+/// Steps `h` through `samples`, returning every output.
+fn run(h: &mut Handle, samples: &[[f64; 6]]) -> Vec<[f64; 6]> {
+    samples
+        .iter()
+        .map(|q| {
+            let mut out = [0.0; 6];
+            let status = h.step(q, &mut out);
+            assert!(status >= 0, "step status {status}");
+            out
+        })
+        .collect()
+}
+
+/// Samples of the rest after `a_move` that bring every delay line to rest: 2 s, ten times
+/// what these maps need (the shaper was found at rest 100 samples after the move's end;
+/// their lines hold the ZV delay of the slowest mode bound times the 1.5 safety factor).
+const SETTLE_SAMPLES: usize = 1000;
+
+#[test]
+fn a_map_replaced_between_moves_shapes_the_next_move_as_a_new_shaper_from_that_map() {
+    let old_map = TempMap::of_robot("set-old", "ur5e");
+    let new_map_file = TempMap::modal_of_robot("set-new", "ur5e");
+    let (code, mut h) = new_map("ur5e", &old_map, "zv", None);
+    assert_eq!(code, TVIST_OK, "{}", last_error());
+    let (code, mut unchanged) = new_map("ur5e", &old_map, "zv", None);
+    assert_eq!(code, TVIST_OK, "{}", last_error());
+    // First move and the rest after it (the move holds its end pose after 0.6 s).
+    let first = a_move(300 + SETTLE_SAMPLES);
+    run(&mut h, &first);
+    run(&mut unchanged, &first);
+    assert_eq!(h.set_map(&new_map_file), TVIST_OK, "{}", last_error());
+    // The next move, from rest at the end pose, against a new shaper built from the new file.
+    let (code, mut fresh) = new_map("ur5e", &new_map_file, "zv", None);
+    assert_eq!(code, TVIST_OK, "{}", last_error());
+    let second = a_move_back(600);
+    let (swapped, expected, old) = (
+        run(&mut h, &second),
+        run(&mut fresh, &second),
+        run(&mut unchanged, &second),
+    );
+    // The replaced shaper starts at rest on the held input exactly as the new one starts on
+    // its first sample, and both run the same arithmetic: equal to the bit (stricter than
+    // any tolerance).
+    assert_eq!(swapped, expected);
+    // And the replacement took effect: the old map shapes the move differently (the two maps
+    // place the modes apart, so outputs differ by far more than rounding).
+    let largest_difference = swapped
+        .iter()
+        .zip(&old)
+        .flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs()))
+        .fold(0.0, f64::max);
+    assert!(largest_difference > 1e-6, "{largest_difference}");
+}
+
+#[test]
+fn set_map_mid_move_is_refused_and_the_output_continues_unchanged() {
+    let old_map = TempMap::of_robot("mid-old", "ur5e");
+    let new_map_file = TempMap::modal_of_robot("mid-new", "ur5e");
+    let (_, mut h) = new_map("ur5e", &old_map, "zv", None);
+    let (_, mut twin) = new_map("ur5e", &old_map, "zv", None);
+    let samples = a_move(300 + SETTLE_SAMPLES);
+    // Mid-move (sample 150), on the first held sample after the move (the input has just
+    // stopped, the delay lines still hold the move) and half a delay later: all refused.
+    let mut refused_at = Vec::new();
+    for (k, q) in samples.iter().enumerate() {
+        if [150, 300, 340].contains(&k) {
+            assert_eq!(h.set_map(&new_map_file), TVIST_ERR_MID_MOVE, "sample {k}");
+            assert!(last_error().contains("mid-move"), "{}", last_error());
+            refused_at.push(k);
+        }
+        let (mut a, mut b) = ([0.0; 6], [0.0; 6]);
+        assert_eq!(h.step(q, &mut a), twin.step(q, &mut b));
+        assert_eq!(a, b, "sample {k}: the refused call changed the output");
+    }
+    assert_eq!(refused_at, [150, 300, 340]);
+    // At rest it is accepted (the same calls were not refused for another reason).
+    assert_eq!(h.set_map(&new_map_file), TVIST_OK, "{}", last_error());
+}
+
+#[test]
+fn an_invalid_map_file_is_refused_with_the_shaper_unchanged() {
+    let old_map = TempMap::of_robot("bad-old", "ur5e");
+    let broken = TempMap::new("bad-broken", "{\"kind\": \"paper10\", \"modes\": [");
+    let other_robot = TempMap::of_robot("bad-other", "ur10e");
+    let missing = TempMap(std::env::temp_dir().join("tvist-ffi-no-such-map.json"));
+    let (_, mut h) = new_map("ur5e", &old_map, "zv", None);
+    let (_, mut twin) = new_map("ur5e", &old_map, "zv", None);
+    let first = a_move(300 + SETTLE_SAMPLES);
+    assert_eq!(run(&mut h, &first), run(&mut twin, &first));
+    for (bad, code) in [
+        (&broken, TVIST_ERR_MAP_FILE),
+        (&missing, TVIST_ERR_MAP_FILE),
+        (&other_robot, TVIST_ERR_ROBOT_MISMATCH),
+    ] {
+        assert_eq!(h.set_map(bad), code, "{}", last_error());
+    }
+    let second = a_move_back(600);
+    assert_eq!(run(&mut h, &second), run(&mut twin, &second));
+}
+
+#[test]
+fn set_map_needs_a_map_driven_shaper_and_valid_pointers() {
+    let map = TempMap::of_robot("kind-map", "ur5e");
+    let modes = [(2.0 * PI * 3.0, 0.05)];
+    let (wn, zeta): (Vec<f64>, Vec<f64>) = modes.iter().copied().unzip();
+    let shaper = c("zv");
+    let mut out = ptr::null_mut();
+    // SAFETY: arrays of one mode, a NUL-terminated name, a writable `out`.
+    let code = unsafe {
+        tvist_shaper_new_constant(
+            wn.as_ptr(),
+            zeta.as_ptr(),
+            1,
+            DT_S,
+            6,
+            shaper.as_ptr(),
+            &mut out,
+        )
+    };
+    assert_eq!(code, TVIST_OK);
+    let mut constant = Handle(out);
+    assert_eq!(constant.set_map(&map), TVIST_ERR_INVALID_PARAMETER);
+    assert!(last_error().contains("constant modes"), "{}", last_error());
+    // The paper's built-in map is a map too: replaced before its first step (not started).
+    let (robot, zv) = (c("ur5e"), c("zv"));
+    let mut out = ptr::null_mut();
+    // SAFETY: NUL-terminated strings, a 3-double CoM, a writable `out`.
+    let code = unsafe {
+        tvist_shaper_new_ur_map(
+            robot.as_ptr(),
+            PAYLOAD_KG,
+            PAYLOAD_COM_M.as_ptr(),
+            DT_S,
+            zv.as_ptr(),
+            &mut out,
+        )
+    };
+    assert_eq!(code, TVIST_OK, "{}", last_error());
+    let mut paper = Handle(out);
+    let modal = TempMap::modal_of_robot("kind-modal", "ur5e");
+    assert_eq!(paper.set_map(&modal), TVIST_OK, "{}", last_error());
+    let path = map.c_path();
+    // SAFETY: null handle and null path are checked before use.
+    unsafe {
+        assert_eq!(
+            tvist_shaper_set_map(ptr::null_mut(), path.as_ptr()),
+            TVIST_ERR_NULL
+        );
+        assert_eq!(
+            tvist_shaper_set_map(constant.0, ptr::null()),
+            TVIST_ERR_NULL
+        );
+    }
 }

@@ -236,6 +236,8 @@ const SHAPE_CHUNK_ROWS: usize = 1024;
 #[pyclass(name = "TvShaper", module = "tvist._core")]
 struct PyTvShaper {
     inner: core::TvShaper<Provider>,
+    /// The configuration `inner` was built with (`set_map` builds again with it).
+    config: core::TvShaperConfig,
     last_status: Status,
     counts: StatusCounter,
 }
@@ -322,6 +324,7 @@ impl PyTvShaper {
         let inner = core::TvShaper::new(provider, &config).map_err(value_error)?;
         Ok(PyTvShaper {
             inner,
+            config,
             last_status: Status::OK,
             counts: StatusCounter::default(),
         })
@@ -412,6 +415,58 @@ impl PyTvShaper {
         self.last_status = last;
         self.take_callable_error()?;
         convert::array(py, &[n, d], output)
+    }
+
+    /// Replaces the map of a shaper driven by `MapDynamics` or `ModalDynamics` by `map` (a
+    /// `DynamicMap` or a `ModalMap`; the same robot and payload), between moves only:
+    /// before the first step, after `reset`, or once the input has not moved for longer than
+    /// the longest delay the shaper can read. The next move is then shaped exactly as a new
+    /// shaper with that map would shape it. A setup call (allocates). Raises `ValueError`
+    /// mid-move or for a map the provider refuses (the shaper unchanged), `TypeError` for
+    /// another provider or map type.
+    #[pyo3(signature = (map, allow_other_robot=false))]
+    fn set_map(&mut self, map: &Bound<'_, PyAny>, allow_other_robot: bool) -> PyResult<()> {
+        let robot =
+            match self.inner.dynamics() {
+                Provider::Map(d) => d.robot().clone(),
+                Provider::Modal(d) => d.robot().clone(),
+                _ => return Err(PyTypeError::new_err(
+                    "set_map replaces the map of a shaper driven by MapDynamics or ModalDynamics",
+                )),
+            };
+        if !self.inner.is_at_rest() {
+            return Err(PyValueError::new_err(
+                "the shaper is mid-move (its delay lines are not at rest on the input); call \
+                 set_map between moves",
+            ));
+        }
+        // A Python map document (tvist.DynamicMap, tvist.ModalMap) holds its core map.
+        let map = match map.getattr("core") {
+            Ok(core) => core,
+            Err(_) => map.clone(),
+        };
+        let provider = if let Ok(m) = map.cast::<robot::PyDynamicMap>() {
+            let law = m.get().inner.clone();
+            Provider::Map(Box::new(robot_modes::new_provider(
+                robot,
+                law,
+                allow_other_robot,
+            )?))
+        } else if let Ok(m) = map.cast::<modal::PyModalMap>() {
+            let law = m.get().inner.clone();
+            Provider::Modal(Box::new(robot_modes::new_provider(
+                robot,
+                law,
+                allow_other_robot,
+            )?))
+        } else {
+            return Err(PyTypeError::new_err(
+                "map must be a tvist DynamicMap or ModalMap",
+            ));
+        };
+        self.inner
+            .replace_dynamics(provider, &self.config)
+            .map_err(value_error)
     }
 
     /// Puts the filter at rest at q0, or (None) forgets history so the next sample starts it.

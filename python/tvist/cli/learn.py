@@ -33,17 +33,24 @@ def add_learn_command(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_cmd_learn)
 
 
+def modal_prior(path: str, flag: str):
+    """The modal map in file ``path`` to learn from; a paper10 map is refused naming ``flag``."""
+    from tvist.map_files import load_map
+    from tvist.modal_map import ModalMap
+
+    prior = load_map(path)
+    if not isinstance(prior, ModalMap):
+        raise ValueError(f"{flag} {path}: a paper10 map; learning refines a modal map")
+    return prior
+
+
 def _cmd_learn(args: argparse.Namespace) -> int:
     from tvist.cli.args import map_payload, payload_from_args
     from tvist.ident.logs import log_payload
     from tvist.learn import MapLearner
-    from tvist.map_files import load_map
-    from tvist.modal_map import ModalMap
     from tvist.robots import Robot, params
 
-    prior = load_map(args.map)
-    if not isinstance(prior, ModalMap):
-        raise ValueError(f"--map {args.map}: a paper10 map; tvist learn refines a modal map")
+    prior = modal_prior(args.map, "--map")
     out = Path(args.out)
     if out.resolve() == Path(args.map).resolve():
         raise ValueError("--out names the --map file; write the learned map to a new file")

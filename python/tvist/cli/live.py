@@ -48,6 +48,44 @@ def _shaper(args: argparse.Namespace, Q):  # noqa: N803 (the move, as elsewhere)
     return tvist.TvShaper(provider, dt_s=args.dt_s, n_dof=n_dof, shaper=args.shaper)
 
 
+def _learner(args: argparse.Namespace):
+    """The :class:`~tvist.learn.MapLearner` of ``--learn`` (None without it), built before the
+    arm moves: a paper10 map or a missing payload is refused first. The payload is the one
+    shaping uses, else ``--payload-kg``, the controller's or the map's metadata.payload."""
+    if not args.learn:
+        return None
+    from tvist.cli.args import map_payload, payload_from_args, robot_from_args
+    from tvist.cli.learn import modal_prior
+    from tvist.learn import MapLearner
+
+    prior = modal_prior(args.learn, "--learn")
+    if args.payload_kg is None:  # not resolved already by shaping with a map
+        payload_from_args(
+            args,
+            (f"the controller at {args.robot_ip}", lambda: _controller_payload(args.robot_ip)),
+            ("the --learn map's metadata.payload", lambda: map_payload(prior)),
+            needed_for="learning (--learn)",
+        )
+    return MapLearner(robot_from_args(args), prior)
+
+
+def _learn_from_run(learner, map_path: Path, log_path: Path) -> None:
+    """Observes the run's log; writes the learned map (with its provenance, as ``tvist
+    learn``) over ``map_path`` only if the learner updated it, the previous file kept as
+    ``map_path.bak``. Prints one line on what it did."""
+    import shutil
+
+    obs = learner.observe(log_path)
+    verdict = "used" if obs.accepted else "rejected"
+    if not obs.map_updated:
+        print(f"learn: {map_path} unchanged, the log {verdict}: {obs.reason}")
+        return
+    backup = map_path.with_name(map_path.name + ".bak")
+    shutil.copyfile(map_path, backup)
+    learner.learned_map().save(map_path)
+    print(f"learn: {map_path} updated (previous map in {backup}), the log {verdict}: {obs.reason}")
+
+
 def _controller_payload(robot_ip: str):
     """The controller's payload, or None if it does not publish one (an old firmware)."""
     from tvist.live import read_controller_payload
@@ -74,6 +112,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         return _error(
             "run", "give the robot's address with --robot-ip (or check the move: --dry-run)"
         )
+    if args.learn and args.dry_run:
+        return _error("run", "--learn learns from the run's log: leave out --dry-run")
     from tvist.cli.args import existing_file, output_file
     from tvist.units import parse_units, to_si
 
@@ -84,6 +124,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             log_path = output_file(args.log or Path(args.move).with_suffix(".rtde.csv"), "--log")
         shaper = _shaper(args, Q)  # after the files: it may ask the controller
         shaped = _checked_reference(args, Q, names, shaper)
+        learner = _learner(args)
     except (OSError, ValueError, RuntimeError) as exc:
         return _error("run", str(exc))
     if args.dry_run:
@@ -137,6 +178,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"residual vibration (accelerometer RMS, 1 s after the move): {rms:.2e} m/s²")
         start, end = moving_span(Q)
         _print_settle(result.log_path, (end - start) * args.dt_s)
+    if learner is not None:
+        try:
+            _learn_from_run(learner, Path(args.learn), Path(result.log_path))
+        except (OSError, ValueError) as exc:
+            return _error("run", f"--learn: {exc}")
     return 0
 
 
@@ -388,6 +434,12 @@ def add_run_command(sub: argparse._SubParsersAction) -> None:
         "deviation) without connecting to a robot",
     )
     p.add_argument("--plot", metavar="PNG", help="with --dry-run: plot the shaped reference here")
+    p.add_argument(
+        "--learn",
+        metavar="MAP",
+        help="after the move, learn from its log (as 'tvist learn') and update this modal map "
+        "file if the learner accepts an update (the previous file kept as MAP.bak)",
+    )
     add_units(p, ("q",))
     p.set_defaults(func=_cmd_run)
 
