@@ -19,6 +19,7 @@ import time
 
 import numpy as np
 
+from tvist.robots import Robot
 from tvist.sim import SimulationDiverged, Twin
 from tvist.sim.plant import TwinPlant
 from tvist.sim.twin import check_payload_mass
@@ -29,6 +30,7 @@ from tvist.urserver.control_script import (
     is_control_script,
     register_offsets,
 )
+from tvist.urserver.kinematics import Kinematics
 from tvist.urserver.motion import CommandRefused, JointMotion, SafetyViolation
 
 log = logging.getLogger("tvist.urserver")
@@ -72,6 +74,10 @@ class TwinController:
         self.motion = JointMotion(
             self.plant.q_motor, self.dt_s, params.max_velocity_rad_s, params.joint_limits_rad
         )
+        #: The robot's kinematics and the TCP offset (``set_tcp``), shared by every program.
+        self.kinematics = Kinematics(Robot(params), params.joint_limits_rad)
+        self._actual_q = self.plant.q_motor
+        self._actual_flange = self.kinematics.forward(self._actual_q, np.zeros(6))
         self.registers = Registers.zeros(rtde.N_REGISTERS)
         self.script: ControlScript | None = None
         self.program_name = ""
@@ -113,7 +119,13 @@ class TwinController:
             self.last_error = f"program not run: {exc}"
             return self.last_error
         self.script = ControlScript(
-            self.registers, self.motion, int_offset, float_offset, self._set_payload
+            self.registers,
+            self.motion,
+            int_offset,
+            float_offset,
+            self._set_payload,
+            kinematics=self.kinematics,
+            measured=lambda: (self._actual_q.copy(), self._actual_flange.copy()),
         )
         self.program_name = "rtde_control"
         log.info("control script started (register offsets %d/%d)", int_offset, float_offset)
@@ -181,6 +193,7 @@ class TwinController:
             self._protective_stop(f"controller fault: {exc!r}")
             q_next = q_start
         sample = self._step_plant(q_start, q_next)
+        self._actual_q, self._actual_flange = sample.q_link, sample.flange_pose
         values = self._outputs(sample, q_start, qd_start, qdd_start)
         self._execution_ms = (time.perf_counter() - t0) * 1e3
         return values
@@ -236,7 +249,8 @@ class TwinController:
             "target_qdd": qdd.tolist(),
             "actual_q": sample.q_link.tolist(),
             "actual_qd": sample.qd_link.tolist(),
-            "actual_TCP_pose": sample.flange_pose.tolist(),
+            "actual_TCP_pose": self.kinematics.flange_to_tcp(sample.flange_pose).tolist(),
+            "target_TCP_pose": self.kinematics.forward(q).tolist(),
             "actual_tool_accelerometer": sample.accelerometer.tolist(),
             "actual_execution_time": self._execution_ms,
             "robot_mode": ROBOT_MODE_RUNNING,

@@ -116,7 +116,6 @@ UNMEASURED_OUTPUTS = frozenset(
         "joint_control_output",
         "actual_TCP_speed",
         "actual_TCP_force",
-        "target_TCP_pose",
         "target_TCP_speed",
         "joint_temperatures",
         "actual_momentum",

@@ -1,0 +1,167 @@
+"""The controller's kinematics services: poses, forward and inverse kinematics, the TCP.
+
+A pose is URScript's ``p[x, y, z, rx, ry, rz]``: position (m) and rotation vector (rad) of a
+frame in another (the base, unless said otherwise). The flange is the robot model's DH frame
+``n`` (:meth:`tvist.robots.Robot.flange_pose`); the tool centre point (TCP) is the flange
+composed with the TCP offset (``set_tcp``), so every TCP pose is ``flange ∘ tcp_offset``.
+
+Inverse kinematics is numerical: damped least squares on the model's geometric Jacobian
+(:func:`tvist.cartesian.solve_ik`, converged to 1e-10 m / rad), started at ``qnear``. A UR's
+``get_inverse_kin`` returns, of the analytic solutions, the one nearest ``qnear``; Newton's
+method started at ``qnear`` converges to the solution whose basin holds ``qnear``, which is
+that nearest one whenever ``qnear`` is near a solution (the case of every move along a path and
+of a caller giving the present joints). It works for every robot model, not only arms with a
+spherical wrist; when it does not converge from ``qnear`` it is tried once more from the
+joint target, and if that fails too the pose has no solution (``get_inverse_kin`` raises, as
+on a UR). Joint angles are returned within the joint limits, the nearest ``2π`` turn to
+``qnear``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from tvist.cartesian import _matrix, solve_ik
+from tvist.robots import Robot
+from tvist.sim.plant import rotation_vector
+from tvist.urserver.motion import CommandRefused, SafetyViolation
+
+
+def pose_matrix(pose) -> np.ndarray:
+    """Homogeneous transform ``(4, 4)`` of a pose ``[x, y, z, rx, ry, rz]``."""
+    arr = np.asarray(pose, dtype=float)
+    out = np.eye(4)
+    out[:3, :3] = _matrix(arr[3:6])
+    out[:3, 3] = arr[:3]
+    return out
+
+
+def matrix_pose(matrix) -> np.ndarray:
+    """Pose ``[x, y, z, rx, ry, rz]`` of a homogeneous transform (rotation angle in [0, π])."""
+    m = np.asarray(matrix, dtype=float)
+    return np.concatenate([m[:3, 3], rotation_vector(m[:3, :3].ravel())])
+
+
+def pose_trans(p_from, p_from_to) -> np.ndarray:
+    """URScript's ``pose_trans``: ``p_from_to`` (given in frame ``p_from``) in the base."""
+    return matrix_pose(pose_matrix(p_from) @ pose_matrix(p_from_to))
+
+
+def finite_pose(values, what: str) -> np.ndarray:
+    """Six finite numbers; :class:`SafetyViolation` naming ``what`` otherwise."""
+    arr = np.asarray(values, dtype=float)
+    if arr.shape != (6,) or not np.all(np.isfinite(arr)):
+        raise SafetyViolation(f"{what} must be 6 finite numbers")
+    return arr
+
+
+class Kinematics:
+    """Forward and inverse kinematics of the twin's robot, with the TCP offset.
+
+    Parameters
+    ----------
+    robot
+        The rigid robot model (its DH kinematics).
+    joint_limits_rad
+        ``(n_dof, 2)`` lower and upper joint limits (rad).
+    """
+
+    def __init__(self, robot: Robot, joint_limits_rad: np.ndarray) -> None:
+        self.robot = robot
+        self.limits = np.asarray(joint_limits_rad, dtype=float)
+        #: TCP offset: the TCP pose in the flange frame (``set_tcp``).
+        self.tcp_offset = np.zeros(6)
+        self._tcp = np.eye(4)
+        #: A TCP farther than this from the flange is no tool the arm could carry (m): the
+        #: arm's reach (sum of its link lengths).
+        self.tcp_limit_m = float(
+            np.sum(np.abs(robot.params.a_m)) + np.sum(np.abs(robot.params.d_m))
+        )
+
+    def set_tcp(self, offset) -> None:
+        """``set_tcp``: the TCP pose in the flange frame.
+
+        Raises
+        ------
+        SafetyViolation
+            A number that is not finite.
+        CommandRefused
+            A TCP beyond the arm's reach.
+        """
+        pose = finite_pose(offset, "set_tcp: pose")
+        distance = float(np.linalg.norm(pose[:3]))
+        if distance > self.tcp_limit_m:
+            raise CommandRefused(
+                f"set_tcp: TCP {distance:g} m from the flange, beyond the arm's reach "
+                f"{self.tcp_limit_m:g} m"
+            )
+        self.tcp_offset = pose
+        self._tcp = pose_matrix(pose)
+
+    def within_limits(self, q) -> bool:
+        """Whether every joint angle is within its limits."""
+        arr = np.asarray(q, dtype=float)
+        lower, upper = self.limits.T
+        return bool(np.all(np.isfinite(arr)) and np.all((arr >= lower) & (arr <= upper)))
+
+    def flange_to_tcp(self, flange_pose) -> np.ndarray:
+        """The TCP pose of a flange pose (``flange ∘ tcp_offset``)."""
+        return matrix_pose(pose_matrix(flange_pose) @ self._tcp)
+
+    def forward(self, q, tcp_offset=None) -> np.ndarray:
+        """TCP pose at joints ``q`` (``tcp_offset``: this one instead of the active one)."""
+        tcp = self._tcp if tcp_offset is None else pose_matrix(tcp_offset)
+        return matrix_pose(self.robot.flange_pose(np.asarray(q, dtype=float)) @ tcp)
+
+    def forward_matrix(self, q) -> np.ndarray:
+        """TCP transform ``(4, 4)`` at joints ``q``."""
+        return self.robot.flange_pose(np.asarray(q, dtype=float)) @ self._tcp
+
+    def inverse(self, pose, qnear, q_fallback=None) -> np.ndarray:
+        """Joints whose TCP is at ``pose``, nearest ``qnear`` (see the module docstring).
+
+        Raises
+        ------
+        CommandRefused
+            If no solution within the joint limits is found.
+        """
+        target = pose_matrix(pose) @ np.linalg.inv(self._tcp)  # the flange's pose
+        seeds = [np.asarray(qnear, dtype=float)]
+        if q_fallback is not None:
+            seeds.append(np.asarray(q_fallback, dtype=float))
+        for seed in seeds:
+            try:
+                q = solve_ik(self.robot, target[:3, 3], target[:3, :3], seed)
+            except ValueError:
+                continue
+            q = self._nearest_turn(q, seeds[0])
+            if self.within_limits(q):
+                return q
+        raise CommandRefused(
+            "get_inverse_kin: no solution within the joint limits for pose "
+            f"{np.array2string(np.asarray(pose), precision=4)}"
+        )
+
+    def has_solution(self, pose, qnear) -> bool:
+        try:
+            self.inverse(pose, qnear)
+        except CommandRefused:
+            return False
+        return True
+
+    def _nearest_turn(self, q: np.ndarray, qnear: np.ndarray) -> np.ndarray:
+        """``q`` with each angle shifted by whole turns towards ``qnear``, within limits."""
+        out = q.copy()
+        lower, upper = self.limits.T
+        for j in range(out.size):
+            turns = round((qnear[j] - out[j]) / (2.0 * math.pi))
+            shifted = out[j] + 2.0 * math.pi * turns
+            if lower[j] <= shifted <= upper[j]:
+                out[j] = shifted
+            while out[j] > upper[j] and out[j] - 2.0 * math.pi >= lower[j]:
+                out[j] -= 2.0 * math.pi
+            while out[j] < lower[j] and out[j] + 2.0 * math.pi <= upper[j]:
+                out[j] += 2.0 * math.pi
+        return out
