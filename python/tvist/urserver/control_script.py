@@ -105,6 +105,7 @@ COMMAND_NAMES = {
     69: "GET_TARGET_JOINT_ACCELERATIONS",
     70: "GET_JACOBIAN",
     71: "GET_JACOBIAN_TIME_DERIVATIVE",
+    99: "WATCHDOG",
     255: "STOP_SCRIPT",
 }
 #: What the twin does not model, by command: such a command stops the program with this
@@ -149,7 +150,7 @@ UNMODELLED = {
     71: "the controller's Jacobian query",
 }
 #: Commands the script processes every tick and answers "ready" at once.
-REALTIME_COMMANDS = frozenset({24, 11, 9, 10, 6, 25, 26, 27, 38, 58})
+REALTIME_COMMANDS = frozenset({24, 11, 9, 10, 6, 25, 26, 27, 38, 58, 99})
 SCRIPT_READY = 1
 SCRIPT_DONE = 2
 STOP_SCRIPT = 255
@@ -238,6 +239,11 @@ class ControlScript:
         self._kin = kinematics
         #: ``() -> (actual joints, actual flange pose)``, the latest measurement.
         self._measured = measured
+        #: RTDE watchdog (``set_watchdog``): longest time (s) the client may leave the command
+        #: register unwritten before the program stops (None: no watchdog), and the time
+        #: since it was last written.
+        self._watchdog_s: float | None = None
+        self._quiet_s = 0.0
         self.running = True
         self.error: str | None = None
         self._executing_cmd = False
@@ -289,6 +295,14 @@ class ControlScript:
         """One pass of the script's main loop (its ``sync()`` is one controller tick)."""
         if not self.running:
             return
+        if self._watchdog_s is not None:
+            self._quiet_s += self._motion.dt_s
+            if self._quiet_s > self._watchdog_s:
+                self.fail(
+                    f"watchdog: the client wrote no command register for {self._quiet_s:.3f} s "
+                    f"(set_watchdog asks for at least {1.0 / self._watchdog_s:g} Hz)"
+                )
+                return
         if self._async_move and self._motion.mode not in ("movej", "follow"):
             self._async_move = False
             self._write_async_progress(-1)
@@ -309,6 +323,15 @@ class ControlScript:
         elif not self._executing_cmd:
             self._executing_cmd = True
             self._process(cmd)
+
+    @property
+    def command_register(self) -> str:
+        """Name of the RTDE input holding the command (the watchdog's register)."""
+        return f"input_int_register_{self._int_offset}"
+
+    def command_register_written(self) -> None:
+        """The client wrote the command register (an RTDE data package): kicks the watchdog."""
+        self._quiet_s = 0.0
 
     def fail(self, message: str) -> None:
         """Stop the program with a runtime error."""
@@ -532,6 +555,17 @@ class ControlScript:
         self._write_doubles(self._measured()[1])
         return False
 
+    def _set_watchdog(self) -> bool:
+        frequency = finite_value(self._in_double(0), "set_watchdog: minimum frequency")
+        if not frequency > 0.0:
+            raise CommandRefused(f"set_watchdog: minimum frequency = {frequency:g} Hz must be > 0")
+        self._watchdog_s = 1.0 / frequency
+        self._quiet_s = 0.0
+        return False
+
+    def _kick_watchdog(self) -> bool:
+        return False  # the data package that carried it has kicked the watchdog
+
     def _steptime(self) -> bool:
         self._out_double(0, self._motion.dt_s)
         return False
@@ -561,6 +595,8 @@ _CARTESIAN_HANDLERS: dict[int, Callable[[ControlScript], bool]] = {
     16: ControlScript._speed_stop,
     24: ControlScript._servol,
     26: ControlScript._steptime,
+    35: ControlScript._set_watchdog,
+    99: ControlScript._kick_watchdog,
     29: ControlScript._set_tcp,
     30: ControlScript._ik_args,
     33: ControlScript._stopl,

@@ -131,6 +131,25 @@ class TwinController:
         log.info("control script started (register offsets %d/%d)", int_offset, float_offset)
         return None
 
+    def client_wrote(self, names) -> None:
+        """An RTDE data package wrote the inputs ``names`` (kicks the program's watchdog when
+        it holds the command register)."""
+        script = self.script
+        if script is not None and script.running and script.command_register in names:
+            script.command_register_written()
+
+    def set_speed_slider(self, fraction) -> str | None:
+        """The speed slider: every move's time runs at ``fraction`` (0..1) of real time, as
+        the speed scaling published; the reason if refused (not a number in [0, 1])."""
+        try:
+            value = float(fraction)
+        except (TypeError, ValueError):
+            value = math.nan
+        if not 0.0 <= value <= 1.0:
+            return f"speed slider fraction {fraction!r} refused: it must be in [0, 1]"
+        self.motion.time_scale = value
+        return None
+
     def stop_program(self) -> None:
         """Stop the running program (dashboard ``stop``): the arm decelerates to rest."""
         if self.script is not None and self.script.running:
@@ -258,8 +277,8 @@ class TwinController:
             "safety_mode": SAFETY_MODE_PROTECTIVE_STOP
             if self.protective_stop
             else SAFETY_MODE_NORMAL,
-            "speed_scaling": 1.0,
-            "target_speed_fraction": 1.0,
+            "speed_scaling": self.motion.time_scale,
+            "target_speed_fraction": self.motion.time_scale,
             "actual_digital_input_bits": 0,
             "actual_digital_output_bits": 0,
             "standard_analog_output0": 0.0,

@@ -11,10 +11,11 @@ Inverse kinematics is numerical: damped least squares on the model's geometric J
 method started at ``qnear`` converges to the solution whose basin holds ``qnear``, which is
 that nearest one whenever ``qnear`` is near a solution (the case of every move along a path and
 of a caller giving the present joints). It works for every robot model, not only arms with a
-spherical wrist; when it does not converge from ``qnear`` it is tried once more from the
-joint target, and if that fails too the pose has no solution (``get_inverse_kin`` raises, as
-on a UR). Joint angles are returned within the joint limits, the nearest ``2π`` turn to
-``qnear``.
+spherical wrist. When it does not converge from ``qnear`` (a seed at a singularity, such as the
+stretched arm, or far from every solution) it is tried from the joint target, then from seeds
+with the elbow and the wrist bent each way; if none converges the pose has no solution
+(``get_inverse_kin`` raises, as on a UR). Joint angles are returned within the joint limits,
+the nearest ``2π`` turn to ``qnear``.
 """
 
 from __future__ import annotations
@@ -128,21 +129,38 @@ class Kinematics:
             If no solution within the joint limits is found.
         """
         target = pose_matrix(pose) @ np.linalg.inv(self._tcp)  # the flange's pose
-        seeds = [np.asarray(qnear, dtype=float)]
+        near = np.asarray(qnear, dtype=float)
+        seeds = [near]
         if q_fallback is not None:
             seeds.append(np.asarray(q_fallback, dtype=float))
-        for seed in seeds:
+        for seed in seeds + self._configuration_seeds(near):
             try:
                 q = solve_ik(self.robot, target[:3, 3], target[:3, :3], seed)
             except ValueError:
                 continue
-            q = self._nearest_turn(q, seeds[0])
+            q = self._nearest_turn(q, near)
             if self.within_limits(q):
                 return q
         raise CommandRefused(
             "get_inverse_kin: no solution within the joint limits for pose "
             f"{np.array2string(np.asarray(pose), precision=4)}"
         )
+
+    @staticmethod
+    def _configuration_seeds(qnear: np.ndarray) -> list[np.ndarray]:
+        """Seeds in the arm's elbow-up/down and wrist-flip configurations (the elbow and
+        the wrist bent away from their singular straight positions), tried in turn when
+        Newton's method does not converge from ``qnear`` (a seed at a singularity, or a
+        ``qnear`` far from every solution)."""
+        seeds = []
+        for elbow in (1.0, -1.0):
+            for wrist in (1.0, -1.0):
+                seed = qnear.copy()
+                if seed.size >= 5:
+                    seed[2] = elbow * max(abs(seed[2]), 0.5)
+                    seed[4] = wrist * max(abs(seed[4]), 0.5)
+                seeds.append(seed)
+        return seeds
 
     def has_solution(self, pose, qnear) -> bool:
         try:

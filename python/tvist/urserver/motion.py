@@ -119,6 +119,9 @@ class JointMotion:
         self._max_speed = np.asarray(max_speed_rad_s, dtype=float)
         self._limits = np.asarray(joint_limits_rad, dtype=float)
         self.mode = "hold"
+        #: Speed slider (0..1): moves (movej, tool-space motions) advance their time by this
+        #: fraction of each tick, so the whole profile slows down in proportion.
+        self.time_scale = 1.0
         # movej
         self._move_from = self.q.copy()
         self._move_to = self.q.copy()
@@ -288,7 +291,7 @@ class JointMotion:
         q_old = self.q.copy()
         qd_old = self.qd.copy()
         if self.mode == "movej":
-            self._move_t = min(self._move_t + dt, self._move_duration)
+            self._move_t = min(self._move_t + dt * self.time_scale, self._move_duration)
             self.q = self._move_from + self._movej_fraction(self._move_t) * (
                 self._move_to - self._move_from
             )
@@ -304,7 +307,7 @@ class JointMotion:
             step = alpha_gain * (self._servo_ref - self.q)
             self.q = self.q + np.clip(step, -self._max_speed * dt, self._max_speed * dt)
         elif self.mode == "follow":
-            q_next = self._source.next_q(self.q.copy(), dt)
+            q_next = self._source.next_q(self.q.copy(), dt * self.time_scale)
             if q_next is None:
                 self.mode = "hold"
             else:

@@ -423,6 +423,14 @@ class TwinServer:
                 else:
                     types.append(rtde.INPUTS[name])
             valid = bool(names) and all(t in rtde.TYPE_FORMATS for t in types)
+            unknown = [n for n, t in zip(names, types, strict=True) if t == "NOT_FOUND"]
+            if unknown:
+                message = (
+                    f"input recipe refused: the twin does not model {', '.join(unknown)[:200]} "
+                    "(it has no I/O; its inputs are the registers and the speed slider)"
+                )
+                log.warning("%s", message)
+                session.send(rtde.text_message(message, level=2))
             recipe_id = 0
             if valid:
                 session.n_inputs += 1
@@ -450,6 +458,12 @@ class TwinServer:
                     regs.in_int[int(name.rsplit("_", 1)[1])] = int(value)
                 elif name.startswith("input_double_register_"):
                     regs.in_double[int(name.rsplit("_", 1)[1])] = float(value)
+            self.controller.client_wrote(values)
+            if int(values.get("speed_slider_mask", 0)) & 1:
+                refusal = self.controller.set_speed_slider(values.get("speed_slider_fraction"))
+                if refusal:
+                    log.error("%s", refusal)
+                    session.send(rtde.text_message(refusal))
 
     # ------------------------------------------------------------------ dashboard
 

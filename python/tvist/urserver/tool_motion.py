@@ -112,7 +112,7 @@ class LinearMove(_ToolSource):
             s = trapezoid_position(
                 self._t, self._speed, self._accel, self._duration, self._distance
             )
-            sd = (s - self._s) / dt
+            sd = (s - self._s) / dt if dt > 0.0 else self._sd
             self._done = self._t >= self._duration
             if self._done:
                 s = self._distance
