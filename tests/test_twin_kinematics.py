@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from pinocchio_reference import pinocchio_model
 
 import tvist
+from pinocchio_reference import pinocchio_model
 from tvist.robots import Payload
 from tvist.urserver.kinematics import Kinematics, pose_trans
 from tvist.urserver.motion import CommandRefused, JointMotion

@@ -126,7 +126,6 @@ UNMODELLED = {
     25: "contact detection (tool_contact)",
     27: "a joint position history",
     28: "blended waypoints (get_target_waypoint)",
-    31: "the safety system's protective stop command",
     38: "joint torque measurements",
     41: "jogging",
     42: "jogging",
@@ -566,6 +565,9 @@ class ControlScript:
     def _kick_watchdog(self) -> bool:
         return False  # the data package that carried it has kicked the watchdog
 
+    def _protective_stop(self) -> bool:
+        raise SafetyViolation("protective stop triggered by the program (protective_stop)")
+
     def _steptime(self) -> bool:
         self._out_double(0, self._motion.dt_s)
         return False
@@ -598,6 +600,7 @@ _CARTESIAN_HANDLERS: dict[int, Callable[[ControlScript], bool]] = {
     35: ControlScript._set_watchdog,
     99: ControlScript._kick_watchdog,
     29: ControlScript._set_tcp,
+    31: ControlScript._protective_stop,
     30: ControlScript._ik_args,
     33: ControlScript._stopl,
     36: ControlScript._pose_within_limits,

@@ -429,12 +429,16 @@ class TwinServer:
                     f"input recipe refused: the twin does not model {', '.join(unknown)[:200]} "
                     "(it has no I/O; its inputs are the registers and the speed slider)"
                 )
+                # Logged only: a client reads the setup reply next, not a text message.
                 log.warning("%s", message)
-                session.send(rtde.text_message(message, level=2))
+            # Every request takes the next id, refused or not: ur_rtde numbers its recipes by
+            # the order it asks for them (its I/O interface asks for the I/O the twin refuses
+            # before the speed slider). Ids stop at 255 (one byte; 0 is "refused").
             recipe_id = 0
-            if valid:
+            if session.n_inputs < 255:
                 session.n_inputs += 1
-                recipe_id = session.n_inputs
+                recipe_id = session.n_inputs if valid else 0
+            if recipe_id:
                 session.inputs[recipe_id] = rtde.Recipe(recipe_id, names, types)
                 for name in names:
                     self._owners[name] = session
