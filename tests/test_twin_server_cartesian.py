@@ -24,6 +24,7 @@ from twin_server_fixture import (
     HOST,
     Commander,
     RawRtde,
+    Subscriber,
     dashboard,
     twin_server,
     upload_script,
@@ -297,7 +298,6 @@ def test_speed_slider_is_published_as_speed_scaling(robot):
 
 # ----------------------------------------------------------------------------- every method
 
-PATH = [-0.4, -0.2, 0.4, 0.0, 3.1, 0.0, 0.25, 1.2, 0.0]
 ZERO6 = [0.0] * 6
 
 #: Methods the twin refuses: the call, and what the reason names. The program stops (every
@@ -335,7 +335,7 @@ REFUSED = {
     "getTargetWaypoint": (lambda c: c.getTargetWaypoint(), "waypoints"),
     "getActualJointPositionsHistory": (lambda c: c.getActualJointPositionsHistory(0), "history"),
     "servoC": (lambda c: c.servoC([-0.4, -0.2, 0.4, 0, 3.1, 0], 0.1, 0.1, 0.0), "servoc"),
-    "movePath": (lambda c: c.movePath(_path()), "paths"),
+    "movePath": (lambda c: c.movePath(_path(blend=0.02)), "blends"),
 }
 
 #: Realtime commands the client sends without waiting for the controller: it returns True
@@ -352,6 +352,7 @@ WORKS = {
     "moveJ_IK": "test_movej_ik_and_movel_fk",
     "moveL": "test_movel_ends_at_the_commanded_pose",
     "moveL_FK": "test_movej_ik_and_movel_fk",
+    "movePath": "test_move_path_runs_its_waypoints",
     "speedJ": "test_twin_server.py",
     "speedL": "test_speedl_moves_the_tcp_in_the_commanded_direction",
     "speedStop": "test_speedl_moves_the_tcp_in_the_commanded_direction",
@@ -388,14 +389,53 @@ CLIENT_SIDE = {
 }  # fmt: skip
 
 
-def _path():
+def _path(blend: float = 0.0, poses=None, q_end=HOME):
+    """moveL through ``poses`` (the second with the blend radius ``blend``), then moveJ to
+    ``q_end`` (joints); 0.25 m/s, 1.2 m/s²; 1 rad/s, 2 rad/s²."""
+    poses = poses or [[-0.45, -0.15, 0.45, 0.0, 3.1, 0.0], [-0.40, -0.25, 0.40, 0.0, 3.1, 0.0]]
     path = rtde_control.Path()
-    path.addEntry(
-        rtde_control.PathEntry(
-            rtde_control.PathEntry.MoveL, rtde_control.PathEntry.PositionTcpPose, PATH
-        )
-    )
+    entry, kind = rtde_control.PathEntry, rtde_control.PathEntry
+    for i, pose in enumerate(poses):
+        r = blend if i == 1 else 0.0
+        path.addEntry(entry(kind.MoveL, kind.PositionTcpPose, [*pose, 0.25, 1.2, r]))
+    path.addEntry(entry(kind.MoveJ, kind.PositionJoints, [*q_end, 1.0, 2.0, 0.0]))
     return path
+
+
+def test_move_path_runs_its_waypoints(robot, reference):
+    control, receive = robot
+    start = fk(reference, HOME)
+    poses = [list(start + [0.05, 0.0, -0.05, 0, 0, 0]), list(start + [0.0, 0.08, 0.0, 0, 0, 0])]
+    q_end = [0.2, -1.4, 1.4, -1.6, -1.5, 0.1]
+    # Blocking: the call returns with the arm at the last waypoint, having stopped at each
+    # linear one on the way (rest-to-rest moves end exactly there; ur_rtde writes the path's
+    # numbers with 6 significant digits, so the waypoint run is within 5e-7 m of the one
+    # given: 1e-6).
+    subscriber = Subscriber(HOST)
+    try:
+        assert control.movePath(_path(0.0, poses, q_end), False)
+        samples = subscriber.wait_for(1)
+    finally:
+        subscriber.close()
+    np.testing.assert_allclose(receive.getTargetQ(), q_end, atol=1e-9)
+    visited = np.array([fk(reference, q)[:3] for _, q in subscriber.samples])
+    for pose in poses:
+        assert np.min(np.linalg.norm(visited - np.array(pose[:3]), axis=1)) < 1e-6
+    del samples
+    # Asynchronous: progress counts the waypoints, then the path ends.
+    assert control.moveJ(HOME, 1.5, 4.0)
+    assert control.movePath(_path(0.0, poses, q_end), True)
+    seen = set()
+    for _ in range(4000):
+        progress = control.getAsyncOperationProgress()
+        if progress < 0 and seen:
+            break
+        if progress >= 0:
+            seen.add(progress)
+        time.sleep(0.005)
+    assert seen == {0, 1, 2}
+    np.testing.assert_allclose(receive.getTargetQ(), q_end, atol=1e-9)
+    assert control.isProgramRunning()
 
 
 def test_every_control_method_works_or_is_refused(server):

@@ -33,6 +33,7 @@ import numpy as np
 
 from tvist.urserver.kinematics import Kinematics, finite_pose, pose_trans
 from tvist.urserver.motion import CommandRefused, JointMotion, SafetyViolation, finite_value
+from tvist.urserver.move_path import MovePath
 from tvist.urserver.tool_motion import LinearMove, ToolSpeed
 
 log = logging.getLogger("tvist.urserver")
@@ -129,7 +130,6 @@ UNMODELLED = {
     38: "joint torque measurements",
     41: "jogging",
     42: "jogging",
-    45: "paths (movePath)",
     51: "contact detection (moveUntilContact)",
     52: "freedrive (hand guiding)",
     53: "freedrive (hand guiding)",
@@ -243,6 +243,10 @@ class ControlScript:
         #: since it was last written.
         self._watchdog_s: float | None = None
         self._quiet_s = 0.0
+        #: The path ``movePath`` injected into this program (None: none), and the waypoints
+        #: still to run of the one under way (index of the next).
+        self.move_path: MovePath | None = None
+        self._path_next: int | None = None
         self.running = True
         self.error: str | None = None
         self._executing_cmd = False
@@ -302,11 +306,17 @@ class ControlScript:
                     f"(set_watchdog asks for at least {1.0 / self._watchdog_s:g} Hz)"
                 )
                 return
-        if self._async_move and self._motion.mode not in ("movej", "follow"):
+        if self._path_next is not None and not self._motion.moving:
+            self._next_waypoint()
+        if (
+            self._async_move
+            and self._path_next is None
+            and self._motion.mode not in ("movej", "follow")
+        ):
             self._async_move = False
             self._write_async_progress(-1)
         if self._blocked_cmd is not None:
-            if self._motion.moving:
+            if self._motion.moving or self._path_next is not None:
                 return
             self._blocked_cmd = None
             self._out_int(0, SCRIPT_DONE)
@@ -554,6 +564,44 @@ class ControlScript:
         self._write_doubles(self._measured()[1])
         return False
 
+    def _move_path(self) -> bool:
+        path = self.move_path
+        if path is None or not path.waypoints:
+            raise CommandRefused(path.refusal if path else "movePath: no path in the program")
+        self._stop_async_move()
+        self._path_next = 0
+        self._next_waypoint()
+        if self._in_int(1) == 1:
+            self._async_move = True
+            return False
+        return True
+
+    def _next_waypoint(self) -> None:
+        """Start the next waypoint of the path (the last one done: the path has ended)."""
+        waypoints = self.move_path.waypoints
+        i = self._path_next
+        if i >= len(waypoints):
+            self._path_next = None
+            return
+        self._path_next = i + 1
+        self._write_async_progress(i)  # the script's signal_async_progress(i)
+        point = waypoints[i]
+        try:
+            if point.kind == "movej":
+                q = (
+                    self._kin.inverse(point.target, self._motion.q)
+                    if point.is_pose
+                    else point.target
+                )
+                self._motion.movej(q, point.v, point.a)
+            else:
+                pose = point.target if point.is_pose else self._kin.forward(point.target)
+                move = LinearMove(self._kin, self._motion.q, pose, point.v, point.a)
+                self._motion.follow(move)
+        except CommandRefused as exc:
+            self._path_next = None
+            self.fail(f"movePath waypoint {i}: {exc}")
+
     def _set_watchdog(self) -> bool:
         frequency = finite_value(self._in_double(0), "set_watchdog: minimum frequency")
         if not frequency > 0.0:
@@ -600,6 +648,7 @@ _CARTESIAN_HANDLERS: dict[int, Callable[[ControlScript], bool]] = {
     35: ControlScript._set_watchdog,
     99: ControlScript._kick_watchdog,
     29: ControlScript._set_tcp,
+    45: ControlScript._move_path,
     31: ControlScript._protective_stop,
     30: ControlScript._ik_args,
     33: ControlScript._stopl,

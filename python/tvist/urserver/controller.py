@@ -32,6 +32,7 @@ from tvist.urserver.control_script import (
 )
 from tvist.urserver.kinematics import Kinematics
 from tvist.urserver.motion import CommandRefused, JointMotion, SafetyViolation
+from tvist.urserver.move_path import parse_move_path
 
 log = logging.getLogger("tvist.urserver")
 
@@ -127,6 +128,7 @@ class TwinController:
             kinematics=self.kinematics,
             measured=lambda: (self._actual_q.copy(), self._actual_flange.copy()),
         )
+        self.script.move_path = parse_move_path(program)
         self.program_name = "rtde_control"
         log.info("control script started (register offsets %d/%d)", int_offset, float_offset)
         return None
