@@ -167,3 +167,13 @@ def test_speed_slider_slows_a_move_in_proportion(ur5e):
 
     # Half speed: twice the ticks (to the tick the last sample rounds to).
     assert abs(ticks(0.5) - 2 * ticks(1.0)) <= 2
+
+
+def test_rotation_matrix_matches_pinocchio_at_every_angle():
+    from tvist.urserver.kinematics import rotation_matrix
+
+    rng = np.random.default_rng(4)
+    vectors = [*rng.normal(size=(50, 3)) * 2.0, *rng.normal(size=(20, 3)) * 1e-9, np.zeros(3)]
+    for v in vectors:
+        # Round-off of the sums of products: a few ulps of 1.
+        np.testing.assert_allclose(rotation_matrix(v), pin.exp3(v), atol=1e-14)

@@ -30,7 +30,7 @@ from tvist.urserver.control_script import (
     is_control_script,
     register_offsets,
 )
-from tvist.urserver.kinematics import Kinematics
+from tvist.urserver.kinematics import Kinematics, PoseRate
 from tvist.urserver.motion import CommandRefused, JointMotion, SafetyViolation
 from tvist.urserver.move_path import parse_move_path
 
@@ -78,6 +78,8 @@ class TwinController:
         #: The robot's kinematics and the TCP offset (``set_tcp``), shared by every program.
         self.kinematics = Kinematics(Robot(params), params.joint_limits_rad)
         self._actual_q = self.plant.q_motor
+        self._actual_speed = PoseRate()
+        self._target_speed = PoseRate()
         self._actual_flange = self.kinematics.forward(self._actual_q, np.zeros(6))
         self.registers = Registers.zeros(rtde.N_REGISTERS)
         self.script: ControlScript | None = None
@@ -262,6 +264,8 @@ class TwinController:
     def _outputs(self, sample, q, qd, qdd) -> dict:
         regs = self.registers
         running = self.program_running
+        actual_tcp = self.kinematics.flange_to_tcp(sample.flange_pose)
+        target_tcp = self.kinematics.forward(q)
         nan6 = [math.nan] * 6
         values = {
             "timestamp": sample.time_s,
@@ -270,8 +274,10 @@ class TwinController:
             "target_qdd": qdd.tolist(),
             "actual_q": sample.q_link.tolist(),
             "actual_qd": sample.qd_link.tolist(),
-            "actual_TCP_pose": self.kinematics.flange_to_tcp(sample.flange_pose).tolist(),
-            "target_TCP_pose": self.kinematics.forward(q).tolist(),
+            "actual_TCP_pose": actual_tcp.tolist(),
+            "target_TCP_pose": target_tcp.tolist(),
+            "actual_TCP_speed": self._actual_speed.velocity(actual_tcp, sample.time_s).tolist(),
+            "target_TCP_speed": self._target_speed.velocity(target_tcp, sample.time_s).tolist(),
             "actual_tool_accelerometer": sample.accelerometer.tolist(),
             "actual_execution_time": self._execution_ms,
             "robot_mode": ROBOT_MODE_RUNNING,
