@@ -117,6 +117,15 @@ def test_movel_ends_at_the_commanded_pose(robot, reference):
     assert control.isProgramRunning()
 
 
+def test_movel_to_an_unreachable_pose_is_refused_before_moving(robot):
+    control, receive = robot
+    q = receive.getTargetQ()
+    assert control.moveL([2.0, 0.0, 0.3, 0.0, 3.14, 0.0], 0.25, 1.2) is False
+    assert "no solution" in last_error()
+    np.testing.assert_array_equal(receive.getTargetQ(), q)  # not a step taken
+    assert dashboard("safetystatus", host=HOST) == ["Safetystatus: NORMAL"]
+
+
 def test_movel_async_reports_progress_and_stopl_stops_on_the_line(robot, reference):
     control, receive = robot
     start = fk(reference, receive.getTargetQ())
