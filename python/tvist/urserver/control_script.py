@@ -16,8 +16,9 @@ main loop does (the twin recognizes the program; it does not interpret URScript)
   write counter, bits 24-30 the operation id).
 - Command 255 ends the program.
 
-A command the twin does not implement, or one with an argument outside URScript's range,
-stops the program with an error, as a URScript runtime error stops a UR's program: the client
+A command the twin does not implement (:data:`UNMODELLED` names what it does not model: force
+mode, contact, freedrive, I/O, ...), or one with an argument outside URScript's range, stops
+the program with an error, as a URScript runtime error stops a UR's program: the client
 sees the program stop and its call returns ``False``. An argument that is not a finite number
 protective-stops the arm (:class:`~tvist.urserver.motion.SafetyViolation`).
 """
@@ -635,7 +636,9 @@ _HANDLERS: dict[int, Callable[[ControlScript], bool]] = {
 #: Commands of ur_rtde the twin implements (the rest stop the program with an error).
 SUPPORTED_COMMANDS = tuple(COMMAND_NAMES.get(c, str(c)) for c in sorted(_HANDLERS))
 
-#: Commands that need the robot's kinematics (a script given one runs them).
+#: The controller's services beyond joint motion: tool-space motion, kinematics, the TCP,
+#: paths, the watchdog, the step time, protective stop (a script given the robot's
+#: kinematics runs them; one without refuses them as unsupported).
 _CARTESIAN_HANDLERS: dict[int, Callable[[ControlScript], bool]] = {
     2: ControlScript._movej_ik,
     3: ControlScript._movel,
