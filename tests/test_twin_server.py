@@ -162,14 +162,11 @@ def test_second_control_client_is_refused(server) -> None:
 
 
 def test_unsupported_command_fails_loudly(server) -> None:
-    """moveL is not implemented: the call returns False and the program stops."""
+    """Teach mode is not modelled: the call returns False and the program stops."""
     control = _control()
     try:
         assert control.isProgramRunning()
-        pose = rtde_receive.RTDEReceiveInterface(HOST, 500.0, ["actual_TCP_pose"])
-        target = pose.getActualTCPPose()
-        pose.disconnect()
-        assert control.moveL(target, 0.1, 0.1) is False
+        assert control.teachMode() is False
         assert not control.isProgramRunning()
     finally:
         _end(control)

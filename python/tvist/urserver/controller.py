@@ -20,6 +20,7 @@ import time
 
 import numpy as np
 
+from tvist.robots import Robot
 from tvist.sim import SimulationDiverged, Twin
 from tvist.sim.plant import TwinPlant
 from tvist.sim.twin import check_payload_mass
@@ -30,7 +31,9 @@ from tvist.urserver.control_script import (
     is_control_script,
     register_offsets,
 )
+from tvist.urserver.kinematics import Kinematics, PoseRate
 from tvist.urserver.motion import CommandRefused, JointMotion, SafetyViolation
+from tvist.urserver.move_path import parse_move_path
 from tvist.urserver.move_program import MoveProgram, is_move_program, parse_move_program
 
 log = logging.getLogger("tvist.urserver")
@@ -74,6 +77,12 @@ class TwinController:
         self.motion = JointMotion(
             self.plant.q_motor, self.dt_s, params.max_velocity_rad_s, params.joint_limits_rad
         )
+        #: The robot's kinematics and the TCP offset (``set_tcp``), shared by every program.
+        self.kinematics = Kinematics(Robot(params), params.joint_limits_rad)
+        self._actual_q = self.plant.q_motor
+        self._actual_speed = PoseRate()
+        self._target_speed = PoseRate()
+        self._actual_flange = self.kinematics.forward(self._actual_q, np.zeros(6))
         self.registers = Registers.zeros(rtde.N_REGISTERS)
         self.script: ControlScript | MoveProgram | None = None
         self.program_name = ""
@@ -121,8 +130,15 @@ class TwinController:
             self.last_error = f"program not run: {exc}"
             return self.last_error
         self.script = ControlScript(
-            self.registers, self.motion, int_offset, float_offset, self._set_payload
+            self.registers,
+            self.motion,
+            int_offset,
+            float_offset,
+            self._set_payload,
+            kinematics=self.kinematics,
+            measured=lambda: (self._actual_q.copy(), self._actual_flange.copy()),
         )
+        self.script.move_path = parse_move_path(program)
         self.program_name = "rtde_control"
         log.info("control script started (register offsets %d/%d)", int_offset, float_offset)
         return None
@@ -138,6 +154,29 @@ class TwinController:
         self.script = MoveProgram(steps, self.motion, self.dt_s)
         self.program_name = name
         log.info("program %s started (%d statements)", name, len(steps))
+        return None
+
+    def client_wrote(self, names) -> None:
+        """An RTDE data package wrote the inputs ``names`` (kicks the program's watchdog when
+        it holds the command register)."""
+        script = self.script
+        if (
+            isinstance(script, ControlScript)
+            and script.running
+            and script.command_register in names
+        ):
+            script.command_register_written()
+
+    def set_speed_slider(self, fraction) -> str | None:
+        """The speed slider: every move's time runs at ``fraction`` (0..1) of real time, as
+        the speed scaling published; the reason if refused (not a number in [0, 1])."""
+        try:
+            value = float(fraction)
+        except (TypeError, ValueError):
+            value = math.nan
+        if not 0.0 <= value <= 1.0:
+            return f"speed slider fraction {fraction!r} refused: it must be in [0, 1]"
+        self.motion.time_scale = value
         return None
 
     def stop_program(self) -> None:
@@ -202,6 +241,7 @@ class TwinController:
             self._protective_stop(f"controller fault: {exc!r}")
             q_next = q_start
         sample = self._step_plant(q_start, q_next)
+        self._actual_q, self._actual_flange = sample.q_link, sample.flange_pose
         values = self._outputs(sample, q_start, qd_start, qdd_start)
         self._execution_ms = (time.perf_counter() - t0) * 1e3
         return values
@@ -249,6 +289,8 @@ class TwinController:
     def _outputs(self, sample, q, qd, qdd) -> dict:
         regs = self.registers
         running = self.program_running
+        actual_tcp = self.kinematics.flange_to_tcp(sample.flange_pose)
+        target_tcp = self.kinematics.forward(q)
         nan6 = [math.nan] * 6
         values = {
             "timestamp": sample.time_s,
@@ -257,7 +299,10 @@ class TwinController:
             "target_qdd": qdd.tolist(),
             "actual_q": sample.q_link.tolist(),
             "actual_qd": sample.qd_link.tolist(),
-            "actual_TCP_pose": sample.flange_pose.tolist(),
+            "actual_TCP_pose": actual_tcp.tolist(),
+            "target_TCP_pose": target_tcp.tolist(),
+            "actual_TCP_speed": self._actual_speed.velocity(actual_tcp, sample.time_s).tolist(),
+            "target_TCP_speed": self._target_speed.velocity(target_tcp, sample.time_s).tolist(),
             "actual_tool_accelerometer": sample.accelerometer.tolist(),
             "actual_execution_time": self._execution_ms,
             "robot_mode": ROBOT_MODE_RUNNING,
@@ -265,8 +310,8 @@ class TwinController:
             "safety_mode": SAFETY_MODE_PROTECTIVE_STOP
             if self.protective_stop
             else SAFETY_MODE_NORMAL,
-            "speed_scaling": 1.0,
-            "target_speed_fraction": 1.0,
+            "speed_scaling": self.motion.time_scale,
+            "target_speed_fraction": self.motion.time_scale,
             "actual_digital_input_bits": 0,
             "actual_digital_output_bits": 0,
             "standard_analog_output0": 0.0,

@@ -119,6 +119,9 @@ class JointMotion:
         self._max_speed = np.asarray(max_speed_rad_s, dtype=float)
         self._limits = np.asarray(joint_limits_rad, dtype=float)
         self.mode = "hold"
+        #: Speed slider (0..1): moves (movej, tool-space motions) advance their time by this
+        #: fraction of each tick, so the whole profile slows down in proportion.
+        self.time_scale = 1.0
         # movej
         self._move_from = self.q.copy()
         self._move_to = self.q.copy()
@@ -143,7 +146,9 @@ class JointMotion:
     def moving(self) -> bool:
         """Whether a movej is under way or the joint target is still moving or decelerating
         (a move has ended once the target stands still with zero acceleration)."""
-        return self.mode == "movej" or bool(np.any(self.qd != 0.0) or np.any(self.qdd != 0.0))
+        return self.mode in ("movej", "follow") or bool(
+            np.any(self.qd != 0.0) or np.any(self.qdd != 0.0)
+        )
 
     # ----------------------------------------------------------------- commands
 
@@ -159,6 +164,15 @@ class JointMotion:
                 f"{what}: joint {j} target {arr[j]:.4f} rad is outside its limits"
             )
         return arr
+
+    def check_target(self, q, what: str) -> np.ndarray:
+        """``q`` as joint angles within the limits (:class:`SafetyViolation` otherwise)."""
+        return self._check_target(q, what)
+
+    @property
+    def source(self):
+        """The source a ``follow`` motion takes its targets from (None before the first)."""
+        return getattr(self, "_source", None)
 
     def movej(self, q, speed_rad_s: float, accel_rad_s2: float) -> None:
         """Start a movej from the current target (a UR blends nothing here: from rest or not,
@@ -239,6 +253,15 @@ class JointMotion:
         self._accel = accel
         self.mode = "stop"
 
+    def follow(self, source) -> None:
+        """Take the joint target from ``source`` every tick (a tool-space motion: moveL,
+        speedL). ``source.next_q(q, dt)`` returns the next target (rad), or None once the
+        motion has ended (the arm then holds). Each target is checked like any other: within
+        the joint limits, and no joint faster than its speed limit (the path would need it
+        near a singularity; a UR protective-stops there too)."""
+        self._source = source
+        self.mode = "follow"
+
     def hold(self) -> None:
         """Stand still at the current target (only from rest; otherwise use :meth:`stop`)."""
         self.qd[:] = 0.0
@@ -268,7 +291,7 @@ class JointMotion:
         q_old = self.q.copy()
         qd_old = self.qd.copy()
         if self.mode == "movej":
-            self._move_t = min(self._move_t + dt, self._move_duration)
+            self._move_t = min(self._move_t + dt * self.time_scale, self._move_duration)
             self.q = self._move_from + self._movej_fraction(self._move_t) * (
                 self._move_to - self._move_from
             )
@@ -283,6 +306,21 @@ class JointMotion:
             alpha_gain = 1.0 - math.exp(-dt * self._gain)
             step = alpha_gain * (self._servo_ref - self.q)
             self.q = self.q + np.clip(step, -self._max_speed * dt, self._max_speed * dt)
+        elif self.mode == "follow":
+            q_next = self._source.next_q(self.q.copy(), dt * self.time_scale)
+            if q_next is None:
+                self.mode = "hold"
+            else:
+                q_next = np.asarray(q_next, dtype=float)
+                fast = np.flatnonzero(np.abs(q_next - self.q) > self._max_speed * dt * 1.0001)
+                if fast.size:
+                    j = int(fast[0])
+                    self.hold_at(q_old)
+                    raise SafetyViolation(
+                        f"tool-space motion: joint {j} would exceed its speed limit "
+                        f"{self._max_speed[j]:g} rad/s (a singularity on the path)"
+                    )
+                self.q = q_next
         elif self.mode in ("speedj", "stop"):
             vel = self._vel
             dv = self._speed_target - vel
@@ -320,13 +358,20 @@ class JointMotion:
         distance = self._move_distance
         if distance <= 0.0 or self._move_duration <= 0.0:
             return 1.0
-        v, a, total = self._move_speed, self._move_accel, self._move_duration
-        t_acc = v / a
-        if t <= t_acc:
-            s = 0.5 * a * t * t
-        elif t <= total - t_acc:
-            s = 0.5 * a * t_acc * t_acc + v * (t - t_acc)
-        else:
-            rest = total - t
-            s = distance - 0.5 * a * rest * rest
+        s = trapezoid_position(t, self._move_speed, self._move_accel, self._move_duration, distance)
         return min(max(s / distance, 0.0), 1.0)
+
+
+def trapezoid_position(
+    t: float, speed: float, accel: float, total: float, distance: float
+) -> float:
+    """Way done at time ``t`` of a rest-to-rest trapezoidal profile over ``distance`` that
+    cruises at ``speed``, accelerates at ``accel`` and lasts ``total`` (see
+    :func:`trapezoid_duration`)."""
+    t_acc = speed / accel
+    if t <= t_acc:
+        return 0.5 * accel * t * t
+    if t <= total - t_acc:
+        return 0.5 * accel * t_acc * t_acc + speed * (t - t_acc)
+    rest = max(total - t, 0.0)
+    return distance - 0.5 * accel * rest * rest

@@ -102,7 +102,12 @@ for _i in range(N_REGISTERS):
     OUTPUTS[f"input_double_register_{_i}"] = "DOUBLE"
 
 #: Input variables a client may write: the general-purpose registers (the twin has no I/O).
-INPUTS: dict[str, str] = {"external_force_torque": "VECTOR6D"}
+INPUTS: dict[str, str] = {
+    "external_force_torque": "VECTOR6D",
+    # The speed slider (bit 0 of the mask set: the fraction applies).
+    "speed_slider_mask": "UINT32",
+    "speed_slider_fraction": "DOUBLE",
+}
 for _i in range(N_REGISTERS):
     INPUTS[f"input_int_register_{_i}"] = "INT32"
     INPUTS[f"input_double_register_{_i}"] = "DOUBLE"
@@ -114,10 +119,7 @@ UNMEASURED_OUTPUTS = frozenset(
         "target_moment",
         "actual_current",
         "joint_control_output",
-        "actual_TCP_speed",
         "actual_TCP_force",
-        "target_TCP_pose",
-        "target_TCP_speed",
         "joint_temperatures",
         "actual_momentum",
         "actual_main_voltage",

@@ -423,10 +423,22 @@ class TwinServer:
                 else:
                     types.append(rtde.INPUTS[name])
             valid = bool(names) and all(t in rtde.TYPE_FORMATS for t in types)
+            unknown = [n for n, t in zip(names, types, strict=True) if t == "NOT_FOUND"]
+            if unknown:
+                message = (
+                    f"input recipe refused: the twin does not model {', '.join(unknown)[:200]} "
+                    "(it has no I/O; its inputs are the registers and the speed slider)"
+                )
+                # Logged only: a client reads the setup reply next, not a text message.
+                log.warning("%s", message)
+            # Every request takes the next id, refused or not: ur_rtde numbers its recipes by
+            # the order it asks for them (its I/O interface asks for the I/O the twin refuses
+            # before the speed slider). Ids stop at 255 (one byte; 0 is "refused").
             recipe_id = 0
-            if valid:
+            if session.n_inputs < 255:
                 session.n_inputs += 1
-                recipe_id = session.n_inputs
+                recipe_id = session.n_inputs if valid else 0
+            if recipe_id:
                 session.inputs[recipe_id] = rtde.Recipe(recipe_id, names, types)
                 for name in names:
                     self._owners[name] = session
@@ -450,6 +462,12 @@ class TwinServer:
                     regs.in_int[int(name.rsplit("_", 1)[1])] = int(value)
                 elif name.startswith("input_double_register_"):
                     regs.in_double[int(name.rsplit("_", 1)[1])] = float(value)
+            self.controller.client_wrote(values)
+            if int(values.get("speed_slider_mask", 0)) & 1:
+                refusal = self.controller.set_speed_slider(values.get("speed_slider_fraction"))
+                if refusal:
+                    log.error("%s", refusal)
+                    session.send(rtde.text_message(refusal))
 
     # ------------------------------------------------------------------ dashboard
 
