@@ -16,8 +16,12 @@ import time
 import numpy as np
 import pytest
 
-from test_twin_server_cartesian import HOME, assert_pose, fk, reference, robot, server  # noqa: F401
+import test_twin_server_cartesian as cartesian
+from test_twin_server_cartesian import HOME, assert_pose, fk
 from twin_server_fixture import HOST, Subscriber
+
+# The Cartesian tests' fixtures: the server, a client pair at HOME, the pinocchio model.
+server, robot, reference = cartesian.server, cartesian.robot, cartesian.reference
 
 rtde_control = pytest.importorskip("rtde_control")
 
@@ -31,12 +35,12 @@ END_TOL = 1e-4
 MIN_BLEND_SPEED = 0.05
 
 
-def _tcp_track(reference, samples):
+def _tcp_track(model, samples):
     """``(t, positions (n, 3), speeds (n-1,))`` of the target TCP along ``samples``."""
     t = np.array([s[0] for s in samples])
     keep = np.concatenate([[True], np.diff(t) > 0])  # a repeated package carries no motion
     t = t[keep]
-    p = np.array([fk(reference, s[1])[:3] for s, k in zip(samples, keep) if k])
+    p = np.array([fk(model, s[1])[:3] for s, k in zip(samples, keep, strict=True) if k])
     speeds = np.linalg.norm(np.diff(p, axis=0), axis=1) / np.diff(t)
     return t, p, speeds
 

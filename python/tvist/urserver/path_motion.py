@@ -218,8 +218,7 @@ class PathMotion:
         # Ways (in each segment's u) inside the blend zone at its end and at its start.
         out = [segs[k].param_within(blend[k], True) if blend[k] > 0 else 0.0 for k in range(n)]
         inn = [0.0] + [
-            segs[k + 1].param_within(blend[k], False) if blend[k] > 0 else 0.0
-            for k in range(n - 1)
+            segs[k + 1].param_within(blend[k], False) if blend[k] > 0 else 0.0 for k in range(n - 1)
         ]
         for k in range(n):
             total = inn[k] + out[k]
