@@ -65,12 +65,13 @@ def _rows(path: str | Path) -> list[tuple[int, list[str]]]:
 
 
 def is_move_list(path: str | Path) -> bool:
-    """Whether the file's first row is a ``movej`` (a move list, not a joint CSV)."""
+    """Whether the file's first row is a ``movej`` or ``movel`` command (a move list, not a
+    joint CSV; :func:`read_move_list` names what is wrong with it)."""
     try:
         rows = _rows(path)
     except (OSError, UnicodeDecodeError, csv.Error):
         return False
-    return bool(rows) and rows[0][1][0].lower() == "movej"
+    return bool(rows) and rows[0][1][0].lower() in ("movej", "movel")
 
 
 def _numbers(fields: list[str], where: str) -> list[float]:
