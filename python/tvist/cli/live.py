@@ -274,7 +274,7 @@ def _move_list_reference(args: argparse.Namespace):
         what="the move list's reference",
     )
     print(
-        f"move list: {len(moves.moves)} linear moves, "
+        f"move list: {len(moves.moves)} linear move{'s' if len(moves.moves) != 1 else ''}, "
         f"{'shaped in Cartesian space' if modes else 'unshaped'}; path deviation "
         f"(flange, from the commanded lines): {planned.deviation_m * 1e3:.3f} mm"
     )
