@@ -151,3 +151,26 @@ def test_overlapping_blends_are_shrunk_to_half_a_segment(robot, reference):
     points = [start[:3], *corners]
     for i in (1, 2):
         _assert_blended(p, speeds, points[i], 0.03 + 1e-6, points[i - 1], points[i + 1])
+
+
+def test_stopl_stops_a_blended_path_on_its_way(robot, reference):
+    """stopL during an asynchronous blended path: the arm decelerates along the path and
+    rests short of the end; the program keeps running and takes the next command."""
+    control, receive = robot
+    path, poses = _example_path()
+    assert control.movePath(path, True)
+    for _ in range(4000):  # until the path is past its first (joint) move
+        if control.getAsyncOperationProgress() >= 2:
+            break
+        time.sleep(0.005)
+    else:
+        pytest.fail("the path did not reach its third waypoint")
+    control.stopL(2.0)  # blocking (the binding returns nothing)
+    assert control.getAsyncOperationProgress() < 0  # the path has ended
+    q = np.array(receive.getTargetQ())
+    time.sleep(0.1)
+    np.testing.assert_array_equal(receive.getTargetQ(), q)  # at rest
+    # Stopped between the waypoints it had reached and the end, not at the end.
+    assert np.linalg.norm(fk(reference, q)[:3] - np.array(poses[-1][:3])) > 0.05
+    assert control.isProgramRunning()
+    assert control.moveJ(HOME, 1.5, 4.0)

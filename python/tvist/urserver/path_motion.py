@@ -42,8 +42,9 @@ from tvist.urserver.tool_motion import Line
 log = logging.getLogger("tvist.urserver")
 
 #: Steps of inverse kinematics along a line to find the joints at its end on the branch the
-#: motion follows (each step moves the TCP by at most 1/16 of the line).
-_IK_WALK_STEPS = 16
+#: motion follows (each step moves the TCP by a quarter of the line; few, because the path is
+#: planned within one controller tick).
+_IK_WALK_STEPS = 4
 #: Bisection steps for the joint-move parameter at a given TCP distance (resolves L / 2**40).
 _BISECTION_STEPS = 40
 
