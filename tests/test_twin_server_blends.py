@@ -174,3 +174,21 @@ def test_stopl_stops_a_blended_path_on_its_way(robot, reference):
     assert np.linalg.norm(fk(reference, q)[:3] - np.array(poses[-1][:3])) > 0.05
     assert control.isProgramRunning()
     assert control.moveJ(HOME, 1.5, 4.0)
+
+
+def test_movej_path_with_blend(robot, reference):
+    """moveJ with a list of joint targets (ur_rtde sends it as a path of movej): the middle
+    one blended with r = 5 cm, in joint space."""
+    control, receive = robot
+    v, a = 1.0, 2.0
+    targets = [
+        [0.3, -1.4, 1.4, -1.57, -1.57, 0.0],
+        [0.3, -1.2, 1.8, -2.1, -1.57, 0.2],
+        [-0.2, -1.3, 1.6, -1.8, -1.4, 0.0],
+    ]
+    path = [[*targets[0], v, a, 0.0], [*targets[1], v, a, 0.05], [*targets[2], v, a, 0.0]]
+    samples = _run(control, lambda c: c.moveJ(path))
+    np.testing.assert_allclose(receive.getTargetQ(), targets[-1], atol=1e-9)
+    _, p, speeds = _tcp_track(reference, samples)
+    corners = [fk(reference, q)[:3] for q in targets]
+    _assert_blended(p, speeds, corners[1], 0.05, corners[0], corners[2])
