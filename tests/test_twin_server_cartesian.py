@@ -346,7 +346,7 @@ REFUSED = {
     "getTargetJointAccelerations": (lambda c: c.getTargetJointAccelerations(), "dynamics"),
     "getJacobian": (lambda c: c.getJacobian(), "Jacobian"),
     "getJacobianTimeDerivative": (lambda c: c.getJacobianTimeDerivative(), "Jacobian"),
-    "getTargetWaypoint": (lambda c: c.getTargetWaypoint(), "waypoints"),
+    "getTargetWaypoint": (lambda c: c.getTargetWaypoint(), "waypoint query"),
     "getActualJointPositionsHistory": (lambda c: c.getActualJointPositionsHistory(0), "history"),
     "servoC": (lambda c: c.servoC([-0.4, -0.2, 0.4, 0, 3.1, 0], 0.1, 0.1, 0.0), "servoc"),
 }

@@ -128,7 +128,7 @@ UNMODELLED = {
     23: "I/O (analog outputs)",
     25: "contact detection (tool_contact)",
     27: "a joint position history",
-    28: "blended waypoints (get_target_waypoint)",
+    28: "the target waypoint query (get_target_waypoint)",
     38: "joint torque measurements",
     41: "jogging",
     42: "jogging",
