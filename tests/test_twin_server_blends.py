@@ -152,6 +152,19 @@ def test_overlapping_blends_are_shrunk_to_half_a_segment(robot, reference):
     for i in (1, 2):
         _assert_blended(p, speeds, points[i], 0.03 + 1e-6, points[i - 1], points[i + 1])
 
+    # Outside the reduced zones the TCP is on the segments (the blends start 3 cm from the
+    # corners, not 5 cm): within 1e-6 m (IK converges to 1e-10; the poses ur_rtde writes
+    # with 6 significant digits move the corners by < 5e-7 m).
+    def off_path(x):
+        gaps = []
+        for a, b in zip(points[:-1], points[1:], strict=True):
+            u = np.clip((x - a) @ (b - a) / ((b - a) @ (b - a)), 0.0, 1.0)
+            gaps.append(np.linalg.norm(x - a - u * (b - a)))
+        return min(gaps)
+
+    outside = [x for x in p if min(np.linalg.norm(x - c) for c in corners[:2]) > 0.03 + 1e-4]
+    assert max(off_path(x) for x in outside) < 1e-6
+
 
 def test_stopl_stops_a_blended_path_on_its_way(robot, reference):
     """stopL during an asynchronous blended path: the arm decelerates along the path and
