@@ -80,8 +80,12 @@ def test_a_bad_move_list_is_one_line_naming_it(tmp_path, capsys, text, named):
     assert len(err) == 1 and err[0].startswith("tvist run: error: ") and named in err[0], err
 
 
-def test_a_move_list_with_a_map_names_the_flag(tmp_path, capsys):
+@pytest.mark.parametrize(
+    ("flags", "named"),
+    [(["--paper-map"], "give --modes"), (["--modes", "10:0.1", "--units", "q=deg"], "--units")],
+)
+def test_a_move_list_refuses_what_it_does_not_take(tmp_path, capsys, flags, named):
     path = tmp_path / "moves.csv"
     path.write_text(START + "movel, -0.49, -0.2, 0.49, 2.2214, 2.2214, 0, 0.1, 1\n")
-    assert main(["run", str(path), "--paper-map", "--dry-run"]) == 2
-    assert "give --modes" in capsys.readouterr().err
+    assert main(["run", str(path), *flags, "--dry-run"]) == 2
+    assert named in capsys.readouterr().err

@@ -262,6 +262,8 @@ def _move_list_reference(args: argparse.Namespace):
             "a move list is shaped in Cartesian space with fixed modes: give --modes "
             "(or --unshaped)"
         )
+    if args.units is not None:
+        raise ValueError("a move list is in SI units (m, rad, m/s, m/s²): leave out --units")
     robot = kinematic_robot(args)
     moves = read_move_list(args.move, robot.n_dof)
     modes = None if args.unshaped else parse_modes(args.modes)
