@@ -245,8 +245,8 @@ class ControlScript:
         #: since it was last written.
         self._watchdog_s: float | None = None
         self._quiet_s = 0.0
-        #: The path ``movePath`` injected into this program (None: none), and the waypoints
-        #: still to run of the one under way (index of the next).
+        #: The path ``movePath`` injected into this program (None: none); the motion of the
+        #: path under way (None: none) and the waypoint it heads for (its async progress).
         self.move_path: MovePath | None = None
         self._path: PathMotion | None = None
         self._path_waypoint = 0
