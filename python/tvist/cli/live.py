@@ -115,15 +115,22 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.learn and args.dry_run:
         return _error("run", "--learn learns from the run's log: leave out --dry-run")
     from tvist.cli.args import existing_file, output_file
+    from tvist.move_list import is_move_list
     from tvist.units import parse_units, to_si
 
     try:
-        Q, names = read_joint_csv(existing_file(args.move, "move"))
-        Q = to_si(Q, "q", parse_units(args.units, ("q",))["q"])
+        moves = is_move_list(existing_file(args.move, "move"))
+        if moves:
+            Q, shaped = _move_list_reference(args)
+            shaper = None  # shaped already, in Cartesian space
+        else:
+            Q, names = read_joint_csv(args.move)
+            Q = to_si(Q, "q", parse_units(args.units, ("q",))["q"])
         if not args.dry_run:
             log_path = output_file(args.log or Path(args.move).with_suffix(".rtde.csv"), "--log")
-        shaper = _shaper(args, Q)  # after the files: it may ask the controller
-        shaped = _checked_reference(args, Q, names, shaper)
+        if not moves:
+            shaper = _shaper(args, Q)  # after the files: it may ask the controller
+            shaped = _checked_reference(args, Q, names, shaper)
         learner = _learner(args)
     except (OSError, ValueError, RuntimeError) as exc:
         return _error("run", str(exc))
@@ -145,7 +152,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     try:
         result = run_shaped_move(
             args.robot_ip,
-            Q,
+            shaped if moves else Q,  # a move list is shaped already (in Cartesian space)
             log_path,
             shaper=shaper,
             dt_s=args.dt_s,
@@ -236,6 +243,44 @@ def _checked_reference(args: argparse.Namespace, Q, names, shaper):  # noqa: N80
         what="the shaped reference",
     )
     return shaped
+
+
+def _move_list_reference(args: argparse.Namespace):
+    """``(planned, streamed)`` joint references of a move list (:mod:`tvist.move_list`),
+    shaped in Cartesian space with ``--modes`` (or not, ``--unshaped``), checked against the
+    ``--robot`` model's limits; prints the streamed path's deviation from the commanded
+    lines."""
+    from tvist.cli.args import kinematic_robot
+    from tvist.cli.shape import parse_modes
+    from tvist.move_list import plan, read_move_list
+    from tvist.units import check_trajectory
+
+    if not (math.isfinite(args.dt_s) and args.dt_s > 0):
+        raise ValueError(f"--dt-s must be > 0; got {args.dt_s}")
+    if args.map or args.paper_map:
+        raise ValueError(
+            "a move list is shaped in Cartesian space with fixed modes: give --modes "
+            "(or --unshaped)"
+        )
+    if args.units is not None:
+        raise ValueError("a move list is in SI units (m, rad, m/s, m/s²): leave out --units")
+    robot = kinematic_robot(args)
+    moves = read_move_list(args.move, robot.n_dof)
+    modes = None if args.unshaped else parse_modes(args.modes)
+    planned = plan(robot, moves, args.dt_s, modes, shaper=args.shaper)
+    check_trajectory(
+        planned.Q,
+        args.dt_s,
+        robot.params,
+        row_label=lambda i: f"period {i} (t = {i * args.dt_s:.3f} s)",
+        what="the move list's reference",
+    )
+    print(
+        f"move list: {len(moves.moves)} linear move{'s' if len(moves.moves) != 1 else ''}, "
+        f"{'shaped in Cartesian space' if modes else 'unshaped'}; path deviation "
+        f"(flange, from the commanded lines): {planned.deviation_m * 1e3:.3f} mm"
+    )
+    return planned.Q_planned, planned.Q
 
 
 def _controller_ready(robot_ip: str):
@@ -396,7 +441,12 @@ def add_run_command(sub: argparse._SubParsersAction) -> None:
         "written by 'tvist shape' is shaped already: run it with --unshaped. Frequencies "
         "are in Hz on the command line, rad/s in the Python API.",
     )
-    p.add_argument("move", help="CSV of joint positions (rad), one row per control period")
+    p.add_argument(
+        "move",
+        help="CSV of joint positions (rad), one row per control period; or a move list "
+        "(first row 'movej, q…', then 'movel, x, y, z, rx, ry, rz, v, a' rows), shaped in "
+        "Cartesian space with --modes",
+    )
     p.add_argument("--robot-ip", help="robot (or twin server) address (not with --dry-run)")
     modes = p.add_mutually_exclusive_group()
     modes.add_argument("--map", help="map file, paper10 or modal (tvist fit-map)")

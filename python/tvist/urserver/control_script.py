@@ -35,6 +35,7 @@ import numpy as np
 from tvist.urserver.kinematics import Kinematics, finite_pose, pose_trans
 from tvist.urserver.motion import CommandRefused, JointMotion, SafetyViolation, finite_value
 from tvist.urserver.move_path import MovePath
+from tvist.urserver.path_motion import PathMotion
 from tvist.urserver.tool_motion import LinearMove, ToolSpeed
 
 log = logging.getLogger("tvist.urserver")
@@ -127,7 +128,7 @@ UNMODELLED = {
     23: "I/O (analog outputs)",
     25: "contact detection (tool_contact)",
     27: "a joint position history",
-    28: "blended waypoints (get_target_waypoint)",
+    28: "the target waypoint query (get_target_waypoint)",
     38: "joint torque measurements",
     41: "jogging",
     42: "jogging",
@@ -244,10 +245,11 @@ class ControlScript:
         #: since it was last written.
         self._watchdog_s: float | None = None
         self._quiet_s = 0.0
-        #: The path ``movePath`` injected into this program (None: none), and the waypoints
-        #: still to run of the one under way (index of the next).
+        #: The path ``movePath`` injected into this program (None: none); the motion of the
+        #: path under way (None: none) and the waypoint it heads for (its async progress).
         self.move_path: MovePath | None = None
-        self._path_next: int | None = None
+        self._path: PathMotion | None = None
+        self._path_waypoint = 0
         self.running = True
         self.error: str | None = None
         self._executing_cmd = False
@@ -307,17 +309,13 @@ class ControlScript:
                     f"(set_watchdog asks for at least {1.0 / self._watchdog_s:g} Hz)"
                 )
                 return
-        if self._path_next is not None and not self._motion.moving:
-            self._next_waypoint()
-        if (
-            self._async_move
-            and self._path_next is None
-            and self._motion.mode not in ("movej", "follow")
-        ):
+        if self._path is not None:
+            self._path_progress()
+        if self._async_move and self._motion.mode not in ("movej", "follow"):
             self._async_move = False
             self._write_async_progress(-1)
         if self._blocked_cmd is not None:
-            if self._motion.moving or self._path_next is not None:
+            if self._motion.moving:
                 return
             self._blocked_cmd = None
             self._out_int(0, SCRIPT_DONE)
@@ -570,38 +568,26 @@ class ControlScript:
         if path is None or not path.waypoints:
             raise CommandRefused(path.refusal if path else "movePath: no path in the program")
         self._stop_async_move()
-        self._path_next = 0
-        self._next_waypoint()
+        motion = PathMotion(self._kin, self._motion, self._motion.q, path.waypoints)
+        self._motion.follow(motion)
+        self._path = motion
+        self._path_waypoint = 0
+        self._write_async_progress(0)  # the script's signal_async_progress(0)
         if self._in_int(1) == 1:
             self._async_move = True
             return False
         return True
 
-    def _next_waypoint(self) -> None:
-        """Start the next waypoint of the path (the last one done: the path has ended)."""
-        waypoints = self.move_path.waypoints
-        i = self._path_next
-        if i >= len(waypoints):
-            self._path_next = None
+    def _path_progress(self) -> None:
+        """The path's ``signal_async_progress(i)`` as it moves on to waypoint ``i``; forget
+        the path once it is no longer the motion."""
+        if self._motion.mode != "follow" or self._motion.source is not self._path:
+            self._path = None
             return
-        self._path_next = i + 1
-        self._write_async_progress(i)  # the script's signal_async_progress(i)
-        point = waypoints[i]
-        try:
-            if point.kind == "movej":
-                q = (
-                    self._kin.inverse(point.target, self._motion.q)
-                    if point.is_pose
-                    else point.target
-                )
-                self._motion.movej(q, point.v, point.a)
-            else:
-                pose = point.target if point.is_pose else self._kin.forward(point.target)
-                move = LinearMove(self._kin, self._motion.q, pose, point.v, point.a)
-                self._motion.follow(move)
-        except CommandRefused as exc:
-            self._path_next = None
-            self.fail(f"movePath waypoint {i}: {exc}")
+        waypoint = self._path.waypoint
+        if waypoint != self._path_waypoint:
+            self._path_waypoint = waypoint
+            self._write_async_progress(waypoint)
 
     def _set_watchdog(self) -> bool:
         frequency = finite_value(self._in_double(0), "set_watchdog: minimum frequency")

@@ -187,22 +187,7 @@ class JointMotion:
         accel = positive_value(accel_rad_s2, "movej: acceleration")
         way = np.abs(target - self.q)
         distance = float(np.max(way))
-        if distance > 0.0:
-            # Joint j moves way[j] / distance of the leading joint's way: its speed limit
-            # bounds the leading joint's speed by max_speed[j] * distance / way[j].
-            moving = way > 0.0
-            speed_limit = float(np.min(self._max_speed[moving] * distance / way[moving]))
-            accel_limit = speed_limit / self.dt_s
-            if speed > speed_limit or accel > accel_limit:
-                log.warning(
-                    "movej: speed %g rad/s, acceleration %g rad/s² clipped to the joint "
-                    "limits (%g rad/s, %g rad/s²)",
-                    speed,
-                    accel,
-                    min(speed, speed_limit),
-                    min(accel, accel_limit),
-                )
-            speed, accel = min(speed, speed_limit), min(accel, accel_limit)
+        speed, accel = self.joint_move_limits(way, speed, accel, "movej")
         self._move_from = self.q.copy()
         self._move_to = target
         self._move_duration, self._move_speed = trapezoid_duration(distance, speed, accel)
@@ -210,6 +195,32 @@ class JointMotion:
         self._move_distance = distance
         self._move_t = 0.0
         self.mode = "movej"
+
+    def joint_move_limits(
+        self, way: np.ndarray, speed: float, accel: float, what: str
+    ) -> tuple[float, float]:
+        """The leading joint's ``speed`` and ``accel`` of a joint move whose joints travel
+        ``way`` (rad, absolute, in proportion), clipped (with a warning in the log) so that
+        every joint stays within its speed limit and takes at least one tick to reach it."""
+        distance = float(np.max(way))
+        if distance <= 0.0:
+            return speed, accel
+        # Joint j moves way[j] / distance of the leading joint's way: its speed limit
+        # bounds the leading joint's speed by max_speed[j] * distance / way[j].
+        moving = way > 0.0
+        speed_limit = float(np.min(self._max_speed[moving] * distance / way[moving]))
+        accel_limit = speed_limit / self.dt_s
+        if speed > speed_limit or accel > accel_limit:
+            log.warning(
+                "%s: speed %g rad/s, acceleration %g rad/s² clipped to the joint "
+                "limits (%g rad/s, %g rad/s²)",
+                what,
+                speed,
+                accel,
+                min(speed, speed_limit),
+                min(accel, accel_limit),
+            )
+        return min(speed, speed_limit), min(accel, accel_limit)
 
     def servoj(self, q, time_s: float, lookahead_s: float, gain: float) -> None:
         """New servo target ``q`` (rad), reached by the target ramp within ``time_s`` (at

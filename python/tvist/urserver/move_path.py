@@ -4,9 +4,9 @@ ur_rtde writes a path as URScript into the script's ``exec_move_path()`` (after 
 ``# inject move path``) and uploads the script again; command 45 then runs it. Each waypoint
 is one line ``movel(p[x,y,z,rx,ry,rz],a=…,v=…,r=…)`` or ``movej([q…],a=…,v=…,r=…)`` (a
 ``movej`` to a pose ``p[…]`` goes through inverse kinematics), each preceded by
-``signal_async_progress(i)``. The twin runs the waypoints one after the other, each from rest
-to rest; a blend radius ``r > 0`` (passing a waypoint without stopping) is not modelled, so a
-path with one is refused, as is a line the twin does not recognize.
+``signal_async_progress(i)``. The twin runs the waypoints as one motion, blending through
+those with a radius ``r > 0`` (see :mod:`tvist.urserver.path_motion`); a line it does not
+recognize is refused.
 """
 
 from __future__ import annotations
@@ -29,13 +29,15 @@ _PROGRESS = re.compile(r"^signal_async_progress\(\d+\)$")
 @dataclass(frozen=True)
 class Waypoint:
     """One move of a path: ``kind`` ``"movel"`` or ``"movej"``; ``target`` six numbers, a
-    pose if ``is_pose`` (m, rad) else joint angles (rad); speed ``v``, acceleration ``a``."""
+    pose if ``is_pose`` (m, rad) else joint angles (rad); speed ``v``, acceleration ``a``;
+    blend radius ``r`` (m, 0: stop at the waypoint)."""
 
     kind: str
     target: np.ndarray
     is_pose: bool
     v: float
     a: float
+    r: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -66,11 +68,7 @@ def parse_move_path(program: str) -> MovePath | None:
         numbers = [*target, float(a), float(v), float(r)]
         if not all(math.isfinite(x) for x in numbers):
             return MovePath((), f"movePath: a number that is not finite in {line[:80]!r}")
-        if float(r) > 0.0:
-            return MovePath(
-                (),
-                f"movePath: the twin does not model blends (r = {float(r):g} m): it runs "
-                "paths whose waypoints all have r = 0",
-            )
-        waypoints.append(Waypoint(kind, target, pose == "p", float(v), float(a)))
+        if float(r) < 0.0:
+            return MovePath((), f"movePath: a negative blend radius in {line[:80]!r}")
+        waypoints.append(Waypoint(kind, target, pose == "p", float(v), float(a), float(r)))
     return MovePath(tuple(waypoints))

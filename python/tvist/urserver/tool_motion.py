@@ -25,7 +25,7 @@ import numpy as np
 
 from tvist.cartesian import _matrix
 from tvist.sim.plant import rotation_vector
-from tvist.urserver.kinematics import Kinematics, pose_matrix
+from tvist.urserver.kinematics import Kinematics, pose_matrix, rotation_matrix
 from tvist.urserver.motion import (
     CommandRefused,
     SafetyViolation,
@@ -59,6 +59,34 @@ class _ToolSource:
         self._stopping = True
 
 
+class Line:
+    """The TCP path of a ``movel`` between two TCP transforms ``(4, 4)``: the position on the
+    straight line, the orientation rotating about one fixed axis (the slerp), both by the same
+    fraction of the way.
+
+    The path parameter ``s`` runs over ``[0, distance]``, ``distance`` the longer of the two
+    ways (m of position or rad of rotation, each in its own unit); the other follows in
+    proportion (each within ``v`` and ``a``: the shorter moves slower).
+    """
+
+    def __init__(self, start: np.ndarray, end: np.ndarray) -> None:
+        self.p0 = start[:3, 3].copy()
+        self.dp = end[:3, 3] - self.p0
+        self.r0 = start[:3, :3].copy()
+        self.axis_angle = rotation_vector((end[:3, :3] @ self.r0.T).ravel())
+        #: Length of the straight line (m).
+        self.length = float(np.linalg.norm(self.dp))
+        self.distance = max(self.length, float(np.linalg.norm(self.axis_angle)))
+
+    def at(self, s: float) -> tuple[np.ndarray, np.ndarray]:
+        """``(position (m), rotation matrix)`` at ``s`` along the path (``s`` in ``[0,
+        distance]``; beyond it the line and the rotation continue)."""
+        if self.distance == 0.0:
+            return self.p0.copy(), self.r0.copy()
+        u = s / self.distance
+        return self.p0 + u * self.dp, rotation_matrix(u * self.axis_angle) @ self.r0
+
+
 class LinearMove(_ToolSource):
     """``movel`` from the TCP pose at ``q_start`` to ``target_pose``.
 
@@ -76,18 +104,9 @@ class LinearMove(_ToolSource):
         super().__init__(kinematics)
         speed = positive_value(v, "movel: speed")
         accel = positive_value(a, "movel: acceleration")
-        start = kinematics.forward_matrix(q_start)
-        end = pose_matrix(target_pose)
         kinematics.inverse(target_pose, q_start)  # refuse an unreachable target up front
-        self._p0 = start[:3, 3]
-        self._dp = end[:3, 3] - self._p0
-        self._r0 = start[:3, :3]
-        self._axis_angle = rotation_vector((end[:3, :3] @ self._r0.T).ravel())
-        length = float(np.linalg.norm(self._dp))
-        angle = float(np.linalg.norm(self._axis_angle))
-        # The path parameter s runs over the longer of the two ways, in its own unit; the
-        # other follows in proportion (each within v and a: the shorter moves slower).
-        self._distance = max(length, angle)
+        self._line = Line(kinematics.forward_matrix(q_start), pose_matrix(target_pose))
+        self._distance = self._line.distance
         self._duration, self._speed = trapezoid_duration(self._distance, speed, accel)
         self._accel = accel
         self._t = 0.0
@@ -117,10 +136,7 @@ class LinearMove(_ToolSource):
             if self._done:
                 s = self._distance
         self._s, self._sd = s, sd
-        u = s / self._distance
-        position = self._p0 + u * self._dp
-        rotation = _matrix(u * self._axis_angle) @ self._r0
-        return self._joints(position, rotation, q)
+        return self._joints(*self._line.at(s), q)
 
 
 class ToolSpeed(_ToolSource):
