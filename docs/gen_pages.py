@@ -1,0 +1,115 @@
+"""Pages generated while the site builds (mkdocs-gen-files runs this file).
+
+Nothing here types a result by hand: every number on these pages is computed now or read
+from what `make demo` / `make bench` wrote into out/.
+
+- reference/cli.md: the help of every `tvist` command, from the parser itself.
+- results/zero-delay.md: the zero-delay benchmark, computed now (a fraction of a second).
+- results/{demo,flexible-payload,pick-place}.md: the report.md of each experiment in out/,
+  with its figures; without one, how to produce it.
+- benchmarks.md: the output `make bench` saved in out/bench/; without it, how to produce it.
+
+The hand-written part of each page stays in docs/ and this file appends to it.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+
+import mkdocs_gen_files
+
+ROOT = Path(__file__).resolve().parent.parent
+OUT = ROOT / "out"
+
+#: Experiment page -> (output folder of its command, the command that writes it).
+EXPERIMENTS = {
+    "demo": (OUT / "demo", "make demo"),
+    "flexible-payload": (
+        OUT / "demo-payload",
+        "tvist demo --experiment flexible-payload",
+    ),
+    "pick-place": (OUT / "demo-pick-place", "tvist demo --experiment pick-place"),
+}
+
+#: Files `make bench` writes into out/bench/, in the order they are shown, with a title.
+BENCH_OUTPUTS = {
+    "cycle.txt": "Rust core: one control cycle (`cargo bench -p tvist-core --bench cycle`)",
+    "bench_shape.txt": "Python: `TvShaper.shape` against numpy (`benches/bench_shape.py`)",
+    "bench_sim.txt": "The MuJoCo twin against real time (`benches/bench_sim.py`)",
+}
+
+FIGURE_LINK = re.compile(r"\]\(([^)/:]+\.(?:png|svg))\)")
+HEADING = re.compile(r"^(#{1,5}) ", flags=re.MULTILINE)
+
+
+def missing(what: str, command: str) -> str:
+    """The note a page shows when the output it is made from has not been produced."""
+    return (
+        f'\n!!! note "Not generated yet"\n'
+        f"    This part of the page is made from {what}, which this checkout does not have.\n"
+        f"    Run `{command}` and then `make docs` to fill it in.\n"
+    )
+
+
+def cli_reference() -> str:
+    """`tvist --help` and every command's help, as the parser prints them."""
+    os.environ["COLUMNS"] = "100"  # argparse wraps to the terminal; fix it for the page
+    from tvist.cli import build_parser
+
+    parser = build_parser()
+    (subparsers,) = (a for a in parser._actions if a.dest == "command")
+    parts = ["```text", parser.format_help().rstrip(), "```"]
+    for name, sub in subparsers.choices.items():
+        parts += ["", f"## tvist {name}", "", "```text", sub.format_help().rstrip(), "```"]
+    return "\n".join(parts) + "\n"
+
+
+def zero_delay_tables() -> str:
+    """The benchmark of `tvist zero-delay`, computed now."""
+    from tvist.demo.ztdis_benchmark import format_table, run_benchmark
+
+    tables = [format_table(run_benchmark(ref)) for ref in ("min_jerk", "trapezoid")]
+    return "\n".join(f"\n```text\n{t.rstrip()}\n```\n" for t in tables)
+
+
+def experiment_report(page: str) -> str:
+    """The experiment's report.md with its figures copied beside the page."""
+    folder, command = EXPERIMENTS[page]
+    report = folder / "report.md"
+    if not report.is_file():
+        return missing(f"`{report.relative_to(ROOT)}`", command)
+    text = report.read_text(encoding="utf-8")
+    for name in sorted(set(FIGURE_LINK.findall(text))):
+        source = folder / name
+        if source.is_file():
+            with mkdocs_gen_files.open(f"results/{page}/{name}", "wb") as f:
+                f.write(source.read_bytes())
+    text = FIGURE_LINK.sub(lambda m: f"]({page}/{m.group(1)})", text)
+    text = HEADING.sub(lambda m: "#" + m.group(1) + " ", text)  # below the page's own title
+    return f"\n*Generated from `{report.relative_to(ROOT)}`.*\n\n{text}"
+
+
+def bench_outputs() -> str:
+    """What `make bench` printed, as saved in out/bench/."""
+    parts = []
+    for name, title in BENCH_OUTPUTS.items():
+        path = OUT / "bench" / name
+        parts.append(f"\n### {title}\n")
+        if path.is_file():
+            parts.append(f"```text\n{path.read_text(encoding='utf-8').rstrip()}\n```\n")
+        else:
+            parts.append(missing(f"`out/bench/{name}`", "make bench"))
+    return "".join(parts)
+
+
+with mkdocs_gen_files.open("reference/cli.md", "a") as f:
+    f.write(cli_reference())
+with mkdocs_gen_files.open("results/zero-delay.md", "a") as f:
+    f.write(zero_delay_tables())
+for page in EXPERIMENTS:
+    with mkdocs_gen_files.open(f"results/{page}.md", "a") as f:
+        f.write(experiment_report(page))
+with mkdocs_gen_files.open("benchmarks.md", "a") as f:
+    f.write(bench_outputs())
