@@ -89,16 +89,16 @@ wheel: $(PY)
 	$(VENV)/bin/maturin build --release --out dist
 
 lint: $(PY)
-	$(VENV)/bin/ruff check python tests benches examples docs
-	$(VENV)/bin/ruff format --check python tests benches examples docs
+	$(VENV)/bin/ruff check python tests benches examples docs/gen_pages.py
+	$(VENV)/bin/ruff format --check python tests benches examples docs/gen_pages.py
 
 pytest: build
 	$(PY) -m pytest -q --durations=15
 
 fmt: $(PY)
 	cargo fmt --all
-	$(VENV)/bin/ruff format python tests benches examples docs
-	$(VENV)/bin/ruff check --fix python tests benches examples docs
+	$(VENV)/bin/ruff format python tests benches examples docs/gen_pages.py
+	$(VENV)/bin/ruff check --fix python tests benches examples docs/gen_pages.py
 
 # Each benchmark's output is also kept in out/bench/ for the docs' benchmarks page.
 bench: build

@@ -5,6 +5,7 @@ from what `make demo` / `make bench` wrote into out/.
 
 - reference/cli.md: the help of every `tvist` command, from the parser itself.
 - results/zero-delay.md: the zero-delay benchmark, computed now (a fraction of a second).
+- results/model.md: the robot model's inertias and the paper map's modes at the test poses.
 - results/{demo,flexible-payload,pick-place}.md: the report.md of each experiment in out/,
   with its figures; without one, how to produce it.
 - benchmarks.md: the output `make bench` saved in out/bench/; without it, how to produce it.
@@ -71,7 +72,38 @@ def zero_delay_tables() -> str:
     from tvist.demo.ztdis_benchmark import format_table, run_benchmark
 
     tables = [format_table(run_benchmark(ref)) for ref in ("min_jerk", "trapezoid")]
-    return "\n".join(f"\n```text\n{t.rstrip()}\n```\n" for t in tables)
+    return "".join(f"\n{table.strip()}\n" for table in tables)  # markdown tables
+
+
+#: Joint-axis inertias (J_0, J_1) in kg m² the paper printed for its test poses (Table 3 of
+#: Thomsen et al. 2020, from Universal Robots' internal model), to compare with the model's.
+PAPER_INERTIAS_KG_M2 = {"Q1": (9.73, 9.25), "Q3": (1.12, 1.58)}
+
+
+def model_inertias() -> str:
+    """The UR5e model's joint-axis inertias and the paper map's modes at Q1 and Q3, now."""
+    import math
+
+    import tvist
+    from tvist.trajectory import PAPER_POSES
+
+    robot = tvist.robots.ur5e(5.0, (0.0, 0.0, 0.05))
+    paper_map = tvist.DynamicMap.paper_ur5e()
+    rows = [
+        "| pose | J_0 (tvist) | J_1 (tvist) | J_0 (paper) | J_1 (paper) "
+        "| base mode, paper map | shoulder mode, paper map |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for pose, (paper_j0, paper_j1) in PAPER_INERTIAS_KG_M2.items():
+        q = PAPER_POSES[pose]
+        j0, j1 = robot.joint_inertia(q)[:2]
+        modes = [
+            f"{wn / (2 * math.pi):.2f} Hz, ζ {zeta:.3f}" for wn, zeta in paper_map.modes(robot, q)
+        ]
+        rows.append(
+            f"| {pose} | {j0:.2f} | {j1:.2f} | {paper_j0} | {paper_j1} | {modes[0]} | {modes[1]} |"
+        )
+    return "\n" + "\n".join(rows) + "\n"
 
 
 def experiment_report(page: str) -> str:
@@ -106,6 +138,8 @@ def bench_outputs() -> str:
 
 with mkdocs_gen_files.open("reference/cli.md", "a") as f:
     f.write(cli_reference())
+with mkdocs_gen_files.open("results/model.md", "a") as f:
+    f.write(model_inertias())
 with mkdocs_gen_files.open("results/zero-delay.md", "a") as f:
     f.write(zero_delay_tables())
 for page in EXPERIMENTS:
