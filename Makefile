@@ -6,12 +6,14 @@ export VIRTUAL_ENV := $(CURDIR)/$(VENV)
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml -o -name '*.json') Cargo.toml pyproject.toml
 
-.PHONY: demo test build lint fmt bench rust-test ffi-test c-example cpp-example cpp-containers examples docs pytest wheel clean mutants
+.PHONY: demo test build lint fmt bench rust-test ffi-test c-cpp-examples c-example cpp-example cpp-containers examples docs pytest wheel clean mutants
 
 demo: build
 	$(PY) -m tvist.cli demo
 
-test: build rust-test ffi-test examples lint docs pytest
+# Every example runs once: the C and C++ ones in ffi-test, the Python ones in pytest
+# (tests/test_examples.py, which also checks what they print).
+test: build rust-test ffi-test lint docs pytest
 
 $(PY):
 	python3 -m venv $(VENV)
@@ -29,17 +31,23 @@ rust-test:
 	cargo fmt --all --check
 	cargo clippy --workspace --all-targets -q -- -D warnings
 
-# C API: release library; the C example linked, with the README's line as printed,
-# dynamically (`make examples` runs it and the C++ example linked statically); tvist.hpp's
+# C API: release library; the C example linked statically and, with the README's line as
+# printed, dynamically; the C++ example (header-only tvist.hpp) on a map file; tvist.hpp's
 # container overloads. All are run.
 FFI_LIBS := -lgcc_s -lutil -lrt -lpthread -lm -ldl
 CXX ?= c++
-ffi-test: build c-example cpp-containers
+ffi-test: build c-cpp-examples cpp-containers
 	grep -m1 -e '-ltvist -lm -Wl,-rpath' README.md > target/c/readme_dynamic_link.sh
 	bash -e target/c/readme_dynamic_link.sh
 	./target/c/shape_move_shared
 	./target/cpp/hpp_containers_17
 	./target/cpp/hpp_containers_20
+
+# The C and C++ examples, each linked statically, run (the C++ one on a map file).
+c-cpp-examples: build c-example cpp-example
+	./target/c/shape_move
+	$(PY) -c "import tvist; tvist.DynamicMap.paper_ur5e().save('target/cpp/paper_ur5e.json')"
+	./target/cpp/shape_with_map ur5e 5.0 0 0 0.05 target/cpp/paper_ur5e.json 0.002 zv
 
 # The C example against libtvist.a.
 c-example:
@@ -64,10 +72,10 @@ cpp-containers:
 			target/release/libtvist.a $(FFI_LIBS) -o target/cpp/hpp_containers_$$std || exit 1; \
 	done
 
-# Every program in examples/: the Python ones each from a fresh working directory (they
-# write their logs, maps and plots there), then the C and C++ ones. Each takes seconds.
+# Every program in examples/: the C and C++ ones, then the Python ones, each Python one in a
+# fresh working directory (they write their logs, maps and plots there). Each takes seconds.
 EXAMPLES_DIR := target/examples
-examples: build c-example cpp-example
+examples: build c-cpp-examples
 	@rm -rf $(EXAMPLES_DIR) && mkdir -p $(EXAMPLES_DIR)
 	@for script in examples/*.py; do \
 		echo "== $$script"; \
@@ -75,9 +83,6 @@ examples: build c-example cpp-example
 		(cd $(EXAMPLES_DIR)/$$(basename $$script .py) && \
 			MPLBACKEND=Agg $(CURDIR)/$(PY) $(CURDIR)/$$script) || exit 1; \
 	done
-	./target/c/shape_move
-	$(PY) -c "import tvist; tvist.DynamicMap.paper_ur5e().save('target/cpp/paper_ur5e.json')"
-	./target/cpp/shape_with_map ur5e 5.0 0 0 0.05 target/cpp/paper_ur5e.json 0.002 zv
 
 # The documentation site (mkdocs.yml) into target/site; any warning fails the build. The
 # results pages are made from what `make demo` and `make bench` left in out/.
