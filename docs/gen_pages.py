@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import os
 import re
+from datetime import datetime, timezone
 from pathlib import Path
 
 import mkdocs_gen_files
@@ -34,11 +35,12 @@ EXPERIMENTS = {
     "pick-place": (OUT / "demo-pick-place", "tvist demo --experiment pick-place"),
 }
 
-#: Files `make bench` writes into out/bench/, in the order they are shown, with a title.
+#: Files `make bench` writes into out/bench/, in the order they are shown: a title, and
+#: whether the output is markdown (the cycle harness prints a table) or plain text.
 BENCH_OUTPUTS = {
-    "cycle.txt": "Rust core: one control cycle (`cargo bench -p tvist-core --bench cycle`)",
-    "bench_shape.txt": "Python: `TvShaper.shape` against numpy (`benches/bench_shape.py`)",
-    "bench_sim.txt": "The MuJoCo twin against real time (`benches/bench_sim.py`)",
+    "cycle.txt": ("Rust core: one control cycle (`cargo bench -p tvist-core --bench cycle`)", True),
+    "bench_shape.txt": ("Python: `TvShaper.shape` against numpy (`benches/bench_shape.py`)", False),
+    "bench_sim.txt": ("The MuJoCo twin against real time (`benches/bench_sim.py`)", False),
 }
 
 FIGURE_LINK = re.compile(r"\]\(([^)/:]+\.(?:png|svg))\)")
@@ -126,13 +128,19 @@ def experiment_report(page: str) -> str:
 def bench_outputs() -> str:
     """What `make bench` printed, as saved in out/bench/."""
     parts = []
-    for name, title in BENCH_OUTPUTS.items():
+    for name, (title, is_markdown) in BENCH_OUTPUTS.items():
         path = OUT / "bench" / name
         parts.append(f"\n### {title}\n")
-        if path.is_file():
-            parts.append(f"```text\n{path.read_text(encoding='utf-8').rstrip()}\n```\n")
-        else:
+        if not path.is_file():
             parts.append(missing(f"`out/bench/{name}`", "make bench"))
+            continue
+        written = datetime.fromtimestamp(path.stat().st_mtime, tz=timezone.utc)
+        parts.append(f"\n*`out/bench/{name}`, written {written:%Y-%m-%d %H:%M} UTC.*\n\n")
+        text = path.read_text(encoding="utf-8").strip()
+        if is_markdown:  # "#10 / #14 ..." is a line of text, not a heading
+            parts.append(re.sub(r"^#", r"\\#", text, flags=re.MULTILINE) + "\n")
+        else:
+            parts.append(f"```text\n{text}\n```\n")
     return "".join(parts)
 
 
