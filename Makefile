@@ -6,20 +6,22 @@ export VIRTUAL_ENV := $(CURDIR)/$(VENV)
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml -o -name '*.json') Cargo.toml pyproject.toml
 
-.PHONY: demo test build lint fmt bench rust-test ffi-test cpp-example cpp-containers pytest wheel clean mutants
+.PHONY: demo test build lint fmt bench rust-test ffi-test c-cpp-examples c-example cpp-example cpp-containers examples docs pytest wheel clean mutants
 
 demo: build
 	$(PY) -m tvist.cli demo
 
-test: build rust-test ffi-test lint pytest
+# Every example runs once: the C and C++ ones in ffi-test, the Python ones in pytest
+# (tests/test_examples.py, which also checks what they print).
+test: build rust-test ffi-test lint docs pytest
 
 $(PY):
 	python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip "maturin>=1.8,<2"
 
-# Release build of the extension plus the package's runtime and test dependencies.
+# Release build of the extension plus the package's runtime, test and docs dependencies.
 $(VENV)/.built: $(PY) $(RUST_SOURCES)
-	maturin develop --release --extras test -q
+	maturin develop --release --extras test,docs -q
 	touch $@
 
 build: $(VENV)/.built
@@ -30,21 +32,29 @@ rust-test:
 	cargo clippy --workspace --all-targets -q -- -D warnings
 
 # C API: release library; the C example linked statically and, with the README's line as
-# printed, dynamically; the C++ example (header-only tvist.hpp) on a map file. All are run.
+# printed, dynamically; the C++ example (header-only tvist.hpp) on a map file; tvist.hpp's
+# container overloads. All are run.
 FFI_LIBS := -lgcc_s -lutil -lrt -lpthread -lm -ldl
 CXX ?= c++
-ffi-test: build cpp-example cpp-containers
-	@mkdir -p target/c
-	cc -std=c11 -Wall -Wextra -Werror -Iinclude examples/c/shape_move.c \
-		target/release/libtvist.a $(FFI_LIBS) -o target/c/shape_move
-	./target/c/shape_move
+ffi-test: build c-cpp-examples cpp-containers
 	grep -m1 -e '-ltvist -lm -Wl,-rpath' README.md > target/c/readme_dynamic_link.sh
 	bash -e target/c/readme_dynamic_link.sh
 	./target/c/shape_move_shared
-	$(PY) -c "import tvist; tvist.DynamicMap.paper_ur5e().save('target/cpp/paper_ur5e.json')"
-	./target/cpp/shape_with_map ur5e 5.0 0 0 0.05 target/cpp/paper_ur5e.json 0.002 zv
 	./target/cpp/hpp_containers_17
 	./target/cpp/hpp_containers_20
+
+# The C and C++ examples, each linked statically, run (the C++ one on a map file).
+c-cpp-examples: build c-example cpp-example
+	./target/c/shape_move
+	$(PY) -c "import tvist; tvist.DynamicMap.paper_ur5e().save('target/cpp/paper_ur5e.json')"
+	./target/cpp/shape_with_map ur5e 5.0 0 0 0.05 target/cpp/paper_ur5e.json 0.002 zv
+
+# The C example against libtvist.a.
+c-example:
+	cargo build -p tvist-ffi --release -q
+	@mkdir -p target/c
+	cc -std=c11 -Wall -Wextra -Werror -Iinclude examples/c/shape_move.c \
+		target/release/libtvist.a $(FFI_LIBS) -o target/c/shape_move
 
 # The C++ example against libtvist.a (the pytest parity test uses it too).
 cpp-example:
@@ -62,26 +72,45 @@ cpp-containers:
 			target/release/libtvist.a $(FFI_LIBS) -o target/cpp/hpp_containers_$$std || exit 1; \
 	done
 
+# Every program in examples/: the C and C++ ones, then the Python ones, each Python one in a
+# fresh working directory (they write their logs, maps and plots there). Each takes seconds.
+EXAMPLES_DIR := target/examples
+examples: build c-cpp-examples
+	@rm -rf $(EXAMPLES_DIR) && mkdir -p $(EXAMPLES_DIR)
+	@for script in examples/*.py; do \
+		echo "== $$script"; \
+		mkdir -p $(EXAMPLES_DIR)/$$(basename $$script .py); \
+		(cd $(EXAMPLES_DIR)/$$(basename $$script .py) && \
+			MPLBACKEND=Agg $(CURDIR)/$(PY) $(CURDIR)/$$script) || exit 1; \
+	done
+
+# The documentation site (mkdocs.yml) into target/site; any warning fails the build. The
+# results pages are made from what `make demo` and `make bench` left in out/.
+docs: build
+	NO_MKDOCS_2_WARNING=1 DISABLE_MKDOCS_2_WARNING=true $(VENV)/bin/mkdocs build --strict -q
+
 # Release wheel (abi3, Python >= 3.10) into dist/: installs without a Rust toolchain.
 wheel: $(PY)
 	$(VENV)/bin/maturin build --release --out dist
 
 lint: $(PY)
-	$(VENV)/bin/ruff check python tests benches examples
-	$(VENV)/bin/ruff format --check python tests benches examples
+	$(VENV)/bin/ruff check python tests benches examples docs/gen_pages.py
+	$(VENV)/bin/ruff format --check python tests benches examples docs/gen_pages.py
 
 pytest: build
 	$(PY) -m pytest -q --durations=15
 
 fmt: $(PY)
 	cargo fmt --all
-	$(VENV)/bin/ruff format python tests benches examples
-	$(VENV)/bin/ruff check --fix python tests benches examples
+	$(VENV)/bin/ruff format python tests benches examples docs/gen_pages.py
+	$(VENV)/bin/ruff check --fix python tests benches examples docs/gen_pages.py
 
+# Each benchmark's output is also kept in out/bench/ for the docs' benchmarks page.
 bench: build
-	cargo bench -q -p tvist-core --bench cycle
-	$(PY) benches/bench_shape.py
-	$(PY) benches/bench_sim.py
+	@mkdir -p out/bench
+	set -o pipefail; cargo bench -q -p tvist-core --bench cycle | tee out/bench/cycle.txt
+	set -o pipefail; $(PY) benches/bench_shape.py | tee out/bench/bench_shape.txt
+	set -o pipefail; $(PY) benches/bench_sim.py | tee out/bench/bench_sim.txt
 
 # Mutation testing (not part of `make test`; see docs/mutants.md for run times): cargo-mutants on
 # tvist-core's numerical modules (.cargo/mutants.toml), then tools/python_mutants.py on the

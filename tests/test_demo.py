@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -31,6 +32,28 @@ def quick_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict]:
     out = tmp_path_factory.mktemp("demo")
     run_demo(out, quick=True, verbose=False)
     return out, json.loads((out / "results.json").read_text())
+
+
+def markdown_cells(line: str) -> int:
+    """Cells of a markdown table line, split at unescaped ``|`` as renderers (GitHub,
+    Python-Markdown) split them."""
+    return len(re.split(r"(?<!\\)\|", line.strip())) - 2  # without the outer pipes
+
+
+def test_quick_demo_report_tables_keep_their_columns(quick_run):
+    """A ``|`` inside a cell (the settle header's ``|ψ|``) must not split it: the header and
+    every row of each table have as many cells as its separator line ``|---|...|``."""
+    out, _ = quick_run
+    lines = (out / "report.md").read_text().splitlines()
+    separators = [i for i, line in enumerate(lines) if re.fullmatch(r"\|(?:---\|)+", line)]
+    assert separators, "the report has tables"
+    for i in separators:
+        width = lines[i].count("---")
+        for line in lines[i + 1 :]:
+            if not line.startswith("|"):
+                break
+            assert markdown_cells(line) == width, line
+        assert markdown_cells(lines[i - 1]) == width, lines[i - 1]
 
 
 def test_quick_demo_writes_results_report_and_figures(quick_run):

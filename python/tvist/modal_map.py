@@ -2,10 +2,11 @@
 
 The physics lives in the Rust core (``tvist-core/src/modal_map.rs``): every flexible joint
 ``j`` is a torsional spring ``k_j`` and damper ``c_j`` between its motor (held rigidly by the
-servo) and its link; at each pose the modes solve ``K φ = ω² M_ff(q) φ`` with ``M_ff`` the
-block of the link-side mass matrix on the flexible joints, damping by modal projection
-``ζ = φᵀCφ / (2 ω φᵀMφ)``; each shaped mode is the eigenmode that stores the largest share
-of its strain energy in the joint that names it, so "base" and "shoulder" keep their meaning
+servo) and its link; at each pose the modes are the roots ``λ`` of
+``det(λ² M_ff(q) + λ C + K) = 0`` with ``M_ff`` the block of the link-side mass matrix on the
+flexible joints: ``ω_n = |λ|``, ``ζ = −Re λ / |λ|`` (the exact damped modes, as a free decay
+shows them); each shaped mode is the eigenmode that stores the largest share of its strain
+energy in the joint that names it, so "base" and "shoulder" keep their meaning
 when their frequencies cross. Stiffness and damping grow with the static load ``L`` (gravity
 torque, N m): ``v(L) = v_0 + v_1 |L|_s + v_2 L²``; the stiffness of joint ``j`` reads its own
 gravity torque, its damping that of ``damping_load_joint``.

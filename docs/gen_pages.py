@@ -1,0 +1,157 @@
+"""Pages generated while the site builds (mkdocs-gen-files runs this file).
+
+Nothing here types a result by hand: every number on these pages is computed now or read
+from what `make demo` / `make bench` wrote into out/.
+
+- reference/cli.md: the help of every `tvist` command, from the parser itself.
+- results/zero-delay.md: the zero-delay benchmark, computed now (a fraction of a second).
+- results/model.md: the robot model's inertias and the paper map's modes at the test poses.
+- results/{demo,flexible-payload,pick-place}.md: the report.md of each experiment in out/,
+  with its figures; without one, how to produce it.
+- benchmarks.md: the output `make bench` saved in out/bench/; without it, how to produce it.
+
+The hand-written part of each page stays in docs/ and this file appends to it.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from datetime import datetime, timezone
+from pathlib import Path
+
+import mkdocs_gen_files
+
+ROOT = Path(__file__).resolve().parent.parent
+OUT = ROOT / "out"
+
+#: Experiment page -> (output folder of its command, the command that writes it).
+EXPERIMENTS = {
+    "demo": (OUT / "demo", "make demo"),
+    "flexible-payload": (
+        OUT / "demo-payload",
+        "tvist demo --experiment flexible-payload",
+    ),
+    "pick-place": (OUT / "demo-pick-place", "tvist demo --experiment pick-place"),
+}
+
+#: Files `make bench` writes into out/bench/, in the order they are shown: a title, and
+#: whether the output is markdown (the cycle harness prints a table) or plain text.
+BENCH_OUTPUTS = {
+    "cycle.txt": ("Rust core: one control cycle (`cargo bench -p tvist-core --bench cycle`)", True),
+    "bench_shape.txt": ("Python: `TvShaper.shape` against numpy (`benches/bench_shape.py`)", False),
+    "bench_sim.txt": ("The MuJoCo twin against real time (`benches/bench_sim.py`)", False),
+}
+
+FIGURE_LINK = re.compile(r"\]\(([^)/:]+\.(?:png|svg))\)")
+HEADING = re.compile(r"^(#{1,5}) ", flags=re.MULTILINE)
+
+
+def missing(what: str, command: str) -> str:
+    """The note a page shows when the output it is made from has not been produced."""
+    return (
+        f'\n!!! note "Not generated yet"\n'
+        f"    This part of the page is made from {what}, which this checkout does not have.\n"
+        f"    Run `{command}` and then `make docs` to fill it in.\n"
+    )
+
+
+def cli_reference() -> str:
+    """`tvist --help` and every command's help, as the parser prints them."""
+    os.environ["COLUMNS"] = "100"  # argparse wraps to the terminal; fix it for the page
+    from tvist.cli import build_parser
+
+    parser = build_parser()
+    (subparsers,) = (a for a in parser._actions if a.dest == "command")
+    parts = ["```text", parser.format_help().rstrip(), "```"]
+    for name, sub in subparsers.choices.items():
+        parts += ["", f"## tvist {name}", "", "```text", sub.format_help().rstrip(), "```"]
+    return "\n".join(parts) + "\n"
+
+
+def zero_delay_tables() -> str:
+    """The benchmark of `tvist zero-delay`, computed now."""
+    from tvist.demo.ztdis_benchmark import format_table, run_benchmark
+
+    tables = [format_table(run_benchmark(ref)) for ref in ("min_jerk", "trapezoid")]
+    return "".join(f"\n{table.strip()}\n" for table in tables)  # markdown tables
+
+
+#: Joint-axis inertias (J_0, J_1) in kg m² the paper printed for its test poses (Table 3 of
+#: Thomsen et al. 2020, from Universal Robots' internal model), to compare with the model's.
+PAPER_INERTIAS_KG_M2 = {"Q1": (9.73, 9.25), "Q3": (1.12, 1.58)}
+
+
+def model_inertias() -> str:
+    """The UR5e model's joint-axis inertias and the paper map's modes at Q1 and Q3, now."""
+    import math
+
+    import tvist
+    from tvist.trajectory import PAPER_POSES
+
+    robot = tvist.robots.ur5e(5.0, (0.0, 0.0, 0.05))
+    paper_map = tvist.DynamicMap.paper_ur5e()
+    rows = [
+        "| pose | J_0 (tvist) | J_1 (tvist) | J_0 (paper) | J_1 (paper) "
+        "| base mode, paper map | shoulder mode, paper map |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for pose, (paper_j0, paper_j1) in PAPER_INERTIAS_KG_M2.items():
+        q = PAPER_POSES[pose]
+        j0, j1 = robot.joint_inertia(q)[:2]
+        modes = [
+            f"{wn / (2 * math.pi):.2f} Hz, ζ {zeta:.3f}" for wn, zeta in paper_map.modes(robot, q)
+        ]
+        rows.append(
+            f"| {pose} | {j0:.2f} | {j1:.2f} | {paper_j0} | {paper_j1} | {modes[0]} | {modes[1]} |"
+        )
+    return "\n" + "\n".join(rows) + "\n"
+
+
+def experiment_report(page: str) -> str:
+    """The experiment's report.md with its figures copied beside the page."""
+    folder, command = EXPERIMENTS[page]
+    report = folder / "report.md"
+    if not report.is_file():
+        return missing(f"`{report.relative_to(ROOT)}`", command)
+    text = report.read_text(encoding="utf-8")
+    for name in sorted(set(FIGURE_LINK.findall(text))):
+        source = folder / name
+        if source.is_file():
+            with mkdocs_gen_files.open(f"results/{page}/{name}", "wb") as f:
+                f.write(source.read_bytes())
+    text = FIGURE_LINK.sub(lambda m: f"]({page}/{m.group(1)})", text)
+    text = HEADING.sub(lambda m: "#" + m.group(1) + " ", text)  # below the page's own title
+    return f"\n*Generated from `{report.relative_to(ROOT)}`.*\n\n{text}"
+
+
+def bench_outputs() -> str:
+    """What `make bench` printed, as saved in out/bench/."""
+    parts = []
+    for name, (title, is_markdown) in BENCH_OUTPUTS.items():
+        path = OUT / "bench" / name
+        parts.append(f"\n### {title}\n")
+        if not path.is_file():
+            parts.append(missing(f"`out/bench/{name}`", "make bench"))
+            continue
+        written = datetime.fromtimestamp(path.stat().st_mtime, tz=timezone.utc)
+        parts.append(f"\n*`out/bench/{name}`, written {written:%Y-%m-%d %H:%M} UTC.*\n\n")
+        text = path.read_text(encoding="utf-8").strip()
+        if is_markdown:  # "#10 / #14 ..." is a line of text, not a heading
+            parts.append(re.sub(r"^#", r"\\#", text, flags=re.MULTILINE) + "\n")
+        else:
+            parts.append(f"```text\n{text}\n```\n")
+    return "".join(parts)
+
+
+with mkdocs_gen_files.open("reference/cli.md", "a") as f:
+    f.write(cli_reference())
+with mkdocs_gen_files.open("results/model.md", "a") as f:
+    f.write(model_inertias())
+with mkdocs_gen_files.open("results/zero-delay.md", "a") as f:
+    f.write(zero_delay_tables())
+for page in EXPERIMENTS:
+    with mkdocs_gen_files.open(f"results/{page}.md", "a") as f:
+        f.write(experiment_report(page))
+with mkdocs_gen_files.open("benchmarks.md", "a") as f:
+    f.write(bench_outputs())
