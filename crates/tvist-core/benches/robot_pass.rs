@@ -27,7 +27,7 @@ mod robot_support;
 mod hand_ur5e;
 
 /// Rounds per case (min and median are taken over these).
-const ROUNDS: usize = 101;
+const ROUNDS: usize = 61;
 /// Cycles per case and round.
 const STEPS: usize = 4_000;
 const DT_S: f64 = 0.002;
