@@ -149,6 +149,14 @@ fn main() {
     cases.extend(robot_cases("UR10e (DH)", || {
         robot_support::ur_robot("ur10e", 5.0)
     }));
+    // The same UR5e placed as a URDF places it: link frames along the DH frames (every step
+    // a DH step) and turned (every step general).
+    cases.extend(robot_cases("UR5e (URDF, DH steps)", || {
+        robot_support::ur_robot_placed("ur5e", 5.0, &[])
+    }));
+    cases.extend(robot_cases("UR5e (URDF, general steps)", || {
+        robot_support::ur_robot_placed("ur5e", 5.0, &robot_support::GENERAL_TURNS)
+    }));
 
     let mut ns: Vec<Vec<f64>> = vec![Vec::with_capacity(ROUNDS); cases.len()];
     let mut ratios: Vec<Vec<f64>> = vec![Vec::with_capacity(ROUNDS); cases.len()];
