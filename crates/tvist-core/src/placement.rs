@@ -176,7 +176,7 @@ pub(crate) fn joint_frames(
     let mut turns = Vec::with_capacity(joints.len());
     for (i, j) in joints.iter().enumerate() {
         let norm = (j.axis[0] * j.axis[0] + j.axis[1] * j.axis[1] + j.axis[2] * j.axis[2]).sqrt();
-        if !j.origin.is_finite() || !(norm.is_finite() && norm > 0.0) {
+        if !(j.origin.is_finite() && norm.is_finite() && norm > 0.0) {
             return bad(format!(
                 "joint {i}: origin and axis must be finite and the axis non-zero"
             ));

@@ -86,8 +86,9 @@ fn a_payload_replaced_later_matches_one_given_at_setup() {
 #[test]
 fn a_first_joint_off_the_gravity_axis_is_refused() {
     let placed = ur_robot_placed("ur5e", 0.0, &[]);
-    let tvist_core::Chain::Urdf { mut joints, flange } = placed.chain().clone() else {
-        panic!("a placed chain");
+    let (mut joints, flange) = match placed.chain().clone() {
+        tvist_core::Chain::Urdf { joints, flange } => (joints, flange),
+        tvist_core::Chain::Dh(_) => unreachable!("ur_robot_placed places by URDF joints"),
     };
     joints[0].origin = Origin::new([0.0; 3], [0.2, 0.0, 0.0]);
     let err = Robot::from_placements(joints, flange, placed.links().to_vec(), RigidBody::NONE)
