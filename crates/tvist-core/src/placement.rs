@@ -192,15 +192,6 @@ pub(crate) fn joint_frames(
         return bad("flange origin must be finite".into());
     }
     let base = joints[0].origin.pose().then(&turns[0]);
-    // Gravity is along −z of the base; the model takes it to be along joint 0's axis.
-    // Tolerance: rounding of the rpy rotation (a few ulp), far below a tilted mount.
-    if base.rot[2].abs() > 1e-12 || base.rot[5].abs() > 1e-12 {
-        return bad(format!(
-            "joint 0: axis {:?} is not vertical in the base frame: the model needs the first \
-             joint to turn about the gravity axis",
-            joints[0].axis
-        ));
-    }
     let n = joints.len();
     let mut steps = Vec::with_capacity(n);
     let mut bodies = Vec::with_capacity(n);

@@ -6,8 +6,9 @@
 //! DH parameters (`S_k = Tz(d_k) Tx(a_k) Rx(α_k)`, frame 0 the base), or joints placed as URDF
 //! places them ([`JointPlacement`]: an origin, then a turn about an axis), from which
 //! [`crate::placement`] derives the steps and the pose of frame 0 in the base. Gravity is
-//! [`GRAVITY_M_S2`] along `−z` of the base, and joint 0 turns about that axis. Everything is
-//! link side: no rotor inertia.
+//! [`GRAVITY_M_S2`] along `−z` of the base; joint 0 turns about that axis in every DH chain
+//! (and then nothing depends on `q_0`), about any axis in a placed one. Everything is link
+//! side: no rotor inertia.
 //!
 //! All per-call methods are allocation-free: they work in a workspace preallocated by
 //! [`Robot::new`] and write into caller buffers. A buffer of the wrong length returns
@@ -534,8 +535,11 @@ pub struct Robot {
     dh: Vec<StepConstants>,
     /// Joint frame 0 in the base (the identity for a DH chain). Its `z` is vertical.
     base: Pose,
-    /// The base's up direction in joint frame 0, `(0, 0, ±1)`.
+    /// The base's up direction in joint frame 0 (`(0, 0, ±1)` when joint 0 turns about the
+    /// gravity axis, as in every DH chain).
     up_in_frame0: [f64; 3],
+    /// Joint 0's axis is not the gravity axis: its angle changes the gravity torques.
+    tilted_first_joint: bool,
     links: Vec<RigidBody>,
     payload: RigidBody,
     /// `links` in joint frames `1..=n` (link `k` in frame `k + 1`).
@@ -629,11 +633,14 @@ impl Robot {
                 (steps, frames.base, frames.bodies)
             }
         };
-        let up_in_frame0 = [0.0, 0.0, base.rot[8].signum()];
+        // R_baseᵀ e_z: the third row of the base rotation.
+        let up_in_frame0 = [base.rot[6], base.rot[7], base.rot[8]];
+        let tilted_first_joint = up_in_frame0[0] != 0.0 || up_in_frame0[1] != 0.0;
         let mut robot = Robot {
             dh,
             base,
             up_in_frame0,
+            tilted_first_joint,
             frame_links: bodies.clone(),
             bodies,
             moments: vec![Moments::ZERO; n],
@@ -815,7 +822,8 @@ impl Robot {
     /// base's up direction in frame `k` (`∂V/∂q_k = g e_z · (z_k × h)`). Off the diagonal,
     /// `M[k, j]` is the `z` moment about joint `k` of the spatial momentum of composite `j`
     /// turning about joint `j` at unit rate, carried down with the composite. Nothing depends
-    /// on `q_0` (joint 0 turns the arm about the gravity axis), so its sine is never taken;
+    /// on `q_0` when joint 0 turns the arm about the gravity axis, so its sine is then never
+    /// taken (a first joint off that axis turns the gravity torques: its sine is taken for them);
     /// the composite of the bodies beyond `fixed_from` is a constant formed at setup
     /// (their joints turn nothing that matters), so their sines are not taken either: one
     /// `sin_cos` per joint `1..fixed_from`, no world transforms.
@@ -854,12 +862,16 @@ impl Robot {
             (n, Moments::ZERO)
         };
         let ws = &mut self.ws;
-        crate::trig::sin_cos_each(&q[1..start], &mut ws.sin_cos[1..start]);
+        // q_0 matters only to the gravity torques of a first joint off the gravity axis.
+        let tilted = self.tilted_first_joint && tau_g.is_some();
+        let first = usize::from(!tilted);
+        crate::trig::sin_cos_each(&q[first..start], &mut ws.sin_cos[first..start]);
         if tau_g.is_some() {
-            // u_{k+1} = Rx(α_k)ᵀ Rz(q_k)ᵀ u_k from u_0 = e_z (Rz(q_0) leaves e_z as it is).
+            // u_{k+1} = S_kᵀ Rz(q_k)ᵀ u_k from u_0, the base's up in frame 0 (Rz(q_0) leaves
+            // it as it is when it is the axis).
             let mut u = self.up_in_frame0;
             for k in 1..joints {
-                if k > 1 {
+                if k > 1 || tilted {
                     let (s, c) = ws.sin_cos[k - 1];
                     (u[0], u[1]) = rotate_pair(u[0], u[1], c, -s);
                 }
@@ -895,7 +907,7 @@ impl Robot {
             .zip(&ws.sin_cos[..joints]);
         for (k, ((body, dh), &sc)) in read.enumerate().rev() {
             composite.add(body);
-            if k == 0 && mass.is_none() {
+            if k == 0 && mass.is_none() && !tilted {
                 // Joint 0's inertia alone (its gravity torque is 0): no full frame change.
                 if let Some(out) = inertia.as_deref_mut() {
                     out[0] = composite.z_inertia_in_parent(dh);
@@ -922,8 +934,13 @@ impl Robot {
             }
             if k == 0 {
                 if let Some(t) = tau_g.as_deref_mut() {
-                    // Joint 0 turns about the gravity axis.
-                    t[0] = 0.0;
+                    t[0] = if tilted {
+                        composite.turn_z(sc);
+                        let (h, u) = (&composite.first_kg_m, &self.up_in_frame0);
+                        GRAVITY_M_S2 * (u[1] * h[0] - u[0] * h[1])
+                    } else {
+                        0.0 // joint 0 turns about the gravity axis
+                    };
                 }
                 break;
             }

@@ -72,6 +72,7 @@ fn modal_map_provider_and_shaper_never_allocate() {
         robot_support::ur_robot("ur5e", 5.0),
         robot_support::ur_robot_placed("ur5e", 5.0, &[]),
         robot_support::ur_robot_placed("ur5e", 5.0, &robot_support::GENERAL_TURNS),
+        robot_support::ur_robot_tilted("ur5e", 5.0),
     ] {
         let provider = ModalDynamics::new(robot, map.clone()).expect("valid map");
         alloc_support::assert_robot_provider_never_allocates(

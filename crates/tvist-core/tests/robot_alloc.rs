@@ -16,11 +16,12 @@ fn robot_map_and_map_shaper_never_allocate() {
     the_counter_sees_this_thread_only();
 
     // The DH chain, and the same arm placed as URDF places it: along the DH frames (DH
-    // steps) and in turned link frames (general steps).
+    // steps), in turned link frames (general steps) and with its first joint tilted.
     let robots = [
         robot_support::ur_robot("ur5e", 5.0),
         robot_support::ur_robot_placed("ur5e", 5.0, &[]),
         robot_support::ur_robot_placed("ur5e", 5.0, &robot_support::GENERAL_TURNS),
+        robot_support::ur_robot_tilted("ur5e", 5.0),
     ];
     let mut rng = robot_support::Rng(5);
     let poses: Vec<Vec<f64>> = (0..200).map(|_| rng.pose(6)).collect();

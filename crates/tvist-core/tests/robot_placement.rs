@@ -1,12 +1,13 @@
 //! Joints placed as URDF places them (origin, then a turn about an axis) give the same model
 //! as the DH chain they describe: mass matrix, joint inertias (general and inertia-only
 //! passes), gravity torques, flange pose and Jacobian, whatever link frames the description
-//! chooses.
+//! chooses. (A first joint off the gravity axis is checked against pinocchio in the Python
+//! tests, on a shipped arm whose description tilts it.)
 
 mod robot_support;
 
 use robot_support::{ur_robot, ur_robot_placed, Rng, GENERAL_TURNS};
-use tvist_core::{Origin, RigidBody, Robot};
+use tvist_core::{RigidBody, Robot};
 
 /// Largest difference of every quantity of `a` and `b` over `poses`, each relative to the
 /// largest magnitude of that quantity over the poses.
@@ -81,17 +82,4 @@ fn a_payload_replaced_later_matches_one_given_at_setup() {
     let poses: Vec<Vec<f64>> = (0..50).map(|_| Rng(3).pose(6)).collect();
     let d = largest_relative_difference(&mut dh, &mut placed, &poses);
     assert!(d <= 1e-13, "{d:e}");
-}
-
-#[test]
-fn a_first_joint_off_the_gravity_axis_is_refused() {
-    let placed = ur_robot_placed("ur5e", 0.0, &[]);
-    let (mut joints, flange) = match placed.chain().clone() {
-        tvist_core::Chain::Urdf { joints, flange } => (joints, flange),
-        tvist_core::Chain::Dh(_) => unreachable!("ur_robot_placed places by URDF joints"),
-    };
-    joints[0].origin = Origin::new([0.0; 3], [0.2, 0.0, 0.0]);
-    let err = Robot::from_placements(joints, flange, placed.links().to_vec(), RigidBody::NONE)
-        .expect_err("a tilted first joint");
-    assert!(err.to_string().contains("joint 0"), "{err}");
 }

@@ -161,3 +161,17 @@ pub const GENERAL_TURNS: [[f64; 3]; 6] = [
     [2.5, 0.3, -0.4],
     [-1.3, 0.7, 2.9],
 ];
+
+/// [`ur_robot_placed`] with the first joint's origin tilted by 0.2 rad about the base's `x`:
+/// joint 0 no longer turns about the gravity axis.
+pub fn ur_robot_tilted(name: &str, payload_kg: f64) -> Robot {
+    let placed = ur_robot_placed(name, payload_kg, &GENERAL_TURNS);
+    let (mut joints, flange) = match placed.chain().clone() {
+        tvist_core::Chain::Urdf { joints, flange } => (joints, flange),
+        tvist_core::Chain::Dh(_) => unreachable!("ur_robot_placed places by URDF joints"),
+    };
+    let rpy = joints[0].origin.rpy_rad;
+    joints[0].origin.rpy_rad = [rpy[0] + 0.2, rpy[1], rpy[2]];
+    Robot::from_placements(joints, flange, placed.links().to_vec(), *placed.payload())
+        .expect("valid robot")
+}
