@@ -41,11 +41,20 @@ def _pin_quantities(model, poses: np.ndarray):
 
     data = model.createData()
     mass, gravity = [], []
-    for q in poses:
+    for angles in poses:
+        q = _pin_configuration(model, angles)
         m = pin.crba(model, data, q)
         mass.append(np.triu(m) + np.triu(m, 1).T)  # crba fills the upper triangle
         gravity.append(pin.computeGeneralizedGravity(model, data, q).copy())
     return np.array(mass), np.array(gravity)
+
+
+def _pin_configuration(model, angles: np.ndarray) -> np.ndarray:
+    """pinocchio's configuration of joint angles (a continuous joint is ``(cos q, sin q)``)."""
+    q = []
+    for joint, angle in zip(model.joints[1:], angles, strict=True):
+        q += [np.cos(angle), np.sin(angle)] if joint.nq == 2 else [angle]
+    return np.array(q)
 
 
 def _urdf_arms(tmp: Path) -> dict[str, tuple[Path, str, str]]:
@@ -63,7 +72,8 @@ def _poses(robot: Robot, seed: int) -> np.ndarray:
     return np.random.default_rng(seed).uniform(limits[:, 0], limits[:, 1], (N_POSES, robot.n_dof))
 
 
-@pytest.mark.parametrize("arm", ["fr3", "iiwa14", "ur5e", "ur10e"])
+@pytest.mark.parametrize("arm", ["fr3", "iiwa14", "gen3", "ur5e", "ur10e"])
+@pytest.mark.filterwarnings("ignore:.*is continuous")
 def test_urdf_arm_equals_pinocchio_on_the_same_file(tmp_path, arm):
     path, base, tip = _urdf_arms(tmp_path)[arm]
     robot = from_urdf(path, base, tip, PAYLOAD.mass_kg, PAYLOAD.com_m, PAYLOAD.inertia_kg_m2)

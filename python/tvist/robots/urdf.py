@@ -375,6 +375,7 @@ def dh_urdf(params: RobotParams) -> str:
 SHIPPED_URDFS: dict[str, tuple[str, str, str]] = {
     "fr3": ("fr3.urdf", "fr3_link0", "fr3_link8"),
     "iiwa14": ("iiwa14.urdf", "iiwa_link_0", "iiwa_link_ee"),
+    "gen3": ("gen3.urdf", "base_link", "end_effector_link"),
 }
 
 
