@@ -256,3 +256,52 @@ def test_cpp_shapes_from_a_robot_file_exactly_as_python(tmp_path):
     got = np.loadtxt(shaped)
     assert np.max(np.abs(expected - q)) > 1e-3  # the move is shaped
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
+
+
+# ---- the twin of a URDF arm ------------------------------------------------------------
+
+
+def test_twin_of_a_urdf_arm_matches_the_model_and_rings(tmp_path):
+    """The MuJoCo twin built from the FR3's URDF placement: MuJoCo's mass matrix and the flange
+    pose equal the core's (both from the same parameters, different code: MuJoCo's CRBA and
+    kinematics against tvist's), and a fast move of the shoulder rings the flange
+    accelerometer after the move stops."""
+    import dataclasses
+
+    from tvist.sim import FlexParams, Twin
+
+    path, base, tip = shipped_urdf("fr3")
+    arm = dataclasses.replace(tvist.robots.urdf_params(path, base, tip), max_payload_kg=3.0)
+    # Gear stiffness per joint for the 0.5 ms physics step: the wrists' tiny inertias (the
+    # payload's own inertia gives joint 7 3e-3 kg m²) keep their modes below ~1 kHz.
+    flex = FlexParams(
+        k1_nm_per_rad=(9e3, 9e3, 7e3, 7e3, 2e3, 2e3, 1e3),
+        k3_nm_per_rad3=(0.0,) * 7,
+        c0_nms_per_rad=(8.0, 8.0, 6.0, 6.0, 1.0, 1.0, 0.5),
+        c_load_per_nm=(0.0,) * 7,
+    )
+    payload = Payload(1.0, (0.0, 0.0, 0.05), (0.004, 0.004, 0.003, 0.0, 0.0, 0.0))
+    twin = Twin(
+        arm,
+        payload_kg=payload.mass_kg,
+        payload_com_m=payload.com_m,
+        flex=flex,
+        payload_inertia_kg_m2=payload.inertia_kg_m2,
+    )
+    robot = Robot(arm, payload)
+    rng = np.random.default_rng(2)
+    limits = arm.joint_limits_rad
+    for q in rng.uniform(limits[:, 0], limits[:, 1], (20, 7)):
+        m = robot.mass_matrix(q)
+        # 1e-10 of the largest entry: two exact algorithms in double precision.
+        assert np.max(np.abs(twin.mass_matrix(q) - m)) <= 1e-10 * np.max(np.abs(m))
+    dt_s = 0.002
+    t = np.arange(0.0, 1.0, dt_s)
+    s = np.clip(t / 0.4, 0.0, 1.0)
+    start = np.array([0.0, -0.3, 0.0, -2.0, 0.0, 1.8, 0.8])
+    q_ref = start + np.outer(s**3 * (10 - 15 * s + 6 * s**2), [0.0, 0.4, 0.0, 0.0, 0.0, 0.0, 0.0])
+    record = twin.run(q_ref, dt_s)
+    accel = np.asarray(record.actual_tool_accelerometer)
+    after_stop = accel[t > 0.45]
+    ringing = np.ptp(after_stop - after_stop.mean(axis=0), axis=0).max()
+    assert np.all(np.isfinite(accel)) and ringing > 1e-2, ringing
