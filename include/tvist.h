@@ -40,8 +40,8 @@ typedef enum TvistError {
     /* An array length that does not match the shaper (n_dof of tvist_shaper_reset). */
     TVIST_ERR_DIMENSION_MISMATCH = -5,
     /* A robot name not in the robot data (e-Series "ur3e", "ur5e", "ur10e", "ur16e", "ur20";
-     * CB-series "ur3", "ur5", "ur10"), or not "ur5e" for tvist_shaper_new_ur_map (the
-     * paper's map). */
+     * CB-series "ur3", "ur5", "ur10") nor a readable, valid robot file (*.json), or not
+     * "ur5e" for tvist_shaper_new_ur_map (the paper's map). */
     TVIST_ERR_UNKNOWN_ROBOT = -6,
     /* An internal error was caught at the boundary (a bug). Only free the handle after it. */
     TVIST_ERR_INTERNAL = -7,
@@ -133,9 +133,11 @@ int32_t tvist_shaper_new_ur_map(const char *robot_name, double payload_kg,
 /*
  * Shaper driven by the map in file map_json_path (any map file tvist writes:
  * `tvist fit-map`, DynamicMap.save, ModalMap.save; a "kind": "modal" file solves the
- * mass-matrix eigenproblem of its flexible joints every cycle) for UR robot `robot` (e-Series
- * "ur3e", "ur5e", "ur10e", "ur16e", "ur20" or CB-series "ur3", "ur5", "ur10") with a point
- * payload of payload_kg at payload_com_m (flange frame, m); shapes the robot's 6 joints sampled every dt_s seconds. The map must have been identified
+ * mass-matrix eigenproblem of its flexible joints every cycle) for robot `robot`: a UR name
+ * (e-Series "ur3e", "ur5e", "ur10e", "ur16e", "ur20" or CB-series "ur3", "ur5", "ur10") or
+ * the path of a robot file ending in ".json" (one robot, as `tvist robot-file` writes it from
+ * a URDF), with a point payload of payload_kg at payload_com_m (flange frame, m); shapes the
+ * robot's joints (all of them) sampled every dt_s seconds. The map must have been identified
  * on that robot (TVIST_ERR_ROBOT_MISMATCH otherwise; see allow_other_robot of the _ex form).
  * TVIST_ERR_MAP_FILE for a file that cannot be read or is not a valid map (the message names
  * the file and the field). Setup reads the file and samples the workspace (milliseconds).

@@ -78,8 +78,9 @@ public:
         return Shaper(out);
     }
 
-    /* The map in map_json_path (paper10 or modal map file) for UR robot `robot` (e-Series or
-     * CB-series, see TVIST_ERR_UNKNOWN_ROBOT) with a point payload. */
+    /* The map in map_json_path (paper10 or modal map file) for robot `robot` (a UR name, see
+     * TVIST_ERR_UNKNOWN_ROBOT, or a robot file *.json from `tvist robot-file`) with a point
+     * payload. */
     static Shaper from_map(const std::string &robot, double payload_kg,
                            const std::array<double, 3> &payload_com_m,
                            const std::string &map_json_path, double dt_s,

@@ -64,6 +64,7 @@ def write_map(map: DynamicMap | ModalMap, metadata: Any) -> str: ...
 def map_document(map: DynamicMap | ModalMap, metadata: Any) -> dict[str, Any]: ...
 def robot_names() -> list[str]: ...
 def robot_params(name: str) -> dict[str, Any]: ...
+def robot_file_params(path: str) -> dict[str, Any]: ...
 
 class Robot:
     def __init__(
@@ -79,6 +80,21 @@ class Robot:
         payload_inertia_kg_m2: Sequence[float] | npt.NDArray[np.float64] | None = None,
         name: str | None = None,
     ) -> None: ...
+    @staticmethod
+    def placed(
+        origin_xyz_m: npt.NDArray[np.float64],
+        origin_rpy_rad: npt.NDArray[np.float64],
+        axis: npt.NDArray[np.float64],
+        flange_xyz_m: Sequence[float] | npt.NDArray[np.float64],
+        flange_rpy_rad: Sequence[float] | npt.NDArray[np.float64],
+        mass_kg: Sequence[float] | npt.NDArray[np.float64],
+        com_m: npt.NDArray[np.float64],
+        inertia_kg_m2: npt.NDArray[np.float64],
+        payload_mass_kg: float = 0.0,
+        payload_com_m: Sequence[float] | npt.NDArray[np.float64] | None = None,
+        payload_inertia_kg_m2: Sequence[float] | npt.NDArray[np.float64] | None = None,
+        name: str | None = None,
+    ) -> Robot: ...
     @property
     def n_dof(self) -> int: ...
     @property

@@ -19,7 +19,8 @@
 //!
 //! The results equal the general pass to rounding (the sums are associated differently).
 
-use crate::robot::{rotate_pair, DhConstants, Moments, Twist};
+use crate::placement::apply3;
+use crate::robot::{rotate_pair, rotate_sym_full, Moments, StepConstants, Twist};
 
 /// The mass-free part of [`Moments`] (about the frame origin, in frame coordinates) in the
 /// form a turn about `z` acts on simply: `sum = E_xx + E_yy` (the inertia about `z`, kept by
@@ -148,8 +149,13 @@ impl AxialMoments {
     #[inline(always)]
     fn sum_after_carry(&self, step: &InertiaStep) -> f64 {
         let v = self;
+        if step.kind == KIND_ANY {
+            let mut moved = *v;
+            moved.carry_any(step);
+            return moved.sum;
+        }
         let moved = match step.twist {
-            Twist::None => v.sum,
+            Twist::None | Twist::Any => v.sum,
             Twist::Quarter(_) => v.e_xx() + v.zz,
             Twist::General => v.e_xx() + v.yz_block_twisted(step).0,
         };
@@ -172,19 +178,44 @@ impl AxialMoments {
             8 => self.carry::<TWIST_GENERAL, false, false>(step),
             9 => self.carry::<TWIST_GENERAL, false, true>(step),
             10 => self.carry::<TWIST_GENERAL, true, false>(step),
-            _ => self.carry::<TWIST_GENERAL, true, true>(step),
+            11 => self.carry::<TWIST_GENERAL, true, true>(step),
+            _ => self.carry_any(step),
         }
+    }
+
+    /// [`Self::carry`] for a step that is no DH step: `E ↦ R E Rᵀ + h' pᵀ + p h'ᵀ` with
+    /// `h' = R h` (the mass terms are in `body`), then the body added.
+    #[inline(always)]
+    fn carry_any(&mut self, step: &InertiaStep) {
+        let v = self;
+        let e = [v.e_xx(), v.e_yy(), v.zz, 0.5 * v.off2, v.xz, v.yz];
+        let e = rotate_sym_full(&e, &step.rot);
+        let h = apply3(&step.rot, &v.h);
+        let p = &step.shift;
+        let xx = e[0] + 2.0 * p[0] * h[0];
+        let yy = e[1] + 2.0 * p[1] * h[1];
+        let b = &step.body;
+        v.sum = xx + yy + b.sum;
+        v.diff = xx - yy + b.diff;
+        v.off2 = 2.0 * (e[3] + p[0] * h[1] + p[1] * h[0]) + b.off2;
+        v.zz = e[2] + 2.0 * p[2] * h[2] + b.zz;
+        v.xz = e[4] + p[0] * h[2] + p[2] * h[0] + b.xz;
+        v.yz = e[5] + p[1] * h[2] + p[2] * h[1] + b.yz;
+        v.h = [h[0] + b.h[0], h[1] + b.h[1], h[2] + b.h[2]];
     }
 }
 
 const TWIST_NONE: u8 = 0;
 const TWIST_QUARTER: u8 = 1;
 const TWIST_GENERAL: u8 = 2;
+/// The step kind of a step that is no DH step ([`Twist::Any`]).
+const KIND_ANY: u8 = 12;
 
 /// Setup-time constants of joint `k`'s step (frame `k + 1` into frame `k` before the turn).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct InertiaStep {
-    /// `4 · twist + 2 · (a != 0) + (d != 0)`, twist 0 none, 1 quarter, 2 general.
+    /// `4 · twist + 2 · (a != 0) + (d != 0)`, twist 0 none, 1 quarter, 2 general; or
+    /// [`KIND_ANY`] for a step that is no DH step.
     kind: u8,
     twist: Twist,
     a: f64,
@@ -195,6 +226,9 @@ pub(crate) struct InertiaStep {
     sin_alpha: f64,
     cos_2alpha: f64,
     sin_2alpha: f64,
+    /// The step's rotation and shift (read by [`KIND_ANY`] only).
+    rot: [f64; 9],
+    shift: [f64; 3],
     /// Body `k` (fixed to frame `k + 1`) moved into frame `k` as if it carried the mass of
     /// the whole composite `k..n` (`composite_mass_kg`): the frame change is affine in the
     /// moments for a given mass, so this is everything of the step that does not depend on
@@ -205,11 +239,11 @@ pub(crate) struct InertiaStep {
 impl InertiaStep {
     /// Joint `k`'s step: its DH constants, the moments of body `k` in frame `k + 1` and the
     /// mass of bodies `k..n`.
-    pub(crate) fn of(dh: &DhConstants, body: &Moments, composite_mass_kg: f64) -> InertiaStep {
+    pub(crate) fn of(dh: &StepConstants, body: &Moments, composite_mass_kg: f64) -> InertiaStep {
         let twist_index = match dh.twist {
             Twist::None => TWIST_NONE,
             Twist::Quarter(_) => TWIST_QUARTER,
-            Twist::General => TWIST_GENERAL,
+            Twist::General | Twist::Any => TWIST_GENERAL,
         };
         let sin_alpha = match dh.twist {
             Twist::Quarter(s) => s,
@@ -221,7 +255,12 @@ impl InertiaStep {
         };
         moved.move_to_parent(dh);
         InertiaStep {
-            kind: 4 * twist_index + 2 * u8::from(dh.a_m != 0.0) + u8::from(dh.d_m != 0.0),
+            kind: match dh.twist {
+                Twist::Any => KIND_ANY,
+                _ => 4 * twist_index + 2 * u8::from(dh.a_m != 0.0) + u8::from(dh.d_m != 0.0),
+            },
+            rot: dh.rot,
+            shift: dh.shift,
             twist: dh.twist,
             a: dh.a_m,
             two_a: 2.0 * dh.a_m,

@@ -39,6 +39,7 @@ pub mod map_file;
 pub mod modal_dynamics;
 pub mod modal_map;
 pub mod multimode;
+pub mod placement;
 pub mod prv;
 pub mod robot;
 #[cfg(feature = "json")]
@@ -58,8 +59,9 @@ pub use map_dynamics::MapDynamics;
 pub use modal_dynamics::ModalDynamics;
 pub use modal_map::{FlexJoint, LoadLaw, ModalMap};
 pub use multimode::{TvShaper, TvShaperConfig};
+pub use placement::{JointPlacement, Origin};
 pub use prv::prv;
-pub use robot::{DhJoint, RigidBody, Robot};
+pub use robot::{Chain, DhJoint, RigidBody, Robot};
 pub use robot_modes::{ModeLaw, RobotModes};
 pub use shaper::{ImpulseArray, Impulses, Mode, ShaperKind, SHAPER_NAMES};
 pub use tvist::ModeFilter;

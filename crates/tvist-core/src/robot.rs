@@ -1,9 +1,14 @@
-//! Rigid-body model of a serial revolute arm in standard DH form, with a payload.
+//! Rigid-body model of a serial revolute arm with a payload.
 //!
-//! Frame `i` (1-based) is `T_i = T_{i−1} · Rz(q_i) Tz(d_i) Tx(a_i) Rx(α_i)`; frame 0 is the
-//! base, frame `n` the flange. Joint `i` (0-based) turns about `z` of frame `i`; link `i`
-//! (0-based) is fixed to frame `i + 1`. Gravity is [`GRAVITY_M_S2`] along `−z` of the base.
-//! Everything is link side: no rotor inertia.
+//! The model runs on a chain of joint frames: frame `k + 1` is `T_{k+1} = T_k · Rz(q_k) S_k`
+//! with a fixed step `S_k`; joint `k` (0-based) turns about `z` of frame `k`, link `k` is
+//! fixed to frame `k + 1` and frame `n` is the flange. Two ways build it ([`Chain`]): standard
+//! DH parameters (`S_k = Tz(d_k) Tx(a_k) Rx(α_k)`, frame 0 the base), or joints placed as URDF
+//! places them ([`JointPlacement`]: an origin, then a turn about an axis), from which
+//! [`crate::placement`] derives the steps and the pose of frame 0 in the base. Gravity is
+//! [`GRAVITY_M_S2`] along `−z` of the base; joint 0 turns about that axis in every DH chain
+//! (and then nothing depends on `q_0`), about any axis in a placed one. Everything is link
+//! side: no rotor inertia.
 //!
 //! All per-call methods are allocation-free: they work in a workspace preallocated by
 //! [`Robot::new`] and write into caller buffers. A buffer of the wrong length returns
@@ -12,6 +17,7 @@
 
 use crate::error::{Error, Status};
 use crate::inertia_pass::{leading_joint_inertias, AxialMoments, InertiaStep, Turn};
+use crate::placement::{apply3, joint_frames, JointPlacement, Origin, Pose};
 use crate::sym_eigen::{sym_eigen, Matrix, MAX_DIM};
 
 /// Standard gravity used for gravity torques, m/s².
@@ -31,6 +37,29 @@ impl DhJoint {
             d_m,
             a_m,
             alpha_rad,
+        }
+    }
+}
+
+/// How the joints of an arm are placed, with the frames its links are given in.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Chain {
+    /// Standard DH: link `i` in DH frame `i + 1`, the payload in DH frame `n`.
+    Dh(Vec<DhJoint>),
+    /// URDF placement: link `i` in the frame of the link after joint `i` (its URDF link
+    /// frame), the payload in the flange frame, whose origin in the last link's frame is
+    /// `flange`.
+    Urdf {
+        joints: Vec<JointPlacement>,
+        flange: Origin,
+    },
+}
+
+impl Chain {
+    pub fn n_dof(&self) -> usize {
+        match self {
+            Chain::Dh(j) => j.len(),
+            Chain::Urdf { joints, .. } => joints.len(),
         }
     }
 }
@@ -220,11 +249,15 @@ impl Moments {
     /// Rx(α) r`. The turn `Rz(q_k)` follows in [`Self::turn_z`]; it leaves the inertia about
     /// `z` (`E_xx + E_yy`) unchanged.
     #[inline]
-    pub(crate) fn move_to_parent(&mut self, dh: &DhConstants) {
+    pub(crate) fn move_to_parent(&mut self, dh: &StepConstants) {
+        if let Twist::Any = dh.twist {
+            self.move_by(&dh.rot, &dh.shift);
+            return;
+        }
         let (m, h, e) = (self.mass_kg, &mut self.first_kg_m, &mut self.second_kg_m2);
         // Rx(α): the (y, z) plane turns.
         match dh.twist {
-            Twist::None => {}
+            Twist::None | Twist::Any => {}
             Twist::Quarter(s) => {
                 (e[1], e[2], e[5]) = (e[2], e[1], -e[5]);
                 (e[3], e[4]) = (-s * e[4], s * e[3]);
@@ -253,14 +286,36 @@ impl Moments {
         }
     }
 
+    /// Any rigid step `r ↦ p + R r`: `E ↦ R E Rᵀ`, `h ↦ R h`, then the shift by `p`:
+    /// `E += h pᵀ + p hᵀ + m p pᵀ`, `h += m p`.
+    fn move_by(&mut self, r: &[f64; 9], p: &[f64; 3]) {
+        let m = self.mass_kg;
+        let e = rotate_sym_full(&self.second_kg_m2, r);
+        let h = apply3(r, &self.first_kg_m);
+        self.second_kg_m2 = [
+            e[0] + p[0] * (2.0 * h[0] + m * p[0]),
+            e[1] + p[1] * (2.0 * h[1] + m * p[1]),
+            e[2] + p[2] * (2.0 * h[2] + m * p[2]),
+            e[3] + p[0] * h[1] + p[1] * h[0] + m * p[0] * p[1],
+            e[4] + p[0] * h[2] + p[2] * h[0] + m * p[0] * p[2],
+            e[5] + p[1] * h[2] + p[2] * h[1] + m * p[1] * p[2],
+        ];
+        self.first_kg_m = [h[0] + m * p[0], h[1] + m * p[1], h[2] + m * p[2]];
+    }
+
     /// `E_xx + E_yy` after [`Self::move_to_parent`] (the inertia about the parent's `z` axis,
     /// which the turn about that axis leaves unchanged), without forming the other entries:
     /// `Rx(α)` keeps `E_xx` and turns the `(y, z)` block; of the shift only `x` moves `E_xx`.
     #[inline]
-    fn z_inertia_in_parent(&self, dh: &DhConstants) -> f64 {
+    fn z_inertia_in_parent(&self, dh: &StepConstants) -> f64 {
+        if let Twist::Any = dh.twist {
+            let mut moved = *self;
+            moved.move_by(&dh.rot, &dh.shift);
+            return moved.second_kg_m2[0] + moved.second_kg_m2[1];
+        }
         let (m, h, e) = (self.mass_kg, &self.first_kg_m, &self.second_kg_m2);
         let e_yy = match dh.twist {
-            Twist::None => e[1],
+            Twist::None | Twist::Any => e[1],
             Twist::Quarter(_) => e[2],
             Twist::General => {
                 let mean = 0.5 * (e[1] + e[2]);
@@ -323,10 +378,17 @@ impl Momentum {
     /// As [`Moments::move_to_parent`]: `Rx(α)`, then the moment about the new origin gains
     /// `(a, 0, d) × linear`.
     #[inline]
-    fn move_to_parent(&mut self, dh: &DhConstants) {
+    fn move_to_parent(&mut self, dh: &StepConstants) {
+        if let Twist::Any = dh.twist {
+            let (n, f) = (apply3(&dh.rot, &self.moment), apply3(&dh.rot, &self.linear));
+            let p = &dh.shift;
+            self.moment = add3(&n, &cross3(p, &f));
+            self.linear = f;
+            return;
+        }
         let (n, f) = (&mut self.moment, &mut self.linear);
         match dh.twist {
-            Twist::None => {}
+            Twist::None | Twist::Any => {}
             Twist::Quarter(s) => {
                 (n[1], n[2]) = (-s * n[2], s * n[1]);
                 (f[1], f[2]) = (-s * f[2], s * f[1]);
@@ -381,12 +443,19 @@ pub(crate) enum Twist {
     Quarter(f64),
     /// Any other angle.
     General,
+    /// Not a DH step at all: any rotation and translation ([`StepConstants::rot`] and
+    /// [`StepConstants::shift`]).
+    Any,
 }
 
-/// Per-joint constants of the DH step `Tz(d) Tx(a) Rx(α)`.
+/// Per-joint constants of the fixed step `S_k` from joint frame `k` after its turn to frame
+/// `k + 1`: `r ↦ shift + rot r`. A DH step `Tz(d) Tx(a) Rx(α)` (`shift = (a, 0, d)`, `rot =
+/// Rx(α)`) also keeps its parameters for the passes specialised to it.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct DhConstants {
+pub(crate) struct StepConstants {
     pub(crate) twist: Twist,
+    pub(crate) rot: [f64; 9],
+    pub(crate) shift: [f64; 3],
     pub(crate) a_m: f64,
     pub(crate) d_m: f64,
     pub(crate) cos_alpha: f64,
@@ -395,8 +464,8 @@ pub(crate) struct DhConstants {
     pub(crate) sin_2alpha: f64,
 }
 
-impl DhConstants {
-    fn of(joint: &DhJoint) -> DhConstants {
+impl StepConstants {
+    fn of(joint: &DhJoint) -> StepConstants {
         let (s, c) = joint.alpha_rad.sin_cos();
         let twist = if joint.alpha_rad == 0.0 {
             Twist::None
@@ -405,8 +474,10 @@ impl DhConstants {
         } else {
             Twist::General
         };
-        DhConstants {
+        StepConstants {
             twist,
+            rot: [1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c],
+            shift: [joint.a_m, 0.0, joint.d_m],
             a_m: joint.a_m,
             d_m: joint.d_m,
             cos_alpha: c,
@@ -415,16 +486,65 @@ impl DhConstants {
             sin_2alpha: 2.0 * c * s,
         }
     }
+
+    /// Any rigid step; one that is exactly a DH step (a rotation about `x` only, no shift
+    /// along `y`: URDF joints placed along DH frames) keeps the specialised passes.
+    fn of_pose(pose: &Pose) -> StepConstants {
+        let (r, p) = (&pose.rot, &pose.pos);
+        let about_x = r[0] == 1.0 && r[1] == 0.0 && r[2] == 0.0 && r[3] == 0.0 && r[6] == 0.0;
+        if about_x && r[4] == r[8] && r[5] == -r[7] && p[1] == 0.0 {
+            let (c, s) = (r[4], r[7]);
+            let twist = if s == 0.0 && c == 1.0 {
+                Twist::None
+            } else if c.abs() <= 1e-15 && (s.abs() - 1.0).abs() <= 1e-15 {
+                Twist::Quarter(s.signum())
+            } else {
+                Twist::General
+            };
+            return StepConstants {
+                twist,
+                rot: *r,
+                shift: *p,
+                a_m: p[0],
+                d_m: p[2],
+                cos_alpha: c,
+                sin_alpha: s,
+                cos_2alpha: c * c - s * s,
+                sin_2alpha: 2.0 * c * s,
+            };
+        }
+        StepConstants {
+            twist: Twist::Any,
+            rot: *r,
+            shift: *p,
+            a_m: 0.0,
+            d_m: 0.0,
+            cos_alpha: 1.0,
+            sin_alpha: 0.0,
+            cos_2alpha: 1.0,
+            sin_2alpha: 0.0,
+        }
+    }
 }
 
 /// A serial revolute arm with link masses and a payload on the flange.
 #[derive(Debug, Clone)]
 pub struct Robot {
-    joints: Vec<DhJoint>,
-    dh: Vec<DhConstants>,
+    chain: Chain,
+    /// Per joint, the step to the next joint frame.
+    dh: Vec<StepConstants>,
+    /// Joint frame 0 in the base (the identity for a DH chain). Its `z` is vertical.
+    base: Pose,
+    /// The base's up direction in joint frame 0 (`(0, 0, ±1)` when joint 0 turns about the
+    /// gravity axis, as in every DH chain).
+    up_in_frame0: [f64; 3],
+    /// Joint 0's axis is not the gravity axis: its angle changes the gravity torques.
+    tilted_first_joint: bool,
     links: Vec<RigidBody>,
     payload: RigidBody,
-    /// `links` with the payload merged into the last one: what the dynamics use.
+    /// `links` in joint frames `1..=n` (link `k` in frame `k + 1`).
+    frame_links: Vec<RigidBody>,
+    /// `frame_links` with the payload merged into the last one: what the dynamics use.
     bodies: Vec<RigidBody>,
     /// [`Moments`] of `bodies[k]` in its own frame `k + 1`.
     moments: Vec<Moments>,
@@ -450,14 +570,35 @@ pub struct Robot {
 }
 
 impl Robot {
-    /// Validates and builds the model. `links[i]` is expressed in DH frame `i + 1`; the
-    /// payload in the flange frame `n`.
+    /// Validates and builds the model of a DH chain. `links[i]` is expressed in DH frame
+    /// `i + 1`; the payload in the flange frame `n`.
     pub fn new(
         joints: Vec<DhJoint>,
         links: Vec<RigidBody>,
         payload: RigidBody,
     ) -> Result<Robot, Error> {
-        let n = joints.len();
+        Robot::from_chain(Chain::Dh(joints), links, payload)
+    }
+
+    /// Validates and builds the model of joints placed as URDF places them: `links[i]` in the
+    /// link frame after joint `i` (centre of mass and inertia axes in that frame), `flange`
+    /// the flange frame's origin in the last link's frame, the payload in the flange frame.
+    pub fn from_placements(
+        joints: Vec<JointPlacement>,
+        flange: Origin,
+        links: Vec<RigidBody>,
+        payload: RigidBody,
+    ) -> Result<Robot, Error> {
+        Robot::from_chain(Chain::Urdf { joints, flange }, links, payload)
+    }
+
+    /// Validates and builds the model of `chain` (links in the frames it names).
+    pub fn from_chain(
+        chain: Chain,
+        links: Vec<RigidBody>,
+        payload: RigidBody,
+    ) -> Result<Robot, Error> {
+        let n = chain.n_dof();
         if n == 0 {
             return Err(Error::InvalidParameter(
                 "a robot needs at least one joint".into(),
@@ -470,27 +611,45 @@ impl Robot {
                 got: links.len(),
             });
         }
-        for (i, j) in joints.iter().enumerate() {
-            if !(j.d_m.is_finite() && j.a_m.is_finite() && j.alpha_rad.is_finite()) {
-                return Err(Error::InvalidParameter(format!(
-                    "joint {i}: DH parameters must be finite"
-                )));
-            }
-        }
         for (i, link) in links.iter().enumerate() {
             link.validate(&format!("link {i}"))?;
         }
         payload.validate("payload")?;
+        let (dh, base, bodies) = match &chain {
+            Chain::Dh(joints) => {
+                for (i, j) in joints.iter().enumerate() {
+                    if !(j.d_m.is_finite() && j.a_m.is_finite() && j.alpha_rad.is_finite()) {
+                        return Err(Error::InvalidParameter(format!(
+                            "joint {i}: DH parameters must be finite"
+                        )));
+                    }
+                }
+                let steps = joints.iter().map(StepConstants::of).collect();
+                (steps, Pose::IDENTITY, links.clone())
+            }
+            Chain::Urdf { joints, flange } => {
+                let frames = joint_frames(joints, flange, &links)?;
+                let steps = frames.steps.iter().map(StepConstants::of_pose).collect();
+                (steps, frames.base, frames.bodies)
+            }
+        };
+        // R_baseᵀ e_z: the third row of the base rotation.
+        let up_in_frame0 = [base.rot[6], base.rot[7], base.rot[8]];
+        let tilted_first_joint = up_in_frame0[0] != 0.0 || up_in_frame0[1] != 0.0;
         let mut robot = Robot {
-            dh: joints.iter().map(DhConstants::of).collect(),
-            bodies: links.clone(),
+            dh,
+            base,
+            up_in_frame0,
+            tilted_first_joint,
+            frame_links: bodies.clone(),
+            bodies,
             moments: vec![Moments::ZERO; n],
             fixed_from: n,
             fixed_composite: Moments::ZERO,
             fixed_before_turn: Moments::ZERO,
             inertia_steps: Vec::with_capacity(n),
             fixed_start: AxialMoments::ZERO,
-            joints,
+            chain,
             links,
             payload,
             ws: Workspace::new(n),
@@ -529,9 +688,9 @@ impl Robot {
     }
 
     fn merge_payload(&mut self) {
-        let n = self.joints.len();
-        self.bodies.copy_from_slice(&self.links);
-        self.bodies[n - 1] = self.links[n - 1].combined(&self.payload);
+        let n = self.dh.len();
+        self.bodies.copy_from_slice(&self.frame_links);
+        self.bodies[n - 1] = self.frame_links[n - 1].combined(&self.payload);
         for (m, b) in self.moments.iter_mut().zip(&self.bodies) {
             *m = Moments::of(b);
         }
@@ -580,13 +739,23 @@ impl Robot {
     }
 
     pub fn n_dof(&self) -> usize {
-        self.joints.len()
+        self.dh.len()
     }
 
-    pub fn joints(&self) -> &[DhJoint] {
-        &self.joints
+    /// The DH parameters of a DH chain (`None` for URDF placement).
+    pub fn joints(&self) -> Option<&[DhJoint]> {
+        match &self.chain {
+            Chain::Dh(joints) => Some(joints),
+            Chain::Urdf { .. } => None,
+        }
     }
 
+    /// How the joints are placed, as given.
+    pub fn chain(&self) -> &Chain {
+        &self.chain
+    }
+
+    /// The links as given (in the frames [`Chain`] names).
     pub fn links(&self) -> &[RigidBody] {
         &self.links
     }
@@ -601,17 +770,28 @@ impl Robot {
     /// and `v = −sin q R e_x + cos q R e_y`, the new columns are `u`, `cos α v + sin α R e_z`
     /// and `−sin α v + cos α R e_z`; the origin moves by `a u + d R e_z`.
     fn forward(&mut self, q: &[f64]) -> bool {
-        if q.len() != self.joints.len() {
+        if q.len() != self.dh.len() {
             return false;
         }
         let ws = &mut self.ws;
-        let mut r = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
-        let mut p = [0.0; 3];
+        let mut r = self.base.rot;
+        let mut p = self.base.pos;
         ws.rot[0] = r;
         ws.pos[0] = p;
         let frames = ws.rot[1..].iter_mut().zip(&mut ws.pos[1..]);
         for ((qk, dh), (rot, pos)) in q.iter().zip(&self.dh).zip(frames) {
             let (st, ct) = crate::trig::sin_cos(*qk);
+            if let Twist::Any = dh.twist {
+                // R Rz(q) then the step: p += R Rz(q) shift, R ← R Rz(q) rot.
+                let turn = [ct, -st, 0.0, st, ct, 0.0, 0.0, 0.0, 1.0];
+                let turned = mul3(&r, &turn);
+                let moved = apply3(&turned, &dh.shift);
+                p = add3(&p, &moved);
+                r = mul3(&turned, &dh.rot);
+                *rot = r;
+                *pos = p;
+                continue;
+            }
             let (ca, sa) = (dh.cos_alpha, dh.sin_alpha);
             let mut u = [0.0; 3];
             let mut v = [0.0; 3];
@@ -642,7 +822,8 @@ impl Robot {
     /// base's up direction in frame `k` (`∂V/∂q_k = g e_z · (z_k × h)`). Off the diagonal,
     /// `M[k, j]` is the `z` moment about joint `k` of the spatial momentum of composite `j`
     /// turning about joint `j` at unit rate, carried down with the composite. Nothing depends
-    /// on `q_0` (joint 0 turns the arm about the gravity axis), so its sine is never taken;
+    /// on `q_0` when joint 0 turns the arm about the gravity axis, so its sine is then never
+    /// taken (a first joint off that axis turns the gravity torques: its sine is taken for them);
     /// the composite of the bodies beyond `fixed_from` is a constant formed at setup
     /// (their joints turn nothing that matters), so their sines are not taken either: one
     /// `sin_cos` per joint `1..fixed_from`, no world transforms.
@@ -656,7 +837,7 @@ impl Robot {
         mut mass: Option<&mut [f64]>,
         mut tau_g: Option<&mut [f64]>,
     ) {
-        let n = self.joints.len();
+        let n = self.dh.len();
         if !q.iter().all(|v| v.is_finite()) {
             let nan = f64::NAN;
             for k in 0..joints {
@@ -681,17 +862,25 @@ impl Robot {
             (n, Moments::ZERO)
         };
         let ws = &mut self.ws;
-        crate::trig::sin_cos_each(&q[1..start], &mut ws.sin_cos[1..start]);
+        // q_0 matters only to the gravity torques of a first joint off the gravity axis.
+        let tilted = self.tilted_first_joint && tau_g.is_some();
+        let first = usize::from(!tilted);
+        crate::trig::sin_cos_each(&q[first..start], &mut ws.sin_cos[first..start]);
         if tau_g.is_some() {
-            // u_{k+1} = Rx(α_k)ᵀ Rz(q_k)ᵀ u_k from u_0 = e_z (Rz(q_0) leaves e_z as it is).
-            let mut u = [0.0, 0.0, 1.0];
+            // u_{k+1} = S_kᵀ Rz(q_k)ᵀ u_k from u_0, the base's up in frame 0 (Rz(q_0) leaves
+            // it as it is when it is the axis).
+            let mut u = self.up_in_frame0;
             for k in 1..joints {
-                if k > 1 {
+                if k > 1 || tilted {
                     let (s, c) = ws.sin_cos[k - 1];
                     (u[0], u[1]) = rotate_pair(u[0], u[1], c, -s);
                 }
                 let dh = &self.dh[k - 1];
-                (u[1], u[2]) = rotate_pair(u[1], u[2], dh.cos_alpha, -dh.sin_alpha);
+                if let Twist::Any = dh.twist {
+                    u = apply3(&transpose3(&dh.rot), &u);
+                } else {
+                    (u[1], u[2]) = rotate_pair(u[1], u[2], dh.cos_alpha, -dh.sin_alpha);
+                }
                 ws.up[k] = u;
             }
         }
@@ -718,7 +907,7 @@ impl Robot {
             .zip(&ws.sin_cos[..joints]);
         for (k, ((body, dh), &sc)) in read.enumerate().rev() {
             composite.add(body);
-            if k == 0 && mass.is_none() {
+            if k == 0 && mass.is_none() && !tilted {
                 // Joint 0's inertia alone (its gravity torque is 0): no full frame change.
                 if let Some(out) = inertia.as_deref_mut() {
                     out[0] = composite.z_inertia_in_parent(dh);
@@ -745,8 +934,13 @@ impl Robot {
             }
             if k == 0 {
                 if let Some(t) = tau_g.as_deref_mut() {
-                    // Joint 0 turns about the gravity axis.
-                    t[0] = 0.0;
+                    t[0] = if tilted {
+                        composite.turn_z(sc);
+                        let (h, u) = (&composite.first_kg_m, &self.up_in_frame0);
+                        GRAVITY_M_S2 * (u[1] * h[0] - u[0] * h[1])
+                    } else {
+                        0.0 // joint 0 turns about the gravity axis
+                    };
                 }
                 break;
             }
@@ -770,7 +964,7 @@ impl Robot {
         if !self.forward(q) {
             return Status::BAD_LENGTH;
         }
-        let n = self.joints.len();
+        let n = self.dh.len();
         let (r, p) = (&self.ws.rot[n], &self.ws.pos[n]);
         *out = [
             r[0], r[1], r[2], p[0], r[3], r[4], r[5], p[1], r[6], r[7], r[8], p[2], 0.0, 0.0, 0.0,
@@ -782,7 +976,7 @@ impl Robot {
     /// Geometric Jacobian of the flange origin in the base frame, row-major `6 × n` with rows
     /// `[linear velocity; angular velocity]`.
     pub fn jacobian(&mut self, q: &[f64], out: &mut [f64]) -> Status {
-        let n = self.joints.len();
+        let n = self.dh.len();
         if out.len() != 6 * n || !self.forward(q) {
             return Status::BAD_LENGTH;
         }
@@ -801,7 +995,7 @@ impl Robot {
 
     /// Joint-space inertia matrix `M(q)` (composite rigid body algorithm), row-major `n × n`.
     pub fn mass_matrix(&mut self, q: &[f64], out: &mut [f64]) -> Status {
-        let n = self.joints.len();
+        let n = self.dh.len();
         self.leading_mass_matrix_and_gravity(q, n, out, None)
     }
 
@@ -813,7 +1007,7 @@ impl Robot {
 
     /// Gravity torques `τ_g(q) = ∂V/∂q` (the torques that hold the arm still), N m.
     pub fn gravity_torque(&mut self, q: &[f64], out: &mut [f64]) -> Status {
-        let n = self.joints.len();
+        let n = self.dh.len();
         if out.len() != n || q.len() != n {
             return Status::BAD_LENGTH;
         }
@@ -829,7 +1023,7 @@ impl Robot {
         inertia: &mut [f64],
         tau_g: Option<&mut [f64]>,
     ) -> Status {
-        let n = self.joints.len();
+        let n = self.dh.len();
         if !Self::lengths_ok(n, q, inertia, n, &tau_g) {
             return Status::BAD_LENGTH;
         }
@@ -851,7 +1045,7 @@ impl Robot {
         inertia: &mut [f64],
         tau_g: Option<&mut [f64]>,
     ) -> Status {
-        let n = self.joints.len();
+        let n = self.dh.len();
         if !Self::lengths_ok(n, q, inertia, joints, &tau_g) {
             return Status::BAD_LENGTH;
         }
@@ -886,7 +1080,7 @@ impl Robot {
     /// inlined next to the general pass, the general pass (with gravity) ran slower.
     #[inline(never)]
     fn inertia_only_pass(&mut self, q: &[f64], out: &mut [f64]) {
-        let n = self.joints.len();
+        let n = self.dh.len();
         let (top, start) = if out.len() <= self.fixed_from {
             (self.fixed_from - 1, &self.fixed_start)
         } else {
@@ -907,7 +1101,7 @@ impl Robot {
         mass: &mut [f64],
         tau_g: Option<&mut [f64]>,
     ) -> Status {
-        let n = self.joints.len();
+        let n = self.dh.len();
         let tau_ok = tau_g.as_ref().is_none_or(|t| t.len() == n);
         if mass.len() != n * n || q.len() != n || joints > n || !tau_ok {
             return Status::BAD_LENGTH;
@@ -922,7 +1116,7 @@ impl Robot {
     /// bounds the distance of body `k`'s centre of mass from the origin of joint `i` by the
     /// triangle inequality along the chain (`Σ √(a² + d²)` plus `|com|`).
     pub fn joint_inertia_upper_bound(&self) -> Vec<f64> {
-        (0..self.joints.len())
+        (0..self.dh.len())
             .map(|i| {
                 self.bodies_beyond(i)
                     .map(|(b, rho)| {
@@ -936,7 +1130,7 @@ impl Robot {
 
     /// An upper bound of `|τ_g,i|` over all configurations, N m (`g Σ_{k≥i} m_k ρ_k`).
     pub fn gravity_torque_upper_bound(&self) -> Vec<f64> {
-        (0..self.joints.len())
+        (0..self.dh.len())
             .map(|i| {
                 let moment: f64 = self.bodies_beyond(i).map(|(b, rho)| b.mass_kg * rho).sum();
                 GRAVITY_M_S2 * moment
@@ -946,17 +1140,13 @@ impl Robot {
 
     /// Bodies `k >= i` with `ρ_k`, a bound on the distance of their centre of mass from the
     /// origin of joint `i` over all configurations (triangle inequality along the chain:
-    /// `Σ √(a² + d²)` of the joints up to `k`, plus `|com_k|`).
+    /// the step lengths `|shift|` of the joints up to `k`, plus `|com_k|`).
     fn bodies_beyond(&self, i: usize) -> impl Iterator<Item = (&RigidBody, f64)> {
         let mut reach = 0.0;
-        self.joints
-            .iter()
-            .zip(&self.bodies)
-            .skip(i)
-            .map(move |(j, b)| {
-                reach += j.a_m.hypot(j.d_m);
-                (b, reach + dot3(&b.com_m, &b.com_m).sqrt())
-            })
+        self.dh.iter().zip(&self.bodies).skip(i).map(move |(j, b)| {
+            reach += dot3(&j.shift, &j.shift).sqrt();
+            (b, reach + dot3(&b.com_m, &b.com_m).sqrt())
+        })
     }
 }
 
@@ -965,6 +1155,33 @@ impl Robot {
 #[inline]
 fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+#[inline]
+fn add3(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+fn mul3(a: &[f64; 9], b: &[f64; 9]) -> [f64; 9] {
+    let mut c = [0.0; 9];
+    for i in 0..3 {
+        for j in 0..3 {
+            c[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
+        }
+    }
+    c
+}
+
+fn transpose3(a: &[f64; 9]) -> [f64; 9] {
+    [a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8]]
+}
+
+/// `R E Rᵀ` of the symmetric `E = [xx, yy, zz, xy, xz, yz]`, in the same form.
+#[inline]
+pub(crate) fn rotate_sym_full(e: &[f64; 6], r: &[f64; 9]) -> [f64; 6] {
+    let full = sym_from_six(e);
+    let t = mul3(&mul3(r, &full), &transpose3(r));
+    [t[0], t[4], t[8], t[1], t[2], t[5]]
 }
 
 #[inline]

@@ -1,13 +1,20 @@
-//! Robot parameters from the crate's robot-data file (feature `json`).
+//! Robot parameters from robot-data files (feature `json`).
 //!
 //! The UR e-Series parameters live in exactly one place, `data/ur_e_series.json` in this crate
 //! (schema in its `conventions` field). This module embeds that file, parses it once, and
 //! turns one of its `robots` entries into a [`RobotEntry`] (every field) or into the joints
 //! and links of a [`Robot`]. The Python package reads the same parsed entries through its
-//! bindings. Setup-time only: parsing allocates.
+//! bindings. A robot file ([`robot_file`]) is a document of the same schema holding one
+//! robot. Setup-time only: parsing allocates.
+//!
+//! An entry places its joints either by standard DH parameters (`"dh": {"d", "a",
+//! "alpha"}`, links in DH frame `i + 1`) or as URDF places them (`"joints": [{"origin_xyz_m",
+//! "origin_rpy_rad", "axis"}, …]` and `"flange": {"origin_xyz_m", "origin_rpy_rad"}`, links in
+//! the link frame after joint `i`), never both (see [`Chain`]).
 
 use crate::error::Error;
-use crate::robot::{DhJoint, RigidBody, Robot};
+use crate::placement::{JointPlacement, Origin};
+use crate::robot::{Chain, DhJoint, RigidBody, Robot};
 use serde_json::Value;
 use std::sync::OnceLock;
 
@@ -39,8 +46,9 @@ pub struct RobotEntry {
     pub description: String,
     pub source: String,
     pub inertia_source: String,
-    pub joints: Vec<DhJoint>,
-    /// Link `i` in DH frame `i + 1` of the chain (mass, centre of mass, inertia about it).
+    /// How the joints are placed.
+    pub chain: Chain,
+    /// Link `i` in the frame the chain names (mass, centre of mass, inertia about it).
     pub links: Vec<RigidBody>,
     /// `[lower, upper]` per joint, rad.
     pub joint_limits_rad: Vec<[f64; 2]>,
@@ -62,12 +70,13 @@ pub struct InertiaCylinders {
 impl RobotEntry {
     /// Number of joints.
     pub fn n_dof(&self) -> usize {
-        self.joints.len()
+        self.chain.n_dof()
     }
 
     /// The rigid-body model of this arm with `payload` on the flange, named after the entry.
     pub fn robot(&self, payload: RigidBody) -> Result<Robot, Error> {
-        Ok(Robot::new(self.joints.clone(), self.links.clone(), payload)?.with_name(&self.name))
+        let robot = Robot::from_chain(self.chain.clone(), self.links.clone(), payload)?;
+        Ok(robot.with_name(&self.name))
     }
 }
 
@@ -105,8 +114,8 @@ fn text(value: Option<&Value>, what: &str) -> Result<String, Error> {
 /// Every field of robot `name` in robot-data document `json` (see [`robot_chain`] for the
 /// chain; the other fields are required too).
 pub fn robot_entry(json: &str, name: &str) -> Result<RobotEntry, Error> {
-    let (joints, links) = robot_chain(json, name)?;
-    let n = joints.len();
+    let (chain, links) = robot_links(json, name)?;
+    let n = chain.n_dof();
     let doc = document(json)?;
     let entry = &doc["robots"][name];
     let field = |key: &str| entry.get(key);
@@ -147,7 +156,7 @@ pub fn robot_entry(json: &str, name: &str) -> Result<RobotEntry, Error> {
         description: text(field("description"), &what("description"))?,
         source: text(field("source"), &what("source"))?,
         inertia_source: text(field("inertia_source"), &what("inertia_source"))?,
-        joints,
+        chain,
         links,
         joint_limits_rad: rows::<2>(field("joint_limits_rad"), n, &what("joint_limits_rad"))?,
         max_velocity_rad_s: numbers(field("max_velocity_rad_s"), n, &what("max_velocity_rad_s"))?,
@@ -211,11 +220,57 @@ fn rows<const N: usize>(
         .collect()
 }
 
-/// Joints and links of robot `name` in robot-data document `json`.
-///
-/// The joint count is that of `dh.d`; every other per-joint field must match it. Values are
-/// taken as written (the [`Robot`] constructor checks that they are physical).
+/// The one robot of robot file `path` (a robot-data document with exactly one entry), every
+/// field read as for the embedded file.
+pub fn robot_file(path: &std::path::Path) -> Result<RobotEntry, Error> {
+    let shown = path.display();
+    let json = std::fs::read_to_string(path)
+        .map_err(|e| invalid(format!("cannot read robot file {shown}: {e}")))?;
+    let names = robot_names(&json).map_err(|e| invalid(format!("{shown}: {e}")))?;
+    match names.as_slice() {
+        [name] => robot_entry(&json, name).map_err(|e| invalid(format!("{shown}: {e}"))),
+        _ => Err(invalid(format!(
+            "robot file {shown} must hold exactly one robot, found {names:?}"
+        ))),
+    }
+}
+
+/// DH joints and links of robot `name` in robot-data document `json` (an error for an entry
+/// placed by `joints`: see [`robot_links`]).
 pub fn robot_chain(json: &str, name: &str) -> Result<(Vec<DhJoint>, Vec<RigidBody>), Error> {
+    match robot_links(json, name)? {
+        (Chain::Dh(joints), links) => Ok((joints, links)),
+        _ => Err(invalid(format!(
+            "{name}: joints are placed by 'joints' (URDF form), not by DH parameters"
+        ))),
+    }
+}
+
+/// A list of `len` objects at `value`, named `what` in errors.
+fn objects<'a>(value: Option<&'a Value>, what: &str) -> Result<&'a Vec<Value>, Error> {
+    value
+        .and_then(Value::as_array)
+        .filter(|list| list.iter().all(Value::is_object))
+        .ok_or_else(|| invalid(format!("{what} must be a list of objects")))
+}
+
+/// An `{"origin_xyz_m", "origin_rpy_rad"}` object.
+fn origin(value: &Value, what: &str) -> Result<Origin, Error> {
+    let three = |key: &str| -> Result<[f64; 3], Error> {
+        let v = numbers(value.get(key), 3, &format!("{what}.{key}"))?;
+        Ok([v[0], v[1], v[2]])
+    };
+    Ok(Origin::new(
+        three("origin_xyz_m")?,
+        three("origin_rpy_rad")?,
+    ))
+}
+
+/// The chain and links of robot `name` in robot-data document `json`.
+///
+/// The joint count is that of `dh.d` (or of `joints`); every other per-joint field must match
+/// it. Values are taken as written (the [`Robot`] constructor checks that they are physical).
+pub fn robot_links(json: &str, name: &str) -> Result<(Chain, Vec<RigidBody>), Error> {
     let doc = document(json)?;
     let entry = doc.get("robots").and_then(|r| r.get(name)).ok_or_else(|| {
         invalid(format!(
@@ -223,6 +278,45 @@ pub fn robot_chain(json: &str, name: &str) -> Result<(Vec<DhJoint>, Vec<RigidBod
             robot_names(json).unwrap_or_default()
         ))
     })?;
+    match (entry.get("dh"), entry.get("joints")) {
+        (Some(_), Some(_)) => {
+            return Err(invalid(format!(
+                "{name}: give either 'dh' or 'joints', not both"
+            )))
+        }
+        (None, Some(joints)) => {
+            let list = objects(Some(joints), &format!("{name}: joints"))?;
+            let placed = list
+                .iter()
+                .enumerate()
+                .map(|(i, j)| {
+                    let what = format!("{name}: joints[{i}]");
+                    let axis = numbers(j.get("axis"), 3, &format!("{what}.axis"))?;
+                    Ok(JointPlacement::new(
+                        origin(j, &what)?,
+                        [axis[0], axis[1], axis[2]],
+                    ))
+                })
+                .collect::<Result<Vec<_>, Error>>()?;
+            let flange = match entry.get("flange") {
+                Some(f) if f.is_object() => origin(f, &format!("{name}: flange"))?,
+                _ => {
+                    return Err(invalid(format!(
+                        "{name}: flange must be an object {{origin_xyz_m, origin_rpy_rad}}"
+                    )))
+                }
+            };
+            let links = links(entry, name, placed.len())?;
+            return Ok((
+                Chain::Urdf {
+                    joints: placed,
+                    flange,
+                },
+                links,
+            ));
+        }
+        _ => {}
+    }
     let dh = entry.get("dh");
     let n = dh
         .and_then(|d| d.get("d"))
@@ -236,6 +330,12 @@ pub fn robot_chain(json: &str, name: &str) -> Result<(Vec<DhJoint>, Vec<RigidBod
         n,
         &format!("{name}: dh.alpha"),
     )?;
+    let joints = (0..n).map(|i| DhJoint::new(d[i], a[i], alpha[i])).collect();
+    Ok((Chain::Dh(joints), links(entry, name, n)?))
+}
+
+/// The `n` links of entry `name` (mass, centre of mass, inertia).
+fn links(entry: &Value, name: &str, n: usize) -> Result<Vec<RigidBody>, Error> {
     let mass = numbers(entry.get("mass_kg"), n, &format!("{name}: mass_kg"))?;
     let com = rows::<3>(entry.get("com_m"), n, &format!("{name}: com_m"))?;
     let inertia = rows::<6>(
@@ -243,15 +343,13 @@ pub fn robot_chain(json: &str, name: &str) -> Result<(Vec<DhJoint>, Vec<RigidBod
         n,
         &format!("{name}: inertia_kg_m2"),
     )?;
-    let joints = (0..n).map(|i| DhJoint::new(d[i], a[i], alpha[i])).collect();
-    let links = (0..n)
+    Ok((0..n)
         .map(|i| RigidBody {
             mass_kg: mass[i],
             com_m: com[i],
             inertia_kg_m2: inertia[i],
         })
-        .collect();
-    Ok((joints, links))
+        .collect())
 }
 
 /// UR e-Series robot `name` (`"ur3e"`, `"ur5e"`, …) from the embedded parameter file, with
@@ -287,6 +385,58 @@ mod tests {
                 com_m: [0.1, 0.0, 0.0],
                 inertia_kg_m2: [0.01, 0.02, 0.02, 0.0, 0.0, 0.0],
             }]
+        );
+        Ok(())
+    }
+
+    const ONE_PLACED_JOINT: &str = r#"{"schema_version": 1, "robots": {"arm": {
+        "joints": [{"origin_xyz_m": [0, 0, 0.1], "origin_rpy_rad": [0, 0, 0.3],
+                    "axis": [0, 0, 1]}],
+        "flange": {"origin_xyz_m": [0.2, 0, 0], "origin_rpy_rad": [0.5, 0, 0]},
+        "mass_kg": [2.0], "com_m": [[0.1, 0.0, 0.0]],
+        "inertia_kg_m2": [[0.01, 0.02, 0.02, 0.0, 0.0, 0.0]]}}}"#;
+
+    #[test]
+    fn reads_joints_placed_as_urdf_places_them() -> Result<(), Error> {
+        let (chain, links) = robot_links(ONE_PLACED_JOINT, "arm")?;
+        let joint = JointPlacement::new(
+            Origin::new([0.0, 0.0, 0.1], [0.0, 0.0, 0.3]),
+            [0.0, 0.0, 1.0],
+        );
+        let flange = Origin::new([0.2, 0.0, 0.0], [0.5, 0.0, 0.0]);
+        assert_eq!(
+            chain,
+            Chain::Urdf {
+                joints: vec![joint],
+                flange
+            }
+        );
+        assert_eq!(links[0].mass_kg, 2.0);
+        let msg = |json: &str| match robot_links(json, "arm") {
+            Ok(_) => String::from("accepted"),
+            Err(e) => e.to_string(),
+        };
+        let both = ONE_PLACED_JOINT.replace(r#""joints""#, r#""dh": {}, "joints""#);
+        assert!(
+            msg(&both).contains("either 'dh' or 'joints'"),
+            "{}",
+            msg(&both)
+        );
+        let no_flange = ONE_PLACED_JOINT.replace(r#""flange""#, r#""tool""#);
+        assert!(
+            msg(&no_flange).contains("flange must be an object"),
+            "{}",
+            msg(&no_flange)
+        );
+        let bad_axis = ONE_PLACED_JOINT.replace("[0, 0, 1]", "[0, 1]");
+        assert!(
+            msg(&bad_axis).contains("joints[0].axis has 2 entries"),
+            "{}",
+            msg(&bad_axis)
+        );
+        assert!(
+            robot_chain(ONE_PLACED_JOINT, "arm").is_err(),
+            "not a DH chain"
         );
         Ok(())
     }

@@ -65,14 +65,21 @@ fn modal_map_provider_and_shaper_never_allocate() {
     });
     assert_eq!(n, 0, "ModalMap evaluation allocated {n} times");
 
-    let provider =
-        ModalDynamics::new(robot_support::ur_robot("ur5e", 5.0), map).expect("valid map");
     let mut rng = robot_support::Rng(11);
     let poses: Vec<Vec<f64>> = (0..200).map(|_| rng.pose(6)).collect();
-    alloc_support::assert_robot_provider_never_allocates(
-        provider,
-        ShaperKind::Zv,
-        &poses,
-        "ModalDynamics",
-    );
+    // The DH chain and the same arm placed as URDF places it (DH steps, general steps).
+    for robot in [
+        robot_support::ur_robot("ur5e", 5.0),
+        robot_support::ur_robot_placed("ur5e", 5.0, &[]),
+        robot_support::ur_robot_placed("ur5e", 5.0, &robot_support::GENERAL_TURNS),
+        robot_support::ur_robot_tilted("ur5e", 5.0),
+    ] {
+        let provider = ModalDynamics::new(robot, map.clone()).expect("valid map");
+        alloc_support::assert_robot_provider_never_allocates(
+            provider,
+            ShaperKind::Zv,
+            &poses,
+            "ModalDynamics",
+        );
+    }
 }

@@ -18,7 +18,7 @@ use tvist_core::dynmap::PAPER_MAP_ROBOT;
 use tvist_core::error::N_STATUS_FLAGS;
 use tvist_core::map_file::{MapFile, MapForm};
 use tvist_core::robot::Robot;
-use tvist_core::robot_data::{ur_e_series_entries, RobotEntry};
+use tvist_core::robot_data::{robot_file, ur_e_series_entries, RobotEntry};
 use tvist_core::{
     ConstantModes, DynamicMap, Interpolation, MapDynamics, ModalDynamics, Mode, Provider,
     RigidBody, ShaperKind, Status, StatusCounter, TvShaper, TvShaperConfig,
@@ -279,24 +279,34 @@ fn provider_from_file(robot: Robot, path: &str, allow_other_robot: bool) -> Resu
     .map_err(|e| fail_with(&e))
 }
 
-/// The robot data entry (e-Series or CB-series) named by C string `robot_name` (setup errors recorded).
+/// The robot named by C string `robot_name`: an entry of the robot data (e-Series or
+/// CB-series) or, for a name ending in `.json`, the one robot of that robot file (as
+/// `tvist robot-file` writes it). Setup errors recorded.
 ///
 /// # Safety
 /// `robot_name` is non-null and NUL-terminated.
-unsafe fn robot_entry(robot_name: *const c_char) -> Result<&'static RobotEntry, i32> {
+unsafe fn robot_entry(robot_name: *const c_char) -> Result<RobotEntry, i32> {
     let entries = ur_e_series_entries().map_err(|e| fail_with(&e))?;
     // SAFETY: forwarded from the caller.
     let name = unsafe { c_str(robot_name) };
+    if let Some(path) = name.filter(|n| n.ends_with(".json")) {
+        return robot_file(Path::new(path))
+            .map_err(|e| fail(TVIST_ERR_UNKNOWN_ROBOT, e.to_string()));
+    }
     entries
         .iter()
         .find(|e| Some(e.name.as_str()) == name)
+        .cloned()
         .ok_or_else(|| {
             let known: Vec<&str> = entries.iter().map(|e| e.name.as_str()).collect();
             // SAFETY: forwarded from the caller.
             let shown = unsafe { quoted(robot_name) };
             fail(
                 TVIST_ERR_UNKNOWN_ROBOT,
-                format!("unknown robot {shown}; known: {}", known.join(", ")),
+                format!(
+                    "unknown robot {shown}; known: {} or a robot file (*.json)",
+                    known.join(", ")
+                ),
             )
         })
 }
@@ -448,9 +458,10 @@ pub unsafe extern "C" fn tvist_shaper_new_ur_map(
 
 /// Creates a shaper driven by the map in file `map_json_path` (any map file tvist writes:
 /// `tvist fit-map`, `DynamicMap.save`, `ModalMap.save`; a `"kind": "modal"` file drives the
-/// modal provider, which solves the mass-matrix eigenproblem every cycle) for UR robot
-/// `robot_name` (e-Series `"ur3e"`, `"ur5e"`, `"ur10e"`, `"ur16e"`, `"ur20"` or CB-series
-/// `"ur3"`, `"ur5"`, `"ur10"`) with a point payload of `payload_kg` at
+/// modal provider, which solves the mass-matrix eigenproblem every cycle) for robot
+/// `robot_name` (e-Series `"ur3e"`, `"ur5e"`, `"ur10e"`, `"ur16e"`, `"ur20"`, CB-series
+/// `"ur3"`, `"ur5"`, `"ur10"`, or the path of a robot file ending in `.json`) with a point
+/// payload of `payload_kg` at
 /// `payload_com_m` (flange frame, m), shaping its joints sampled every `dt_s` seconds.
 ///
 /// Returns as [`tvist_shaper_new_constant`]; `TVIST_ERR_UNKNOWN_ROBOT` for an unknown robot,

@@ -30,7 +30,50 @@ fn six(values: &[f64]) -> [f64; 6] {
     out
 }
 
-/// Serial revolute arm (standard DH) with link masses and a payload.
+/// `n` links from mass_kg (n,), com_m (n, 3) and inertia_kg_m2 (n, 6).
+fn links(
+    n: usize,
+    mass_kg: &[f64],
+    com_m: &PyReadonlyArray2<'_, f64>,
+    inertia_kg_m2: &PyReadonlyArray2<'_, f64>,
+) -> PyResult<Vec<core::RigidBody>> {
+    check_len("mass_kg", mass_kg.len(), n)?;
+    let (com_rows, com) = rows(com_m, 3, "com_m")?;
+    check_len("com_m rows", com_rows, n)?;
+    let (inertia_rows, inertia) = rows(inertia_kg_m2, 6, "inertia_kg_m2")?;
+    check_len("inertia_kg_m2 rows", inertia_rows, n)?;
+    Ok((0..n)
+        .map(|i| core::RigidBody {
+            mass_kg: mass_kg[i],
+            com_m: [com[3 * i], com[3 * i + 1], com[3 * i + 2]],
+            inertia_kg_m2: six(&inertia[6 * i..6 * i + 6]),
+        })
+        .collect())
+}
+
+/// The payload body (a point mass without an inertia).
+fn payload(
+    mass_kg: f64,
+    com_m: Option<Vec<f64>>,
+    inertia_kg_m2: Option<Vec<f64>>,
+) -> PyResult<core::RigidBody> {
+    let com = com_m.unwrap_or_else(|| vec![0.0; 3]);
+    check_len("payload_com_m", com.len(), 3)?;
+    let inertia = match inertia_kg_m2 {
+        Some(v) => {
+            check_len("payload_inertia_kg_m2", v.len(), 6)?;
+            six(&v)
+        }
+        None => [0.0; 6],
+    };
+    Ok(core::RigidBody {
+        mass_kg,
+        com_m: [com[0], com[1], com[2]],
+        inertia_kg_m2: inertia,
+    })
+}
+
+/// Serial revolute arm (DH or URDF placement) with link masses and a payload.
 #[pyclass(name = "Robot", module = "tvist._core")]
 #[derive(Clone)]
 pub struct PyRobot {
@@ -80,35 +123,65 @@ impl PyRobot {
         check_len("a_m", a_m.len(), n)?;
         check_len("alpha_rad", alpha_rad.len(), n)?;
         check_len("mass_kg", mass_kg.len(), n)?;
-        let (com_rows, com) = rows(&com_m, 3, "com_m")?;
-        check_len("com_m rows", com_rows, n)?;
-        let (inertia_rows, inertia) = rows(&inertia_kg_m2, 6, "inertia_kg_m2")?;
-        check_len("inertia_kg_m2 rows", inertia_rows, n)?;
         let joints = (0..n)
             .map(|i| core::DhJoint::new(d_m[i], a_m[i], alpha_rad[i]))
             .collect();
-        let links = (0..n)
-            .map(|i| core::RigidBody {
-                mass_kg: mass_kg[i],
-                com_m: [com[3 * i], com[3 * i + 1], com[3 * i + 2]],
-                inertia_kg_m2: six(&inertia[6 * i..6 * i + 6]),
-            })
-            .collect();
-        let pcom = payload_com_m.unwrap_or_else(|| vec![0.0; 3]);
-        check_len("payload_com_m", pcom.len(), 3)?;
-        let pinertia = match payload_inertia_kg_m2 {
-            Some(v) => {
-                check_len("payload_inertia_kg_m2", v.len(), 6)?;
-                six(&v)
-            }
-            None => [0.0; 6],
-        };
-        let payload = core::RigidBody {
-            mass_kg: payload_mass_kg,
-            com_m: [pcom[0], pcom[1], pcom[2]],
-            inertia_kg_m2: pinertia,
-        };
+        let links = links(n, &mass_kg, &com_m, &inertia_kg_m2)?;
+        let payload = payload(payload_mass_kg, payload_com_m, payload_inertia_kg_m2)?;
         let robot = core::Robot::new(joints, links, payload).map_err(value_error)?;
+        Ok(PyRobot {
+            inner: match name {
+                Some(name) => robot.with_name(name),
+                None => robot,
+            },
+        })
+    }
+
+    /// Joints placed as URDF places them: origin_xyz_m, origin_rpy_rad, axis (n, 3);
+    /// flange_xyz_m, flange_rpy_rad (3,) in the last link's frame; links (mass_kg (n,), com_m
+    /// (n, 3), inertia_kg_m2 (n, 6)) in the link frame after each joint; payload in the
+    /// flange frame.
+    #[staticmethod]
+    #[pyo3(signature = (origin_xyz_m, origin_rpy_rad, axis, flange_xyz_m, flange_rpy_rad, mass_kg, com_m, inertia_kg_m2, payload_mass_kg=0.0, payload_com_m=None, payload_inertia_kg_m2=None, name=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn placed(
+        origin_xyz_m: PyReadonlyArray2<'_, f64>,
+        origin_rpy_rad: PyReadonlyArray2<'_, f64>,
+        axis: PyReadonlyArray2<'_, f64>,
+        flange_xyz_m: Vec<f64>,
+        flange_rpy_rad: Vec<f64>,
+        mass_kg: Vec<f64>,
+        com_m: PyReadonlyArray2<'_, f64>,
+        inertia_kg_m2: PyReadonlyArray2<'_, f64>,
+        payload_mass_kg: f64,
+        payload_com_m: Option<Vec<f64>>,
+        payload_inertia_kg_m2: Option<Vec<f64>>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let n = mass_kg.len();
+        let three = |a: &PyReadonlyArray2<'_, f64>, what: &str| -> PyResult<Vec<[f64; 3]>> {
+            let (r, v) = rows(a, 3, what)?;
+            check_len(&format!("{what} rows"), r, n)?;
+            Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+        };
+        let (xyz, rpy, ax) = (
+            three(&origin_xyz_m, "origin_xyz_m")?,
+            three(&origin_rpy_rad, "origin_rpy_rad")?,
+            three(&axis, "axis")?,
+        );
+        check_len("flange_xyz_m", flange_xyz_m.len(), 3)?;
+        check_len("flange_rpy_rad", flange_rpy_rad.len(), 3)?;
+        let joints = (0..n)
+            .map(|i| core::JointPlacement::new(core::Origin::new(xyz[i], rpy[i]), ax[i]))
+            .collect();
+        let flange = core::Origin::new(
+            [flange_xyz_m[0], flange_xyz_m[1], flange_xyz_m[2]],
+            [flange_rpy_rad[0], flange_rpy_rad[1], flange_rpy_rad[2]],
+        );
+        let links = links(n, &mass_kg, &com_m, &inertia_kg_m2)?;
+        let payload = payload(payload_mass_kg, payload_com_m, payload_inertia_kg_m2)?;
+        let robot =
+            core::Robot::from_placements(joints, flange, links, payload).map_err(value_error)?;
         Ok(PyRobot {
             inner: match name {
                 Some(name) => robot.with_name(name),
@@ -355,17 +428,58 @@ fn robot_names() -> PyResult<Vec<String>> {
 #[pyfunction]
 fn robot_params<'py>(py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyDict>> {
     let e = robot_data::ur_e_series_entry(name).map_err(value_error)?;
+    entry_dict(py, e)
+}
+
+/// Every parameter of the one robot in robot file `path`, as a dict (as robot_params).
+#[pyfunction]
+fn robot_file_params<'py>(py: Python<'py>, path: &str) -> PyResult<Bound<'py, PyDict>> {
+    let e = robot_data::robot_file(std::path::Path::new(path)).map_err(value_error)?;
+    entry_dict(py, &e)
+}
+
+/// A robot entry as a dict: DH chains give d_m, a_m, alpha_rad; URDF placement gives
+/// origin_xyz_m, origin_rpy_rad, axis (n, 3) and flange_xyz_m, flange_rpy_rad (the others
+/// None).
+fn entry_dict<'py>(py: Python<'py>, e: &robot_data::RobotEntry) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("name", &e.name)?;
     d.set_item("description", &e.description)?;
     d.set_item("source", &e.source)?;
     d.set_item("inertia_source", &e.inertia_source)?;
-    d.set_item("d_m", e.joints.iter().map(|j| j.d_m).collect::<Vec<_>>())?;
-    d.set_item("a_m", e.joints.iter().map(|j| j.a_m).collect::<Vec<_>>())?;
-    d.set_item(
+    let none = py.None();
+    for key in [
+        "d_m",
+        "a_m",
         "alpha_rad",
-        e.joints.iter().map(|j| j.alpha_rad).collect::<Vec<_>>(),
-    )?;
+        "origin_xyz_m",
+        "origin_rpy_rad",
+        "axis",
+        "flange_xyz_m",
+        "flange_rpy_rad",
+    ] {
+        d.set_item(key, &none)?;
+    }
+    match &e.chain {
+        core::Chain::Dh(joints) => {
+            d.set_item("d_m", joints.iter().map(|j| j.d_m).collect::<Vec<_>>())?;
+            d.set_item("a_m", joints.iter().map(|j| j.a_m).collect::<Vec<_>>())?;
+            d.set_item(
+                "alpha_rad",
+                joints.iter().map(|j| j.alpha_rad).collect::<Vec<_>>(),
+            )?;
+        }
+        core::Chain::Urdf { joints, flange } => {
+            let rows = |f: fn(&core::JointPlacement) -> [f64; 3]| {
+                joints.iter().map(|j| f(j).to_vec()).collect::<Vec<_>>()
+            };
+            d.set_item("origin_xyz_m", rows(|j| j.origin.xyz_m))?;
+            d.set_item("origin_rpy_rad", rows(|j| j.origin.rpy_rad))?;
+            d.set_item("axis", rows(|j| j.axis))?;
+            d.set_item("flange_xyz_m", flange.xyz_m.to_vec())?;
+            d.set_item("flange_rpy_rad", flange.rpy_rad.to_vec())?;
+        }
+    }
     d.set_item(
         "mass_kg",
         e.links.iter().map(|l| l.mass_kg).collect::<Vec<_>>(),
@@ -576,5 +690,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(map_document, m)?)?;
     m.add_function(wrap_pyfunction!(robot_names, m)?)?;
     m.add_function(wrap_pyfunction!(robot_params, m)?)?;
+    m.add_function(wrap_pyfunction!(robot_file_params, m)?)?;
     Ok(())
 }

@@ -1,8 +1,8 @@
 """The ``tvist`` command line: one module per group of commands (``demo``, ``ident``,
-``learn``, ``shape``, ``live``, ``plan``, ``twin_server``; shared options in ``args``), each
-registering its subparsers through an ``add_*_command`` listed in ``COMMANDS``. Heavy imports
-happen inside the command that needs them. :func:`main` turns user errors into one line and
-exit code 2."""
+``learn``, ``shape``, ``live``, ``plan``, ``twin_server``, ``robot_file``; shared options in
+``args``), each registering its subparsers through an ``add_*_command`` listed in
+``COMMANDS``. Heavy imports happen inside the command that needs them. :func:`main` turns
+user errors into one line and exit code 2."""
 
 from __future__ import annotations
 
@@ -20,6 +20,7 @@ from tvist.cli.ident import (
 from tvist.cli.learn import add_learn_command
 from tvist.cli.live import add_record_command, add_run_command
 from tvist.cli.plan import add_plan_command
+from tvist.cli.robot_file import add_robot_file_command
 from tvist.cli.shape import add_shape_command
 from tvist.cli.twin_server import add_twin_server_command
 
@@ -38,6 +39,7 @@ COMMANDS += [
     ("twin-server", add_twin_server_command),
     ("run", add_run_command),
     ("record", add_record_command),
+    ("robot-file", add_robot_file_command),
 ]
 
 

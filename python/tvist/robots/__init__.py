@@ -13,16 +13,40 @@ Examples
 
 from __future__ import annotations
 
-from tvist.robots._params import Payload, RobotParams, inertia_tensor, names, params
+from tvist.robots._params import (
+    JointPlacements,
+    Payload,
+    RobotParams,
+    inertia_tensor,
+    names,
+    params,
+    robot_file,
+)
 from tvist.robots._robot import Robot, ur3e, ur5e, ur10e, ur16e, ur20
+from tvist.robots.urdf import (
+    SHIPPED_URDFS,
+    dh_urdf,
+    from_urdf,
+    shipped_urdf,
+    urdf_params,
+    write_robot_file,
+)
 
 __all__ = [
+    "JointPlacements",
     "Payload",
     "Robot",
     "RobotParams",
     "inertia_tensor",
     "names",
     "params",
+    "robot_file",
+    "dh_urdf",
+    "from_urdf",
+    "shipped_urdf",
+    "SHIPPED_URDFS",
+    "urdf_params",
+    "write_robot_file",
     "ur3e",
     "ur5e",
     "ur10e",

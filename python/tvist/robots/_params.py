@@ -5,6 +5,9 @@ by the Rust core; :func:`params` reads them through the bindings (no second pars
 
 Conventions (also stated in the JSON file):
 
+- Joints are placed by standard DH parameters or, for an arm described by a URDF, as URDF
+  places them (:class:`JointPlacements`: origin, then a turn about an axis; links in the link
+  frame after each joint). The rest of this list is for DH.
 - Standard DH: frame ``i = Rz(q_i) Tz(d_i) Tx(a_i) Rx(alpha_i)``; ``q = 0`` is the arm stretched
   out horizontally. The flange frame is DH frame ``n``.
 - ``com_m[i]`` is the centre of mass of link ``i`` in DH frame ``i`` (m).
@@ -48,10 +51,51 @@ def inertia_tensor(six: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class RobotParams:
-    """Kinematic and rigid-body parameters of a serial revolute arm (standard DH).
+class JointPlacements:
+    """Joints placed as URDF places them (the alternative to DH parameters).
 
-    Arrays are read-only. ``n_dof`` is the number of joints ``n``.
+    Joint ``i``'s origin in the frame of the link before it is the translation
+    ``origin_xyz_m[i]`` then the rotation ``Rz(yaw) Ry(pitch) Rx(roll)`` of
+    ``origin_rpy_rad[i] = (roll, pitch, yaw)``; the joint turns about ``axis[i]`` of that frame.
+    Link ``i`` is fixed to the turned frame (its URDF link frame). The flange frame's origin in
+    the last link's frame is ``flange_xyz_m``, ``flange_rpy_rad``. Arrays are read-only;
+    per-joint arrays have shape ``(n, 3)``.
+    """
+
+    origin_xyz_m: np.ndarray
+    origin_rpy_rad: np.ndarray
+    axis: np.ndarray
+    flange_xyz_m: np.ndarray
+    flange_rpy_rad: np.ndarray
+
+    def __post_init__(self) -> None:
+        n = np.shape(self.axis)[0] if np.ndim(self.axis) == 2 else 0
+        if n < 1:
+            raise ValueError("joint placements: axis must have shape (n, 3), n >= 1")
+        spec = {
+            "origin_xyz_m": (n, 3),
+            "origin_rpy_rad": (n, 3),
+            "axis": (n, 3),
+            "flange_xyz_m": (3,),
+            "flange_rpy_rad": (3,),
+        }
+        for attr, shape in spec.items():
+            value = _frozen_array(getattr(self, attr), shape, f"joint placements: {attr}")
+            object.__setattr__(self, attr, value)
+
+    @property
+    def n_dof(self) -> int:
+        return int(self.axis.shape[0])
+
+
+@dataclass(frozen=True)
+class RobotParams:
+    """Kinematic and rigid-body parameters of a serial revolute arm.
+
+    Joints are placed by standard DH parameters (``d_m``, ``a_m``, ``alpha_rad``) or, for an
+    arm read from a URDF, by ``placements`` (then the DH fields are ``None`` and ``com_m``,
+    ``inertia_kg_m2`` are in the link frame after each joint). Arrays are read-only.
+    ``n_dof`` is the number of joints ``n``.
 
     Attributes
     ----------
@@ -72,14 +116,16 @@ class RobotParams:
         Joint speed limits, ``(n,)``.
     max_payload_kg
         Rated payload.
+    placements
+        URDF joint placement (``None`` for a DH arm).
     """
 
     name: str
     description: str
     source: str
-    d_m: np.ndarray
-    a_m: np.ndarray
-    alpha_rad: np.ndarray
+    d_m: np.ndarray | None
+    a_m: np.ndarray | None
+    alpha_rad: np.ndarray | None
     mass_kg: np.ndarray
     com_m: np.ndarray
     inertia_kg_m2: np.ndarray
@@ -87,17 +133,22 @@ class RobotParams:
     joint_limits_rad: np.ndarray
     max_velocity_rad_s: np.ndarray
     max_payload_kg: float
+    placements: JointPlacements | None = None
     n_dof: int = field(init=False)
 
     def __post_init__(self) -> None:
-        n = np.asarray(self.d_m).shape[0] if np.ndim(self.d_m) == 1 else -1
-        if n < 1:
-            raise ValueError(f"{self.name}: dh.d must be a non-empty 1-D array")
+        dh = (self.d_m, self.a_m, self.alpha_rad)
+        if self.placements is not None:
+            if any(v is not None for v in dh):
+                raise ValueError(f"{self.name}: give DH parameters or placements, not both")
+            n = self.placements.n_dof
+        else:
+            n = np.asarray(self.d_m).shape[0] if np.ndim(self.d_m) == 1 else -1
+            if n < 1:
+                raise ValueError(f"{self.name}: dh.d must be a non-empty 1-D array")
         object.__setattr__(self, "n_dof", int(n))
-        spec = {
-            "d_m": (n,),
-            "a_m": (n,),
-            "alpha_rad": (n,),
+        spec = {} if self.placements is not None else {"d_m": (n,), "a_m": (n,), "alpha_rad": (n,)}
+        spec |= {
             "mass_kg": (n,),
             "com_m": (n, 3),
             "inertia_kg_m2": (n, 6),
@@ -190,6 +241,23 @@ class Payload:
         }
 
 
+def _from_core(entry: dict[str, Any]) -> RobotParams:
+    """RobotParams from the core's entry dict (DH or URDF placement keys)."""
+    entry = dict(entry)
+    entry.pop("inertia_cylinders", None)  # the source of inertia_kg_m2, see _cylinders
+    keys = ("origin_xyz_m", "origin_rpy_rad", "axis", "flange_xyz_m", "flange_rpy_rad")
+    placed = {k: entry.pop(k) for k in keys}
+    if placed["axis"] is not None:
+        entry["placements"] = JointPlacements(**placed)
+    return RobotParams(**entry)
+
+
+def robot_file(path: str) -> RobotParams:
+    """Parameters of the one robot in robot file ``path`` (as ``tvist robot-file`` writes
+    it; read and checked by the core, the same reader the C API uses)."""
+    return _from_core(_core.robot_file_params(str(path)))
+
+
 def names() -> tuple[str, ...]:
     """Names of the robots in the robot data, e.g. ``("ur3e", "ur5e", ...)``."""
     return tuple(_core.robot_names())
@@ -200,6 +268,4 @@ def params(name: str) -> RobotParams:
     """Parameters of robot ``name`` (one of :func:`names`)."""
     if name not in names():
         raise ValueError(f"unknown robot {name!r}; known: {', '.join(names())}")
-    entry = _core.robot_params(name)
-    del entry["inertia_cylinders"]  # the source of inertia_kg_m2, see tvist.robots._cylinders
-    return RobotParams(**entry)
+    return _from_core(_core.robot_params(name))

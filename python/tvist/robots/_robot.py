@@ -30,7 +30,7 @@ def _as_many(q: Sequence[Sequence[float]] | np.ndarray, n_dof: int) -> np.ndarra
 
 
 class Robot:
-    """Serial revolute arm (standard DH) with link masses and an optional payload.
+    """Serial revolute arm (DH or URDF joint placement) with link masses and a payload.
 
     All quantities are link side, without rotor inertia, with gravity 9.81 m/s² along ``-z`` of
     the base frame. Joint vectors have shape ``(n_dof,)``; batches ``(n_samples, n_dof)``.
@@ -53,18 +53,36 @@ class Robot:
         payload = Payload() if payload is None else payload
         self._params = params
         self._payload = payload
-        self._core = _core.Robot(
-            np.asarray(params.d_m),
-            np.asarray(params.a_m),
-            np.asarray(params.alpha_rad),
-            np.asarray(params.mass_kg),
-            np.ascontiguousarray(params.com_m),
-            np.ascontiguousarray(params.inertia_kg_m2),
+        payload_args = (
             payload.mass_kg,
             np.asarray(payload.com_m),
             None if payload.inertia_kg_m2 is None else np.asarray(payload.inertia_kg_m2),
             params.name,
         )
+        links = (
+            np.asarray(params.mass_kg),
+            np.ascontiguousarray(params.com_m),
+            np.ascontiguousarray(params.inertia_kg_m2),
+        )
+        placed = params.placements
+        if placed is None:
+            self._core = _core.Robot(
+                np.asarray(params.d_m),
+                np.asarray(params.a_m),
+                np.asarray(params.alpha_rad),
+                *links,
+                *payload_args,
+            )
+        else:
+            self._core = _core.Robot.placed(
+                np.ascontiguousarray(placed.origin_xyz_m),
+                np.ascontiguousarray(placed.origin_rpy_rad),
+                np.ascontiguousarray(placed.axis),
+                np.asarray(placed.flange_xyz_m),
+                np.asarray(placed.flange_rpy_rad),
+                *links,
+                *payload_args,
+            )
 
     @classmethod
     def from_params(cls, params: RobotParams, payload: Payload | None = None) -> Robot:

@@ -200,6 +200,11 @@ def build_mjcf(
     ET.SubElement(visual, "geom", contype="0", conaffinity="0", group="1", rgba="0.6 0.7 0.8 1")
 
     parent = ET.SubElement(root, "worldbody")
+    if params.placements is not None:
+        if beams is not None:
+            raise ValueError(f"{params.name}: bending links need a DH arm")
+        body, flange_pos, flange_quat = _placed_arm(parent, params, payload)
+        return _finish(root, body, flange_pos, flange_quat)
     inertias = params.inertia_tensors_kg_m2
     pos_in_parent = np.zeros(3)
     quat_in_parent = np.array([1.0, 0.0, 0.0, 0.0])
@@ -240,7 +245,77 @@ def build_mjcf(
         quat_in_parent = _quat_x(float(params.alpha_rad[i]))
         parent = body
 
-    ET.SubElement(body, "site", name="flange", pos=_fmt(pos_in_parent), quat=_fmt(quat_in_parent))
+    return _finish(root, body, pos_in_parent, quat_in_parent)
+
+
+def _rpy_matrix(rpy: np.ndarray) -> np.ndarray:
+    """URDF's ``Rz(yaw) Ry(pitch) Rx(roll)``."""
+    (sr, cr), (sp, cp), (sy, cy) = ((math.sin(a), math.cos(a)) for a in rpy)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
+
+
+def _rpy_quat(rpy: np.ndarray) -> np.ndarray:
+    """``(w, x, y, z)`` of URDF's ``Rz(yaw) Ry(pitch) Rx(roll)``."""
+    (sr, cr), (sp, cp), (sy, cy) = ((math.sin(a / 2), math.cos(a / 2)) for a in rpy)
+    return np.array(
+        [
+            cr * cp * cy + sr * sp * sy,
+            sr * cp * cy - cr * sp * sy,
+            cr * sp * cy + sr * cp * sy,
+            cr * cp * sy - sr * sp * cy,
+        ]
+    )
+
+
+def _placed_arm(parent: ET.Element, params: RobotParams, payload: Payload | None):
+    """Bodies ``link1 .. link{n}`` of an arm placed as URDF places it: each body is its URDF
+    link frame (placed by the joint's origin, hinge about the joint's axis), the link's inertial
+    as given; the payload (flange frame) joins the last link. Returns the last body and the
+    flange's position and quaternion in it."""
+    placed = params.placements
+    inertias = params.inertia_tensors_kg_m2
+    n = params.n_dof
+    flange_rot = _rpy_matrix(placed.flange_rpy_rad)
+    body = parent
+    for i in range(n):
+        origin = placed.origin_xyz_m[i]
+        body = ET.SubElement(
+            parent,
+            "body",
+            name=f"link{i + 1}",
+            pos=_fmt(origin),
+            quat=_fmt(_rpy_quat(placed.origin_rpy_rad[i])),
+        )
+        ET.SubElement(body, "joint", name=f"joint{i + 1}", type="hinge", axis=_fmt(placed.axis[i]))
+        inertial = (float(params.mass_kg[i]), np.asarray(params.com_m[i]), inertias[i])
+        if i == n - 1 and payload is not None:
+            mass, com, tensor = _payload_inertial(payload)
+            moved = (
+                mass,
+                placed.flange_xyz_m + flange_rot @ com,
+                flange_rot @ tensor @ flange_rot.T,
+            )
+            inertial = _lump(inertial, moved)
+        if inertial[0] > _NEGLIGIBLE:
+            _inertial(body, *inertial)
+        next_origin = placed.flange_xyz_m if i == n - 1 else placed.origin_xyz_m[i + 1]
+        if np.linalg.norm(next_origin) > 1e-6:
+            ET.SubElement(
+                body, "geom", type="capsule", size="0.03", fromto=_fmt([0, 0, 0, *next_origin])
+            )
+        parent = body
+    return body, placed.flange_xyz_m, _rpy_quat(placed.flange_rpy_rad)
+
+
+def _finish(root: ET.Element, body: ET.Element, flange_pos, flange_quat) -> str:
+    """The flange site and its accelerometer on ``body``; the document's text."""
+    ET.SubElement(body, "site", name="flange", pos=_fmt(flange_pos), quat=_fmt(flange_quat))
     sensor = ET.SubElement(root, "sensor")
     ET.SubElement(sensor, "accelerometer", name="accelerometer", site="flange")
     ET.indent(root)

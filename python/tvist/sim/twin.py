@@ -110,7 +110,10 @@ class Twin:
     Parameters
     ----------
     robot_name
-        A robot of the parameter file, e.g. ``"ur5e"`` (see :func:`tvist.robots.names`).
+        A robot of the parameter file, e.g. ``"ur5e"`` (see :func:`tvist.robots.names`), or
+        any arm's :class:`~tvist.robots.RobotParams` (for example from
+        :func:`tvist.robots.urdf_params`; then ``flex`` is needed unless its name has a
+        default).
     payload_kg
         Payload mass (kg), ``0 <= payload_kg <= 1.5 * max_payload_kg``.
     payload_com_m
@@ -143,7 +146,7 @@ class Twin:
 
     def __init__(
         self,
-        robot_name: str = "ur5e",
+        robot_name: str | robots.RobotParams = "ur5e",
         payload_kg: float = 5.0,
         payload_com_m: Sequence[float] = (0.0, 0.0, 0.05),
         flex: FlexParams | None = None,
@@ -155,10 +158,13 @@ class Twin:
     ) -> None:
         import mujoco
 
-        self._params = robots.params(robot_name)
+        if isinstance(robot_name, robots.RobotParams):
+            self._params = robot_name
+        else:
+            self._params = robots.params(robot_name)
         mass_kg = check_payload_mass(self._params, payload_kg)
         self._payload = robots.Payload(mass_kg, tuple(payload_com_m), payload_inertia_kg_m2)
-        self._flex = default_flex(robot_name) if flex is None else flex
+        self._flex = default_flex(self._params.name) if flex is None else flex
         self._flex.validate(self._params.n_dof)
         if physics_dt_s is None:
             physics_dt_s = 0.0005 if beams is None else beams.physics_dt_s

@@ -151,7 +151,7 @@ pub struct HandUr5eZv {
 
 impl HandUr5eZv {
     pub fn new(robot: &Robot, base: MapCoefficients, shoulder: MapCoefficients, dt_s: f64) -> Self {
-        let j = robot.joints();
+        let j = robot.joints().expect("a DH chain");
         let alpha: Vec<f64> = j.iter().map(|j| j.alpha_rad).collect();
         let quarter = PI / 2.0;
         assert!(
