@@ -56,7 +56,7 @@ pub use dynmap::{DynamicMap, InertiaRange, MapCoefficients, ModeMap};
 pub use error::{Error, Status, StatusCounter};
 pub use map_dynamics::MapDynamics;
 pub use modal_dynamics::ModalDynamics;
-pub use modal_map::{FlexJoint, LoadLaw, ModalMap};
+pub use modal_map::{FlexJoint, LoadLaw, ModalMap, ShapedModes};
 pub use multimode::{TvShaper, TvShaperConfig};
 pub use prv::prv;
 pub use robot::{DhJoint, RigidBody, Robot};
