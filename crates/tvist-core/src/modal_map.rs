@@ -518,7 +518,7 @@ fn dominated_by(sol: &ModalSolution, f: usize) -> Mode {
         }
     }
     let s_d = share(d);
-    if !(s_d > 0.0) {
+    if s_d.is_nan() || s_d <= 0.0 {
         return Mode::new(f64::NAN, f64::NAN);
     }
     let (mut sum_w, mut wn, mut zeta) = (1.0, sol.wn_rad_s[d], sol.zeta[d]);
