@@ -52,7 +52,10 @@
 //!
 //! - **By joint** (`mode_joints`, e.g. `[0, 1]` for base then shoulder): mode `m` is the
 //!   (damped) eigenmode that stores the largest share of its strain energy in joint
-//!   `mode_joints[m]`, so "base" and "shoulder" keep their meaning when the frequencies cross.
+//!   `mode_joints[m]`, so "base" and "shoulder" keep their meaning when the frequencies cross;
+//!   among the eigenmodes not already taken by an earlier mode, so two modes never shape the
+//!   same eigenmode (where one eigenmode strains both base and shoulder most, the shoulder
+//!   mode is the next one in the shoulder).
 //!   Another eigenmode is blended in only if it forms a *veering pair* with that dominant one
 //!   (see below); otherwise the dominant eigenmode is the shaped mode as it is.
 //! - **By frequency** (`shaped_modes: K`): the `K` lowest-frequency eigenmodes, in frequency
@@ -498,25 +501,36 @@ impl ModalMap {
                 }
             }
             ShapedModes::ByJoint(_) => {
+                // Each eigenmode is dominant for one shaped mode at most (cascade order).
+                let mut claimed = [false; MAX_FLEX_JOINTS];
                 for (o, &f) in out.iter_mut().zip(&self.mode_flex_index) {
-                    *o = dominated_by(sol, f);
+                    *o = dominated_by(sol, f, &mut claimed);
                 }
             }
         }
     }
 }
 
-/// The eigenmode that stores the largest share of its strain energy in flexible joint `f`,
-/// blended with the eigenmodes that veer with it (module docs): weights `(s_i/s_d)^4 h(g_i)`
-/// against 1 for the dominant `d`. NaN if no eigenmode strains the joint.
-fn dominated_by(sol: &ModalSolution, f: usize) -> Mode {
+/// The eigenmode `d` that stores the largest share of its strain energy in flexible joint
+/// `f` among those not `claimed` by an earlier shaped mode (then claimed), blended with the
+/// eigenmodes that veer with it (module docs): weights `(s_i/s_d)^4 h(g_i)` against 1 for `d`.
+/// NaN if no unclaimed eigenmode strains the joint.
+fn dominated_by(
+    sol: &ModalSolution,
+    f: usize,
+    claimed: &mut [bool; MAX_FLEX_JOINTS],
+) -> Mode {
     let share = |i: usize| sol.strain_share[i][f];
-    let mut d = 0;
-    for i in 1..sol.n {
-        if share(i) > share(d) {
-            d = i;
+    let mut dominant: Option<usize> = None;
+    for i in (0..sol.n).filter(|&i| !claimed[i]) {
+        if dominant.is_none_or(|d| share(i) > share(d)) {
+            dominant = Some(i);
         }
     }
+    let Some(d) = dominant else {
+        return Mode::new(f64::NAN, f64::NAN);
+    };
+    claimed[d] = true;
     let s_d = share(d);
     if s_d.is_nan() || s_d <= 0.0 {
         return Mode::new(f64::NAN, f64::NAN);
