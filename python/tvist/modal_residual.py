@@ -19,8 +19,11 @@ holding the pose over 2 ms.
 eigenmodes of the end pose (eigenvectors of the first-order form): mode ``i`` contributes
 ``2 Re(c_i e^{λ_i t})`` to the flange's displacement, ``c_i = J_f ψ_i a_i`` with ``J_f`` the
 translational flange Jacobian on the flexible joints, ``ψ_i`` the mode shape and ``a_i`` its
-modal coordinate. Its residual is the amplitude ``2 |c_i|`` (m; the peak for motion along one
-line, an upper bound of the peak otherwise). The unshaped total is the sum over modes, the
+modal coordinate: a displacement amplitude ``2 |c_i|`` (m; the peak for motion along one
+line, an upper bound of the peak otherwise). Its residual vibration is the acceleration
+amplitude ``2 |λ_i|² |c_i|`` (m/s²), what a tool accelerometer measures and how tvist states
+residual vibration (:mod:`tvist.analysis.residual`): it weighs a mode at twice the frequency
+four times more than its displacement does. The unshaped total is the sum over modes, the
 largest peak the superposition can reach. Overdamped (real) eigenvalues do not ring and are
 left out.
 
@@ -61,10 +64,12 @@ class ModeResidual:
         Position in frequency order (0: the lowest), as ``shaped_modes`` counts.
     wn_rad_s, zeta
         Natural frequency ``|λ|`` (rad/s) and damping ratio ``−Re λ / |λ|``.
-    residual_m
-        Amplitude of the flange displacement the mode rings with after the move, m.
+    residual_m_s2
+        Amplitude of the flange acceleration the mode rings with after the move, m/s².
+    displacement_m
+        The same as a flange displacement amplitude, m.
     fraction
-        ``residual_m`` over the unshaped total (the sum over modes).
+        ``residual_m_s2`` over the unshaped total (the sum over modes).
     joint_shares
         Share of the mode's gear strain energy per flexible joint (map order), summing to 1.
     """
@@ -72,7 +77,8 @@ class ModeResidual:
     rank: int
     wn_rad_s: float
     zeta: float
-    residual_m: float
+    residual_m_s2: float
+    displacement_m: float
     fraction: float
     joint_shares: tuple[float, ...]
 
@@ -92,15 +98,15 @@ class ShapingChoice:
         ``K``: shape the ``K`` lowest-frequency modes.
     modes
         Every oscillating eigenmode at the end pose, in frequency order.
-    total_m
-        Unshaped total: the sum of the modes' residual amplitudes, m.
+    total_m_s2
+        Unshaped total: the sum of the modes' residual acceleration amplitudes, m/s².
     threshold
         The significance threshold used (fraction of ``total_m``).
     """
 
     n_modes: int
     modes: tuple[ModeResidual, ...]
-    total_m: float
+    total_m_s2: float
     threshold: float
 
     @property
@@ -176,10 +182,11 @@ def _state_after(traj: Trajectory, end: int, modal_map: ModalMap, robot: Robot) 
 
 def modal_residuals(
     modal_map: ModalMap, robot: Robot, trajectory: Trajectory
-) -> tuple[list[tuple[int, float, float, float, tuple[float, ...]]], float]:
-    """Residual amplitude per oscillating eigenmode at the end of ``trajectory``'s motion:
-    ``[(rank, wn_rad_s, zeta, residual_m, joint_shares), ...]`` in frequency order, and the
-    sum of the residuals (m). See the module docs."""
+) -> list[tuple[int, float, float, float, tuple[float, ...]]]:
+    """Residual per oscillating eigenmode at the end of ``trajectory``'s motion:
+    ``[(rank, wn_rad_s, zeta, displacement_m, joint_shares), ...]`` in frequency order (the
+    flange displacement amplitude; its acceleration is ``wn_rad_s² ×`` that). See the module
+    docs."""
     dt = trajectory.dt_s
     end = min(int(round(trajectory.t_motion_end_s / dt)), trajectory.n_samples - 1)
     x = _state_after(trajectory, end, modal_map, robot)
@@ -204,7 +211,7 @@ def modal_residuals(
                 tuple(float(e) for e in energy / energy.sum()),
             )
         )
-    return out, float(sum(r[3] for r in out))
+    return out
 
 
 def modes_to_shape(
@@ -246,10 +253,13 @@ def modes_to_shape(
         raise ValueError(f"threshold = {threshold}: must be a fraction in [0, 1)")
     if trajectory.n_dof != robot.n_dof:
         raise ValueError(f"the trajectory has {trajectory.n_dof} joints, the robot {robot.n_dof}")
-    residuals, total = modal_residuals(modal_map, robot, trajectory)
+    residuals = modal_residuals(modal_map, robot, trajectory)
+    total = sum(wn * wn * d for _, wn, _, d, _ in residuals)
     modes = tuple(
-        ModeResidual(rank, wn, zeta, r, r / total if total > 0 else 0.0, shares)
-        for rank, wn, zeta, r, shares in residuals
+        ModeResidual(
+            rank, wn, zeta, wn * wn * d, d, wn * wn * d / total if total > 0 else 0.0, shares
+        )
+        for rank, wn, zeta, d, shares in residuals
     )
     significant = [m.rank for m in modes if m.fraction > threshold]
     n_modes = max(significant, default=0) + 1
