@@ -515,11 +515,7 @@ impl ModalMap {
 /// `f` among those not `claimed` by an earlier shaped mode (then claimed), blended with the
 /// eigenmodes that veer with it (module docs): weights `(s_i/s_d)^4 h(g_i)` against 1 for `d`.
 /// NaN if no unclaimed eigenmode strains the joint.
-fn dominated_by(
-    sol: &ModalSolution,
-    f: usize,
-    claimed: &mut [bool; MAX_FLEX_JOINTS],
-) -> Mode {
+fn dominated_by(sol: &ModalSolution, f: usize, claimed: &mut [bool; MAX_FLEX_JOINTS]) -> Mode {
     let share = |i: usize| sol.strain_share[i][f];
     let mut dominant: Option<usize> = None;
     for i in (0..sol.n).filter(|&i| !claimed[i]) {
