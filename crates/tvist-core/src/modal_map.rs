@@ -59,8 +59,9 @@
 //!   Another eigenmode is blended in only if it forms a *veering pair* with that dominant one
 //!   (see below); otherwise the dominant eigenmode is the shaped mode as it is.
 //! - **By frequency** (`shaped_modes: K`): the `K` lowest-frequency eigenmodes, in frequency
-//!   order. Frequency-ranked modes are continuous along a motion (the sorted roots are), and
-//!   two veering modes are both shaped, so no blending is needed.
+//!   order. Frequency-ranked modes are continuous along a motion (the sorted roots are; their
+//!   damping ratios too, except where two uncoupled modes cross exactly), and two veering
+//!   modes are both shaped, so no blending is needed.
 //!
 //! **Veering pairs.** Where two eigenmodes swap the joint they dominate, the dominant one
 //! jumps from one branch to the other; a jump in a filter's delay is a step in the shaped
