@@ -53,7 +53,8 @@ typedef enum TvistError {
     /* A request beyond a setup limit (TVIST_MAX_DOF channels, TVIST_MAX_MODES modes,
      * TVIST_MAX_DELAY_LINE_BYTES of delay lines): refused before anything is allocated. */
     TVIST_ERR_TOO_LARGE = -10,
-    /* tvist_shaper_set_map on a shaper mid-move (its delay lines not at rest on the input). */
+    /* tvist_shaper_set_map or tvist_shaper_set_shaped_modes on a shaper mid-move (its delay
+     * lines not at rest on the input). */
     TVIST_ERR_MID_MOVE = -11
 } TvistError;
 
@@ -163,6 +164,17 @@ int32_t tvist_shaper_new_map_ex(const char *robot, double payload_kg,
  * file; the shaper is unchanged on every error.
  */
 int32_t tvist_shaper_set_map(TvistShaper *shaper, const char *map_json_path);
+
+/*
+ * Shapes the n_modes lowest-frequency modes of the shaper's modal map from the next move on
+ * (frequency-ranked, as "shaped_modes": n_modes in a map file, whatever the map shaped
+ * before), one cascaded filter each: the added delay is that of those modes.
+ * 1 <= n_modes <= the map's number of flexible joints. A setup call (builds a new provider and
+ * delay lines): never from the control loop. Only between moves, as tvist_shaper_set_map.
+ * TVIST_ERR_MID_MOVE mid-move, TVIST_ERR_INVALID_PARAMETER for a shaper not driven by a modal
+ * map or n_modes out of range; the shaper is unchanged on every error.
+ */
+int32_t tvist_shaper_set_shaped_modes(TvistShaper *shaper, size_t n_modes);
 
 /*
  * One control cycle: shapes q_in into q_out (n_dof doubles each; they may be the same array).

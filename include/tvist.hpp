@@ -137,6 +137,14 @@ public:
         return tvist_shaper_set_map(handle_, map_json_path.c_str());
     }
 
+    /* Shapes the n_modes lowest-frequency modes of the modal map between moves
+     * (tvist_shaper_set_shaped_modes): TVIST_OK, or TVIST_ERR_MID_MOVE /
+     * TVIST_ERR_INVALID_PARAMETER with the shaper unchanged. A setup call: not from the
+     * control loop. */
+    int32_t set_shaped_modes(std::size_t n_modes) noexcept {
+        return tvist_shaper_set_shaped_modes(handle_, n_modes);
+    }
+
     /* At rest at q0 (n_dof() doubles). */
     int32_t reset(const double *q0) noexcept { return tvist_shaper_reset(handle_, q0, n_dof()); }
 

@@ -66,9 +66,11 @@ def exact_damped_modes(
     blend: bool = False,
 ) -> list[tuple[float, float]]:
     """``[(ω_n, ζ), ...]`` of the mode dominating each of ``mode_joints`` (indices into the
-    flexible joints), for ``M`` ``(n, n)`` and diagonal ``K``, ``C`` ``(n,)``. With ``blend``,
-    each is instead the average of all modes weighted by the 4th power of their strain-energy
-    share in the joint (the core's assignment, continuous where two modes share a joint)."""
+    flexible joints; each mode other than those of earlier joints), for ``M`` ``(n, n)`` and
+    diagonal ``K``, ``C`` ``(n,)``. With ``blend``, each is instead blended with the modes that
+    veer with it as the core assigns modes (``modal_map.rs``): weights ``(s_i/s_d)^4 h(g)``
+    against 1, ``s`` the strain-energy shares in the joint, ``g = |ln(ω_i/ω_d)|``, ``h`` 1 up
+    to 3 % and a smoothstep to 0 at 6 %."""
     n = m.shape[0]
     minv = np.linalg.inv(m)
     a = np.block([[np.zeros((n, n)), np.eye(n)], [-minv @ np.diag(k), -minv @ np.diag(c)]])
@@ -80,14 +82,15 @@ def exact_damped_modes(
     wn, zeta = np.abs(lam), -lam.real / np.abs(lam)
     out, taken = [], []
     for j in mode_joints:
-        if blend:
-            w = share[j] ** 4 / np.sum(share[j] ** 4)
-            out.append((float(w @ wn), float(w @ zeta)))
-            continue
         s = share[j].copy()
         s[taken] = -np.inf
         i = int(np.argmax(s))
         taken.append(i)
+        if blend:
+            t = np.clip((0.06 - np.abs(np.log(wn / wn[i]))) / 0.03, 0.0, 1.0)
+            w = (share[j] / share[j, i]) ** 4 * t * t * (3.0 - 2.0 * t)
+            out.append((float(w @ wn / w.sum()), float(w @ zeta / w.sum())))
+            continue
         out.append((float(wn[i]), float(zeta[i])))
     return out
 

@@ -73,15 +73,16 @@ def _stiffness(modal, joint: int) -> dict:
 def test_the_demo_plan_recovers_the_twins_gear_stiffnesses():
     twin_k = default_flex("ur5e").k1_nm_per_rad
     modal = fit_modal_map(_plan_records(DEMO_PLAN), "ur5e", flex_joints=DEMO_FLEX_JOINTS)
-    # Base, shoulder and elbow are kept; the wrists, seen only through their small part in the
-    # base mode at folded poses, are not determined by these modes with 0.5 % noise and are made
-    # rigid (the real campaign's identifications keep wrist 2).
-    assert _joints(modal) == [0, 1, 2]
-    # Base and shoulder within 3 % of the twin's gears (measured: 1-2 %; the fit absorbs the
-    # wrists' flexibility and the gravity stiffness in these two), the elbow, ten times stiffer
-    # and seen only through its share of the two modes, within 30 % (measured: 22 % low with
-    # this seed; 29.6 % with seed 5, the elbow being the least determined of the three).
-    for joint, tolerance in ((0, 0.03), (1, 0.03), (2, 0.30)):
+    # Base, shoulder, elbow and wrist 2 are kept; wrist 1 is not determined by these modes
+    # with 0.5 % noise and is made rigid. (While the core blended every mode by share⁴, the
+    # data's dominant modes did not fit it at poses where two far-apart modes share a joint,
+    # and wrist 2 was made rigid too.)
+    assert _joints(modal) == [0, 1, 2, 4]
+    # Base and shoulder within 3 % of the twin's gears (measured: 0.8 % and 0.3 %; the fit
+    # absorbs wrist 1's flexibility and the gravity stiffness in these two), the elbow, ten
+    # times stiffer and seen only through its share of the modes, and wrist 2 within 30 %
+    # (measured: 10 % low and 0.1 %, standard errors 4 % and 13 %).
+    for joint, tolerance in ((0, 0.03), (1, 0.03), (2, 0.30), (4, 0.30)):
         k = _stiffness(modal, joint)
         assert k["value"] == pytest.approx(twin_k[joint], rel=tolerance), (joint, k)
         assert 0 < k["se"] < 0.25 * k["value"], (joint, k)
@@ -98,13 +99,16 @@ def test_one_payload_cannot_determine_the_elbow():
 
 def test_a_mistaken_identification_does_not_inflate_the_stiffness_standard_errors():
     records = _plan_records(DEMO_PLAN)
-    clean = fit_modal_map(records, "ur5e", flex_joints=DEMO_FLEX_JOINTS)
+    # Base, shoulder and elbow flexible: the joints both fits keep (wrist 2, kept with a 13 %
+    # standard error from the clean data, is made rigid with the outlier among them).
+    flex = (0, 1, 2)
+    clean = fit_modal_map(records, "ur5e", flex_joints=flex)
     # One pose whose local fit took another mode for the shoulder's, 20 % off (as the demo
     # campaign's folded 5 kg pose at V = 3π/4 does).
     wrong = [dict(r, modes=[dict(m) for m in r["modes"]]) for r in records]
     wrong[5]["modes"][1]["wn_rad_s"] *= 0.8
-    fitted = fit_modal_map(wrong, "ur5e", flex_joints=DEMO_FLEX_JOINTS)
-    assert _joints(fitted) == _joints(clean)
+    fitted = fit_modal_map(wrong, "ur5e", flex_joints=flex)
+    assert _joints(fitted) == _joints(clean) == list(flex)
     for joint in (0, 1, 2):
         a, b = _stiffness(clean, joint), _stiffness(fitted, joint)
         # The robust loss keeps the estimate (within 2 standard errors) and the standard error

@@ -155,9 +155,9 @@ def test_the_fit_recovers_an_exact_damped_modal_map_where_modes_come_close(tmp_p
     # Measured with the core, seeds 1-3 and 7: base and shoulder stiffness within 0.35 %, the
     # elbow's within 2.7 %, the shoulder's stiffness law within 0.15 % RMS over the poses, the
     # damping laws within 5.3 % (base: its zero-load term absorbs the elbow's damper, which
-    # the default fit leaves out) and 0.96 % RMS (shoulder). The data's modes are the
-    # dominant ones, the core's a share⁴ blend; where two modes share a joint (pose
-    # m5kg-V2-R0, 52/46 %) they differ by about 10 %, which the robust loss leaves out.
+    # the default fit leaves out) and 0.96 % RMS (shoulder). (Measured while the core
+    # blended every mode by share⁴, 10 % off the data's dominant modes at pose m5kg-V2-R0,
+    # where two far-apart modes share a joint 52/46 %; the core now takes the dominant one.)
     for (joint, what, index, tol), err in zip(EXACT_CORE_TOLERANCES, errors, strict=True):
         assert err < tol, (joint, what, index, err)
     # Every load term the fit keeps is significant in the joint fit (drop_t = 3, the default);
@@ -199,9 +199,7 @@ def test_held_out_selection_keeps_the_generating_terms_and_names_its_moves(tmp_p
     from tvist.cli import main
 
     # Data the map form represents exactly: the exact damped modes assigned as the core does
-    # (share⁴ blend). With each mode the dominant one instead, the veering pose m5kg-V2-R0,
-    # which the blend cannot match (about 10 % off), tilts the held-out error towards |L| for
-    # the shoulder's law on this seed (0.69 % RMS held out, against 0.27 % here).
+    # (the dominant mode, blended with a veering partner).
     path = _records_file(str(tmp_path), 1.0, 7, blend=True)
     # The wrists flexible in the fit (the default flexible joints), rigid in the data: they must
     # not be kept; the elbow and the shoulder's L² law are in the data and must be (leaving

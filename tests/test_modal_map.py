@@ -61,6 +61,18 @@ def _system(q: np.ndarray):
     return m, k, c
 
 
+def _dominant_blend(exact, joint: int, exclude: tuple[int, ...] = ()) -> tuple[float, float]:
+    """The shaped mode named by ``joint`` as the module docs of ``modal_map.rs`` define it:
+    the dominant eigenmode of the joint but those in ``exclude`` (taken by earlier modes),
+    blended with the eigenmodes that veer with it."""
+    share = exact.strain_energy[joint]
+    d = exact.dominant_mode(joint, exclude=exclude)
+    gap = np.abs(np.log(exact.wn_rad_s / exact.wn_rad_s[d]))
+    t = np.clip((0.06 - gap) / (0.06 - 0.03), 0.0, 1.0)
+    w = (share / share[d]) ** 4 * t * t * (3.0 - 2.0 * t)
+    return float(w @ exact.wn_rad_s / w.sum()), float(w @ exact.zeta / w.sum())
+
+
 def test_modes_match_scipys_damped_eigenproblem_weighted_by_strain_energy():
     # The exact modes of M δ'' + C δ' + K δ = 0 from LAPACK's eigenvalues of the first-order
     # form (tvist.sim.modal), against the core's Aberth iteration on det(λ²M + λC + K), at
@@ -72,11 +84,11 @@ def test_modes_match_scipys_damped_eigenproblem_weighted_by_strain_energy():
     for q, pred in zip(q_all, got, strict=True):
         m, k, c = _system(q)
         exact = modal_analysis(m, np.diag(c), np.diag(k), k)
-        # Each shaped mode: the eigenmodes weighted by the 4th power of their strain-energy
-        # share in its joint (the dominant eigenmode, blended where two share the joint).
-        weights = exact.strain_energy[:2] ** 4
-        weights /= weights.sum(axis=1, keepdims=True)
-        want = np.column_stack([weights @ exact.wn_rad_s, weights @ exact.zeta])
+        # Each shaped mode: the eigenmode dominating its joint's strain energy (the shoulder's
+        # other than the base's), blended with those that veer with it (modal_map.rs: weights
+        # (s_i/s_d)^4 h(|ln ω_i/ω_d|), h = 1 up to a 3 % gap and a smoothstep to 0 at 6 %).
+        base = exact.dominant_mode(0)
+        want = np.array([_dominant_blend(exact, 0), _dominant_blend(exact, 1, (base,))])
         # Two independent eigensolvers. The core's roots are exact to rounding; its mode shapes
         # (the blend's weights) are those of each root's last iterate, within its last Newton
         # correction (at most 1e-6, typically 1e-8) of the root: measured 7.4e-7 at worst over
@@ -292,8 +304,10 @@ def test_fit_map_cli_writes_a_modal_map_that_shapes_a_ur10e(tmp_path, capsys):
     q = np.array([0.3, -2.0, 1.6, -1.2, 1.0, 0.0])
     for (wn, _), (true_wn, _) in zip(modal.modes(robot, q), twin.modes(q), strict=True):
         # Measured at this pose: base 2.8 % high from the two-stage fit, 3.1 % after the joint
-        # refinement, which trades some ω for ζ where the map's modes are not the twin's.
-        assert wn == pytest.approx(true_wn, rel=0.035)
+        # refinement, which trades some ω for ζ where the map's modes are not the twin's;
+        # 3.5 % since the fit predicts the dominant eigenmode instead of a share⁴ blend of all
+        # (the base mode here is 91 % base strain either way: the fit's laws moved).
+        assert wn == pytest.approx(true_wn, rel=0.04)
     shaper = tvist.TvShaper(tvist.MapDynamics(robot, modal), 0.002, 6)
     shaper.reset(q)
     shaper.shape(np.repeat(q[None, :], 10, axis=0))

@@ -2,12 +2,21 @@
 
 The physics lives in the Rust core (``tvist-core/src/modal_map.rs``): every flexible joint
 ``j`` is a torsional spring ``k_j`` and damper ``c_j`` between its motor (held rigidly by the
-servo) and its link; at each pose the modes are the roots ``λ`` of
-``det(λ² M_ff(q) + λ C + K) = 0`` with ``M_ff`` the block of the link-side mass matrix on the
-flexible joints: ``ω_n = |λ|``, ``ζ = −Re λ / |λ|`` (the exact damped modes, as a free decay
-shows them); each shaped mode is the eigenmode that stores the largest share of its strain
-energy in the joint that names it, so "base" and "shoulder" keep their meaning
-when their frequencies cross. Stiffness and damping grow with the static load ``L`` (gravity
+servo) and its link; at each pose the modes solve ``K φ = ω² M_ff(q) φ`` with ``M_ff`` the
+block of the link-side mass matrix on the flexible joints, solved exactly with the joint
+dampers: ``ω_n = |λ|``, ``ζ = −Re λ / |λ|`` of the roots of ``det(λ² M_ff + λ C + K) = 0``.
+The shaped modes are named in one of two ways:
+
+- ``mode_joints`` (e.g. ``[0, 1]``): mode ``m`` is the eigenmode that stores the largest share
+  of its strain energy in joint ``mode_joints[m]``, so "base" and "shoulder" keep their meaning
+  when their frequencies cross. Another eigenmode is blended in only where it veers with that
+  one (frequencies within about 6 %, weights by the shares), so the mode stays continuous where
+  two close modes swap; two far-apart modes that share the joint are never averaged.
+- ``shaped_modes`` (an integer K): the K lowest-frequency eigenmodes, in frequency order,
+  whatever joint they strain most; continuous along a motion, and two veering modes are both
+  shaped. :func:`modes_to_shape` picks K for a move.
+
+Stiffness and damping grow with the static load ``L`` (gravity
 torque, N m): ``v(L) = v_0 + v_1 |L|_s + v_2 L²``; the stiffness of joint ``j`` reads its own
 gravity torque, its damping that of ``damping_load_joint``.
 
@@ -18,7 +27,7 @@ Python, Rust and C; errors name the field path, e.g. ``flex_joints[1].stiffness_
     {"schema_version": 1, "kind": "modal",
      "metadata": {"robot": "ur5e", "payload": null, "source": "...",
                   "fit_statistics": {...} | null},
-     "mode_joints": [0, 1],
+     "mode_joints": [0, 1],          (or "shaped_modes": 3: exactly one of the two)
      "flex_joints": [{"joint": 0, "stiffness_nm_per_rad": [k_0, k_1, k_2],
                       "damping_nms_per_rad": [c_0, c_1, c_2], "damping_load_joint": 1},
                      ...]}
@@ -38,9 +47,19 @@ import numpy as np
 
 from tvist import _core
 from tvist.map_files import MapDocument, RobotModesMixin
+from tvist.modal_residual import ModeResidual, ShapingChoice, modes_to_shape
 from tvist.robots import Robot
 
-__all__ = ["KIND", "SCHEMA_VERSION", "ModalDynamics", "ModalMap", "modal_map_from_flex"]
+__all__ = [
+    "KIND",
+    "SCHEMA_VERSION",
+    "ModalDynamics",
+    "ModalMap",
+    "ModeResidual",
+    "ShapingChoice",
+    "modal_map_from_flex",
+    "modes_to_shape",
+]
 
 SCHEMA_VERSION: int = _core.MAP_SCHEMA_VERSION
 #: The ``kind`` of a modal map file.
@@ -74,34 +93,52 @@ class ModalMap(MapDocument):
         at zero load, per N m, per (N m)²; ``v_0 > 0`` for the stiffness, all ``>= 0``), and
         ``damping_load_joint``.
     mode_joints
-        The joints naming the shaped modes, in cascade order (default base, shoulder).
+        The joints naming the shaped modes, in cascade order (default base, shoulder, unless
+        ``shaped_modes`` is given).
     metadata
         ``robot``, ``source``, ``fit_statistics`` and anything else JSON-ready.
+    shaped_modes
+        Instead of ``mode_joints``: the number K of lowest-frequency modes shaped, in
+        frequency order (1 to the number of flexible joints).
 
     Raises
     ------
     ValueError
         Naming the field: missing, unknown, non-finite or negative values, a joint listed
-        twice, a mode joint that is not flexible.
+        twice, a mode joint that is not flexible, both ``mode_joints`` and ``shaped_modes``, a
+        ``shaped_modes`` outside 1 to the number of flexible joints.
     """
 
     def __init__(
         self,
         flex_joints: Sequence[Mapping[str, Any]],
-        mode_joints: Sequence[int] = (0, 1),
+        mode_joints: Sequence[int] | None = None,
         metadata: Mapping[str, Any] | None = None,
+        *,
+        shaped_modes: int | None = None,
     ) -> None:
         if isinstance(flex_joints, (str, bytes)) or not isinstance(flex_joints, Sequence):
             raise ValueError("flex_joints: must be a list of flexible-joint objects")
-        if isinstance(mode_joints, (str, bytes)) or not isinstance(mode_joints, Sequence):
+        if mode_joints is not None and shaped_modes is not None:
+            raise ValueError("shaped_modes: give either mode_joints or shaped_modes, not both")
+        if mode_joints is None and shaped_modes is None:
+            mode_joints = (0, 1)
+        if mode_joints is not None and (
+            isinstance(mode_joints, (str, bytes)) or not isinstance(mode_joints, Sequence)
+        ):
             raise ValueError("mode_joints: must be a list of joint indices")
         if metadata is not None and not isinstance(metadata, Mapping):
             raise ValueError("metadata: must be an object")
+        selection = (
+            {"mode_joints": _plain(mode_joints)}
+            if mode_joints is not None
+            else {"shaped_modes": _plain(shaped_modes)}
+        )
         document = {
             "schema_version": SCHEMA_VERSION,
             "kind": KIND,
             "metadata": _plain(metadata),
-            "mode_joints": _plain(mode_joints),
+            **selection,
             "flex_joints": _plain(flex_joints),
         }
         core, self.metadata = _core.map_from_document(document)
@@ -123,9 +160,23 @@ class ModalMap(MapDocument):
         return self._core.flex_joints
 
     @property
-    def mode_joints(self) -> list[int]:
-        """The joints naming the shaped modes, in cascade order."""
+    def mode_joints(self) -> list[int] | None:
+        """The joints naming the shaped modes, in cascade order; ``None`` for a map shaping
+        its lowest-frequency modes (:attr:`shaped_modes`)."""
         return self._core.mode_joints
+
+    @property
+    def shaped_modes(self) -> int | None:
+        """The number of lowest-frequency modes shaped; ``None`` for a map naming its modes
+        by joint (:attr:`mode_joints`)."""
+        return self._core.shaped_modes
+
+    def joint_laws(self, robot: Robot, q: Sequence[float] | np.ndarray) -> np.ndarray:
+        """Stiffness (N m/rad) and damping (N m s/rad) of every flexible joint at pose ``q``
+        of ``robot`` (the laws at its gravity torques), in the order of :attr:`flex_joints`:
+        ``(n_flex, 2)``."""
+        tau = robot.gravity_torque_many(np.asarray(q, dtype=float)[None, :])
+        return self._core.joint_laws_many(np.ascontiguousarray(tau))[0]
 
     def modes_from_mass_matrix_many(
         self, mass_kg_m2: np.ndarray, gravity_torque_nm: np.ndarray | None = None
@@ -169,10 +220,12 @@ class ModalMap(MapDocument):
 
     def __repr__(self) -> str:
         joints = [f["joint"] for f in self.flex_joints]
-        return (
-            f"ModalMap(flex_joints={joints}, mode_joints={self.mode_joints}, "
-            f"robot={self.metadata.get('robot')!r})"
+        shaped = (
+            f"mode_joints={self.mode_joints}"
+            if self.mode_joints is not None
+            else f"shaped_modes={self.shaped_modes}"
         )
+        return f"ModalMap(flex_joints={joints}, {shaped}, robot={self.metadata.get('robot')!r})"
 
 
 class ModalDynamics(RobotModesMixin, _core.ModalDynamics):

@@ -15,7 +15,7 @@
 //! {"schema_version": 1,
 //!  "kind": "modal",
 //!  "metadata": {...as above...},
-//!  "mode_joints": [0, 1],
+//!  "mode_joints": [0, 1]   |   "shaped_modes": 3,
 //!  "flex_joints": [{"joint": 0, "stiffness_nm_per_rad": [k_0, k_1, k_2],
 //!                   "damping_nms_per_rad": [c_0, c_1, c_2], "damping_load_joint": 1}, ...]}
 //! ```
@@ -24,7 +24,9 @@
 //! - `kind` names the form of the map. `"paper10"`: the ten-coefficient physical map of
 //!   [`crate::dynmap`] ([`MapForm::Paper10`]); `"modal"`: the modal map of
 //!   [`crate::modal_map`] ([`MapForm::Modal`]: load laws `[at_zero, per_nm, per_nm2]` of
-//!   every flexible joint, and the joints naming the shaped modes in cascade order). Files
+//!   every flexible joint, and which modes are shaped: exactly one of `mode_joints`, the
+//!   joints naming the shaped modes in cascade order, or `shaped_modes`, the number of
+//!   lowest-frequency modes shaped, 1 to the number of flexible joints). Files
 //!   written before `kind` named the form carry
 //!   `"tvist.dynamic_map"` or no `kind`; both are read as `"paper10"` (and written back as it).
 //!   Another form is one more [`MapForm`] variant and one more arm in [`MapForm::parse`] and
@@ -48,7 +50,7 @@
 
 use crate::dynmap::{DynamicMap, InertiaRange, MapCoefficients, ModeMap, MAX_JOINT_INDEX};
 use crate::error::Error;
-use crate::modal_map::{FlexJoint, LoadLaw, ModalMap};
+use crate::modal_map::{FlexJoint, LoadLaw, ModalMap, ShapedModes};
 use serde::de::{Deserialize, Deserializer, Error as _, MapAccess, SeqAccess, Visitor};
 use serde_json::{Map, Number, Value};
 use std::io::Read;
@@ -125,7 +127,7 @@ impl MapForm {
     fn fields(kind: &str) -> Option<&'static [&'static str]> {
         match kind {
             KIND_PAPER10 | LEGACY_KIND => Some(&["modes"]),
-            KIND_MODAL => Some(&["mode_joints", "flex_joints"]),
+            KIND_MODAL => Some(&["mode_joints", "shaped_modes", "flex_joints"]),
             _ => None,
         }
     }
@@ -177,10 +179,10 @@ impl MapForm {
                 Value::Array(map.mode_maps().iter().map(mode_to_value).collect()),
             )],
             MapForm::Modal(map) => vec![
-                (
-                    "mode_joints",
-                    Value::from(map.mode_joints().collect::<Vec<_>>()),
-                ),
+                match map.shaped_modes() {
+                    ShapedModes::ByJoint(joints) => ("mode_joints", Value::from(joints.clone())),
+                    ShapedModes::Lowest(k) => ("shaped_modes", Value::from(*k)),
+                },
                 (
                     "flex_joints",
                     Value::Array(map.flex_joints().iter().map(flex_to_value).collect()),
@@ -601,16 +603,29 @@ pub fn mode_from(value: &Value, path: &str) -> Result<ModeMap, Error> {
     })
 }
 
-/// The `modal` form's fields: `mode_joints` and `flex_joints`.
+/// The `modal` form's fields: `flex_joints` and one of `mode_joints` and `shaped_modes`.
 fn modal_from(doc: &Map<String, Value>) -> Result<ModalMap, Error> {
-    let mode_joints = match doc.get("mode_joints") {
-        None => return Err(Error::document("mode_joints", "missing")),
-        Some(Value::Array(joints)) => joints
+    let mode_joints = match (doc.get("mode_joints"), doc.get("shaped_modes")) {
+        (None, None) => {
+            return Err(Error::document(
+                "mode_joints",
+                "missing: name the shaped modes by joint (mode_joints: [0, 1, ...]) or by \
+                 number (shaped_modes: K, the K lowest-frequency modes)",
+            ))
+        }
+        (Some(_), Some(_)) => {
+            return Err(Error::document(
+                "shaped_modes",
+                "give either mode_joints or shaped_modes, not both",
+            ))
+        }
+        (None, Some(k)) => Err(k),
+        (Some(Value::Array(joints)), None) => Ok(joints
             .iter()
             .enumerate()
             .map(|(i, j)| joint_index(Some(j), &format!("mode_joints[{i}]")))
-            .collect::<Result<Vec<_>, _>>()?,
-        Some(other) => {
+            .collect::<Result<Vec<_>, _>>()?),
+        (Some(other), None) => {
             return Err(Error::document(
                 "mode_joints",
                 format!("must be a list of joint indices, got {other}"),
@@ -635,6 +650,26 @@ fn modal_from(doc: &Map<String, Value>) -> Result<ModalMap, Error> {
     // messages name the joint), with a mode they certainly have; then the mode joints.
     let first = flex.first().map_or(0, |f| f.joint);
     ModalMap::new(flex.clone(), &[first]).map_err(|e| Error::document("flex_joints", reason(e)))?;
+    let mode_joints = match mode_joints {
+        Ok(joints) => joints,
+        Err(k) => {
+            let n = flex.len();
+            let k = k
+                .as_u64()
+                .filter(|&k| k >= 1 && k <= n as u64)
+                .ok_or_else(|| {
+                    Error::document(
+                        "shaped_modes",
+                        format!(
+                            "must be an integer from 1 to {n} (the number of flexible joints), \
+                             got {k}"
+                        ),
+                    )
+                })?;
+            return ModalMap::shaping(flex, ShapedModes::Lowest(k as usize))
+                .map_err(|e| Error::document("shaped_modes", reason(e)));
+        }
+    };
     if mode_joints.is_empty() {
         return Err(Error::document(
             "mode_joints",
@@ -1175,7 +1210,7 @@ mod tests {
         assert_eq!(file.robot(), Some("ur5e"));
         let map = file.form().as_modal().expect("modal");
         assert_eq!(map.robot(), Some("ur5e"));
-        assert_eq!(map.mode_joints().collect::<Vec<_>>(), vec![0, 1]);
+        assert_eq!(map.mode_joints(), Some(&[0, 1][..]));
         let base = map.flex_joints()[0];
         assert_eq!((base.joint, base.damping_load_joint), (0, 1));
         assert_eq!(base.stiffness_nm_per_rad.per_nm2, 0.012);
@@ -1245,6 +1280,38 @@ mod tests {
         let without = text.replace(r#""robot": "ur5e""#, r#""robot": null"#);
         let file = MapFile::parse(&without).expect("no robot");
         assert_eq!(file.form().robot(), None);
+    }
+
+    #[test]
+    fn a_modal_file_shaping_its_lowest_modes_reads_and_writes_back() {
+        let text = PYTHON_MODAL_FILE.replacen(
+            "\"mode_joints\": [\n    0,\n    1\n  ]",
+            "\"shaped_modes\": 2",
+            1,
+        );
+        assert_ne!(text, PYTHON_MODAL_FILE);
+        let file = MapFile::parse(&text).expect("shaped_modes file");
+        let map = file.form().as_modal().expect("modal");
+        assert_eq!(map.shaped_modes(), &ShapedModes::Lowest(2));
+        assert_eq!(map.mode_joints(), None);
+        assert_eq!(map.n_modes(), 2);
+        let written = file.to_value();
+        assert_eq!(written["shaped_modes"], Value::from(2));
+        assert!(written.get("mode_joints").is_none());
+        assert_eq!(MapFile::parse(&file.to_json()).expect("round trip"), file);
+        let cases = [
+            (text.replacen("\"shaped_modes\": 2", "\"shaped_modes\": 3", 1), "shaped_modes: must be an integer from 1 to 2 (the number of flexible joints), got 3"),
+            (text.replacen("\"shaped_modes\": 2", "\"shaped_modes\": 0", 1), "shaped_modes: must be an integer from 1 to 2"),
+            (text.replacen("\"shaped_modes\": 2", "\"shaped_modes\": 1.5", 1), "shaped_modes: must be an integer from 1 to 2"),
+            (text.replacen("\"shaped_modes\": 2", "\"shaped_modes\": [0]", 1), "shaped_modes: must be an integer from 1 to 2"),
+            (text.replacen("\"shaped_modes\": 2", "\"shaped_modes\": 2, \"mode_joints\": [0]", 1), "shaped_modes: give either mode_joints or shaped_modes, not both"),
+            (text.replacen("\"shaped_modes\": 2,", "", 1), "mode_joints: missing: name the shaped modes"),
+        ];
+        for (doc, expected) in cases {
+            assert_ne!(doc, text, "{expected}");
+            let msg = reason_of(&doc);
+            assert!(msg.contains(expected), "{msg:?} lacks {expected:?}");
+        }
     }
 
     proptest::proptest! {

@@ -2,7 +2,7 @@
 //! mass-matrix block of the flexible joints (and gravity torques, if the map's laws read them)
 //! at the previous shaped output, and the map's eigenproblem.
 
-use crate::error::Status;
+use crate::error::{Error, Status};
 use crate::modal_map::ModalMap;
 use crate::robot::Robot;
 use crate::robot_modes::{ModeLaw, RobotModes};
@@ -20,6 +20,14 @@ impl ModalDynamics {
     /// (only the leading block of the joints the map reads is evaluated; other entries stay 0).
     pub fn last_mass_matrix(&self) -> &[f64] {
         self.last_evaluation()
+    }
+
+    /// The same robot and flexible joints shaping their `k` lowest-frequency modes
+    /// ([`ModalMap::shaping_lowest`]; `1 <= k <=` the number of flexible joints). A setup call:
+    /// it builds and checks a new provider.
+    pub fn shaping_lowest(&self, k: usize) -> Result<ModalDynamics, Error> {
+        // The robot check passed when `self` was built: the same robot and map robot.
+        ModalDynamics::new_allowing_other_robot(self.robot().clone(), self.map().shaping_lowest(k)?)
     }
 }
 

@@ -47,12 +47,35 @@
 //! its bearing). `|x|_s` is [`crate::dynmap::smooth_abs_torque_nm`]. The coefficients are
 //! non-negative and `k_0 > 0`, so stiffness is positive everywhere.
 //!
-//! **Mode assignment.** The modes to shape are named by a joint each (`mode_joints`, e.g.
-//! `[0, 1]` for base then shoulder): mode `m` is the (damped) eigenmode that stores the largest share
-//! of its strain energy in joint `mode_joints[m]`, so "base" and "shoulder" keep their
-//! meaning when the frequencies cross. Precisely, a share-weighted average (weights
-//! `share^4`) of the eigenmodes: the dominant one where one dominates, a continuous blend
-//! where two close modes share the joint (see `ModalMap::assign`).
+//! **Which modes are shaped.** A map names its shaped modes in one of two ways
+//! ([`ShapedModes`]):
+//!
+//! - **By joint** (`mode_joints`, e.g. `[0, 1]` for base then shoulder): mode `m` is the
+//!   (damped) eigenmode that stores the largest share of its strain energy in joint
+//!   `mode_joints[m]`, so "base" and "shoulder" keep their meaning when the frequencies cross;
+//!   among the eigenmodes not already taken by an earlier mode, so two modes never shape the
+//!   same eigenmode (where one eigenmode strains both base and shoulder most, the shoulder
+//!   mode is the next one in the shoulder).
+//!   Another eigenmode is blended in only if it forms a *veering pair* with that dominant one
+//!   (see below); otherwise the dominant eigenmode is the shaped mode as it is.
+//! - **By frequency** (`shaped_modes: K`): the `K` lowest-frequency eigenmodes, in frequency
+//!   order. Frequency-ranked modes are continuous along a motion (the sorted roots are; their
+//!   damping ratios too, except where two uncoupled modes cross exactly), and two veering
+//!   modes are both shaped, so no blending is needed.
+//!
+//! **Veering pairs.** Where two eigenmodes swap the joint they dominate, the dominant one
+//! jumps from one branch to the other; a jump in a filter's delay is a step in the shaped
+//! reference. Close to such a swap the two are blended, weights `(s_i/s_d)^4 · h(g)` against
+//! 1 for the dominant `d`, with `s` the shares of the naming joint and `g = |ln(ω_i/ω_d)|` the
+//! frequency gap; `h` is 1 up to [`VEERING_FULL_GAP`] and falls smoothly to 0 at
+//! [`VEERING_GAP`]. At the swap the two shares are equal and the blend is symmetric, so the
+//! shaped mode is continuous there. Two weakly coupled modes swap where their frequencies are
+//! closest, a gap of about the coupling `|M_ij|/√(M_ii M_jj)` (a few per cent or less): a
+//! veering pair, blended, with every blended frequency within [`VEERING_GAP`] of the dominant
+//! one, which a ZV filter still suppresses to a few per cent. Two strongly coupled modes far
+//! apart (17 and 35 Hz, base shares 0.49 and 0.37) are two physical modes that both move the
+//! joint; their share-weighted mean (21.4 Hz) is neither and shapes neither, so the dominant
+//! one is taken and the other is left to a frequency-ranked map.
 //!
 //! Evaluation ([`ModalMap::modes_from_mass_matrix`]) uses fixed-size arrays only: no
 //! allocation, no panic.
@@ -153,11 +176,22 @@ pub struct ModalSolution {
     pub strain_share: [[f64; MAX_FLEX_JOINTS]; MAX_FLEX_JOINTS],
 }
 
-/// Flexible joints plus the list of modes to shape (see the module docs).
+/// Which eigenmodes a modal map shapes, in cascade order (module docs).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ShapedModes {
+    /// Mode `m` is the eigenmode dominated by joint `joints[m]` (a joint index, 0 = base).
+    ByJoint(Vec<usize>),
+    /// The `k` lowest-frequency eigenmodes, in frequency order.
+    Lowest(usize),
+}
+
+/// Flexible joints plus the modes to shape (see the module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModalMap {
     flex: Vec<FlexJoint>,
-    /// For each shaped mode, the index into `flex` of the joint that must dominate it.
+    shaped: ShapedModes,
+    /// For [`ShapedModes::ByJoint`], per shaped mode the index into `flex` of the joint that
+    /// must dominate it; empty for [`ShapedModes::Lowest`].
     mode_flex_index: Vec<usize>,
     /// The robot the map was identified on, if known.
     robot: Option<String>,
@@ -169,12 +203,19 @@ pub struct ModalMap {
 }
 
 impl ModalMap {
+    /// Validates and builds the map shaping the modes named by `mode_joints`
+    /// ([`ShapedModes::ByJoint`]): the joints naming the shaped modes in cascade order, each
+    /// one of the flexible joints, distinct, at least one. See [`Self::shaping`].
+    pub fn new(flex: Vec<FlexJoint>, mode_joints: &[usize]) -> Result<ModalMap, Error> {
+        ModalMap::shaping(flex, ShapedModes::ByJoint(mode_joints.to_vec()))
+    }
+
     /// Validates and builds the map.
     ///
-    /// `flex`: 1 to [`MAX_FLEX_JOINTS`] joints, distinct. `mode_joints`: the joints naming the
-    /// shaped modes in cascade order, each one of the flexible joints, distinct, at least one.
+    /// `flex`: 1 to [`MAX_FLEX_JOINTS`] joints, distinct. `shaped`: by joint (see
+    /// [`Self::new`]) or the `k` lowest-frequency modes, `1 <= k <= flex.len()`.
     /// The robot is unknown until [`Self::for_robot`].
-    pub fn new(flex: Vec<FlexJoint>, mode_joints: &[usize]) -> Result<ModalMap, Error> {
+    pub fn shaping(flex: Vec<FlexJoint>, shaped: ShapedModes) -> Result<ModalMap, Error> {
         if flex.is_empty() || flex.len() > MAX_FLEX_JOINTS {
             return Err(Error::InvalidParameter(format!(
                 "a modal map needs 1 to {MAX_FLEX_JOINTS} flexible joints, got {}",
@@ -193,7 +234,21 @@ impl ModalMap {
             f.damping_nms_per_rad
                 .validate(&format!("damping of joint {}", f.joint), false)?;
         }
-        if mode_joints.is_empty() {
+        let mode_joints: &[usize] = match &shaped {
+            ShapedModes::ByJoint(joints) => joints,
+            ShapedModes::Lowest(k) => {
+                if *k == 0 || *k > flex.len() {
+                    return Err(Error::InvalidParameter(format!(
+                        "shaped_modes = {k}: a modal map with {} flexible joint(s) shapes 1 to \
+                         {} of its lowest-frequency modes",
+                        flex.len(),
+                        flex.len()
+                    )));
+                }
+                &[]
+            }
+        };
+        if mode_joints.is_empty() && matches!(shaped, ShapedModes::ByJoint(_)) {
             return Err(Error::InvalidParameter(
                 "a modal map needs at least one mode to shape".into(),
             ));
@@ -224,6 +279,7 @@ impl ModalMap {
             .any(|f| f.stiffness_nm_per_rad.uses_load() || f.damping_nms_per_rad.uses_load());
         Ok(ModalMap {
             flex,
+            shaped,
             mode_flex_index,
             robot: None,
             required_joints,
@@ -247,14 +303,36 @@ impl ModalMap {
         &self.flex
     }
 
-    /// The joints naming the shaped modes, in cascade order.
-    pub fn mode_joints(&self) -> impl Iterator<Item = usize> + '_ {
-        self.mode_flex_index.iter().map(|&i| self.flex[i].joint)
+    /// Which modes the map shapes.
+    pub fn shaped_modes(&self) -> &ShapedModes {
+        &self.shaped
+    }
+
+    /// The joints naming the shaped modes, in cascade order; `None` for a map shaping its
+    /// lowest-frequency modes.
+    pub fn mode_joints(&self) -> Option<&[usize]> {
+        match &self.shaped {
+            ShapedModes::ByJoint(joints) => Some(joints),
+            ShapedModes::Lowest(_) => None,
+        }
+    }
+
+    /// The same flexible joints shaping their `k` lowest-frequency modes
+    /// ([`ShapedModes::Lowest`]), `1 <= k <=` the number of flexible joints; the robot is kept.
+    pub fn shaping_lowest(&self, k: usize) -> Result<ModalMap, Error> {
+        let map = ModalMap::shaping(self.flex.clone(), ShapedModes::Lowest(k))?;
+        Ok(ModalMap {
+            robot: self.robot.clone(),
+            ..map
+        })
     }
 
     /// Number of shaped modes.
     pub fn n_modes(&self) -> usize {
-        self.mode_flex_index.len()
+        match self.shaped {
+            ShapedModes::ByJoint(_) => self.mode_flex_index.len(),
+            ShapedModes::Lowest(k) => k,
+        }
     }
 
     /// Number of joints the map reads (largest joint or load-joint index + 1).
@@ -265,6 +343,27 @@ impl ModalMap {
     /// Whether any law reads a gravity torque.
     pub fn uses_gravity(&self) -> bool {
         self.uses_gravity
+    }
+
+    /// Stiffness (N m/rad) and damping (N m s/rad) of every flexible joint, in the order of
+    /// [`Self::flex_joints`], under the gravity torques `tau_g` (N m, at least
+    /// [`Self::required_joints`] values when [`Self::uses_gravity`]; otherwise not read).
+    /// Entries past the flexible joints are 0; NaN for a `tau_g` too short.
+    pub fn joint_laws_at(&self, tau_g: &[f64]) -> ([f64; MAX_FLEX_JOINTS], [f64; MAX_FLEX_JOINTS]) {
+        let load = |j: usize| {
+            if !self.uses_gravity {
+                0.0
+            } else {
+                tau_g.get(j).copied().unwrap_or(f64::NAN)
+            }
+        };
+        let mut stiffness = [0.0; MAX_FLEX_JOINTS];
+        let mut damping = [0.0; MAX_FLEX_JOINTS];
+        for (i, f) in self.flex.iter().enumerate() {
+            stiffness[i] = f.stiffness_nm_per_rad.value(load(f.joint));
+            damping[i] = f.damping_nms_per_rad.value(load(f.damping_load_joint));
+        }
+        (stiffness, damping)
     }
 
     /// Every mode of the flexible joints from the mass matrix `mass` (row-major
@@ -282,12 +381,11 @@ impl ModalMap {
         if gravity && tau_g.len() < need {
             return None;
         }
-        let load = |j: usize| if gravity { tau_g[j] } else { 0.0 };
+        let (stiffness, damping) = self.joint_laws_at(tau_g);
         let mut inv_sqrt_k = [0.0; MAX_FLEX_JOINTS];
         let mut c_over_k = [0.0; MAX_FLEX_JOINTS];
-        for (i, f) in self.flex.iter().enumerate() {
-            let k = f.stiffness_nm_per_rad.value(load(f.joint));
-            let c = f.damping_nms_per_rad.value(load(f.damping_load_joint));
+        for i in 0..nf {
+            let (k, c) = (stiffness[i], damping[i]);
             if !(k > 0.0 && k.is_finite() && c.is_finite()) {
                 return None;
             }
@@ -382,28 +480,82 @@ impl ModalMap {
         Status::OK
     }
 
-    /// Assigns eigenmodes to the shaped modes by dominant joint (module docs): mode `m` is
-    /// the average of the eigenmodes weighted by `share^ASSIGNMENT_POWER` of their strain
-    /// energy in joint `m`. Where one eigenmode dominates the joint (the usual case) that is
-    /// the eigenmode itself to well under a per mille; where two eigenmodes share the joint
-    /// (a veering of two close frequencies) it blends them, so the shaped modes stay
-    /// continuous along a motion instead of jumping between the two branches (a jump in a
-    /// filter's delay is a step in the shaped reference).
+    /// The shaped modes of the eigenmodes `sol` (module docs), into `out` ([`Self::n_modes`]).
     fn assign(&self, sol: &ModalSolution, out: &mut [Mode]) {
-        for (o, &f) in out.iter_mut().zip(&self.mode_flex_index) {
-            let (mut sum_w, mut wn, mut zeta) = (0.0, 0.0, 0.0);
-            for i in 0..sol.n {
-                let w = sol.strain_share[i][f].powi(ASSIGNMENT_POWER);
-                sum_w += w;
-                wn += w * sol.wn_rad_s[i];
-                zeta += w * sol.zeta[i];
+        match self.shaped {
+            ShapedModes::Lowest(_) => {
+                // Insertion sort of the (at most MAX_FLEX_JOINTS) eigenmodes by frequency; a
+                // NaN frequency sorts last.
+                let mut order: [usize; MAX_FLEX_JOINTS] = std::array::from_fn(|i| i);
+                for i in 1..sol.n {
+                    let mut j = i;
+                    while j > 0
+                        && sol.wn_rad_s[order[j]].total_cmp(&sol.wn_rad_s[order[j - 1]])
+                            == std::cmp::Ordering::Less
+                    {
+                        order.swap(j, j - 1);
+                        j -= 1;
+                    }
+                }
+                for (o, &i) in out.iter_mut().zip(&order[..sol.n]) {
+                    *o = Mode::new(sol.wn_rad_s[i], sol.zeta[i]);
+                }
             }
-            *o = if sum_w > 0.0 {
-                Mode::new(wn / sum_w, zeta / sum_w)
-            } else {
-                Mode::new(f64::NAN, f64::NAN)
-            };
+            ShapedModes::ByJoint(_) => {
+                // Each eigenmode is dominant for one shaped mode at most (cascade order).
+                let mut claimed = [false; MAX_FLEX_JOINTS];
+                for (o, &f) in out.iter_mut().zip(&self.mode_flex_index) {
+                    *o = dominated_by(sol, f, &mut claimed);
+                }
+            }
         }
+    }
+}
+
+/// The eigenmode `d` that stores the largest share of its strain energy in flexible joint
+/// `f` among those not `claimed` by an earlier shaped mode (then claimed), blended with the
+/// eigenmodes that veer with it (module docs): weights `(s_i/s_d)^4 h(g_i)` against 1 for `d`.
+/// NaN if no unclaimed eigenmode strains the joint.
+fn dominated_by(sol: &ModalSolution, f: usize, claimed: &mut [bool; MAX_FLEX_JOINTS]) -> Mode {
+    let share = |i: usize| sol.strain_share[i][f];
+    let mut dominant: Option<usize> = None;
+    for i in (0..sol.n).filter(|&i| !claimed[i]) {
+        if dominant.is_none_or(|d| share(i) > share(d)) {
+            dominant = Some(i);
+        }
+    }
+    let Some(d) = dominant else {
+        return Mode::new(f64::NAN, f64::NAN);
+    };
+    claimed[d] = true;
+    let s_d = share(d);
+    if s_d.is_nan() || s_d <= 0.0 {
+        return Mode::new(f64::NAN, f64::NAN);
+    }
+    let (mut sum_w, mut wn, mut zeta) = (1.0, sol.wn_rad_s[d], sol.zeta[d]);
+    for i in (0..sol.n).filter(|&i| i != d) {
+        let gap = (sol.wn_rad_s[i] / sol.wn_rad_s[d]).ln().abs();
+        let w = (share(i) / s_d).powi(ASSIGNMENT_POWER) * veering_weight(gap);
+        if w > 0.0 {
+            sum_w += w;
+            wn += w * sol.wn_rad_s[i];
+            zeta += w * sol.zeta[i];
+        }
+    }
+    Mode::new(wn / sum_w, zeta / sum_w)
+}
+
+/// `h(g)`: 1 for a frequency gap `g = |ln(ω_i/ω_d)|` up to [`VEERING_FULL_GAP`], 0 from
+/// [`VEERING_GAP`] on (and for a NaN gap), a smoothstep between (continuous with its slope).
+#[inline]
+fn veering_weight(gap: f64) -> f64 {
+    if gap <= VEERING_FULL_GAP {
+        1.0
+    } else if gap < VEERING_GAP {
+        let t = (VEERING_GAP - gap) / (VEERING_GAP - VEERING_FULL_GAP);
+        t * t * (3.0 - 2.0 * t)
+    } else {
+        0.0
     }
 }
 
@@ -415,8 +567,20 @@ impl ModalMap {
 /// per full step at `1e-4`, `benches/modal_step.rs`).
 pub const JACOBI_TOLERANCE: f64 = 1e-2;
 
-/// Exponent of the strain-energy shares that weigh the eigenmodes of one shaped mode.
+/// Exponent of the strain-energy share ratios that weigh a veering eigenmode against the
+/// dominant one.
 pub const ASSIGNMENT_POWER: i32 = 4;
+
+/// Frequency gap `|ln(ω_i/ω_d)|` up to which a veering eigenmode is blended with full weight
+/// (module docs).
+pub const VEERING_FULL_GAP: f64 = 0.03;
+
+/// Frequency gap `|ln(ω_i/ω_d)|` from which two eigenmodes are never blended: about 6 %.
+/// A blended mode's frequency then stays within 6 % of the dominant eigenmode's, where a ZV
+/// filter leaves at most `sin(π/2 · 0.06) ≈ 9 %` of the vibration (less with damping), and
+/// two weakly coupled joints (coupling `|M_ij|/√(M_ii M_jj)` below 3 %) swap inside the
+/// full-weight band.
+pub const VEERING_GAP: f64 = 0.06;
 
 #[cfg(test)]
 mod tests {

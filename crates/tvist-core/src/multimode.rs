@@ -5,7 +5,7 @@
 //! filters that each update from their own input would be wrong.
 
 use crate::delay_line::{DelayLine, Interpolation};
-use crate::dynamics::Dynamics;
+use crate::dynamics::{Dynamics, Provider};
 use crate::error::{Error, Status};
 use crate::held_input::HeldInput;
 use crate::shaper::{Mode, ShaperKind};
@@ -64,6 +64,8 @@ pub struct TvShaper<D: Dynamics> {
     designed: bool,
     n_dof: usize,
     dt_s: f64,
+    /// The configuration the shaper was built with (a replacement of its provider reuses it).
+    config: TvShaperConfig,
 }
 
 impl<D: Dynamics> TvShaper<D> {
@@ -155,6 +157,7 @@ impl<D: Dynamics> TvShaper<D> {
             designed: false,
             n_dof,
             dt_s,
+            config: config.clone(),
         })
     }
 
@@ -192,13 +195,7 @@ impl<D: Dynamics> TvShaper<D> {
     /// [`Error::InvalidParameter`] mid-move and with the constructor's error for an invalid
     /// provider or configuration; the shaper is unchanged on every error.
     pub fn replace_dynamics(&mut self, dynamics: D, config: &TvShaperConfig) -> Result<(), Error> {
-        if !self.is_at_rest() {
-            return Err(Error::InvalidParameter(
-                "the shaper is mid-move (its delay lines are not at rest on the input); \
-                 replace its dynamics between moves"
-                    .into(),
-            ));
-        }
+        self.check_at_rest("replace its dynamics")?;
         let mut next = TvShaper::new(dynamics, config)?;
         if next.n_dof != self.n_dof {
             return Err(Error::DimensionMismatch {
@@ -212,6 +209,23 @@ impl<D: Dynamics> TvShaper<D> {
         }
         *self = next;
         Ok(())
+    }
+
+    /// [`Error::InvalidParameter`] naming `what` to do between moves, unless
+    /// [`Self::is_at_rest`].
+    fn check_at_rest(&self, what: &str) -> Result<(), Error> {
+        if self.is_at_rest() {
+            return Ok(());
+        }
+        Err(Error::InvalidParameter(format!(
+            "the shaper is mid-move (its delay lines are not at rest on the input); {what} \
+             between moves"
+        )))
+    }
+
+    /// The configuration the shaper was built with.
+    pub fn config(&self) -> &TvShaperConfig {
+        &self.config
     }
 
     /// Forgets all history: the next `step` starts at rest on its input.
@@ -371,5 +385,25 @@ impl<D: Dynamics> TvShaper<D> {
 
     pub fn dt_s(&self) -> f64 {
         self.dt_s
+    }
+}
+
+impl<C: Dynamics> TvShaper<Provider<C>> {
+    /// Shapes the `k` lowest-frequency modes of the shaper's modal map from now on
+    /// ([`crate::ModalDynamics::shaping_lowest`], whatever modes the map shaped before;
+    /// `1 <= k <=` its number of flexible joints), one filter each, so the added delay is
+    /// that of those `k` modes. Between moves only, as [`Self::replace_dynamics`] (a setup
+    /// call: it builds a new provider and new delay lines); the shaper is unchanged on every
+    /// error: mid-move, a provider other than a modal map, or `k` out of range.
+    pub fn set_shaped_modes(&mut self, k: usize) -> Result<(), Error> {
+        let Provider::Modal(modal) = &self.dynamics else {
+            return Err(Error::InvalidParameter(
+                "the number of shaped modes is set on a shaper driven by a modal map".into(),
+            ));
+        };
+        self.check_at_rest("set the number of shaped modes")?;
+        let next = Provider::Modal(Box::new(modal.shaping_lowest(k)?));
+        let config = self.config.clone();
+        self.replace_dynamics(next, &config)
     }
 }

@@ -7,7 +7,7 @@ mod robot_support;
 mod alloc_support;
 
 use alloc_support::{allocations_in, the_counter_sees_this_thread_only};
-use tvist_core::{FlexJoint, LoadLaw, ModalDynamics, ModalMap, Mode, ShaperKind};
+use tvist_core::{FlexJoint, LoadLaw, ModalDynamics, ModalMap, Mode, ShapedModes, ShaperKind};
 
 fn ur5e_like_map() -> ModalMap {
     let law = |v0: f64, v1: f64, v2: f64| LoadLaw {
@@ -65,9 +65,23 @@ fn modal_map_provider_and_shaper_never_allocate() {
     });
     assert_eq!(n, 0, "ModalMap evaluation allocated {n} times");
 
+    // The frequency-ranked selection (a sort of the eigenmodes) takes the same path.
+    for k in 1..=3 {
+        let lowest = map.shaping_lowest(k).expect("valid");
+        assert_eq!(lowest.shaped_modes(), &ShapedModes::Lowest(k));
+        let mut modes = vec![Mode::new(0.0, 0.0); k];
+        let n = allocations_in(|| {
+            lowest.modes_from_mass_matrix(&mass, 6, &tau, &mut modes);
+            lowest.modes_from_mass_matrix(&mass[..30], 6, &tau, &mut modes);
+            lowest.modes_from_mass_matrix(&[f64::NAN; 36], 6, &tau, &mut modes);
+        });
+        assert_eq!(n, 0, "ModalMap (lowest {k}) evaluation allocated {n} times");
+    }
+
     let mut rng = robot_support::Rng(11);
     let poses: Vec<Vec<f64>> = (0..200).map(|_| rng.pose(6)).collect();
-    // The DH chain and the same arm placed as URDF places it (DH steps, general steps).
+    // The DH chain and the same arm placed as URDF places it (DH steps, general steps), each
+    // with the joint-named modes and with the three lowest.
     for robot in [
         robot_support::ur_robot("ur5e", 5.0),
         robot_support::ur_robot_placed("ur5e", 5.0, &[]),
@@ -75,11 +89,18 @@ fn modal_map_provider_and_shaper_never_allocate() {
         robot_support::ur_robot_tilted("ur5e", 5.0),
     ] {
         let provider = ModalDynamics::new(robot, map.clone()).expect("valid map");
+        let lowest = provider.shaping_lowest(3).expect("valid");
         alloc_support::assert_robot_provider_never_allocates(
             provider,
             ShaperKind::Zv,
             &poses,
             "ModalDynamics",
+        );
+        alloc_support::assert_robot_provider_never_allocates(
+            lowest,
+            ShaperKind::Zv,
+            &poses,
+            "ModalDynamics (3 lowest modes)",
         );
     }
 }

@@ -614,6 +614,52 @@ pub unsafe extern "C" fn tvist_shaper_set_map(
     })
 }
 
+/// Shapes the `n_modes` lowest-frequency modes of the shaper's modal map from the next move
+/// on (the map's flexible joints, frequency-ranked as `"shaped_modes": n_modes` in a map
+/// file, whatever modes the map shaped before), one cascaded filter each: the added delay is
+/// that of those modes. `1 <= n_modes <=` the map's number of flexible joints. A setup call
+/// (it builds a new provider and delay lines, sampling the workspace as a constructor does);
+/// never call it from the control loop.
+///
+/// Only between moves, as `tvist_shaper_set_map`. Returns `TVIST_OK`; `TVIST_ERR_MID_MOVE`
+/// mid-move; `TVIST_ERR_INVALID_PARAMETER` for a shaper not driven by a modal map or
+/// `n_modes` out of range; `TVIST_ERR_NULL`. On every error the shaper is unchanged and the
+/// reason is in `tvist_last_error_message`.
+///
+/// # Safety
+/// `shaper` comes from a constructor and is not freed.
+#[no_mangle]
+pub unsafe extern "C" fn tvist_shaper_set_shaped_modes(
+    shaper: *mut TvistShaper,
+    n_modes: usize,
+) -> i32 {
+    guard(TVIST_ERR_INTERNAL, || {
+        if !usable(shaper) {
+            return fail(TVIST_ERR_NULL, "shaper must be non-null (and aligned)");
+        }
+        // SAFETY: a live handle from a constructor (caller), used by this thread only.
+        let handle = unsafe { &mut *shaper };
+        if !matches!(handle.shaper.dynamics(), Provider::Modal(_)) {
+            return fail(
+                TVIST_ERR_INVALID_PARAMETER,
+                "this shaper is not driven by a modal map; tvist_shaper_set_shaped_modes sets \
+                 the number of shaped modes of a shaper from a \"kind\": \"modal\" map file",
+            );
+        }
+        if !handle.shaper.is_at_rest() {
+            return fail(
+                TVIST_ERR_MID_MOVE,
+                "the shaper is mid-move (its delay lines are not at rest on the input); call \
+                 tvist_shaper_set_shaped_modes between moves",
+            );
+        }
+        match handle.shaper.set_shaped_modes(n_modes) {
+            Ok(()) => TVIST_OK,
+            Err(e) => fail_with(&e),
+        }
+    })
+}
+
 /// One control cycle: shapes `q_in` into `q_out` (each `n_dof` doubles; they may be the same
 /// array). Allocation-free and lock-free.
 ///

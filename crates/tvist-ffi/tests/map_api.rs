@@ -5,19 +5,20 @@ use std::ffi::{c_char, CStr, CString};
 use std::path::PathBuf;
 use std::ptr;
 use tvist::{
-    tvist_last_error_message, tvist_shaper_free, tvist_shaper_new_constant,
+    tvist_last_error_message, tvist_shaper_delay_s, tvist_shaper_free, tvist_shaper_new_constant,
     tvist_shaper_new_constant_ex, tvist_shaper_new_map, tvist_shaper_new_map_ex,
-    tvist_shaper_new_ur_map, tvist_shaper_reset, tvist_shaper_set_map, tvist_shaper_status_counts,
-    tvist_shaper_step, TvistShaper, TvistShaperOptions, TVIST_ERR_INVALID_PARAMETER,
-    TVIST_ERR_MAP_FILE, TVIST_ERR_MID_MOVE, TVIST_ERR_NULL, TVIST_ERR_ROBOT_MISMATCH,
-    TVIST_ERR_TOO_LARGE, TVIST_ERR_UNKNOWN_ROBOT, TVIST_INTERP_CUBIC, TVIST_MAX_MODES,
-    TVIST_N_STATUS_FLAGS, TVIST_OK,
+    tvist_shaper_new_ur_map, tvist_shaper_reset, tvist_shaper_set_map,
+    tvist_shaper_set_shaped_modes, tvist_shaper_status_counts, tvist_shaper_step, TvistShaper,
+    TvistShaperOptions, TVIST_ERR_INVALID_PARAMETER, TVIST_ERR_MAP_FILE, TVIST_ERR_MID_MOVE,
+    TVIST_ERR_NULL, TVIST_ERR_ROBOT_MISMATCH, TVIST_ERR_TOO_LARGE, TVIST_ERR_UNKNOWN_ROBOT,
+    TVIST_INTERP_CUBIC, TVIST_MAX_MODES, TVIST_N_STATUS_FLAGS, TVIST_OK,
 };
 use tvist_core::map_file::{MapFile, MapForm};
 use tvist_core::robot_data::ur_e_series;
 use tvist_core::{
-    ConstantModes, DynamicMap, FlexJoint, Interpolation, LoadLaw, MapDynamics, ModalDynamics,
-    ModalMap, Mode, RigidBody, ShaperKind, Status, TvShaper, TvShaperConfig,
+    ConstantModes, DynamicMap, Dynamics, FlexJoint, Interpolation, LoadLaw, MapDynamics,
+    ModalDynamics, ModalMap, Mode, RigidBody, ShapedModes, ShaperKind, Status, TvShaper,
+    TvShaperConfig,
 };
 
 const PI: f64 = std::f64::consts::PI;
@@ -677,4 +678,114 @@ fn set_map_needs_a_map_driven_shaper_and_valid_pointers() {
             TVIST_ERR_NULL
         );
     }
+}
+
+impl Handle {
+    fn set_shaped_modes(&mut self, n_modes: usize) -> i32 {
+        // SAFETY: live handle.
+        unsafe { tvist_shaper_set_shaped_modes(self.0, n_modes) }
+    }
+}
+
+/// Base, shoulder and elbow flexible (constant laws), shaping `shaped`.
+fn three_joint_map(shaped: ShapedModes) -> ModalMap {
+    let flex = |joint: usize, k: f64, c: f64| FlexJoint {
+        joint,
+        stiffness_nm_per_rad: LoadLaw::constant(k),
+        damping_nms_per_rad: LoadLaw::constant(c),
+        damping_load_joint: joint,
+    };
+    let joints = vec![
+        flex(0, 22_000.0, 10.0),
+        flex(1, 18_000.0, 40.0),
+        flex(2, 9_000.0, 15.0),
+    ];
+    ModalMap::shaping(joints, shaped).expect("modal map")
+}
+
+fn three_joint_file(tag: &str, shaped: ShapedModes) -> TempMap {
+    let meta = serde_json::json!({"robot": "ur5e", "source": "test"});
+    let file = MapFile::new(MapForm::Modal(three_joint_map(shaped)), &meta).expect("modal file");
+    TempMap::new(tag, &file.to_json())
+}
+
+#[test]
+fn set_shaped_modes_between_moves_shapes_as_a_map_of_that_many_lowest_modes() {
+    let named = three_joint_file("k-named", ShapedModes::ByJoint(vec![0, 1]));
+    let (code, mut h) = new_map("ur5e", &named, "zv", None);
+    assert_eq!(code, TVIST_OK, "{}", last_error());
+    let first = a_move(300 + SETTLE_SAMPLES);
+    run(&mut h, &first);
+    let robot = ur_e_series("ur5e", RigidBody::point(PAYLOAD_KG, PAYLOAD_COM_M)).expect("robot");
+    for k in [3, 1, 2] {
+        assert_eq!(h.set_shaped_modes(k), TVIST_OK, "{}", last_error());
+        // The next move exactly as a new shaper from a file with "shaped_modes": k (the same
+        // arithmetic from the same rest: equal to the bit).
+        let lowest = three_joint_file(&format!("k-{k}"), ShapedModes::Lowest(k));
+        let (code, mut fresh) = new_map("ur5e", &lowest, "zv", None);
+        assert_eq!(code, TVIST_OK, "{}", last_error());
+        let (back, there) = (
+            a_move_back(600 + SETTLE_SAMPLES),
+            a_move(300 + SETTLE_SAMPLES),
+        );
+        assert_eq!(run(&mut h, &back), run(&mut fresh, &back), "k = {k}");
+        // At rest at Q1 the added delay is that of the k modes shaped: the sum of their ZV
+        // durations π / ω_d (the design's last impulse time; rounding only, far below one
+        // sample).
+        let mut modes = vec![Mode::new(0.0, 0.0); k];
+        let mut provider =
+            ModalDynamics::new(robot.clone(), three_joint_map(ShapedModes::Lowest(3)))
+                .expect("provider");
+        let mut all = [Mode::new(0.0, 0.0); 3];
+        assert!(provider.modes(&Q1, &mut all).is_ok());
+        modes.copy_from_slice(&all[..k]);
+        let expected: f64 = modes
+            .iter()
+            .map(|m| PI / (m.wn_rad_s * (1.0 - m.zeta * m.zeta).sqrt()))
+            .sum();
+        // SAFETY: live handle.
+        let delay = unsafe { tvist_shaper_delay_s(h.0) };
+        assert!(
+            (delay - expected).abs() < 1e-9,
+            "k = {k}: {delay} vs {expected}"
+        );
+        run(&mut h, &there);
+    }
+}
+
+#[test]
+fn set_shaped_modes_mid_move_or_out_of_range_is_refused_with_the_shaper_unchanged() {
+    let named = three_joint_file("k-mid", ShapedModes::ByJoint(vec![0, 1]));
+    let (_, mut h) = new_map("ur5e", &named, "zv", None);
+    let (_, mut twin) = new_map("ur5e", &named, "zv", None);
+    let samples = a_move(300 + SETTLE_SAMPLES);
+    for (k, q) in samples.iter().enumerate() {
+        if [150, 300, 340].contains(&k) {
+            assert_eq!(h.set_shaped_modes(3), TVIST_ERR_MID_MOVE, "sample {k}");
+            assert!(last_error().contains("mid-move"), "{}", last_error());
+        }
+        let (mut a, mut b) = ([0.0; 6], [0.0; 6]);
+        assert_eq!(h.step(q, &mut a), twin.step(q, &mut b));
+        assert_eq!(a, b, "sample {k}: the refused call changed the output");
+    }
+    for bad in [0, 4] {
+        assert_eq!(
+            h.set_shaped_modes(bad),
+            TVIST_ERR_INVALID_PARAMETER,
+            "{bad}"
+        );
+        assert!(last_error().contains("shaped_modes"), "{}", last_error());
+    }
+    let back = a_move_back(600);
+    assert_eq!(run(&mut h, &back), run(&mut twin, &back));
+    // A paper10 map, constant modes and null handles are refused.
+    let paper = TempMap::of_robot("k-paper", "ur5e");
+    let (_, mut p) = new_map("ur5e", &paper, "zv", None);
+    assert_eq!(p.set_shaped_modes(1), TVIST_ERR_INVALID_PARAMETER);
+    assert!(last_error().contains("modal map"), "{}", last_error());
+    // SAFETY: a null handle is checked before use.
+    assert_eq!(
+        unsafe { tvist_shaper_set_shaped_modes(ptr::null_mut(), 1) },
+        TVIST_ERR_NULL
+    );
 }

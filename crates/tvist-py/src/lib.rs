@@ -469,6 +469,28 @@ impl PyTvShaper {
             .map_err(value_error)
     }
 
+    /// Shapes the `n_modes` lowest-frequency modes of the shaper's modal map from the next
+    /// move on (frequency-ranked, as `ModalMap(..., shaped_modes=n_modes)`, whatever modes
+    /// the map shaped before), one filter each: the added delay is that of those modes.
+    /// `1 <= n_modes <=` the map's number of flexible joints. Between moves only, as
+    /// `set_map` (a setup call). Raises `ValueError` mid-move or for `n_modes` out of range
+    /// (the shaper unchanged), `TypeError` for a shaper not driven by `ModalDynamics`.
+    fn set_shaped_modes(&mut self, n_modes: usize) -> PyResult<()> {
+        if !matches!(self.inner.dynamics(), Provider::Modal(_)) {
+            return Err(PyTypeError::new_err(
+                "set_shaped_modes sets the number of shaped modes of a shaper driven by \
+                 ModalDynamics (a modal map)",
+            ));
+        }
+        if !self.inner.is_at_rest() {
+            return Err(PyValueError::new_err(
+                "the shaper is mid-move (its delay lines are not at rest on the input); call \
+                 set_shaped_modes between moves",
+            ));
+        }
+        self.inner.set_shaped_modes(n_modes).map_err(value_error)
+    }
+
     /// Puts the filter at rest at q0, or (None) forgets history so the next sample starts it.
     /// Accepts what `step` accepts (any 1-D array-like of numbers, any memory layout).
     #[pyo3(signature = (q0=None))]

@@ -58,7 +58,8 @@ fn flex_from(d: &Bound<'_, PyDict>, index: usize) -> PyResult<core::FlexJoint> {
 }
 
 /// Modal map: flexible joints (dicts of FLEX_JOINT_FIELDS, laws as [at_zero, per_nm,
-/// per_nm2]) and the joints naming the shaped modes, in cascade order.
+/// per_nm2]) and the shaped modes: exactly one of the joints naming them in cascade order
+/// (`mode_joints`) or the number of lowest-frequency modes (`shaped_modes`).
 #[pyclass(name = "ModalMap", module = "tvist._core", frozen)]
 #[derive(Clone)]
 pub struct PyModalMap {
@@ -68,14 +69,28 @@ pub struct PyModalMap {
 #[pymethods]
 impl PyModalMap {
     #[new]
-    fn new(flex_joints: Vec<Bound<'_, PyDict>>, mode_joints: Vec<usize>) -> PyResult<Self> {
+    #[pyo3(signature = (flex_joints, mode_joints=None, shaped_modes=None))]
+    fn new(
+        flex_joints: Vec<Bound<'_, PyDict>>,
+        mode_joints: Option<Vec<usize>>,
+        shaped_modes: Option<usize>,
+    ) -> PyResult<Self> {
         let flex = flex_joints
             .iter()
             .enumerate()
             .map(|(i, d)| flex_from(d, i))
             .collect::<PyResult<Vec<_>>>()?;
+        let shaped = match (mode_joints, shaped_modes) {
+            (Some(joints), None) => core::ShapedModes::ByJoint(joints),
+            (None, Some(k)) => core::ShapedModes::Lowest(k),
+            _ => {
+                return Err(PyValueError::new_err(
+                    "give exactly one of mode_joints and shaped_modes",
+                ))
+            }
+        };
         Ok(PyModalMap {
-            inner: core::ModalMap::new(flex, &mode_joints).map_err(value_error)?,
+            inner: core::ModalMap::shaping(flex, shaped).map_err(value_error)?,
         })
     }
 
@@ -103,9 +118,48 @@ impl PyModalMap {
         self.inner.robot().map(str::to_owned)
     }
 
+    /// The joints naming the shaped modes in cascade order, or None for a map shaping its
+    /// lowest-frequency modes.
     #[getter]
-    fn mode_joints(&self) -> Vec<usize> {
-        self.inner.mode_joints().collect()
+    fn mode_joints(&self) -> Option<Vec<usize>> {
+        self.inner.mode_joints().map(<[usize]>::to_vec)
+    }
+
+    /// The number of lowest-frequency modes shaped, or None for a map naming its modes by
+    /// joint.
+    #[getter]
+    fn shaped_modes(&self) -> Option<usize> {
+        match self.inner.shaped_modes() {
+            core::ShapedModes::Lowest(k) => Some(*k),
+            core::ShapedModes::ByJoint(_) => None,
+        }
+    }
+
+    /// Stiffness (N m/rad) and damping (N m s/rad) of every flexible joint (in the order of
+    /// `flex_joints`) under gravity torques (n_poses, n_dof) (N m; read only when the laws
+    /// use them): (n_poses, n_flex, 2).
+    fn joint_laws_many<'py>(
+        &self,
+        py: Python<'py>,
+        gravity_torque_nm: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let n_dof = gravity_torque_nm.as_array().ncols();
+        let need = self.inner.required_joints();
+        if n_dof < need {
+            return Err(PyValueError::new_err(format!(
+                "the modal map reads {need} joints, gravity_torque_nm has {n_dof} columns"
+            )));
+        }
+        let (n_poses, tau) = rows(&gravity_torque_nm, n_dof, "gravity_torque_nm")?;
+        let nf = self.inner.flex_joints().len();
+        let mut out = Vec::with_capacity(n_poses * nf * 2);
+        for row in tau.chunks_exact(n_dof.max(1)) {
+            let (k, c) = self.inner.joint_laws_at(row);
+            for i in 0..nf {
+                out.extend([k[i], c[i]]);
+            }
+        }
+        convert::array(py, &[n_poses, nf, 2], out)
     }
 
     #[getter]

@@ -226,6 +226,11 @@ class MapLearner:
     ) -> None:
         if not isinstance(modal_map, ModalMap):
             raise ValueError("modal_map: the learner refines a modal map (kind 'modal')")
+        if modal_map.mode_joints is None:
+            raise ValueError(
+                "modal_map: the learner refines a modal map that names its modes by joint "
+                "(mode_joints), not one shaping its lowest-frequency modes (shaped_modes)"
+            )
         self.robot = robot
         self.prior = modal_map
         self.flex_joints = [int(f["joint"]) for f in modal_map.flex_joints]

@@ -101,7 +101,7 @@ pub fn assert_robot_provider_never_allocates<D: tvist_core::Dynamics>(
 ) {
     use tvist_core::{Mode, Status, TvShaper, TvShaperConfig};
 
-    let mut modes = [Mode::new(0.0, 0.0); 2];
+    let mut modes = vec![Mode::new(0.0, 0.0); provider.n_modes()];
     let n = allocations_in(|| {
         for q in poses {
             provider.modes(q, &mut modes);
