@@ -58,7 +58,7 @@ def test_plan_busy_time_adds_excitations_and_approaches(tmp_path):
     """The time printed is the excitations' own length plus the approach moves between
     them (movej trapezoids at the approach limits), recomputed here from plan.json."""
     out = tmp_path / "plan"
-    args = ["plan", "--payloads", "5", "--every", "8", "--duration", "1"]
+    args = ["plan", "--payloads", "5", "--every", "8", "--duration", "1", "--no-workspace-cover"]
     assert main([*args, "--out", str(out), "--approach-speed", "0.5"]) == 0
     plan = json.loads((out / "plan.json").read_text())
     excitations = [
