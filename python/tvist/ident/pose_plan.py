@@ -382,8 +382,9 @@ def covering_poses(
     ``J_j`` (``j`` in ``joints``) of every candidate lie within the range of the plan's.
 
     Greedy: while a candidate lies outside (by more than :data:`COVER_TOLERANCE`), the one
-    farthest outside (largest ``|log(J / bound)|`` over the joints) is added, which widens the range; so at most two
-    poses per joint and payload are added, the poses at the extremes. A candidate's payload
+    farthest outside (largest ``|log(J / bound)|`` over the joints) is added, which widens
+    the range; so at most two poses per joint and payload are added, the poses at the
+    extremes. A candidate's payload
     is its own (candidates of a payload the plan lacks start that payload's range).
     Unreachable poses (``q = None``) neither count nor are added.
     """
