@@ -18,7 +18,7 @@ import tvist.ident.campaign_robots as campaign_robots
 from tvist.cli import main
 
 #: The plan of the tests: one payload, every 8th pose: 7 poses at 7 radii.
-PLAN = ["--payloads", "5", "--every", "8", "--duration", "0.2"]
+PLAN = ["--payloads", "5", "--every", "8", "--duration", "0.2", "--no-workspace-cover"]
 
 
 class _Control:
@@ -71,7 +71,7 @@ def fake_robot(monkeypatch):
 def test_unfittable_plan_is_refused_before_the_robot_is_contacted(fake_robot, tmp_path, capsys):
     out = tmp_path / "c.jsonl"
     args = ["campaign", "--robot-ip", "192.0.2.1", "--out", str(out), "--yes"]
-    assert main([*args, "--every", "13", "--payloads", "5"]) == 2
+    assert main([*args, "--every", "13", "--payloads", "5", "--no-workspace-cover"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1
     assert "4 reachable poses" in err and "needs at least 6" in err and "--every" in err

@@ -212,6 +212,7 @@ def test_family_variant_from_the_cli(tmp_path, capsys) -> None:
 
     out = tmp_path / "family.jsonl"
     args = ["campaign", "--sim", "--out", str(out), "--payloads", "5", "--duration", "1"]
+    args += ["--no-workspace-cover"]
     assert main([*args, "--variant", "family:ur5e:3", "--every", "52"]) == 0
     records = load_results(out)
     assert records

@@ -241,6 +241,7 @@ def test_ctrl_c_is_one_line_and_the_file_resumes(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(campaign, "run_pose", interrupted)
     out = tmp_path / "c.jsonl"
     args = ["campaign", "--sim", "--out", str(out), "--payloads", "0", "--every", "26"]
+    args += ["--no-workspace-cover"]
     assert main([*args, "--duration", "2"]) == 130
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [

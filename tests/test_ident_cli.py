@@ -73,6 +73,7 @@ def test_a_huge_cell_gives_the_one_line_error_and_no_numpy_warning(
 def test_campaign_on_the_twin(tmp_path, capsys):
     out = tmp_path / "c.jsonl"
     args = ["campaign", "--sim", "--out", str(out), "--payloads", "0", "--every", "26"]
+    args += ["--no-workspace-cover"]  # two poses only
     assert main([*args, "--duration", "4"]) == 0
     records = load_results(out)
     assert [r["key"] for r in records] == ["m0kg-V0-R0", "m0kg-V2-R0"]

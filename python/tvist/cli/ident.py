@@ -79,6 +79,9 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     # only matters when a map is asked for).
     fit_check = bool(args.robot_ip or args.map) and not args.no_fit_check
     poses = checked_plan(args, require_fittable=fit_check)
+    from tvist.cli.plan import coverage_text
+
+    print(f"plan: {len(poses)} poses; {coverage_text(poses, args)}", flush=True)
     robot = None
     if args.robot_ip:
         log_dir = new_run_folder(Path(args.out).parent / "logs")

@@ -10,12 +10,12 @@ import numpy as np
 
 from tvist.cli.args import DEFAULT_PAYLOAD_COM_M, existing_file
 
-__all__ = ["add_plan_command", "add_plan_options", "checked_plan"]
+__all__ = ["add_plan_command", "add_plan_options", "checked_plan", "coverage_text"]
 
 
 def add_plan_options(p: argparse.ArgumentParser) -> None:
     """``--robot``, ``--payloads``, ``--payload-com``, ``--every``, ``--seed``, ``--cover``,
-    ``--duration``: which poses and excitations a campaign runs."""
+    ``--no-workspace-cover``, ``--duration``: which poses and excitations a campaign runs."""
     p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
     p.add_argument(
         "--payloads",
@@ -37,7 +37,8 @@ def add_plan_options(p: argparse.ArgumentParser) -> None:
         type=int,
         default=1,
         help="keep every N-th of Algorithm 1's poses (52 per payload, counted over all "
-        "payloads; 0: none, only the --cover poses; default 1)",
+        "payloads), plus the poses that cover the inertias of the workspace (0: none of "
+        "these, only poses covering the --cover poses; default 1)",
     )
     p.add_argument(
         "--seed", type=int, default=0, help="seed of wrists, excitations, noise (default 0)"
@@ -45,8 +46,15 @@ def add_plan_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--cover",
         metavar="POSES.csv",
-        help="also your own poses: a CSV of 6 joint angles (rad) per row, each run with "
-        "every payload",
+        help="poses your moves will pass through (a CSV: 6 comma-separated joint angles, rad, "
+        "per row; header optional): the plan adds poses until their inertias lie within the "
+        "plan's, with every payload",
+    )
+    p.add_argument(
+        "--no-workspace-cover",
+        action="store_true",
+        help="do not add the poses that cover the workspace's inertias (a few poses only: "
+        "a map of them is held at the bounds of their range elsewhere)",
     )
     p.add_argument(
         "--duration", type=float, default=8.0, help="excitation length per joint, s (default 8)"
@@ -77,6 +85,7 @@ def checked_plan(args: argparse.Namespace, require_fittable: bool = True) -> lis
             every=args.every,
             seed=args.seed,
             cover_q=cover_q,
+            cover_workspace=not args.no_workspace_cover,
         )
     except ValueError as exc:
         if cover_q is None:
@@ -91,20 +100,58 @@ def checked_plan(args: argparse.Namespace, require_fittable: bool = True) -> lis
     return poses
 
 
+def coverage_text(poses: list, args: argparse.Namespace) -> str:
+    """What the plan added to cover inertias: workspace poses and ``--cover`` poses."""
+    from tvist.ident.pose_plan import COVERED_JOINTS
+
+    joints = ", ".join(f"J_{j}" for j in COVERED_JOINTS)
+    if args.no_workspace_cover or args.every == 0:
+        text = f"the workspace's {joints} not covered (--no-workspace-cover or --every 0)"
+    else:
+        workspace = sum("-W" in p.key for p in poses)
+        text = f"{workspace} poses added so that {joints} cover the workspace's"
+    if args.cover:
+        given = sum("-C" in p.key for p in poses)
+        text += f"; {given} of the --cover poses (the others lie within the plan's range)"
+    return text
+
+
 def _read_poses(path: str) -> np.ndarray:
-    """``--cover``: joint angles (rad), one pose per row, comma-separated, an optional
-    header line."""
-    text = existing_file(path, "--cover").read_text().splitlines()
-    rows = [line for line in text if line.strip()]
-    if rows and not rows[0].lstrip()[:1].isdigit() and rows[0].lstrip()[:1] not in "+-.":
+    """``--cover``: one pose per row, its 6 joint angles in rad, comma-separated, an optional
+    header line (a first line that does not start with a number). Refused on one line naming
+    the row: a value that is not a number, a row of another length; the angles' unit and the
+    joint limits are checked with the plan (:func:`tvist.ident.pose_plan.cover_poses`)."""
+    lines = existing_file(path, "--cover").read_text(errors="replace").splitlines()
+    rows = [(n, line) for n, line in enumerate(lines, start=1) if line.strip()]
+    if rows and rows[0][1].lstrip()[:1] not in "0123456789+-.":
         rows = rows[1:]  # a header
+    if not rows:
+        raise ValueError(f"--cover {path}: no poses (one pose per row: 6 joint angles, rad)")
+    q = []
+    for n, line in rows:
+        cells = [c.strip() for c in line.split(",")]
+        try:
+            q.append([float(c) for c in cells])
+        except ValueError:
+            bad = next(c for c in cells if not _is_number(c))
+            raise ValueError(
+                f"--cover {path}: line {n}: {bad[:20]!r} is not a number (6 comma-separated "
+                "joint angles, rad, per row)"
+            ) from None
+        if len(cells) != 6:
+            raise ValueError(
+                f"--cover {path}: line {n} has {len(cells)} values: a pose is 6 "
+                "comma-separated joint angles (rad)"
+            )
+    return np.array(q, dtype=float)
+
+
+def _is_number(text: str) -> bool:
     try:
-        q = np.array([[float(v) for v in line.split(",")] for line in rows], ndmin=2)
+        float(text)
     except ValueError:
-        raise ValueError(f"--cover {path}: not comma-separated numbers") from None
-    if q.size == 0 or q.ndim != 2:
-        raise ValueError(f"--cover {path}: one pose per row (joint angles, rad)")
-    return q
+        return False
+    return True
 
 
 def _cmd_plan(args: argparse.Namespace) -> int:
@@ -132,6 +179,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     )
     if summary.unreachable:
         print(f"  left out, out of reach: {', '.join(summary.unreachable)}")
+    print(f"  {coverage_text(poses, args)}")
     print(f"  payloads in this order, one change each: {payloads}")
     print(
         f"  the robot will be busy {summary.busy_s / 60:.1f} min ({summary.excitation_s:.0f} s "

@@ -7,10 +7,13 @@ pose one wrist joint (3, 4 or 5), chosen at random, is turned to a random angle;
 and elbow are then solved (elbow up) by numerical inverse kinematics with the robot model's
 flange position and Jacobian.
 
-A plan (:func:`plan_poses`) is every ``every``-th of these poses, plus poses the user gives
-(:func:`cover_poses`), in the order that changes the payload least (:func:`campaign_order`);
-:func:`plan_shortfall` says why the map fit could not succeed on it, before anything moves.
-Each pose's excitations (:func:`pose_excitations`) follow from its seed.
+A plan (:func:`plan_poses`) is every ``every``-th of these poses, plus the poses that extend
+its range of joint-axis inertias over the whole workspace (:func:`workspace_poses`) and over
+the poses the user gives (:func:`cover_poses`), added until every one of those lies within
+the plan's range (:func:`covering_poses`; a map is identified only over the inertias of its
+poses, :mod:`tvist.dynmap`), in the order that changes the payload least
+(:func:`campaign_order`); :func:`plan_shortfall` says why the map fit could not succeed on it,
+before anything moves. Each pose's excitations (:func:`pose_excitations`) follow from its seed.
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ import numpy as np
 from scipy import optimize
 
 from tvist.ident.excitation import Excitation, random_excitation
-from tvist.robots import Robot, params
+from tvist.robots import Payload, Robot, params
 
 __all__ = [
     "PAPER_ANGLES_RAD",
@@ -33,11 +36,14 @@ __all__ = [
     "campaign_order",
     "campaign_poses",
     "cover_poses",
+    "covering_poses",
     "plan_poses",
     "plan_shortfall",
     "plane_coordinates",
     "pose_excitations",
     "solve_plane_ik",
+    "workspace_extremes",
+    "workspace_poses",
 ]
 
 #: Algorithm 1's angles of the flange seen from the shoulder, rad.
@@ -54,6 +60,26 @@ NOMINAL_WRIST_RAD = (-math.pi / 2, 0.0, 0.0)
 GIVEN_POSE = -1
 #: The flange must land within this distance of the target, m.
 IK_TOLERANCE_M = 1e-6
+#: Joints whose axis inertia ``J_j`` (diagonal of the mass matrix) a plan covers: the base and
+#: the shoulder, which a paper10 map reads (and holds at the bound of its identified range
+#: outside it), and the elbow, whose stiffness a modal map fits.
+COVERED_JOINTS = (0, 1, 2)
+#: The workspace (:func:`workspace_poses`): shoulder from one horizontal to the other (upper
+#: arm at or above the shoulder), elbow from stretched to the demo's folded pose Q3 (150°),
+#: wrists anywhere, flange above the mounting plane.
+WORKSPACE_SHOULDER_RAD = (-math.pi, 0.0)
+WORKSPACE_ELBOW_RAD = (0.0, 5 * math.pi / 6)
+#: Random workspace poses from which the default plan's extreme poses are refined.
+WORKSPACE_SAMPLES = 2000
+#: Streams of the random draws of :func:`workspace_poses` and of the seeds of the plan's
+#: workspace poses, apart from the campaign poses' (``[seed, index]``) and the user's
+#: (``[seed, 1_000_000 + row]``).
+WORKSPACE_STREAM = 2_000_000
+_COVERING_STREAM = 3_000_000
+#: A pose whose inertias lie less than this (relative) outside the plan's range counts as
+#: covered: angles written with 6 decimals move an inertia by ~1e-8, and a paper10 map's soft
+#: clamp bends the inertia it reads by up to 0.9 % near a bound anyway (:mod:`tvist.dynmap`).
+COVER_TOLERANCE = 1e-3
 
 # --------------------------------------------------------------------------- poses
 
@@ -228,25 +254,169 @@ def cover_poses(
     check_trajectory(
         q_rows, None, robot.params, row_label=lambda i: f"row {i + 1}", what="the poses"
     )
+    return _given_poses(robot_name, q_rows, payloads_kg, payload_com_m, seed, "C", 1_000_000)
+
+
+def _given_poses(
+    robot_name: str,
+    q_rows: np.ndarray,
+    payloads_kg: Sequence[float],
+    payload_com_m: Sequence[float],
+    seed: int,
+    key: str,
+    stream: int,
+) -> list[CampaignPose]:
+    """Poses ``q_rows`` with every payload, keys ``m{payload}kg-{key}{row}``, each seeded
+    from ``[seed, stream + row]``."""
+    robot = Robot(params(robot_name))
     com = tuple(float(v) for v in payload_com_m)
     poses = []
     for payload in payloads_kg:
         for i, q in enumerate(q_rows):
             angle, radius = plane_coordinates(robot, q)
-            rng = np.random.default_rng([seed, 1_000_000 + i])
+            rng = np.random.default_rng([seed, stream + i])
             poses.append(
                 CampaignPose(
-                    key=f"m{payload:g}kg-C{i}",
+                    key=f"m{payload:g}kg-{key}{i}",
                     payload_kg=float(payload),
                     payload_com_m=com,  # type: ignore[arg-type]
                     angle_rad=angle,
                     radius_m=radius,
                     wrist_joint=GIVEN_POSE,
-                    q=q.copy(),
+                    q=np.array(q, dtype=float),
                     seed=int(rng.integers(2**31)),
                 )
             )
     return poses
+
+
+def workspace_poses(
+    robot_name: str,
+    n: int,
+    *,
+    seed: int = 0,
+    stream: int = WORKSPACE_STREAM,
+    corners: bool = False,
+    base_angle_rad: float = 0.0,
+) -> np.ndarray:
+    """``n`` random poses ``(n, 6)`` (rad) of the workspace, drawn from ``[seed, stream]``
+    (another ``stream`` draws other poses, e.g. to evaluate a map away from the plan's).
+
+    The workspace: shoulder in :data:`WORKSPACE_SHOULDER_RAD`, elbow in
+    :data:`WORKSPACE_ELBOW_RAD`, each wrist joint uniform in ``[-π, π]``, uniformly, kept where
+    the flange is above the mounting plane (``z > 0`` in the base frame). The base stays at
+    ``base_angle_rad``: no mode of the arm depends on it (it turns the arm about the vertical).
+    With ``corners`` the workspace's corners come first (``n`` more rows): shoulder at both
+    horizontals and upright, elbow stretched and folded, wrists at
+    :data:`NOMINAL_WRIST_RAD` -- where the base inertia is largest (stretched out) and
+    smallest (stretched up), which random draws approach only slowly.
+    """
+    if n < 0:
+        raise ValueError(f"n must be >= 0, got {n}")
+    robot = Robot(params(robot_name))
+    rows = []
+    if corners:
+        for shoulder in (WORKSPACE_SHOULDER_RAD[0], -math.pi / 2, WORKSPACE_SHOULDER_RAD[1]):
+            for elbow in WORKSPACE_ELBOW_RAD:
+                rows.append([base_angle_rad, shoulder, elbow, *NOMINAL_WRIST_RAD])
+        rows = [q for q in rows if robot.flange_pose(np.array(q))[2, 3] > 0.0]
+    rng = np.random.default_rng([seed, stream])
+    drawn = 0
+    while drawn < n:
+        batch = max(2 * (n - drawn), 16)
+        q = np.zeros((batch, robot.n_dof))
+        q[:, 0] = base_angle_rad
+        q[:, 1] = rng.uniform(*WORKSPACE_SHOULDER_RAD, size=batch)
+        q[:, 2] = rng.uniform(*WORKSPACE_ELBOW_RAD, size=batch)
+        q[:, 3:] = rng.uniform(-math.pi, math.pi, size=(batch, robot.n_dof - 3))
+        above = robot.flange_pose_many(q)[:, 2, 3] > 0.0
+        for row in q[above][: n - drawn]:
+            rows.append(row)
+            drawn += 1
+    return np.array(rows, dtype=float).reshape(-1, robot.n_dof)
+
+
+def workspace_extremes(
+    robot_name: str,
+    payload_kg: float,
+    payload_com_m: Sequence[float],
+    *,
+    joints: Sequence[int] = COVERED_JOINTS,
+    samples: int = WORKSPACE_SAMPLES,
+    seed: int = 0,
+) -> np.ndarray:
+    """The workspace poses ``(2 len(joints), 6)`` (rad) of the smallest and the largest
+    inertia ``J_j`` of each joint in ``joints`` with the payload: the best of ``samples``
+    random poses and the corners (:func:`workspace_poses`), refined by a bounded local search
+    within the workspace (a refinement that leaves it, flange below the mounting plane, is
+    not taken)."""
+    robot = Robot(params(robot_name), Payload(payload_kg, tuple(payload_com_m)))
+    q = workspace_poses(robot_name, samples, seed=seed, corners=True)
+    inertia = robot.joint_inertia_many(q)
+    bounds = [WORKSPACE_SHOULDER_RAD, WORKSPACE_ELBOW_RAD] + [(-math.pi, math.pi)] * (
+        robot.n_dof - 3
+    )
+    out = []
+    for joint in joints:
+        for sign in (1.0, -1.0):  # smallest, then largest
+            start = q[int(np.argmin(sign * inertia[:, joint]))]
+
+            def objective(x: np.ndarray, start=start, joint=joint, sign=sign) -> float:
+                pose = np.concatenate([start[:1], x])
+                return sign * float(robot.joint_inertia(pose)[joint])
+
+            res = optimize.minimize(objective, start[1:], method="L-BFGS-B", bounds=bounds)
+            best = np.concatenate([start[:1], res.x])
+            better = res.fun < objective(start[1:])
+            out.append(best if better and robot.flange_pose(best)[2, 3] > 0.0 else start)
+    return np.array(out)
+
+
+def covering_poses(
+    robot_name: str,
+    plan: Sequence[CampaignPose],
+    candidates: Sequence[CampaignPose],
+    joints: Sequence[int] = COVERED_JOINTS,
+) -> list[CampaignPose]:
+    """The ``candidates`` to add to ``plan`` so that, payload by payload, the inertias
+    ``J_j`` (``j`` in ``joints``) of every candidate lie within the range of the plan's.
+
+    Greedy: while a candidate lies outside (by more than :data:`COVER_TOLERANCE`), the one
+    farthest outside (largest ``|log(J / bound)|`` over the joints) is added, which widens
+    the range; so at most two poses per joint and payload are added, the poses at the
+    extremes. A candidate's payload
+    is its own (candidates of a payload the plan lacks start that payload's range).
+    Unreachable poses (``q = None``) neither count nor are added.
+    """
+    joints = list(joints)
+    added: list[CampaignPose] = []
+    groups: dict[tuple, list[CampaignPose]] = {}
+    for pose in candidates:
+        if pose.q is not None:
+            groups.setdefault((pose.payload_kg, tuple(pose.payload_com_m)), []).append(pose)
+    for (mass, com), group in groups.items():
+        robot = Robot(params(robot_name), Payload(mass, com))
+        inertia = robot.joint_inertia_many(np.array([p.q for p in group]))[:, joints]
+        covered = [
+            p.q
+            for p in plan
+            if p.q is not None and (p.payload_kg, tuple(p.payload_com_m)) == (mass, com)
+        ]
+        if covered:
+            have = robot.joint_inertia_many(np.array(covered))[:, joints]
+            lo, hi = have.min(axis=0), have.max(axis=0)
+        else:  # an empty range: every candidate lies outside it
+            lo, hi = np.full(len(joints), np.inf), np.full(len(joints), -np.inf)
+        while True:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                outside = np.maximum(np.log(lo / inertia), np.log(inertia / hi))
+            outside = np.max(np.maximum(np.nan_to_num(outside, nan=np.inf), 0.0), axis=1)
+            worst = int(np.argmax(outside))
+            if outside[worst] <= COVER_TOLERANCE:
+                break
+            added.append(group[worst])
+            lo, hi = np.minimum(lo, inertia[worst]), np.maximum(hi, inertia[worst])
+    return added
 
 
 def campaign_order(poses: Sequence[CampaignPose]) -> list[CampaignPose]:
@@ -263,20 +433,53 @@ def plan_poses(
     every: int = 1,
     seed: int = 0,
     cover_q: np.ndarray | None = None,
+    cover_workspace: bool = True,
+    workspace_samples: int = WORKSPACE_SAMPLES,
 ) -> list[CampaignPose]:
-    """Every ``every``-th pose of :func:`campaign_poses` (none for ``every = 0``) plus the
-    user's ``cover_q`` poses (:func:`cover_poses`), in :func:`campaign_order`."""
+    """A campaign plan, in :func:`campaign_order`.
+
+    Every ``every``-th pose of :func:`campaign_poses` and, with them, the workspace poses of
+    the smallest and largest inertias :data:`COVERED_JOINTS` (:func:`workspace_extremes`
+    from ``workspace_samples`` random poses, keys ``m{payload}kg-W{i}``) that extend the
+    plan's range over the whole workspace (:func:`covering_poses`; not with
+    ``cover_workspace=False``); ``every = 0`` takes none of these. Then the user's
+    ``cover_q`` poses (:func:`cover_poses`, keys ``m{payload}kg-C{row}``) that extend the
+    range over theirs: afterwards the inertias of every workspace pose and every ``cover_q``
+    pose lie within the plan's, payload by payload.
+
+    Raises
+    ------
+    ValueError
+        ``every < 0``, or a ``cover_q`` row that is not a pose of the robot in rad
+        (:func:`cover_poses`).
+    """
     if every < 0:
         raise ValueError(f"every must be >= 0, got {every}")
-    poses = []
+    poses: list[CampaignPose] = []
     if every > 0:
         poses = campaign_poses(
             robot_name, payloads_kg=payloads_kg, payload_com_m=payload_com_m, seed=seed
         )[::every]
+        workspace = []
+        for payload in payloads_kg if cover_workspace else ():
+            extremes = workspace_extremes(
+                robot_name, payload, payload_com_m, samples=workspace_samples, seed=seed
+            )
+            workspace += _given_poses(
+                robot_name,
+                extremes,
+                [payload],
+                payload_com_m,
+                seed=seed,
+                key="W",
+                stream=_COVERING_STREAM,
+            )
+        poses += covering_poses(robot_name, poses, workspace)
     if cover_q is not None:
-        poses += cover_poses(
+        given = cover_poses(
             robot_name, cover_q, payloads_kg=payloads_kg, payload_com_m=payload_com_m, seed=seed
         )
+        poses += covering_poses(robot_name, poses, given)
     return campaign_order(poses)
 
 
