@@ -1130,59 +1130,6 @@ def _record_payload(record: Mapping[str, Any], i: int) -> tuple[float, tuple[flo
     return mass, tuple(float(v) for v in (com or (0.0, 0.0, 0.0)))
 
 
-def fit_map_command(records: Sequence[Mapping[str, Any]], args: Any) -> int:
-    """``tvist fit-map --kind modal``: fit, print the laws with standard errors, write the
-    map file (``args``: ``results``, ``out``, ``robot``, ``include_low_confidence``)."""
-    try:
-        modal = fit_modal_map(
-            records,
-            args.robot,
-            include_low_confidence=args.include_low_confidence,
-            select_folds=getattr(args, "select_folds", None),
-            metadata={"source": f"tvist fit-map --kind modal {args.results}"},
-        )
-    except ValueError as exc:
-        print(f"tvist fit-map: error: {exc}", file=sys.stderr)
-        return 2
-    stats = modal.metadata["fit_statistics"]
-    print(
-        f"modal map of {args.robot}: {stats['n_poses']} poses, usable identifications "
-        f"base {stats['usable_identifications']['base']}, "
-        f"shoulder {stats['usable_identifications']['shoulder']}"
-    )
-    for what, unit in (("stiffness_nm_per_rad", "N m/rad"), ("damping_nms_per_rad", "N m s/rad")):
-        for t in stats[what]:
-            print(
-                f"  joint {t['joint']} {what.split('_')[0]} {t['term']}: "
-                f"{t['value']:.5g} ± {_se_text(t['se'])} ({unit}{_per(t['term'])})"
-            )
-    if stats["dropped"]:
-        print(f"  dropped as negligible: {', '.join(stats['dropped'])}")
-    selection = stats.get("term_selection")
-    if selection:
-        made = ", ".join(m["move"] for m in selection["moves"]) or "none"
-        print(
-            f"  held-out selection ({selection['folds']} folds): moves {made}; held-out "
-            f"frequency error {100 * selection['held_out_rms']:.2f} % RMS"
-        )
-    for name, entry in stats["versus_identified"].items():
-        print(
-            f"  {name}: RMS relative error frequency {100 * entry['frequency']['rms']:.2f} %, "
-            f"damping {100 * entry['damping']['rms']:.1f} %"
-        )
-    modal.save(args.out)
-    print(f"modal map written to {args.out}")
-    return 0
-
-
-def _se_text(se: float | None) -> str:
-    return "?" if se is None else f"{se:.2g}"
-
-
-def _per(term: str) -> str:
-    return {"at_zero": "", "per_nm": " per N m", "per_nm2": " per (N m)²"}[term]
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m tvist.ident.modal_fit RESULTS.jsonl [--robot R] [--folds K]``: both map
     forms' errors, in-sample and on held-out poses, as a markdown table."""

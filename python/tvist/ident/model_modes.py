@@ -133,7 +133,8 @@ def model_modes(
     b = mff * s[:, :, None] * s[:, None, :]
     mu, v = np.linalg.eigh(b)  # ascending 1/ω²: reverse for ascending ω
     mu, v = mu[:, ::-1], v[:, :, ::-1]
-    wn_u = 1.0 / np.sqrt(mu)
+    with np.errstate(invalid="ignore", divide="ignore"):  # NaN where M_ff is not positive
+        wn_u = 1.0 / np.sqrt(mu)
     phi_u = v * s[:, :, None]  # K-scaled: φᵀ K φ = 1, so φᵀ M φ = 1/ω²
     phi_mass = phi_u * wn_u[:, None, :]  # mass-normalised: φᵀ M φ = 1
     zeta_p = 0.5 * wn_u * np.einsum("nki,nk,nki->ni", phi_u, c, phi_u)

@@ -1,13 +1,23 @@
-"""A modal map's shaped modes against a twin variant's true modes at given poses.
+"""A modal map's modes against a twin variant's true modes at given poses.
 
-The true mode of a shaped mode named by joint ``j`` is the variant's eigenmode paired with
-``j`` when the map's mode joints and the true modes below ``max_freq_hz`` are paired one to
-one by strain-energy share (Hungarian assignment): the dominant eigenmode, never a blend.
+Two views, both from the map's model (:func:`tvist.ident.model_modes.model_modes`: every
+eigenmode, no blending):
+
+- **by joint** (:func:`physical_mode_errors`): the map's physical mode of joint ``j`` (its
+  eigenmode paired with ``j`` by strain-energy share, one to one) against the variant's
+  mode paired with ``j`` likewise among all its modes;
+- **by frequency rank** (:func:`ranked_mode_errors`): the map's ``k``-th lowest mode against
+  the variant's mode matched to it by frequency and flange direction
+  (:func:`tvist.ident.all_modes_fit.match_modes`' cost, one to one) among those below
+  ``max_freq_hz``: what a frequency-ranked shaper (``"shaped_modes": K``) shapes.
+
+NaN where the true mode is above ``max_freq_hz`` (or none matches).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import math
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -16,47 +26,81 @@ from scipy import optimize
 from tvist.robots import Payload, Robot, params
 from tvist.sim.family import Variant, modes_of
 
-__all__ = ["map_frequency_errors", "true_mode_of_joints"]
+__all__ = ["physical_mode_errors", "ranked_mode_errors"]
+
+Pose = tuple[str, np.ndarray, float, Sequence[float]]
 
 
-def true_mode_of_joints(truth: Sequence[Any], joints: Sequence[int]) -> list[int | None]:
-    """Index into ``truth`` (:class:`~tvist.sim.family.TrueMode` list) of the mode of each of
-    ``joints`` (one to one by strain-energy share), ``None`` where there are fewer modes."""
-    if not truth:
-        return [None] * len(joints)
-    shares = np.array([[m.joint_shares[j] for m in truth] for j in joints])
-    rows, cols = optimize.linear_sum_assignment(-shares)
-    out: list[int | None] = [None] * len(joints)
-    for r, c in zip(rows, cols, strict=True):
-        out[r] = int(c)
-    return out
+def _each_pose(entries: Sequence[Mapping[str, Any]], variant: Variant, poses: Sequence[Pose]):
+    """Per pose: the variant's true modes and the map model's modes (one pose)."""
+    from tvist.ident.model_modes import model_modes
+
+    cache: dict[tuple, tuple] = {}
+    for _, q, payload_kg, com in poses:
+        key = (float(payload_kg), tuple(float(v) for v in com))
+        if key not in cache:
+            cache[key] = (variant.twin(*key), Robot(params(variant.robot), Payload(*key)))
+        twin, robot = cache[key]
+        model = model_modes(
+            entries,
+            robot.mass_matrix(q)[None],
+            robot.gravity_torque(q)[None],
+            robot.jacobian(q)[None],
+        )
+        yield modes_of(twin, q), model
 
 
-def map_frequency_errors(
-    modal_map: Any,
+def physical_mode_errors(
+    entries: Sequence[Mapping[str, Any]],
     variant: Variant,
-    poses: Sequence[tuple[str, np.ndarray, float, Sequence[float]]],
+    poses: Sequence[Pose],
+    joints: Sequence[int],
     *,
     max_freq_hz: float = 60.0,
 ) -> dict[int, np.ndarray]:
-    """``{joint: relative frequency errors (n_poses,)}`` of each shaped mode of
-    ``modal_map`` (:class:`tvist.ModalMap`, evaluated by the core) against ``variant``'s true
-    mode of that joint at ``poses`` ``[(key, q, payload_kg, payload_com_m), ...]``; NaN
-    where the variant has no such mode below ``max_freq_hz``."""
-    joints = list(modal_map.mode_joints)
+    """``{joint: relative frequency errors (n_poses,)}`` by joint (module docstring) of the
+    map with flexible joints ``entries``, for ``joints`` (flexible ones)."""
+    from tvist.ident.shaped_modes import physical_index
+
+    flex = [int(e["joint"]) for e in entries]
     out = {j: np.full(len(poses), np.nan) for j in joints}
-    twins: dict[tuple, Any] = {}
-    robots: dict[tuple, Robot] = {}
-    for p, (_, q, payload_kg, com) in enumerate(poses):
-        key = (float(payload_kg), tuple(float(v) for v in com))
-        if key not in twins:
-            twins[key] = variant.twin(payload_kg, com)
-            robots[key] = Robot(params(variant.robot), Payload(*key))
-        truth = modes_of(twins[key], q, max_freq_hz=max_freq_hz)
-        predicted = modal_map.modes(robots[key], q)
-        for j, index, (wn, _) in zip(
-            joints, true_mode_of_joints(truth, joints), predicted, strict=True
-        ):
-            if index is not None:
-                out[j][p] = wn / (2 * np.pi * truth[index].freq_hz) - 1.0
+    for p, (truth, model) in enumerate(_each_pose(entries, variant, poses)):
+        rank = physical_index(model.joint_shares)[0]
+        shares = np.array([[m.joint_shares[j] for m in truth] for j in flex])
+        rows, cols = optimize.linear_sum_assignment(-shares)
+        true_of = {flex[r]: truth[c] for r, c in zip(rows, cols, strict=True)}
+        for j in joints:
+            if j in true_of and true_of[j].freq_hz <= max_freq_hz:
+                wn = model.wn_rad_s[0, rank[flex.index(j)]]
+                out[j][p] = wn / (2 * math.pi * true_of[j].freq_hz) - 1.0
+    return out
+
+
+def ranked_mode_errors(
+    entries: Sequence[Mapping[str, Any]],
+    variant: Variant,
+    poses: Sequence[Pose],
+    n_modes: int,
+    *,
+    max_freq_hz: float = 60.0,
+) -> np.ndarray:
+    """``(n_modes, n_poses)`` relative frequency errors by frequency rank (module docstring)
+    of the ``n_modes`` lowest modes of the map with flexible joints ``entries``."""
+    from tvist.ident.all_modes_fit import D_TOL, F_TOL, GATE
+
+    out = np.full((n_modes, len(poses)), np.nan)
+    for p, (truth, model) in enumerate(_each_pose(entries, variant, poses)):
+        truth = [m for m in truth if m.freq_hz <= max_freq_hz]
+        if not truth:
+            continue
+        f_true = 2 * math.pi * np.array([m.freq_hz for m in truth])
+        d_true = np.array([m.flange_direction for m in truth])
+        wn = model.wn_rad_s[0, :n_modes]
+        cos = np.abs(model.flange_direction[0, :n_modes] @ d_true.T)
+        cost = (np.log(wn[:, None] / f_true[None, :]) / F_TOL) ** 2
+        cost += np.clip(1 - cos**2, 0, 1) / D_TOL**2
+        rows, cols = optimize.linear_sum_assignment(np.nan_to_num(cost, nan=1e6))
+        for r, c in zip(rows, cols, strict=True):
+            if cost[r, c] <= GATE:
+                out[r, p] = wn[r] / f_true[c] - 1.0
     return out
