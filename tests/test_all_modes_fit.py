@@ -8,18 +8,16 @@ from __future__ import annotations
 
 import functools
 import json
-import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from tvist.demo.identified import DEMO_PLAN
-from tvist.ident.campaign import campaign_poses
 from tvist.modal_map import ModalMap
 from tvist.robots import Payload, Robot, params
 from tvist.sim.family import sample_variant
-from tvist.sim.map_truth import physical_mode_errors
+from tvist.sim.map_truth import held_out_poses, physical_mode_errors
 from tvist.sim.ringing_records import ringing_records
 
 #: A development variant of the UR5e family with a soft elbow (0.10 x its nominal gear: an
@@ -31,23 +29,6 @@ def _fit_poses() -> list[tuple]:
     """The demo's reduced campaign plan (36 poses, no payload and 5 kg)."""
     return [
         (p.key, p.q, p.payload_kg, p.payload_com_m) for p in DEMO_PLAN.poses() if p.q is not None
-    ]
-
-
-def _held_out_poses() -> list[tuple]:
-    """20 poses of other radii, angles, payloads and wrist draws than the fit's."""
-    poses = campaign_poses(
-        "ur5e",
-        payloads_kg=(0.0, 2.5, 5.0),
-        angles_rad=(math.pi / 8, 3 * math.pi / 8, 5 * math.pi / 8),
-        radii_m=(0.3, 0.5, 0.65, 0.78, 0.88),
-        seed=77,
-    )
-    poses = [p for p in poses if p.q is not None]
-    pick = np.random.default_rng(5).choice(len(poses), 20, replace=False)
-    return [
-        (poses[i].key, poses[i].q, poses[i].payload_kg, poses[i].payload_com_m)
-        for i in sorted(pick)
     ]
 
 
@@ -84,7 +65,7 @@ def test_the_fit_finds_and_shapes_a_soft_elbow_from_every_ringing_mode(soft_elbo
     # stiffening at the static deflection and servo in series, which the load laws only
     # approximate).
     variant = sample_variant("ur5e", SOFT_ELBOW_SEED)
-    errors = physical_mode_errors(modal.flex_joints, variant, _held_out_poses(), modal.mode_joints)
+    errors = physical_mode_errors(modal.flex_joints, variant, held_out_poses(), modal.mode_joints)
     for joint, e in errors.items():
         e = e[np.isfinite(e)]
         assert e.size >= 5, f"joint {joint}: too few held-out poses with the mode below 60 Hz"

@@ -26,9 +26,30 @@ from scipy import optimize
 from tvist.robots import Payload, Robot, params
 from tvist.sim.family import Variant, modes_of
 
-__all__ = ["physical_mode_errors", "ranked_mode_errors"]
+__all__ = ["held_out_poses", "physical_mode_errors", "ranked_mode_errors"]
 
 Pose = tuple[str, np.ndarray, float, Sequence[float]]
+
+
+def held_out_poses(robot_name: str = "ur5e", n: int = 20, seed: int = 5) -> list[Pose]:
+    """``n`` poses unlike a campaign plan's: Algorithm 1's construction
+    (:func:`tvist.ident.campaign.campaign_poses`) at radii, angles, payloads (0, 2.5, 5 kg)
+    and wrist draws the plans do not use, ``n`` of them drawn (seeded)."""
+    from tvist.ident.campaign import campaign_poses
+
+    poses = campaign_poses(
+        robot_name,
+        payloads_kg=(0.0, 2.5, 5.0),
+        angles_rad=(math.pi / 8, 3 * math.pi / 8, 5 * math.pi / 8),
+        radii_m=(0.3, 0.5, 0.65, 0.78, 0.88),
+        seed=77,
+    )
+    poses = [p for p in poses if p.q is not None]
+    pick = np.random.default_rng(seed).choice(len(poses), n, replace=False)
+    return [
+        (poses[i].key, poses[i].q, poses[i].payload_kg, poses[i].payload_com_m)
+        for i in sorted(pick)
+    ]
 
 
 def _each_pose(entries: Sequence[Mapping[str, Any]], variant: Variant, poses: Sequence[Pose]):
