@@ -1,4 +1,8 @@
-"""Fit a :class:`tvist.ModalMap` to modes identified at many poses (a mapping campaign).
+"""Fit a :class:`tvist.ModalMap` to the base and shoulder modes identified at many poses, each
+named by its excitation joint (the label-based fit; ``tvist fit-map --kind modal
+--select-folds K``, the demo's modal rows). ``tvist fit-map --kind modal`` fits every
+identified mode instead, each matched to the model's eigenmode it is
+(:mod:`tvist.ident.all_modes_fit`).
 
 The same pose records as :func:`tvist.ident.map_fit.fit_map` (the campaign's JSON lines) are
 used, plus each pose's configuration ``q`` and payload, from which the robot model gives the
