@@ -14,7 +14,10 @@ A mode the campaign's excitations never made ring above noise is not shaped, wha
 model predicts for it: its frequency is then the model's extrapolation (on the default twin
 the stiff elbow's mode, 38-140 Hz, identified at 14 % of the demo campaign's poses, is
 predicted 7 % RMS off). Its flange participation is reported so that a campaign which
-excites it can be planned.
+excites it can be planned. Nor does a stiffness the fit determines without identifying
+its mode suffice: on a 26-pose simulated campaign of ``family:ur5e:14`` whose records name
+base and shoulder modes only, the elbow's stiffness came out with a 4 % standard error and
+its mode 12.6 % RMS off the arm's true elbow mode.
 
 :func:`shaping_field` turns the report into the map file's field naming the shaped modes.
 """
