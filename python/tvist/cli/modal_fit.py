@@ -34,6 +34,13 @@ def fit_modal_command(records: Sequence[Mapping[str, Any]], args: argparse.Names
         return _labelled_fit(records, args)
     from tvist.ident.all_modes_fit import fit_all_modes, fitted_map
 
+    if not any("ringing" in r for r in records):
+        print(
+            f"tvist fit-map: warning: {args.results}: no record lists its ringing modes; "
+            "using each log's one mode, matched by frequency alone (no flange direction): "
+            "a mode the base log mistook for another is then fitted as what it is closest to",
+            file=sys.stderr,
+        )
     try:
         fit = fit_all_modes(records, args.robot, include_low_confidence=args.include_low_confidence)
     except ValueError as exc:
