@@ -302,11 +302,15 @@ def test_fit_map_cli_writes_a_modal_map_that_shapes_a_ur10e(tmp_path, capsys):
     robot = tvist.robots.ur10e(payload_kg=5.0, payload_com_m=(0.0, 0.0, 0.05))
     twin = Twin("ur10e", payload_kg=5.0)
     q = np.array([0.3, -2.0, 1.6, -1.2, 1.0, 0.0])
-    for (wn, _), (true_wn, _) in zip(modal.modes(robot, q), twin.modes(q), strict=True):
-        # Measured at this pose: base 2.8 % high from the two-stage fit, 3.1 % after the joint
-        # refinement, which trades some ω for ζ where the map's modes are not the twin's;
-        # 3.5 % since the fit predicts the dominant eigenmode instead of a share⁴ blend of all
-        # (the base mode here is 91 % base strain either way: the fit's laws moved).
+    # The map's first two modes are base and shoulder (mode_joints ascending); it may shape
+    # more (every mode the campaign identified), which the twin's two do not name.
+    assert modal.mode_joints[:2] == [0, 1]
+    base_shoulder = modal.modes(robot, q)[:2]
+    for (wn, _), (true_wn, _) in zip(base_shoulder, twin.modes(q), strict=True):
+        # Measured at this pose: base 3.5 % high (shoulder 0.6 %) from the fit on every
+        # identified mode; these records have no ringing list, so their base and shoulder modes
+        # are matched by frequency alone, and on 24 poses the joint test keeps base, shoulder
+        # and elbow flexible (the twin's wrists also are). The label-based fit: 3.1 %.
         assert wn == pytest.approx(true_wn, rel=0.04)
     shaper = tvist.TvShaper(tvist.MapDynamics(robot, modal), 0.002, 6)
     shaper.reset(q)

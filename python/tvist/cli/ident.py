@@ -440,9 +440,9 @@ def _cmd_fit_map(args: argparse.Namespace) -> int:
     _check_pose_angles(args.results, results)
     print(f"payload from the pose records: {_payload_summary(results)}")
     if args.kind == "modal":
-        from tvist.ident.modal_fit import fit_map_command
+        from tvist.cli.modal_fit import fit_modal_command
 
-        return fit_map_command(results, args)
+        return fit_modal_command(results, args)
     dynmap = fit_map(
         results,
         k_0=args.k0,
@@ -549,8 +549,10 @@ def add_fit_map_command(sub: argparse._SubParsersAction) -> None:
         type=int,
         default=None,
         metavar="K",
-        help="modal: keep a wrist joint or stiffness load term only if it lowers the K-fold "
-        "held-out frequency error (default: significance only)",
+        help="modal: fit only the base and shoulder modes named by their excitation joint "
+        "(records' 'modes'), keeping a wrist joint or stiffness load term only if it lowers "
+        "the K-fold held-out frequency error (default: every identified mode, matched to the "
+        "model's eigenmodes by frequency and flange direction, flexible joints by a test)",
     )
     p.set_defaults(func=_cmd_fit_map)
 

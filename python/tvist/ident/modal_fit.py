@@ -1,4 +1,8 @@
-"""Fit a :class:`tvist.ModalMap` to modes identified at many poses (a mapping campaign).
+"""Fit a :class:`tvist.ModalMap` to the base and shoulder modes identified at many poses, each
+named by its excitation joint (the label-based fit; ``tvist fit-map --kind modal
+--select-folds K``, the demo's modal rows). ``tvist fit-map --kind modal`` fits every
+identified mode instead, each matched to the model's eigenmode it is
+(:mod:`tvist.ident.all_modes_fit`).
 
 The same pose records as :func:`tvist.ident.map_fit.fit_map` (the campaign's JSON lines) are
 used, plus each pose's configuration ``q`` and payload, from which the robot model gives the
@@ -1128,59 +1132,6 @@ def _record_payload(record: Mapping[str, Any], i: int) -> tuple[float, tuple[flo
     if com is None and mass != 0.0:
         raise ValueError(f"{name}: payload_kg {mass:g} without payload_com_m")
     return mass, tuple(float(v) for v in (com or (0.0, 0.0, 0.0)))
-
-
-def fit_map_command(records: Sequence[Mapping[str, Any]], args: Any) -> int:
-    """``tvist fit-map --kind modal``: fit, print the laws with standard errors, write the
-    map file (``args``: ``results``, ``out``, ``robot``, ``include_low_confidence``)."""
-    try:
-        modal = fit_modal_map(
-            records,
-            args.robot,
-            include_low_confidence=args.include_low_confidence,
-            select_folds=getattr(args, "select_folds", None),
-            metadata={"source": f"tvist fit-map --kind modal {args.results}"},
-        )
-    except ValueError as exc:
-        print(f"tvist fit-map: error: {exc}", file=sys.stderr)
-        return 2
-    stats = modal.metadata["fit_statistics"]
-    print(
-        f"modal map of {args.robot}: {stats['n_poses']} poses, usable identifications "
-        f"base {stats['usable_identifications']['base']}, "
-        f"shoulder {stats['usable_identifications']['shoulder']}"
-    )
-    for what, unit in (("stiffness_nm_per_rad", "N m/rad"), ("damping_nms_per_rad", "N m s/rad")):
-        for t in stats[what]:
-            print(
-                f"  joint {t['joint']} {what.split('_')[0]} {t['term']}: "
-                f"{t['value']:.5g} ± {_se_text(t['se'])} ({unit}{_per(t['term'])})"
-            )
-    if stats["dropped"]:
-        print(f"  dropped as negligible: {', '.join(stats['dropped'])}")
-    selection = stats.get("term_selection")
-    if selection:
-        made = ", ".join(m["move"] for m in selection["moves"]) or "none"
-        print(
-            f"  held-out selection ({selection['folds']} folds): moves {made}; held-out "
-            f"frequency error {100 * selection['held_out_rms']:.2f} % RMS"
-        )
-    for name, entry in stats["versus_identified"].items():
-        print(
-            f"  {name}: RMS relative error frequency {100 * entry['frequency']['rms']:.2f} %, "
-            f"damping {100 * entry['damping']['rms']:.1f} %"
-        )
-    modal.save(args.out)
-    print(f"modal map written to {args.out}")
-    return 0
-
-
-def _se_text(se: float | None) -> str:
-    return "?" if se is None else f"{se:.2g}"
-
-
-def _per(term: str) -> str:
-    return {"at_zero": "", "per_nm": " per N m", "per_nm2": " per (N m)²"}[term]
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -1,0 +1,129 @@
+"""``tvist fit-map --kind modal``: fit a modal map, print what was found, write the map file.
+
+By default the fit uses every identified mode (:mod:`tvist.ident.all_modes_fit`);
+``--select-folds K`` runs the label-based fit of the base and shoulder modes with its held-out
+term selection (:mod:`tvist.ident.modal_fit`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+__all__ = ["fit_modal_command"]
+
+_UNITS = {"stiffness": "N m/rad", "damping": "N m s/rad"}
+_PER = {"at_zero": "", "per_nm": " per N m", "per_nm2": " per (N m)²"}
+
+
+def _error(message: str) -> int:
+    print(f"tvist fit-map: error: {message}", file=sys.stderr)
+    return 2
+
+
+def _se(se: float | None) -> str:
+    return "?" if se is None else f"{se:.2g}"
+
+
+def fit_modal_command(records: Sequence[Mapping[str, Any]], args: argparse.Namespace) -> int:
+    """Fit, print, save (``args``: ``results``, ``out``, ``robot``, ``include_low_confidence``,
+    ``select_folds``)."""
+    if args.select_folds is not None:
+        return _labelled_fit(records, args)
+    from tvist.ident.all_modes_fit import fit_all_modes, fitted_map
+
+    if not any("ringing" in r for r in records):
+        print(
+            f"tvist fit-map: warning: {args.results}: no record lists its ringing modes; "
+            "using each log's one mode, matched by frequency alone (no flange direction): "
+            "a mode the base log mistook for another is then fitted as what it is closest to",
+            file=sys.stderr,
+        )
+    try:
+        fit = fit_all_modes(records, args.robot, include_low_confidence=args.include_low_confidence)
+    except ValueError as exc:
+        return _error(str(exc))
+    modal = fitted_map(fit, {"source": f"tvist fit-map --kind modal {args.results}"})
+    stats = modal.metadata["fit_statistics"]
+    print(
+        f"modal map of {args.robot}: {stats['n_poses']} poses, {stats['identified_modes']} "
+        f"identified modes, {stats['matched_modes']} matched to the model's eigenmodes "
+        f"(frequency error {100 * stats['frequency_error_matched']['rms']:.2f} % RMS)"
+    )
+    level = stats["joint_test_level"]
+    print(f"  flexible joints {stats['flexible_joints']} (kept at p < {level:g})")
+    for test in stats["joint_tests"]:
+        verdict = "made rigid" if test.get("made_rigid") else "flexible"
+        print(
+            f"    joint {test['joint']}: χ² gain {test['chi2_gain']:.1f} on {test['dof']} "
+            f"parameter(s), p = {test['p_value']:.2g}: {verdict}"
+        )
+    for c in stats["coefficients"]:
+        print(
+            f"  joint {c['joint']} {c['what']} {c['term']}: {c['value']:.5g} ± {_se(c['se'])} "
+            f"({_UNITS[c['what']]}{_PER[c['term']]})"
+        )
+    dropped = [d for d in stats["dropped"] if not d.startswith("joint ")]
+    if dropped:
+        print(f"  dropped as negligible: {', '.join(dropped)}")
+    print("  physical modes (frequency min/median/max over the poses, flange participation):")
+    for m in stats["physical_modes"]:
+        f = m["freq_hz"]
+        print(
+            f"    joint {m['joint']}: {f[0]:.1f} / {f[1]:.1f} / {f[2]:.1f} Hz, participation "
+            f"median {100 * m['flange_participation'][0]:.0f} %, max "
+            f"{100 * m['flange_participation'][1]:.0f} %, identified at "
+            f"{100 * m['identified_at_poses']:.0f} % of the poses: "
+            f"{'shaped' if m['shaped'] else 'not shaped'}"
+        )
+    print(f"  shaped modes: mode_joints {modal.mode_joints}")
+    modal.save(args.out)
+    print(f"modal map written to {args.out}")
+    return 0
+
+
+def _labelled_fit(records: Sequence[Mapping[str, Any]], args: argparse.Namespace) -> int:
+    from tvist.ident.modal_fit import fit_modal_map
+
+    try:
+        modal = fit_modal_map(
+            records,
+            args.robot,
+            include_low_confidence=args.include_low_confidence,
+            select_folds=args.select_folds,
+            metadata={"source": f"tvist fit-map --kind modal {args.results}"},
+        )
+    except ValueError as exc:
+        return _error(str(exc))
+    stats = modal.metadata["fit_statistics"]
+    print(
+        f"modal map of {args.robot} (base and shoulder modes by label): {stats['n_poses']} "
+        f"poses, usable identifications base {stats['usable_identifications']['base']}, "
+        f"shoulder {stats['usable_identifications']['shoulder']}"
+    )
+    for what in ("stiffness_nm_per_rad", "damping_nms_per_rad"):
+        name = what.split("_")[0]
+        for t in stats[what]:
+            print(
+                f"  joint {t['joint']} {name} {t['term']}: {t['value']:.5g} ± {_se(t['se'])} "
+                f"({_UNITS[name]}{_PER[t['term']]})"
+            )
+    if stats["dropped"]:
+        print(f"  dropped as negligible: {', '.join(stats['dropped'])}")
+    selection = stats.get("term_selection")
+    if selection:
+        made = ", ".join(m["move"] for m in selection["moves"]) or "none"
+        print(
+            f"  held-out selection ({selection['folds']} folds): moves {made}; held-out "
+            f"frequency error {100 * selection['held_out_rms']:.2f} % RMS"
+        )
+    for name, entry in stats["versus_identified"].items():
+        print(
+            f"  {name}: RMS relative error frequency {100 * entry['frequency']['rms']:.2f} %, "
+            f"damping {100 * entry['damping']['rms']:.1f} %"
+        )
+    modal.save(args.out)
+    print(f"modal map written to {args.out}")
+    return 0

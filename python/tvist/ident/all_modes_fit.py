@@ -1,0 +1,552 @@
+"""Fit a modal map to every identified mode of every pose, matched to the model's eigenmodes.
+
+Each identified mode (a pose record's ``ringing`` entry, :mod:`tvist.ident.observed_modes`)
+is compared with the model eigenmode it physically is, not with the mode a joint label names:
+at a folded pose the base excitation's strongest ringing is often an elbow-dominated mode.
+
+**Matching.** Per pose and excitation log, identified modes and the model's eigenmodes
+(:func:`tvist.ident.model_modes.model_modes`) are paired one to one (Hungarian assignment)
+at the least cost ``(ln(ω_id/ω_model)/F_TOL)² + (sin θ/D_TOL)²``, ``θ`` the angle between the
+identified and the model's flange direction (the eigenvector through the flange Jacobian; the
+term is left out for a mode identified without a direction). A pair costing more than
+:data:`GATE` is no match: that identification is left out. The model's modes are tracked by
+frequency rank, which is continuous in the parameters (also where two modes veer), so the
+assignment is fixed during each least-squares fit and redone after it until it settles.
+
+**Fit.** (1) Stiffness on the matched frequencies, from several starts of the joints other
+than base and shoulder (the pairing depends on them), robust least squares with the
+undamped modes; (2) damping, non-negative least squares on the matched damping ratios with
+the damping projected on the undamped modes (linear in the coefficients); (3) both together on
+``ω`` and ``ζ`` with the exact damped modes (the core's model), each in units of its scatter.
+Load terms below ``drop_t`` standard errors are dropped.
+
+**Which joints are flexible** is decided by the data: starting from every candidate joint
+(base to wrist 2), a joint other than base and shoulder is made rigid when the evidence for
+its flexibility is weak: the truncated χ² of the frequency fit (each residual in units of the
+full model's robust scatter, capped at :data:`GATE` like an unmatched mode) must fall by more
+than the ``1 − JOINT_P`` quantile of χ² with as many degrees of freedom as the joint's
+stiffness parameters when the joint is flexible (a likelihood-ratio test at level
+:data:`JOINT_P`); the weakest joint is removed first and the test repeated.
+
+**A servo of finite stiffness** ``k_s`` in series with a gear ``k_g`` is not fitted as a
+parameter of its own: with the motor's inertia neglected (as the core's model, and the twin,
+take it: the motor is held by the servo) the pair is exactly one spring
+``k_g k_s / (k_g + k_s)``, and the gear's stiffening with load, diluted by the linear servo,
+is what the law ``k_0 + k_1 |L| + k_2 L²`` of that joint fits. The data cannot separate the two.
+
+**Which modes to shape** (:mod:`tvist.ident.shaped_modes`): each physical mode (the eigenmode
+dominated by one flexible joint) is reported with its flange participation over the poses.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import optimize, stats
+
+from tvist.ident.model_modes import ModelModes, joint_laws, model_modes, undamped_frequencies
+from tvist.ident.observed_modes import ObservedModes, observed_modes
+from tvist.modal_map import ModalMap
+
+__all__ = ["CANDIDATE_JOINTS", "AllModesFit", "fit_all_modes", "match_modes"]
+
+#: Joints that may be flexible: base, shoulder, elbow, wrists 1-2 (wrist 3, the tool axis,
+#: hardly moves the flange in the arm's modes).
+CANDIDATE_JOINTS = (0, 1, 2, 3, 4)
+#: Always flexible: the joints whose excitation logs the campaign records.
+ALWAYS_FLEXIBLE = (0, 1)
+#: Matching scales: relative frequency difference and sine of the angle between directions.
+F_TOL = 0.05
+D_TOL = 0.35
+#: Largest matching cost of a pair (3 "standard deviations"), and the cap of one residual's
+#: squared size in the joint test.
+GATE = 9.0
+#: Level of the test that keeps a joint flexible.
+JOINT_P = 1e-3
+#: Starts of the joints other than base and shoulder, as multiples of the shoulder's
+#: stiffness (elbow) and as the frequency (Hz) of their own mode (wrists).
+ELBOW_STARTS = (0.5, 1.0, 2.0, 5.0)
+WRIST_START_HZ = 60.0
+#: Passes of match-then-fit.
+MATCH_PASSES = 4
+#: Smallest relative standard errors believed of a local fit (ω, ζ), as the label-based fit.
+MIN_RELATIVE_SE = (1.0e-3, 1.0e-2)
+ROBUST_SCALE = 0.02
+STIFFNESS_SPAN = 100.0
+MIN_LOAD_SPAN_NM = 1.0
+DAMPING_LOAD = {0: 1}
+_LSQ = {"x_scale": "jac", "xtol": 1e-10, "ftol": 1e-10, "gtol": 1e-10, "max_nfev": 200}
+_INVALID = 10.0
+
+
+def match_modes(obs: ObservedModes, model: ModelModes, f_tol: float = F_TOL) -> np.ndarray:
+    """``(k,)`` index of the model eigenmode (frequency rank) each identified mode is, or -1.
+
+    One to one within each pose's excitation log, least total cost (module docstring)."""
+    out = np.full(obs.wn_rad_s.size, -1)
+    groups: dict[tuple[int, int], list[int]] = {}
+    for i, (p, log) in enumerate(zip(obs.pose, obs.log_joint, strict=True)):
+        groups.setdefault((int(p), int(log)), []).append(i)
+    for (p, _), rows in groups.items():
+        wn = model.wn_rad_s[p]
+        cost = (np.log(obs.wn_rad_s[rows][:, None] / wn[None, :]) / f_tol) ** 2
+        d = obs.direction[rows]
+        cos = np.abs(d @ model.flange_direction[p].T)
+        sin2 = np.clip(1.0 - cos**2, 0.0, 1.0)
+        cost = cost + np.where(np.isfinite(sin2), sin2 / D_TOL**2, 0.0)
+        cost = np.where(np.isfinite(cost), cost, 1e6)
+        r, c = optimize.linear_sum_assignment(cost)
+        for a, b in zip(r, c, strict=True):
+            if cost[a, b] <= GATE:
+                out[rows[a]] = b
+    return out
+
+
+@dataclass
+class _Model:
+    """Parameters of one candidate model: flexible joints and kept terms."""
+
+    flex: tuple[int, ...]
+    load_terms: dict[int, list[int]]  # joint -> stiffness load terms kept (1: |L|, 2: L²)
+    damped: tuple[int, ...]
+    damp_terms: dict[int, list[int]]  # joint -> damping terms kept (0, 1, 2)
+
+    def stiffness_names(self) -> list[tuple[int, int]]:
+        return [(j, 0) for j in self.flex] + [(j, t) for j in self.flex for t in self.load_terms[j]]
+
+    def damping_names(self) -> list[tuple[int, int]]:
+        return [(j, t) for j in self.damped for t in self.damp_terms[j]]
+
+
+def _entries(
+    model: _Model, x_stiff: np.ndarray, x_damp: np.ndarray | None = None
+) -> list[dict[str, Any]]:
+    """Map entries of parameters ``x_stiff`` (``log k_0`` then ``a_t``, ``k_t = k_0 a_t``) and
+    ``x_damp`` (N m s/rad)."""
+    k = {j: [0.0, 0.0, 0.0] for j in model.flex}
+    c = {j: [0.0, 0.0, 0.0] for j in model.flex}
+    names = model.stiffness_names()
+    for v, (j, t) in zip(x_stiff, names, strict=True):
+        if t == 0:
+            k[j][0] = math.exp(v)
+    for v, (j, t) in zip(x_stiff, names, strict=True):
+        if t:
+            k[j][t] = k[j][0] * v
+    if x_damp is not None:
+        for v, (j, t) in zip(x_damp, model.damping_names(), strict=True):
+            c[j][t] = float(v)
+    return [
+        {
+            "joint": j,
+            "stiffness_nm_per_rad": k[j],
+            "damping_nms_per_rad": c[j],
+            "damping_load_joint": DAMPING_LOAD.get(j, j),
+        }
+        for j in model.flex
+    ]
+
+
+def _mass_ff(obs: ObservedModes, flex: Sequence[int]) -> np.ndarray:
+    idx = np.asarray(flex)
+    return obs.mass_kg_m2[:, idx][:, :, idx]
+
+
+def _sigma(value: np.ndarray, se: np.ndarray, floor: float) -> np.ndarray:
+    """Relative measurement error of each identification: its stated standard error, floored."""
+    rel = se / value
+    return np.where(np.isfinite(rel), np.maximum(rel, floor), floor)
+
+
+@dataclass
+class _FreqFit:
+    x: np.ndarray
+    assignment: np.ndarray
+    residual: np.ndarray  # relative ω error over σ, matched modes (others NaN), (k,)
+    jac: np.ndarray
+    cost: float
+
+
+def _fit_frequencies(
+    obs: ObservedModes, model: _Model, x0: np.ndarray, bounds: tuple[list, list]
+) -> _FreqFit:
+    """Match-then-fit passes of the stiffness on the matched frequencies (undamped modes)."""
+    mff = _mass_ff(obs, model.flex)
+    sigma = _sigma(obs.wn_rad_s, obs.wn_se_rad_s, MIN_RELATIVE_SE[0])
+    x = np.clip(x0, *bounds)
+    assignment = np.full(obs.wn_rad_s.size, -1)
+    res = None
+    for i in range(MATCH_PASSES):
+        entries = _entries(model, x)
+        modes = model_modes(entries, obs.mass_kg_m2, obs.gravity_torque_nm, obs.jacobian)
+        # A wide first pairing (the start may be 20 % off), the stated one after.
+        new = match_modes(obs, modes, f_tol=3 * F_TOL if i == 0 else F_TOL)
+        if res is not None and np.array_equal(new, assignment):
+            break
+        assignment = new
+        used = assignment >= 0
+        if used.sum() <= x.size:
+            break
+        rows, cols = obs.pose[used], assignment[used]
+
+        def residual(v: np.ndarray, rows=rows, cols=cols, used=used) -> np.ndarray:
+            k, _ = joint_laws(_entries(model, v), obs.gravity_torque_nm)
+            wn = undamped_frequencies(mff, k)[rows, cols]
+            r = (wn / obs.wn_rad_s[used] - 1.0) / sigma[used]
+            return np.where(np.isfinite(r), r, _INVALID / MIN_RELATIVE_SE[0])
+
+        res = optimize.least_squares(
+            residual, x, bounds=bounds, loss="soft_l1", f_scale=ROBUST_SCALE / 1e-3, **_LSQ
+        )
+        x = res.x
+    full = np.full(obs.wn_rad_s.size, np.nan)
+    if res is None:
+        return _FreqFit(x, assignment, full, np.zeros((0, x.size)), math.inf)
+    used = assignment >= 0
+    full[used] = res.fun if res.fun.size == used.sum() else np.nan
+    return _FreqFit(x, assignment, full, res.jac, float(res.cost))
+
+
+def _truncated_chi2(fit: _FreqFit, scale: float) -> float:
+    """Σ min((r/scale)², GATE) over every identified mode (unmatched ones count GATE)."""
+    r = fit.residual / scale
+    return float(np.sum(np.where(np.isfinite(r), np.minimum(r * r, GATE), GATE)))
+
+
+def _robust_scale(r: np.ndarray) -> float:
+    r = r[np.isfinite(r)]
+    return max(1.4826 * float(np.median(np.abs(r))), 1e-6) if r.size else 1.0
+
+
+def _start(obs: ObservedModes, flex: Sequence[int], elbow_factor: float) -> dict[int, float]:
+    """Start stiffnesses: base and shoulder ``ω² M_jj`` of the lowest mode of their own log,
+    the elbow ``elbow_factor`` times the shoulder's, the wrists' own mode at
+    :data:`WRIST_START_HZ`."""
+    start: dict[int, float] = {}
+    for j in ALWAYS_FLEXIBLE:
+        vals = []
+        for p in range(obs.n_poses):
+            sel = (obs.pose == p) & (obs.log_joint == j)
+            if sel.any():
+                vals.append(obs.wn_rad_s[sel].min() ** 2 * obs.mass_kg_m2[p, j, j])
+        start[j] = float(np.median(vals)) if vals else 2.0e4
+    for j in flex:
+        if j == 2:
+            start[j] = elbow_factor * start[1]
+        elif j not in start:
+            inertia = float(np.median(obs.mass_kg_m2[:, j, j]))
+            start[j] = (2 * math.pi * WRIST_START_HZ) ** 2 * inertia
+    return start
+
+
+def _stiffness_bounds(model: _Model, start: Mapping[int, float]) -> tuple[list, list]:
+    span = math.log(STIFFNESS_SPAN)
+    lo, hi = [], []
+    for j, t in model.stiffness_names():
+        if t == 0:
+            lo.append(math.log(start[j]) - span)
+            hi.append(math.log(start[j]) + span)
+        else:
+            lo.append(0.0)
+            hi.append(np.inf)
+    return lo, hi
+
+
+def _best_frequency_fit(
+    obs: ObservedModes, model: _Model, warm: Mapping[tuple[int, int], float] | None = None
+) -> tuple[_FreqFit, dict[int, float]]:
+    """The stiffness fit of ``model`` from every start (:data:`ELBOW_STARTS`), least cost;
+    with ``warm`` (parameter values by name, e.g. of a larger model's fit) from that alone."""
+    best, best_start = None, {}
+    factors = ELBOW_STARTS if 2 in model.flex and warm is None else (1.0,)
+    for factor in factors:
+        start = _start(obs, model.flex, factor)
+        names = model.stiffness_names()
+        x0 = np.array([math.log(start[j]) if t == 0 else 0.0 for j, t in names])
+        if warm is not None:
+            x0 = np.array([warm.get(n, v) for n, v in zip(names, x0, strict=True)])
+        fit = _fit_frequencies(obs, model, x0, _stiffness_bounds(model, start))
+        # Ranked by the truncated χ² in common units (matched share and residual size).
+        if best is None or _truncated_chi2(fit, 1.0) < _truncated_chi2(best, 1.0):
+            best, best_start = fit, start
+    assert best is not None
+    return best, best_start
+
+
+def _standard_errors(jac: np.ndarray, residual: np.ndarray) -> np.ndarray:
+    """``√diag(σ² (JᵀJ)⁻¹)`` over the inliers (within 4 robust standard deviations)."""
+    sigma = _robust_scale(residual)
+    keep = np.abs(residual) <= 4 * sigma
+    if keep.sum() > jac.shape[1]:
+        jac, residual = jac[keep], residual[keep]
+    n, p = jac.shape
+    if p == 0:
+        return np.zeros(0)
+    s2 = float(residual @ residual) / max(n - p, 1)
+    _, sv, vt = np.linalg.svd(jac, full_matrices=False)
+    if sv.size < p or sv[-1] <= 1e-12 * sv[0]:
+        return np.full(p, math.inf)
+    return np.sqrt(np.einsum("ki,k->i", vt**2, 1.0 / sv**2) * s2)
+
+
+def _candidate(obs: ObservedModes, flex: Sequence[int]) -> _Model:
+    load = {
+        j: [1, 2] if np.ptp(np.abs(obs.gravity_torque_nm[:, j])) > MIN_LOAD_SPAN_NM else []
+        for j in flex
+    }
+    return _Model(tuple(flex), load, (), {})
+
+
+def _drop_weak_load_terms(
+    obs: ObservedModes, model: _Model, drop_t: float, dropped: list[str]
+) -> tuple[_FreqFit, dict[int, float]]:
+    while True:
+        fit, start = _best_frequency_fit(obs, model)
+        used = np.isfinite(fit.residual)
+        se = _standard_errors(fit.jac, fit.residual[used])
+        weak = [
+            (abs(fit.x[i]) / se[i] if se[i] > 0 else math.inf, i)
+            for i, (_, t) in enumerate(model.stiffness_names())
+            if t
+        ]
+        weak = [w for w in weak if w[0] < drop_t]
+        if not weak:
+            return fit, start
+        j, t = model.stiffness_names()[min(weak)[1]]
+        model.load_terms[j].remove(t)
+        dropped.append(f"stiffness term {t} of joint {j}")
+
+
+def _select_joints(
+    obs: ObservedModes, candidates: Sequence[int], drop_t: float
+) -> tuple[_Model, _FreqFit, dict[int, float], list[dict[str, Any]], list[str]]:
+    """Backward elimination of flexible joints by the likelihood-ratio test (module doc)."""
+    dropped: list[str] = []
+    model = _candidate(obs, candidates)
+    fit, start = _drop_weak_load_terms(obs, model, drop_t, dropped)
+    tests: list[dict[str, Any]] = []
+    while True:
+        scale = _robust_scale(fit.residual)
+        chi2_full = _truncated_chi2(fit, scale)
+        trials = []
+        for j in model.flex:
+            if j in ALWAYS_FLEXIBLE:
+                continue
+            rigid = _candidate(obs, [i for i in model.flex if i != j])
+            for i in rigid.flex:
+                rigid.load_terms[i] = list(model.load_terms[i])
+            warm = dict(zip(model.stiffness_names(), fit.x, strict=True))
+            trial, _ = _best_frequency_fit(obs, rigid, warm)
+            dof = 1 + len(model.load_terms[j])
+            gain = _truncated_chi2(trial, scale) - chi2_full
+            p_value = float(stats.chi2.sf(max(gain, 0.0), dof))
+            trials.append({"joint": j, "chi2_gain": gain, "dof": dof, "p_value": p_value})
+        weakest = max(trials, key=lambda t: t["p_value"], default=None)
+        tests += trials
+        if weakest is None or weakest["p_value"] < JOINT_P:
+            return model, fit, start, tests, dropped
+        weakest["made_rigid"] = True
+        dropped.append(f"joint {weakest['joint']} made rigid (p = {weakest['p_value']:.2g})")
+        kept = {i: model.load_terms[i] for i in model.flex if i != weakest["joint"]}
+        model = _candidate(obs, list(kept))
+        model.load_terms = kept
+        fit, start = _drop_weak_load_terms(obs, model, drop_t, dropped)
+
+
+def _fit_damping(
+    obs: ObservedModes, model: _Model, x_stiff: np.ndarray, assignment: np.ndarray
+) -> np.ndarray:
+    """Damping coefficients by NNLS on the matched ζ (damping projected on undamped modes):
+    each column is the model's ζ with one unit coefficient."""
+    used = assignment >= 0
+    columns = []
+    for name in model.damping_names():
+        x_damp = np.array([1.0 if n == name else 0.0 for n in model.damping_names()])
+        modes = model_modes(
+            _entries(model, x_stiff, x_damp),
+            obs.mass_kg_m2,
+            obs.gravity_torque_nm,
+            obs.jacobian,
+        )
+        # Unit coefficients are light damping: the projection is linear in them.
+        columns.append(modes.zeta[obs.pose[used], assignment[used]])
+    a = np.column_stack(columns) / obs.zeta[used][:, None]
+    ok = np.all(np.isfinite(a), axis=1)
+    scale = np.linalg.norm(a[ok], axis=0)
+    scale[scale == 0] = 1.0
+    x, _ = optimize.nnls(a[ok] / scale, np.ones(int(ok.sum())))
+    return x / scale
+
+
+def _refine(
+    obs: ObservedModes,
+    model: _Model,
+    x_stiff: np.ndarray,
+    x_damp: np.ndarray,
+    assignment: np.ndarray,
+    start: Mapping[int, float],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Stiffness and damping together on the matched ω and ζ, exact damped modes, each
+    quantity in units of its robust scatter at the start."""
+    used = assignment >= 0
+    rows, cols = obs.pose[used], assignment[used]
+    sw = _sigma(obs.wn_rad_s, obs.wn_se_rad_s, MIN_RELATIVE_SE[0])[used]
+    sz = _sigma(obs.zeta, obs.zeta_se, MIN_RELATIVE_SE[1])[used]
+    n_s = x_stiff.size
+
+    def relative(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        modes = model_modes(
+            _entries(model, v[:n_s], v[n_s:]), obs.mass_kg_m2, obs.gravity_torque_nm, obs.jacobian
+        )
+        return (
+            modes.wn_rad_s[rows, cols] / obs.wn_rad_s[used] - 1.0,
+            modes.zeta[rows, cols] / obs.zeta[used] - 1.0,
+        )
+
+    lo, hi = _stiffness_bounds(model, start)
+    lo, hi = lo + [0.0] * x_damp.size, hi + [np.inf] * x_damp.size
+    x = np.clip(np.concatenate([x_stiff, x_damp]), lo, hi)
+    ew, ez = relative(x)
+    scale_w, scale_z = _robust_scale(ew / sw), _robust_scale(ez / sz)
+
+    def residual(v: np.ndarray) -> np.ndarray:
+        rw, rz = relative(v)
+        r = np.concatenate([rw / (sw * scale_w), rz / (sz * scale_z)])
+        return np.where(np.isfinite(r), r, _INVALID / MIN_RELATIVE_SE[0])
+
+    res = optimize.least_squares(residual, x, bounds=(lo, hi), loss="soft_l1", f_scale=4.0, **_LSQ)
+    return res.x[:n_s], res.x[n_s:], res.jac, res.fun
+
+
+@dataclass(frozen=True)
+class AllModesFit:
+    """The fitted map and what the fit found.
+
+    Attributes
+    ----------
+    entries
+        The flexible joints' laws (a modal map's ``flex_joints``).
+    observed
+        The identified modes the fit used.
+    assignment
+        ``(k,)`` model eigenmode (frequency rank) of each identified mode, -1: no match.
+    statistics
+        JSON-ready: coefficients with standard errors, the joint tests, dropped terms,
+        matched share and residuals.
+    """
+
+    entries: list[dict[str, Any]]
+    observed: ObservedModes
+    assignment: np.ndarray
+    statistics: dict[str, Any]
+
+    def model_modes(self, obs: ObservedModes | None = None) -> ModelModes:
+        """The fitted model's every mode at the poses of ``obs`` (default: the fit's)."""
+        o = self.observed if obs is None else obs
+        return model_modes(self.entries, o.mass_kg_m2, o.gravity_torque_nm, o.jacobian)
+
+
+def fit_all_modes(
+    records: Sequence[Mapping[str, Any]] | ObservedModes,
+    robot_name: str = "ur5e",
+    *,
+    candidate_joints: Sequence[int] = CANDIDATE_JOINTS,
+    drop_t: float = 3.0,
+    include_low_confidence: bool = False,
+) -> AllModesFit:
+    """Fit the flexible joints' laws to every identified mode (module docstring).
+
+    Raises
+    ------
+    ValueError
+        Unusable records, too few identified modes, or candidates without base and shoulder.
+    """
+    candidates = tuple(sorted(int(j) for j in candidate_joints))
+    if not set(ALWAYS_FLEXIBLE) <= set(candidates):
+        raise ValueError(f"candidate joints must include base and shoulder, got {candidates}")
+    obs = (
+        records
+        if isinstance(records, ObservedModes)
+        else observed_modes(records, robot_name, include_low_confidence=include_low_confidence)
+    )
+    if obs.wn_rad_s.size < 2 * len(candidates) + 2:
+        raise ValueError(
+            f"{obs.wn_rad_s.size} usable identified modes, need at least "
+            f"{2 * len(candidates) + 2} to fit {len(candidates)} flexible joints"
+        )
+    model, fit, start, joint_tests, dropped = _select_joints(obs, candidates, drop_t)
+
+    # Dampers: base and shoulder, and any joint dominating identified modes.
+    modes = model_modes(_entries(model, fit.x), obs.mass_kg_m2, obs.gravity_torque_nm, obs.jacobian)
+    used = fit.assignment >= 0
+    dominant = modes.dominant_joint()[obs.pose[used], fit.assignment[used]]
+    damped = tuple(j for j in model.flex if j in ALWAYS_FLEXIBLE or np.sum(dominant == j) >= 5)
+    model.damped = damped
+    for j in damped:
+        spans = np.ptp(np.abs(obs.gravity_torque_nm[:, DAMPING_LOAD.get(j, j)]))
+        model.damp_terms[j] = [0, 1, 2] if spans > MIN_LOAD_SPAN_NM else [0]
+    x_damp = _fit_damping(obs, model, fit.x, fit.assignment)
+    x_stiff, assignment = fit.x, fit.assignment
+    for _ in range(MATCH_PASSES):
+        x_stiff, x_damp, jac, fun = _refine(obs, model, x_stiff, x_damp, assignment, start)
+        modes = model_modes(
+            _entries(model, x_stiff, x_damp), obs.mass_kg_m2, obs.gravity_torque_nm, obs.jacobian
+        )
+        new = match_modes(obs, modes)
+        if np.array_equal(new, assignment):
+            break
+        assignment = new
+    entries = _entries(model, x_stiff, x_damp)
+    se = _standard_errors(jac, fun)
+    names = [("stiffness", j, t) for j, t in model.stiffness_names()]
+    names += [("damping", j, t) for j, t in model.damping_names()]
+    coefficients = []
+    by_joint = {e["joint"]: e for e in entries}
+    for i, (what, j, t) in enumerate(names):
+        field = "stiffness_nm_per_rad" if what == "stiffness" else "damping_nms_per_rad"
+        value = by_joint[j][field][t]
+        # d k_0 = k_0 d(log k_0); k_t = k_0 a_t: d k_t ≈ k_0 d a_t.
+        err = by_joint[j][field][0] * se[i] if what == "stiffness" else se[i]
+        coefficients.append(
+            {
+                "what": what,
+                "joint": j,
+                "term": ("at_zero", "per_nm", "per_nm2")[t],
+                "value": float(value),
+                "se": float(err) if math.isfinite(err) else None,
+            }
+        )
+    used = assignment >= 0
+    rel = modes.wn_rad_s[obs.pose[used], assignment[used]] / obs.wn_rad_s[used] - 1.0
+    statistics = {
+        "robot": robot_name,
+        "n_poses": obs.n_poses,
+        "identified_modes": int(obs.wn_rad_s.size),
+        "matched_modes": int(used.sum()),
+        "flexible_joints": list(model.flex),
+        "damped_joints": list(model.damped),
+        "joint_tests": joint_tests,
+        "joint_test_level": JOINT_P,
+        "dropped": dropped,
+        "coefficients": coefficients,
+        "frequency_error_matched": {
+            "rms": float(np.sqrt(np.mean(rel**2))) if rel.size else None,
+            "max": float(np.max(np.abs(rel))) if rel.size else None,
+        },
+    }
+    return AllModesFit(entries, obs, assignment, statistics)
+
+
+def fitted_map(fit: AllModesFit, metadata: Mapping[str, Any] | None = None) -> ModalMap:
+    """The :class:`~tvist.ModalMap` of ``fit``, shaping the modes
+    :func:`tvist.ident.shaped_modes.physical_modes` says matter."""
+    from tvist.ident.shaped_modes import physical_modes, shaping_field
+
+    report = physical_modes(fit)
+    meta = {"robot": fit.statistics["robot"], "source": "tvist.ident.fit_all_modes"}
+    meta.update(metadata or {})
+    meta["fit_statistics"] = {**fit.statistics, "physical_modes": report}
+    return ModalMap(fit.entries, metadata=meta, **shaping_field(report))

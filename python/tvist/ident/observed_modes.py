@@ -1,0 +1,184 @@
+"""Every identified mode of a campaign's poses, with what the robot model says of each pose.
+
+A pose record (:mod:`tvist.ident.pose`) lists in ``ringing`` every mode that rang after the
+base and the shoulder excitation, each with its flange direction (base frame) where the log
+had three axes. Older records have only ``modes`` (one per excitation log, no direction):
+those are read as ringing entries without a direction. Entries flagged ``low_confidence`` are
+left out unless asked for.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from tvist.robots import Payload, Robot, params
+
+__all__ = ["ObservedModes", "observed_modes"]
+
+
+@dataclass(frozen=True)
+class ObservedModes:
+    """Poses (``n``) and their identified modes (``k``, flattened over poses).
+
+    Attributes
+    ----------
+    q, mass_kg_m2, gravity_torque_nm, jacobian
+        Per pose ``(n, n_dof)``, ``(n, n_dof, n_dof)``, ``(n, n_dof)``, ``(n, 6, n_dof)``
+        (robot model, payload included).
+    keys
+        Pose keys.
+    pose, log_joint
+        ``(k,)`` pose index and excitation log (0 base, 1 shoulder) of each mode.
+    wn_rad_s, zeta, wn_se_rad_s, zeta_se
+        ``(k,)``; standard errors NaN where the record states none.
+    direction
+        ``(k, 3)`` unit flange direction, NaN where unknown.
+    true_modes
+        Per pose, the record's ``true_modes`` list (a twin's campaign) or ``None``.
+    """
+
+    q: np.ndarray
+    mass_kg_m2: np.ndarray
+    gravity_torque_nm: np.ndarray
+    jacobian: np.ndarray
+    keys: tuple[str, ...]
+    pose: np.ndarray
+    log_joint: np.ndarray
+    wn_rad_s: np.ndarray
+    zeta: np.ndarray
+    wn_se_rad_s: np.ndarray
+    zeta_se: np.ndarray
+    direction: np.ndarray
+    true_modes: tuple[Any, ...]
+
+    @property
+    def n_poses(self) -> int:
+        return int(self.q.shape[0])
+
+    def subset(self, index: Sequence[int] | np.ndarray) -> ObservedModes:
+        """The poses at ``index`` (and their modes), renumbered."""
+        index = np.asarray(index, dtype=int)
+        new = np.full(self.n_poses, -1)
+        new[index] = np.arange(index.size)
+        keep = new[self.pose] >= 0
+        return ObservedModes(
+            self.q[index],
+            self.mass_kg_m2[index],
+            self.gravity_torque_nm[index],
+            self.jacobian[index],
+            tuple(self.keys[i] for i in index),
+            new[self.pose[keep]],
+            self.log_joint[keep],
+            self.wn_rad_s[keep],
+            self.zeta[keep],
+            self.wn_se_rad_s[keep],
+            self.zeta_se[keep],
+            self.direction[keep],
+            tuple(self.true_modes[i] for i in index),
+        )
+
+
+def _number(value: Any) -> float:
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        return math.nan
+    return value if math.isfinite(value) and value > 0 else math.nan
+
+
+def _entries(record: Mapping[str, Any]) -> list[Mapping[str, Any]]:
+    """The record's ringing entries, or its ``modes`` read as such (no direction)."""
+    ringing = record.get("ringing")
+    if ringing is not None:
+        return list(ringing)
+    return [
+        {**m, "log_joint": m.get("joint"), "flange_direction": None}
+        for m in record.get("modes", [])
+        if m.get("joint") in (0, 1) and not m.get("error")
+    ]
+
+
+def observed_modes(
+    records: Sequence[Mapping[str, Any]],
+    robot_name: str,
+    *,
+    include_low_confidence: bool = False,
+) -> ObservedModes:
+    """The identified modes of every campaign record with a configuration ``q``.
+
+    Raises
+    ------
+    ValueError
+        No usable record, a malformed ``q`` or payload, or stored joint inertias that are not
+        this robot's (the campaign ran with another robot or payload).
+    """
+    from tvist.ident.modal_fit import _check_stored_inertia, _record_payload
+
+    robot_params = params(robot_name)
+    robots: dict[tuple, Robot] = {}
+    qs, keys, truth = [], [], []
+    payload_of: list[tuple] = []
+    pose, log, wn, zeta, wn_se, zeta_se, direction = [], [], [], [], [], [], []
+    for i, r in enumerate(records):
+        q = r.get("q")
+        if q is None or r.get("error"):
+            continue
+        q = np.asarray(q, dtype=float)
+        if q.shape != (robot_params.n_dof,) or not np.all(np.isfinite(q)):
+            raise ValueError(f"records[{i}]: 'q' must be {robot_params.n_dof} finite angles")
+        key = _record_payload(r, i)
+        if key not in robots:
+            robots[key] = Robot(robot_params, Payload(key[0], key[1]))
+        _check_stored_inertia(r, i, robots[key].joint_inertia(q), robot_name)
+        p = len(qs)
+        for m in _entries(r):
+            if m.get("low_confidence", False) and not include_low_confidence:
+                continue
+            w, z = _number(m.get("wn_rad_s")), _number(m.get("zeta"))
+            if not (math.isfinite(w) and math.isfinite(z)):
+                continue
+            d = m.get("flange_direction")
+            d = np.full(3, np.nan) if d is None else np.asarray(d, dtype=float)
+            norm = float(np.linalg.norm(d)) if d.shape == (3,) else math.nan
+            pose.append(p)
+            log.append(int(m.get("log_joint", -1)))
+            wn.append(w)
+            zeta.append(z)
+            wn_se.append(_number(m.get("wn_se_rad_s")))
+            zeta_se.append(_number(m.get("zeta_se")))
+            direction.append(d / norm if norm > 0 else np.full(3, np.nan))
+        qs.append(q)
+        payload_of.append(key)
+        keys.append(str(r.get("key", i)))
+        truth.append(r.get("true_modes"))
+    if not qs:
+        raise ValueError(f"no campaign record with a configuration 'q' among {len(records)}")
+    q_all = np.array(qs)
+    mass = np.empty((len(qs), robot_params.n_dof, robot_params.n_dof))
+    tau = np.empty((len(qs), robot_params.n_dof))
+    jac = np.empty((len(qs), 6, robot_params.n_dof))
+    for key, model in robots.items():
+        rows = [i for i, k in enumerate(payload_of) if k == key]
+        mass[rows] = model.mass_matrix_many(q_all[rows])
+        tau[rows] = model.gravity_torque_many(q_all[rows])
+        jac[rows] = model.jacobian_many(q_all[rows])
+    return ObservedModes(
+        q_all,
+        mass,
+        tau,
+        jac,
+        tuple(keys),
+        np.array(pose, dtype=int),
+        np.array(log, dtype=int),
+        np.array(wn),
+        np.array(zeta),
+        np.array(wn_se),
+        np.array(zeta_se),
+        np.array(direction).reshape(-1, 3),
+        tuple(truth),
+    )
