@@ -34,6 +34,11 @@ def fit_modal_command(records: Sequence[Mapping[str, Any]], args: argparse.Names
         return _labelled_fit(records, args)
     from tvist.ident.all_modes_fit import fit_all_modes, fitted_map
 
+    try:
+        fit = fit_all_modes(records, args.robot, include_low_confidence=args.include_low_confidence)
+    except ValueError as exc:
+        return _error(str(exc))
+    # After the fit: a refusal stays the one line of its error.
     if not any("ringing" in r for r in records):
         print(
             f"tvist fit-map: warning: {args.results}: no record lists its ringing modes; "
@@ -41,10 +46,6 @@ def fit_modal_command(records: Sequence[Mapping[str, Any]], args: argparse.Names
             "a mode the base log mistook for another is then fitted as what it is closest to",
             file=sys.stderr,
         )
-    try:
-        fit = fit_all_modes(records, args.robot, include_low_confidence=args.include_low_confidence)
-    except ValueError as exc:
-        return _error(str(exc))
     modal = fitted_map(fit, {"source": f"tvist fit-map --kind modal {args.results}"})
     stats = modal.metadata["fit_statistics"]
     print(
