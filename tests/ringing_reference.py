@@ -9,7 +9,10 @@ does not assume:
 - the flange acceleration (base frame) is the rigid arm's (tangential ``q̈ z×(p-o)`` and
   centripetal ``q̇² z×(z×(p-o))`` at the motor angle) plus ``Σ_i g_i d_i(t) ë_i(t)``: mode ``i``
   moves the flange along ``d_i`` (unit, base frame at the pose), turned with the excited joint
-  as it swings (rotation about the joint's axis);
+  as it swings (rotation about the joint's axis). A stiff remainder mode beyond the band
+  (``fast_hz``) carries the rest of the lever, ``z×(p-o) - Σ_i g_i d_i``, so that the flange
+  acceleration is continuous where the motor's acceleration steps (a flexible arm's link
+  does not follow a step of its motor at once);
 - the accelerometer is sampled with timing jitter (uniform, each sample) around the log's
   timestamps, reads in the tool frame with the reaction to gravity, a constant bias and white
   noise, and is written as ur_rtde CSV.
@@ -52,9 +55,11 @@ def generate_ringing_log(
     modes: list[TrueRinging],
     dt_s: float = 0.002,
     noise_m_s2: float = 0.03,
-    jitter_s: float = 0.0002,
+    jitter_s: float = 0.00002,
     duration_s: float = 8.0,
     robot_name: str = "ur5e",
+    fast_hz: float = 250.0,
+    fast_zeta: float = 0.7,
 ) -> Path:
     """Write one excitation log of ``joint`` at ``q0`` in which ``modes`` ring."""
     rng = np.random.default_rng(seed)
@@ -77,13 +82,19 @@ def generate_ringing_log(
     a_base = qdd_s[:, None] * lever + qd_s[:, None] ** 2 * np.cross(z, lever)
     axis = dh_frames(q0[None], robot_name)[joint][0, :3, 2]
     swing = q_s - q0[joint]
-    for mode in modes:
-        wn = 2.0 * math.pi * mode.freq_hz
-        e, e_dot = integrate_mode(profile, wn, mode.zeta, t_sensor)
-        e_ddot = -qdd_s - 2.0 * mode.zeta * wn * e_dot - wn**2 * e
+    remainder = lever.copy()
+    for mode in [*modes, None]:
+        freq, zeta = (fast_hz, fast_zeta) if mode is None else (mode.freq_hz, mode.zeta)
+        wn = 2.0 * math.pi * freq
+        e, e_dot = integrate_mode(profile, wn, zeta, t_sensor)
+        e_ddot = -qdd_s - 2.0 * zeta * wn * e_dot - wn**2 * e
+        if mode is None:
+            a_base += e_ddot[:, None] * remainder
+            continue
         d = np.asarray(mode.direction, dtype=float)
-        d = d / np.linalg.norm(d)
-        a_base += mode.gain * e_ddot[:, None] * _rotate(d, axis, swing)
+        path_dir = mode.gain * _rotate(d / np.linalg.norm(d), axis, swing)
+        a_base += e_ddot[:, None] * path_dir
+        remainder -= path_dir
     reading = np.einsum("nji,nj->ni", rot, a_base + G_UP)
     reading += rng.normal(0.0, 0.05, 3) + rng.normal(0.0, noise_m_s2, (n, 3))
 

@@ -352,8 +352,10 @@ def identify_pose(
 def _linked(
     modes: dict[int, LocalFit | str], ringing: list[RingingMode]
 ) -> dict[int, LocalFit | str]:
-    """``modes`` with a confident entry flagged where its log's multi-mode fit has no mode at
-    its frequency (then it is not among the modes that ring)."""
+    """``modes`` with a confident entry flagged where its log's multi-mode fit does not
+    confirm it: no ringing mode near its frequency, or the nearest one differs by more than
+    the standard errors allow (as between two logs, :func:`cross_check_logs`); a single-mode
+    or two-mode fit that merged two neighbours is caught so."""
     if not ringing:
         return modes
     out = dict(modes)
@@ -362,15 +364,28 @@ def _linked(
             continue
         if not any(m.log_joint == joint for m in ringing):
             continue
-        if _ringing_index(fit, joint, tuple(ringing)) is None:
-            from dataclasses import replace
-
+        index = _ringing_index(fit, joint, tuple(ringing))
+        found = ", ".join(f"{m.fn_hz:.2f}" for m in ringing if m.log_joint == joint)
+        reason = None
+        if index is None:
             reason = (
                 f"not among the modes that ring in the log ({fit.fn_hz:.2f} Hz; the multi-mode "
-                "fit finds "
-                + ", ".join(f"{m.fn_hz:.2f}" for m in ringing if m.log_joint == joint)
-                + " Hz)"
+                f"fit finds {found} Hz)"
             )
+        else:
+            mode = ringing[index]
+            distance = abs(math.log(mode.wn_rad_s / fit.wn_rad_s))
+            combined = math.hypot(_relative_se(mode), fit.wn_se_rad_s / fit.wn_rad_s)
+            tolerance = max(AGREEMENT_SE * combined, AGREEMENT_FLOOR)
+            if distance > tolerance:
+                reason = (
+                    f"disagrees with the multi-mode fit of the same log "
+                    f"({100 * (math.exp(distance) - 1):.1f} %: {fit.fn_hz:.2f} Hz against "
+                    f"{found} Hz)"
+                )
+        if reason is not None:
+            from dataclasses import replace
+
             out[joint] = replace(fit, low_confidence=True, reasons=(*fit.reasons, reason))
     return out
 

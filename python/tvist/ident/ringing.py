@@ -68,6 +68,8 @@ MAX_WN_REL_SE = 0.05
 MERGE_RSS_GAIN = 0.03
 #: A further mode this close (frequency ratio) to a fitted mode counts as its neighbour.
 NEIGHBOUR_RATIO = 1.35
+#: Starts refined per added mode (the best by their residual before refinement).
+N_REFINED = 3
 #: A mode's energy over the residual energy below which it is "below noise" (dB), and below
 #: which it is "weak" (dB): as the local fit's ``min_ringing_snr_db`` / ``min_confident_snr_db``.
 BELOW_NOISE_DB = -10.0
@@ -180,9 +182,22 @@ class _Problem:
         self.u, self.mask, self.dt_s, self.delay_s = u, mask, dt_s, delay_s
         self.y = y[mask]
         self.fixed = np.column_stack([extra[mask], np.ones(int(mask.sum()))])
+        self._cache: dict[tuple[float, float], np.ndarray] = {}
+
+    def block(self, wn: float, zeta: float) -> np.ndarray:
+        """The mode's two regressors on the used samples, cached: a finite-difference
+        Jacobian moves one mode at a time, the others' responses are reused."""
+        key = (wn, zeta)
+        found = self._cache.get(key)
+        if found is None:
+            if len(self._cache) > 256:
+                self._cache.clear()
+            found = zoh_responses(wn, zeta, self.u, self.dt_s, self.delay_s)[self.mask]
+            self._cache[key] = found
+        return found
 
     def blocks(self, modes: list[tuple[float, float]]) -> list[np.ndarray]:
-        return [zoh_responses(w, z, self.u, self.dt_s, self.delay_s)[self.mask] for w, z in modes]
+        return [self.block(w, z) for w, z in modes]
 
     def solve(self, modes: list[tuple[float, float]]) -> tuple[np.ndarray, np.ndarray, list]:
         """Residual (n_used, n_ch), coefficients and the mode blocks."""
@@ -230,9 +245,9 @@ def _refine(problem: _Problem, start: list[tuple[float, float]], wn_bounds) -> _
         bounds=(lower, upper),
         x_scale=scale,
         diff_step=1e-6,
-        xtol=1e-8,
-        ftol=1e-9,
-        max_nfev=200,
+        xtol=1e-7,
+        ftol=1e-8,
+        max_nfev=80,
     )
     from tvist.ident.local_fit import _standard_errors
 
@@ -334,9 +349,16 @@ def fit_ringing(
     while True:
         candidates = _grid_candidates(problem, fit.modes, wn_bounds, n_grid)
         candidates += _split_candidates(fit.modes)
-        more = min((_refine(problem, s, wn_bounds) for s in candidates), key=lambda f: f.rss)
+        # Refine the most promising starts only (by their residual before refinement).
+        candidates.sort(key=problem.rss)
+        more = min(
+            (_refine(problem, s, wn_bounds) for s in candidates[:N_REFINED]), key=lambda f: f.rss
+        )
         best_more.append(more)
         gain = 1.0 - more.rss / fit.rss if fit.rss > 0 else 0.0
+        import os
+        if os.environ.get("RINGING_DEBUG"):
+            print("K", len(fit.modes), fit.rss, [(w / 6.2832, z) for w, z in fit.modes], "->", more.rss, gain, [(w / 6.2832, z, se/w) for (w, z), se in zip(more.modes, more.se[0::2])], more.resolved())
         if len(fit.modes) < max_modes and gain >= MIN_RSS_REDUCTION and more.resolved():
             fit = more
             continue
@@ -425,7 +447,12 @@ def ringing_from_log(
         channels = tangential.psi[:, None]
     u = interval_mean_acceleration(record.target_qd[:, joint], dt)
     lag = int(round(single.delay_s / dt))
-    extra = np.column_stack([shifted(u, lag), shifted(record.target_qd[:, joint] ** 2, lag)])
+    # The faster modes' quasi-static response, to first order in s (a feedthrough and its
+    # rate), and the centripetal acceleration.
+    fed = shifted(u, lag)
+    extra = np.column_stack(
+        [fed, np.diff(fed, prepend=fed[0]) / dt, shifted(record.target_qd[:, joint] ** 2, lag)]
+    )
     mask = ~saturated_samples(record.tool_accel)
     result = fit_ringing(
         u,
