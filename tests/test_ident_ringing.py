@@ -66,14 +66,23 @@ def test_every_ringing_mode_is_reported_with_its_direction(tmp_path):
     record = _identify(tmp_path, {0: THREE_MODES})
     found = [m for m in record.ringing if m.log_joint == 0]
     assert len(found) == 3, [(m.fn_hz, m.zeta, m.reasons) for m in found]
+    # The two strong modes are confident; the third (6 % of the ringing's amplitude) may be
+    # flagged weak, but is reported.
+    assert not found[0].low_confidence and not found[1].low_confidence
     for true, mode in zip(THREE_MODES, found, strict=True):
+        direction = np.array(true.direction) / np.linalg.norm(true.direction)
+        if mode.low_confidence:
+            # Reported, and near the true mode (3 %, 20°), but doubted.
+            assert mode.fn_hz == pytest.approx(true.freq_hz, rel=0.03)
+            assert _angle_deg(mode.flange_direction, direction) < 20.0
+            continue
         # Frequency 1 % and ζ 15 %: the local fit's accuracy on independent logs is 1 % / 5 %
-        # for one mode at 20 dB; three modes sharing the log, the weakest carrying ~10 % of
-        # the ringing energy, widen the damping's error.
+        # for one mode at 20 dB; modes sharing the log, with a stiff remainder the model
+        # approximates to first order, widen the damping's error.
         assert mode.fn_hz == pytest.approx(true.freq_hz, rel=0.01)
         assert mode.zeta == pytest.approx(true.zeta, rel=0.15)
         # Direction within 10°: the mode turns ±10° with the base during the log.
-        assert _angle_deg(mode.flange_direction, np.array(true.direction) / np.linalg.norm(true.direction)) < 10.0
+        assert _angle_deg(mode.flange_direction, direction) < 10.0
         assert max(mode.flange_direction, key=abs) > 0  # sign convention
         assert mode.amplitude_m_s2 > 0
     data = record.to_dict()

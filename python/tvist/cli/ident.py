@@ -421,8 +421,22 @@ input: JSON lines, one pose per line, as written by 'tvist identify --out' and
     wn_se_rad_s, zeta_se  standard errors
     low_confidence   true: not used unless --include-low-confidence; reasons: why
     method           single-mode or two-mode (base separated from the shoulder mode)
+    ringing_index    the ringing entry that is this mode (the base mode: the base log's
+                     mode along the base joint's tangent); null if none
     error            instead of the above if the joint could not be identified
+  ringing            list        every mode that rings in each log (1-3 per log):
+    log_joint        0 base log, 1 shoulder log
+    wn_rad_s, zeta   natural frequency (rad/s) and damping ratio; wn_se_rad_s, zeta_se
+    amplitude_m_s2   largest flange acceleration of the mode's ringing in the log
+    flange_direction [3] unit vector, base frame, largest component positive (null: no
+                     3-axis accelerometer)
+    low_confidence   true with reasons: below noise, weak, uncertain, merged neighbours,
+                     disagrees with the other log, jumps against neighbouring poses
+  true_modes         (twin only) every true mode below 60 Hz: freq_hz, zeta,
+                     joint_shares [6], flange_direction [3], link_share, wn_rad_s, and
+                     joint 0 / 1 for the twin's base / shoulder mode (else null)
   error              why the pose has no result (e.g. unreachable)
+Records without ringing (older files) are read; their modes are used.
 """
 
 
