@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
 from ident_reference import G_UP, dh_frames, integrate_mode, random_profile, write_ur_rtde_csv
 
 

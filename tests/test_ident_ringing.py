@@ -14,8 +14,8 @@ import warnings
 
 import numpy as np
 import pytest
-from ringing_reference import TrueRinging, generate_ringing_log
 
+from ringing_reference import TrueRinging, generate_ringing_log
 from tvist.ident.batch import identify_logs
 from tvist.ident.logs import read_rtde_csv
 from tvist.ident.pose import PoseRecord, identify_pose
@@ -32,7 +32,10 @@ def _identify(tmp_path, modes_by_log: dict[int, list[TrueRinging]], seed: int = 
     records = {}
     for joint, modes in modes_by_log.items():
         path = generate_ringing_log(
-            tmp_path / f"log{joint}.csv", seed=seed + joint, joint=joint, q0=Q_STRETCHED,
+            tmp_path / f"log{joint}.csv",
+            seed=seed + joint,
+            joint=joint,
+            q0=Q_STRETCHED,
             modes=modes,
         )
         with warnings.catch_warnings():
@@ -120,7 +123,11 @@ def test_merged_neighbours_are_never_confident_and_wrong(tmp_path, seed):
         if mode.low_confidence:
             continue
         worst = float(np.min(np.abs(mode.fn_hz / true_hz - 1.0)))
-        assert worst <= 0.03, (mode.fn_hz, mode.zeta, [(m.fn_hz, m.reasons) for m in record.ringing])
+        assert worst <= 0.03, (
+            mode.fn_hz,
+            mode.zeta,
+            [(m.fn_hz, m.reasons) for m in record.ringing],
+        )
     # The same holds for the paper map's base-mode entry.
     base = record.mode(0)
     if base is not None and not base.low_confidence:
@@ -139,7 +146,10 @@ def test_a_mode_that_disagrees_between_the_logs_is_flagged(tmp_path):
     base = [m for m in record.ringing if m.log_joint == 0]
     shoulder = [m for m in record.ringing if m.log_joint == 1]
     assert base and shoulder
-    for mode in (min(base, key=lambda m: abs(m.fn_hz - 11.0)), min(shoulder, key=lambda m: abs(m.fn_hz - 11.8))):
+    for mode in (
+        min(base, key=lambda m: abs(m.fn_hz - 11.0)),
+        min(shoulder, key=lambda m: abs(m.fn_hz - 11.8)),
+    ):
         assert mode.low_confidence
         assert any("disagrees with the" in r for r in mode.reasons), mode.reasons
 
@@ -156,7 +166,13 @@ def _record(key, q1, modes_hz):
         "q": [0.0, q1, 1.0, 0.0, 0.0, 0.0],
         "payload_kg": 5.0,
         "ringing": [
-            {"log_joint": 0, "wn_rad_s": 2 * math.pi * f, "zeta": 0.1, "low_confidence": False, "reasons": []}
+            {
+                "log_joint": 0,
+                "wn_rad_s": 2 * math.pi * f,
+                "zeta": 0.1,
+                "low_confidence": False,
+                "reasons": [],
+            }
             for f in modes_hz
         ],
     }
@@ -178,7 +194,10 @@ def test_a_mode_that_jumps_against_its_neighbouring_poses_is_flagged():
 def test_batch_identification_writes_ringing(tmp_path):
     paths = [
         generate_ringing_log(
-            tmp_path / f"p_joint{j}.csv", seed=5 + j, joint=j, q0=Q_STRETCHED,
+            tmp_path / f"p_joint{j}.csv",
+            seed=5 + j,
+            joint=j,
+            q0=Q_STRETCHED,
             modes=[TrueRinging(9.0, 0.07, T0, 0.5)],
         )
         for j in (0, 1)

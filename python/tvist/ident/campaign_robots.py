@@ -20,7 +20,14 @@ from tvist.ident.logs import Record, read_rtde_csv
 #: A twin campaign records every true mode up to this frequency (Hz).
 TRUE_MODES_MAX_HZ = 60.0
 
-__all__ = ["RECORDED_FIELDS", "TRUE_MODES_MAX_HZ", "CampaignRobot", "TwinRobot", "URRobot", "new_run_folder"]
+__all__ = [
+    "RECORDED_FIELDS",
+    "TRUE_MODES_MAX_HZ",
+    "CampaignRobot",
+    "TwinRobot",
+    "URRobot",
+    "new_run_folder",
+]
 
 #: RTDE fields recorded on a real robot (what :func:`read_rtde_csv` needs, plus the pose).
 RECORDED_FIELDS = (

@@ -70,9 +70,7 @@ def flag_jumps(records: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         distance[a] = np.inf
         distance[payload != payload[a]] = np.inf
         near = [
-            b
-            for b in np.argsort(distance)
-            if distance[b] <= MAX_NEIGHBOUR_RAD and confident[b]
+            b for b in np.argsort(distance) if distance[b] <= MAX_NEIGHBOUR_RAD and confident[b]
         ][:N_NEIGHBOURS]
         if len(near) < N_NEIGHBOURS:
             continue

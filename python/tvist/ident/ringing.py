@@ -25,6 +25,9 @@ acceleration of the log, not only its tangential component:
   a damping ratio too high for either. A mode is flagged when the best fit with one mode more
   that splits it (or adds a mode within :data:`NEIGHBOUR_RATIO` of it) removes at least
   :data:`MERGE_RSS_GAIN` of the residual energy but is not resolved.
+- **Unresolved neighbours.** A mode next to (within :data:`NEIGHBOUR_RATIO`) a mode of the
+  same log whose frequency is not resolved, or that is flagged as merged, shares its
+  uncertainty: the fit trades one against the other (:func:`flag_unresolved_neighbours`).
 - **Direction and amplitude.** Each mode's fitted response over the three channels traces a
   path at the flange; its major axis (SVD), turned into the base frame at the pose, is the
   direction (sign: largest component positive), and the largest acceleration along the path
@@ -52,6 +55,7 @@ __all__ = [
     "MAX_MODES",
     "RingingMode",
     "fit_ringing",
+    "flag_unresolved_neighbours",
     "ringing_from_log",
 ]
 
@@ -340,7 +344,9 @@ def fit_ringing(
     """
     n = u.size
     mask = np.ones(n, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
-    problem = _Problem(u, np.asarray(channels, float), np.asarray(extra, float), mask, dt_s, delay_s)
+    problem = _Problem(
+        u, np.asarray(channels, float), np.asarray(extra, float), mask, dt_s, delay_s
+    )
     wn_bounds = (2 * math.pi * f_min_hz, 2 * math.pi * min(f_max_hz, 0.4 / dt_s))
     # One mode: from the single-mode fit and the best grid frequencies.
     starts = [[start]] + _grid_candidates(problem, [], wn_bounds, n_grid)
@@ -356,9 +362,6 @@ def fit_ringing(
         )
         best_more.append(more)
         gain = 1.0 - more.rss / fit.rss if fit.rss > 0 else 0.0
-        import os
-        if os.environ.get("RINGING_DEBUG"):
-            print("K", len(fit.modes), fit.rss, [(w / 6.2832, z) for w, z in fit.modes], "->", more.rss, gain, [(w / 6.2832, z, se/w) for (w, z), se in zip(more.modes, more.se[0::2])], more.resolved())
         if len(fit.modes) < max_modes and gain >= MIN_RSS_REDUCTION and more.resolved():
             fit = more
             continue
@@ -380,6 +383,31 @@ def fit_ringing(
     residual, beta, blocks = problem.solve(fit.modes)
     responses = [block @ beta[2 * i : 2 * i + 2] for i, block in enumerate(blocks)]
     return RingingFit(fit=fit, merged=merged, residual=residual, responses=responses)
+
+
+#: Reasons (prefixes) that make a mode an unresolved neighbour of the modes next to it.
+_UNRESOLVED = ("uncertain frequency", "merged neighbours")
+
+
+def flag_unresolved_neighbours(modes: list[RingingMode]) -> list[RingingMode]:
+    """``modes`` (of one log) with every confident mode flagged that has, within
+    :data:`NEIGHBOUR_RATIO`, a mode whose frequency is unresolved or merged."""
+    out = list(modes)
+    for i, mode in enumerate(modes):
+        if mode.low_confidence:
+            continue
+        for other in modes:
+            if other is mode or abs(math.log(other.wn_rad_s / mode.wn_rad_s)) >= math.log(
+                NEIGHBOUR_RATIO
+            ):
+                continue
+            if any(r.startswith(_UNRESOLVED) for r in other.reasons):
+                out[i] = out[i].flagged(
+                    f"next to an unresolved mode at {other.fn_hz:.2f} Hz: the fit trades one "
+                    "against the other"
+                )
+                break
+    return out
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -487,7 +515,9 @@ def ringing_from_log(
         wn_se, zeta_se = float(fit.se[2 * i]), float(fit.se[2 * i + 1])
         reasons: list[str] = []
         if snr_db < BELOW_NOISE_DB:
-            reasons.append(f"below noise: the mode's ringing is {snr_db:+.1f} dB against the residual")
+            reasons.append(
+                f"below noise: the mode's ringing is {snr_db:+.1f} dB against the residual"
+            )
         elif snr_db < WEAK_DB:
             reasons.append(f"weak ringing: {snr_db:+.1f} dB against the residual")
         if not wn_se <= opts.max_wn_rel_se * wn:
@@ -514,4 +544,4 @@ def ringing_from_log(
                 tangent_share=tangent_share,
             )
         )
-    return out
+    return flag_unresolved_neighbours(out)
