@@ -132,6 +132,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
                 f"  {name}: ω_n within 3 % of the twin's modes at {within}/{len(errors)} poses "
                 f"({100 * within / len(errors):.0f} %)"
             )
+    print(_ringing_summary(done))
     if args.map:
         from tvist.ident.map_fit import fit_map
 
@@ -139,6 +140,26 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
         dynmap.save(args.map)
         print(f"map written to {args.map}")
     return 0
+
+
+def _ringing_summary(records: list[dict]) -> str:
+    """One line on the records' ``ringing`` modes; on the twin, how many confident ones are
+    more than 3 % from every true mode."""
+    modes = [m for r in records for m in r.get("ringing") or ()]
+    confident = [m for m in modes if not m.get("low_confidence", True)]
+    line = f"  ringing: {len(modes)} modes in the logs, {len(confident)} confident"
+    truth = [r for r in records if r.get("true_modes") and r.get("ringing")]
+    if truth:
+        off = 0
+        for r in truth:
+            true_hz = [m["freq_hz"] for m in r["true_modes"] if "freq_hz" in m]
+            for m in r["ringing"]:
+                if m.get("low_confidence", True) or not true_hz:
+                    continue
+                f = m["wn_rad_s"] / (2 * math.pi)
+                off += min(abs(f / t - 1.0) for t in true_hz) > 0.03
+        line += f"; {off} of them more than 3 % from every true mode below 60 Hz"
+    return line
 
 
 def add_campaign_command(sub: argparse._SubParsersAction) -> None:
@@ -270,6 +291,7 @@ def _identify_batch(args: argparse.Namespace, paths: list[Path]) -> int:
         f"{len(paths)} logs -> {len(records)} poses in {out}; {confident}/{n_modes} modes "
         "identified with confidence"
     )
+    print(_ringing_summary(records))
     return 0
 
 

@@ -243,16 +243,24 @@ def _refine(problem: _Problem, start: list[tuple[float, float]], wn_bounds) -> _
         lower += [math.log(wn_lo), 1e-3]
         upper += [math.log(wn_hi), 2.0]
         scale += [0.05, 0.02]
+    lower_a, upper_a = np.array(lower), np.array(upper)
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        # Levenberg-Marquardt (MINPACK's QR: far cheaper than a bounded trust region's SVD
+        # of the tall Jacobian) on the parameters held inside their bounds.
+        return problem.residual_vector(np.clip(x, lower_a, upper_a))
+
     res = optimize.least_squares(
-        problem.residual_vector,
+        residual,
         np.array(x0),
-        bounds=(lower, upper),
+        method="lm",
         x_scale=scale,
         diff_step=1e-6,
         xtol=1e-7,
         ftol=1e-8,
-        max_nfev=80,
+        max_nfev=80 * (len(x0) + 1),
     )
+    res.x = np.clip(res.x, lower_a, upper_a)
     from tvist.ident.local_fit import _standard_errors
 
     k = res.x.size // 2
