@@ -6,7 +6,10 @@ campaign robot (:mod:`tvist.ident.campaign_robots`: the MuJoCo twin or a real UR
 identified (:func:`~tvist.ident.pose.identify_pose`). Each pose record is appended to a
 JSON-lines file as it finishes (:mod:`tvist.ident.results_store`), so an interrupted campaign
 resumes where it stopped; each line is one pose record in the format
-:func:`~tvist.ident.map_fit.fit_map` reads.
+:func:`~tvist.ident.map_fit.fit_map` reads. When the campaign ends, ringing modes that jump
+against their neighbouring poses are flagged in the file
+(:func:`~tvist.ident.pose_checks.flag_jumps`). On the twin each record lists every true mode
+below :data:`~tvist.ident.campaign_robots.TRUE_MODES_MAX_HZ` (:func:`true_modes_entries`).
 """
 
 from __future__ import annotations

@@ -502,7 +502,7 @@ def ringing_from_log(
         f_max_hz=opts.f_max_hz,
     )
     # The moving frame at the pose, to turn directions into the base frame.
-    jq = robot.jacobian(np.asarray(q, dtype=float))
+    jq = robot.jacobian_many(np.asarray(q, dtype=float)[None])[0]
     t0, z0 = _unit(jq[:3, joint]), _unit(jq[3:, joint])
     frame = np.column_stack([t0, np.cross(z0, t0), z0])
     noise = max(float(np.sum(result.residual**2)), 1e-300)
