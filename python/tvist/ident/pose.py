@@ -61,8 +61,10 @@ SAME_POSE_TOL_RAD = 0.02
 #: ``modes`` entry is the ``ringing`` entry within this ratio.
 SAME_MODE_RATIO = 1.15
 #: The same mode in two logs agrees if the frequencies differ by at most this many combined
-#: standard errors (sqrt(se_a² + se_b²), relative) ...
-AGREEMENT_SE = 3.0
+#: standard errors (sqrt(se_a² + se_b²), relative) ... (two, not three: on arms unlike the
+#: twin the standard errors leave out the model's mismatch, and at three a merged pair of
+#: modes 2.5-3.5 % off passed as agreeing)
+AGREEMENT_SE = 2.0
 #: ... or by at most this fraction (the two logs' fits differ in the input and the noise,
 #: not in the mode: a floor under standard errors that come out very small).
 AGREEMENT_FLOOR = 0.01
@@ -198,19 +200,22 @@ def _relative_se(mode: RingingMode) -> float:
 def cross_check_logs(ringing: list[RingingMode]) -> list[RingingMode]:
     """``ringing`` with the modes found in both logs checked against each other.
 
-    Confident modes of the base and the shoulder log closer than :data:`SAME_MODE_RATIO` are
-    paired, closest first; a pair whose frequencies differ by more than
-    ``max(AGREEMENT_SE · sqrt(se_a² + se_b²), AGREEMENT_FLOOR)`` (relative) is flagged in
-    both logs, naming the difference.
+    Modes of the base and the shoulder log closer than :data:`SAME_MODE_RATIO`, at least one
+    of them confident, are paired, closest first; a pair whose frequencies differ by more
+    than ``max(AGREEMENT_SE · sqrt(se_a² + se_b²), AGREEMENT_FLOOR)`` (relative) is flagged
+    in both logs, naming the difference (a doubtful partner widens the tolerance by its
+    larger standard error, but still counts).
     """
     out = list(ringing)
-    base = [i for i, m in enumerate(out) if m.log_joint == 0 and not m.low_confidence]
-    shoulder = [i for i, m in enumerate(out) if m.log_joint == 1 and not m.low_confidence]
+    base = [i for i, m in enumerate(out) if m.log_joint == 0]
+    shoulder = [i for i, m in enumerate(out) if m.log_joint == 1]
     pairs = sorted(
         (abs(math.log(out[a].wn_rad_s / out[b].wn_rad_s)), a, b)
         for a in base
         for b in shoulder
         if abs(math.log(out[a].wn_rad_s / out[b].wn_rad_s)) < math.log(SAME_MODE_RATIO)
+        and not (out[a].low_confidence and out[b].low_confidence)
+        and math.isfinite(_relative_se(out[a]) + _relative_se(out[b]))
     )
     used: set[int] = set()
     for distance, a, b in pairs:
@@ -349,13 +354,19 @@ def identify_pose(
     )
 
 
+#: Reasons of a ringing entry that doubt the mode itself (not only its precision): a
+#: ``modes`` entry that is that mode inherits them.
+_WRONG_MODE = ("merged neighbours", "disagrees with the", "next to an unresolved")
+
+
 def _linked(
     modes: dict[int, LocalFit | str], ringing: list[RingingMode]
 ) -> dict[int, LocalFit | str]:
     """``modes`` with a confident entry flagged where its log's multi-mode fit does not
-    confirm it: no ringing mode near its frequency, or the nearest one differs by more than
-    the standard errors allow (as between two logs, :func:`cross_check_logs`); a single-mode
-    or two-mode fit that merged two neighbours is caught so."""
+    confirm it: no ringing mode near its frequency, the nearest one is doubted as a mode
+    (:data:`_WRONG_MODE`), or it differs by more than the standard errors allow (as between two logs,
+    :func:`cross_check_logs`); a single-mode or two-mode fit that merged two neighbours is
+    caught so."""
     if not ringing:
         return modes
     out = dict(modes)
@@ -372,6 +383,10 @@ def _linked(
                 f"not among the modes that ring in the log ({fit.fn_hz:.2f} Hz; the multi-mode "
                 f"fit finds {found} Hz)"
             )
+        elif any(r.startswith(_WRONG_MODE) for r in ringing[index].reasons):
+            mode = ringing[index]
+            why = next(r for r in mode.reasons if r.startswith(_WRONG_MODE))
+            reason = f"the multi-mode fit of the same log doubts it ({mode.fn_hz:.2f} Hz: {why})"
         else:
             mode = ringing[index]
             distance = abs(math.log(mode.wn_rad_s / fit.wn_rad_s))
