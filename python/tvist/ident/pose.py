@@ -197,14 +197,20 @@ def _relative_se(mode: RingingMode) -> float:
     return mode.wn_se_rad_s / mode.wn_rad_s
 
 
+def _rings(mode: RingingMode) -> bool:
+    """Whether the mode rings clearly (not flagged weak or below noise)."""
+    return not any(r.startswith(("weak ringing", "below noise")) for r in mode.reasons)
+
+
 def cross_check_logs(ringing: list[RingingMode]) -> list[RingingMode]:
     """``ringing`` with the modes found in both logs checked against each other.
 
     Modes of the base and the shoulder log closer than :data:`SAME_MODE_RATIO`, at least one
-    of them confident, are paired, closest first; a pair whose frequencies differ by more
-    than ``max(AGREEMENT_SE · sqrt(se_a² + se_b²), AGREEMENT_FLOOR)`` (relative) is flagged
-    in both logs, naming the difference (a doubtful partner widens the tolerance by its
-    larger standard error, but still counts).
+    of them confident and neither weak (a weak mode may be no mode), are paired, closest
+    first; a pair whose frequencies differ by more than
+    ``max(AGREEMENT_SE · sqrt(se_a² + se_b²), AGREEMENT_FLOOR)`` (relative) is flagged in
+    both logs, naming the difference (a doubtful partner widens the tolerance by its larger
+    standard error, but still counts).
     """
     out = list(ringing)
     base = [i for i, m in enumerate(out) if m.log_joint == 0]
@@ -215,6 +221,8 @@ def cross_check_logs(ringing: list[RingingMode]) -> list[RingingMode]:
         for b in shoulder
         if abs(math.log(out[a].wn_rad_s / out[b].wn_rad_s)) < math.log(SAME_MODE_RATIO)
         and not (out[a].low_confidence and out[b].low_confidence)
+        and _rings(out[a])
+        and _rings(out[b])
         and math.isfinite(_relative_se(out[a]) + _relative_se(out[b]))
     )
     used: set[int] = set()
@@ -356,7 +364,7 @@ def identify_pose(
 
 #: Reasons of a ringing entry that doubt the mode itself (not only its precision): a
 #: ``modes`` entry that is that mode inherits them.
-_WRONG_MODE = ("merged neighbours", "disagrees with the", "next to an unresolved")
+_WRONG_MODE = ("merged neighbours", "disagrees with the")
 
 
 def _linked(
@@ -364,9 +372,9 @@ def _linked(
 ) -> dict[int, LocalFit | str]:
     """``modes`` with a confident entry flagged where its log's multi-mode fit does not
     confirm it: no ringing mode near its frequency, the nearest one is doubted as a mode
-    (:data:`_WRONG_MODE`), or it differs by more than the standard errors allow (as between two logs,
-    :func:`cross_check_logs`); a single-mode or two-mode fit that merged two neighbours is
-    caught so."""
+    (:data:`_WRONG_MODE`), or it differs by more than the standard errors allow (as between
+    two logs, :func:`cross_check_logs`); a single-mode or two-mode fit that merged two
+    neighbours is caught so."""
     if not ringing:
         return modes
     out = dict(modes)

@@ -25,6 +25,9 @@ acceleration of the log, not only its tangential component:
   a damping ratio too high for either. A mode is flagged when the best fit with one mode more
   that splits it (or adds a mode within :data:`NEIGHBOUR_RATIO` of it) removes at least
   :data:`MERGE_RSS_GAIN` of the residual energy but is not resolved.
+- **Model order.** A mode that moves by more than :data:`ORDER_SHIFT_SE` standard errors
+  (and :data:`ORDER_SHIFT_FLOOR`) when one mode more is fitted rests on the model order: a
+  weak neighbour the fit left out pulls it; it is flagged with the merged neighbours.
 - **Unresolved neighbours.** A mode next to (within :data:`NEIGHBOUR_RATIO`) a mode of the
   same log whose frequency is not resolved, or that is flagged as merged, shares its
   uncertainty: the fit trades one against the other (:func:`flag_unresolved_neighbours`).
@@ -72,6 +75,10 @@ MAX_WN_REL_SE = 0.05
 MERGE_RSS_GAIN = 0.03
 #: A further mode this close (frequency ratio) to a fitted mode counts as its neighbour.
 NEIGHBOUR_RATIO = 1.35
+#: A mode that the fit with one mode more moves by more than this many of its standard
+#: errors, and by more than the floor, is flagged as resting on the model order.
+ORDER_SHIFT_SE = 2.0
+ORDER_SHIFT_FLOOR = 0.01
 #: Starts refined per added mode (the best by their residual before refinement).
 N_REFINED = 3
 #: A mode's energy over the residual energy below which it is "below noise" (dB), and below
@@ -379,7 +386,21 @@ def fit_ringing(
     more = best_more[-1]
     gain = 1.0 - more.rss / fit.rss if fit.rss > 0 else 0.0
     merged: list[str | None] = [None] * len(fit.modes)
-    if gain >= MERGE_RSS_GAIN and not more.resolved():
+    if len(fit.modes) == max_modes and gain >= MIN_RSS_REDUCTION and more.resolved():
+        # More modes ring than are fitted: the modes next to the one left out are suspect.
+        extra = [
+            m
+            for m in more.modes
+            if all(abs(math.log(m[0] / w)) > math.log(MIN_FREQ_RATIO) for w, _ in fit.modes)
+        ]
+        for i, (w, _) in enumerate(fit.modes):
+            near = [m for m in extra if abs(math.log(m[0] / w)) < math.log(NEIGHBOUR_RATIO)]
+            if near:
+                merged[i] = (
+                    f"merged neighbours: a further mode rings at {near[0][0] / (2 * math.pi):.2f}"
+                    f" Hz, beyond the {max_modes} fitted"
+                )
+    elif gain >= MERGE_RSS_GAIN and not more.resolved():
         for i, (w, _) in enumerate(fit.modes):
             near = [m for m in more.modes if abs(math.log(m[0] / w)) < math.log(NEIGHBOUR_RATIO)]
             if len(near) >= 2:
@@ -388,6 +409,18 @@ def fit_ringing(
                     f"merged neighbours: {pair} Hz instead fit {100 * gain:.0f} % better but "
                     "cannot be resolved"
                 )
+    # Order sensitivity: a mode that the fit with one mode more moves by more than its
+    # standard errors allow rests on the model order (a weak neighbour pulls it).
+    for i, (w, _) in enumerate(fit.modes):
+        if merged[i] is not None:
+            continue
+        nearest = min((m[0] for m in more.modes), key=lambda v: abs(math.log(v / w)))
+        moved = abs(math.log(nearest / w))
+        if moved > max(ORDER_SHIFT_SE * fit.se[2 * i] / w, ORDER_SHIFT_FLOOR):
+            merged[i] = (
+                f"merged neighbours: with one mode more it moves {100 * moved:.1f} % "
+                f"(to {nearest / (2 * math.pi):.2f} Hz)"
+            )
     residual, beta, blocks = problem.solve(fit.modes)
     responses = [block @ beta[2 * i : 2 * i + 2] for i, block in enumerate(blocks)]
     return RingingFit(fit=fit, merged=merged, residual=residual, responses=responses)
