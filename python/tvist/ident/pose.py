@@ -363,8 +363,20 @@ def identify_pose(
 
 
 #: Reasons of a ringing entry that doubt the mode itself (not only its precision): a
-#: ``modes`` entry that is that mode inherits them.
+#: ``modes`` entry that is that mode inherits them where the entry's frequency is also
+#: uncertain (:func:`_unresolved_merge`).
 _WRONG_MODE = ("merged neighbours",)
+
+
+def _unresolved_merge(mode: RingingMode) -> bool:
+    """Whether the multi-mode fit cannot resolve the modes at this entry's frequency: flagged
+    as merged neighbours and with an uncertain frequency."""
+    reasons = mode.reasons
+    return any(r.startswith(_WRONG_MODE) for r in reasons) and any(
+        r.startswith("uncertain frequency") for r in reasons
+    )
+
+
 #: A ``modes`` entry agrees with its log's multi-mode fit within ``AGREEMENT_SE`` combined
 #: standard errors or this fraction: the two estimators model the same log differently (the
 #: paper map's entry has no feedthrough or a second mode only), so they differ by up to 1-2 %
@@ -376,8 +388,8 @@ def _linked(
     modes: dict[int, LocalFit | str], ringing: list[RingingMode]
 ) -> dict[int, LocalFit | str]:
     """``modes`` with a confident entry flagged where its log's multi-mode fit does not
-    confirm it: no ringing mode near its frequency, the nearest one is doubted as a mode
-    (:data:`_WRONG_MODE`), or it differs by more than the standard errors allow (as between
+    confirm it: no ringing mode near its frequency, the nearest one is an unresolved merge
+    (:func:`_unresolved_merge`), or it differs by more than the standard errors allow (as between
     two logs, :func:`cross_check_logs`); a single-mode or two-mode fit that merged two
     neighbours is caught so."""
     if not ringing:
@@ -396,7 +408,7 @@ def _linked(
                 f"not among the modes that ring in the log ({fit.fn_hz:.2f} Hz; the multi-mode "
                 f"fit finds {found} Hz)"
             )
-        elif any(r.startswith(_WRONG_MODE) for r in ringing[index].reasons):
+        elif _unresolved_merge(ringing[index]):
             mode = ringing[index]
             why = next(r for r in mode.reasons if r.startswith(_WRONG_MODE))
             reason = f"the multi-mode fit of the same log doubts it ({mode.fn_hz:.2f} Hz: {why})"

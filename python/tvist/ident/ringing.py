@@ -12,8 +12,9 @@ acceleration of the log, not only its tangential component:
   swings ±10°.
 - **Model.** Each channel is ``Σ_i (a_i s + b_i)/(s² + 2ζ_i ω_i s + ω_i²) u + d u + c q̇_j² +
   e``: the modes share ``(ω_i, ζ_i)`` over the three channels, each channel has its own
-  numerators, a feedthrough (the rigid arm's and the faster modes' quasi-static response), a
-  centripetal term and an offset, all eliminated by linear least squares (variable
+  numerators, a feedthrough and its rate (the rigid arm's and the faster modes' quasi-static
+  response), a centripetal term, what is left of gravity and the sensor bias (linear and
+  quadratic in the joint's swing) and an offset, all eliminated by linear least squares (variable
   projection). Input, exact sampled responses and the timing offset are those of the local
   fit (:mod:`tvist.ident.local_fit`, :mod:`tvist.ident.zoh`).
 - **Model order.** Modes are added one at a time, each candidate started from a grid over the
@@ -517,10 +518,18 @@ def ringing_from_log(
     u = interval_mean_acceleration(record.target_qd[:, joint], dt)
     lag = int(round(single.delay_s / dt))
     # The faster modes' quasi-static response, to first order in s (a feedthrough and its
-    # rate), and the centripetal acceleration.
+    # rate), the centripetal acceleration, and what is left of gravity and the sensor bias
+    # after their estimate (a slow function of the joint's swing: to second order).
     fed = shifted(u, lag)
+    swing = record.target_q[:, joint] - float(np.median(record.target_q[:, joint]))
     extra = np.column_stack(
-        [fed, np.diff(fed, prepend=fed[0]) / dt, shifted(record.target_qd[:, joint] ** 2, lag)]
+        [
+            fed,
+            np.diff(fed, prepend=fed[0]) / dt,
+            shifted(record.target_qd[:, joint] ** 2, lag),
+            swing,
+            swing**2,
+        ]
     )
     mask = ~saturated_samples(record.tool_accel)
     result = fit_ringing(
