@@ -268,8 +268,22 @@ def test_a_twin_variant_campaign_records_the_variants_modes_in_its_own_file(tmp_
         "ur5e", 5.0, pose.payload_com_m, flex=variant_flex(variant), beams=variant_beams(variant)
     )
     want = twin.modes(np.array(record["q"]))
-    got = [(m["wn_rad_s"], m["zeta"]) for m in record["true_modes"]]
+    by_joint = {m["joint"]: m for m in record["true_modes"] if m["joint"] is not None}
+    got = [(by_joint[j]["wn_rad_s"], by_joint[j]["zeta"]) for j in (0, 1)]
     np.testing.assert_allclose(got, want, rtol=1e-9)
+    # Every true mode below 60 Hz is recorded, with its strain-energy shares and flange
+    # direction (the variant's own eigen-analysis, built independently here).
+    from tvist.sim.family import modes_of
+
+    every = modes_of(twin, np.array(record["q"]), max_freq_hz=60.0)
+    assert len(every) >= 3  # base, shoulder and more ring below 60 Hz on this arm
+    assert len(record["true_modes"]) == len(every)
+    for entry, mode in zip(record["true_modes"], every, strict=True):
+        assert entry["freq_hz"] == pytest.approx(mode.freq_hz, rel=1e-9)
+        assert entry["zeta"] == pytest.approx(mode.zeta, rel=1e-9)
+        np.testing.assert_allclose(entry["joint_shares"], mode.joint_shares, atol=1e-12)
+        np.testing.assert_allclose(entry["flange_direction"], mode.flange_direction, atol=1e-12)
+        assert entry["link_share"] == pytest.approx(mode.link_share, abs=1e-12)
     standard = Twin("ur5e", 5.0, pose.payload_com_m).modes(np.array(record["q"]))
     assert all(v[0] < 0.99 * s[0] for v, s in zip(want, standard, strict=True))
     # The standard twin's campaign must not resume (or append to) the variant's file.

@@ -135,6 +135,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
                 f"  {name}: ω_n within 3 % of the twin's modes at {within}/{len(errors)} poses "
                 f"({100 * within / len(errors):.0f} %)"
             )
+    print(_ringing_summary(done))
     if args.map:
         from tvist.ident.map_fit import fit_map
 
@@ -142,6 +143,26 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
         dynmap.save(args.map)
         print(f"map written to {args.map}")
     return 0
+
+
+def _ringing_summary(records: list[dict]) -> str:
+    """One line on the records' ``ringing`` modes; on the twin, how many confident ones are
+    more than 3 % from every true mode."""
+    modes = [m for r in records for m in r.get("ringing") or ()]
+    confident = [m for m in modes if not m.get("low_confidence", True)]
+    line = f"  ringing: {len(modes)} modes in the logs, {len(confident)} confident"
+    truth = [r for r in records if r.get("true_modes") and r.get("ringing")]
+    if truth:
+        off = 0
+        for r in truth:
+            true_hz = [m["freq_hz"] for m in r["true_modes"] if "freq_hz" in m]
+            for m in r["ringing"]:
+                if m.get("low_confidence", True) or not true_hz:
+                    continue
+                f = m["wn_rad_s"] / (2 * math.pi)
+                off += min(abs(f / t - 1.0) for t in true_hz) > 0.03
+        line += f"; {off} of them more than 3 % from every true mode below 60 Hz"
+    return line
 
 
 def add_campaign_command(sub: argparse._SubParsersAction) -> None:
@@ -273,6 +294,7 @@ def _identify_batch(args: argparse.Namespace, paths: list[Path]) -> int:
         f"{len(paths)} logs -> {len(records)} poses in {out}; {confident}/{n_modes} modes "
         "identified with confidence"
     )
+    print(_ringing_summary(records))
     return 0
 
 
@@ -424,8 +446,22 @@ input: JSON lines, one pose per line, as written by 'tvist identify --out' and
     wn_se_rad_s, zeta_se  standard errors
     low_confidence   true: not used unless --include-low-confidence; reasons: why
     method           single-mode or two-mode (base separated from the shoulder mode)
+    ringing_index    the ringing entry that is this mode (the base mode: the base log's
+                     mode along the base joint's tangent); null if none
     error            instead of the above if the joint could not be identified
+  ringing            list        every mode that rings in each log (1-3 per log):
+    log_joint        0 base log, 1 shoulder log
+    wn_rad_s, zeta   natural frequency (rad/s) and damping ratio; wn_se_rad_s, zeta_se
+    amplitude_m_s2   largest flange acceleration of the mode's ringing in the log
+    flange_direction [3] unit vector, base frame, largest component positive (null: no
+                     3-axis accelerometer)
+    low_confidence   true with reasons: below noise, weak, uncertain, merged neighbours,
+                     disagrees with the other log, jumps against neighbouring poses
+  true_modes         (twin only) every true mode below 60 Hz: freq_hz, zeta,
+                     joint_shares [6], flange_direction [3], link_share, wn_rad_s, and
+                     joint 0 / 1 for the twin's base / shoulder mode (else null)
   error              why the pose has no result (e.g. unreachable)
+Records without ringing (older files) are read; their modes are used.
 """
 
 

@@ -9,6 +9,8 @@
    poses (the measured joint angles before the first move) agree.
 3. Each pair (or a lone log) is identified (:func:`~tvist.ident.pose.identify_pose`) into the
    record :func:`~tvist.ident.map_fit.fit_map` reads.
+4. Modes that jump against their neighbouring poses are flagged
+   (:func:`~tvist.ident.pose_checks.flag_jumps`).
 
 Both passes run in parallel worker processes.
 """
@@ -31,6 +33,7 @@ import numpy as np
 from tvist.ident.local_fit import FitOptions
 from tvist.ident.logs import Record, read_rtde_csv
 from tvist.ident.pose import IDENTIFIED_JOINTS, PoseRecord, identify_pose, pose_of
+from tvist.ident.pose_checks import flag_jumps
 from tvist.ident.segment import excitation_segment
 
 __all__ = [
@@ -289,7 +292,7 @@ def identify_logs(
                 bar.advance("identified")
     finally:
         bar.close()
-    return results
+    return flag_jumps(results)
 
 
 class _Bar:

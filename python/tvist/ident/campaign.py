@@ -6,20 +6,26 @@ campaign robot (:mod:`tvist.ident.campaign_robots`: the MuJoCo twin or a real UR
 identified (:func:`~tvist.ident.pose.identify_pose`). Each pose record is appended to a
 JSON-lines file as it finishes (:mod:`tvist.ident.results_store`), so an interrupted campaign
 resumes where it stopped; each line is one pose record in the format
-:func:`~tvist.ident.map_fit.fit_map` reads.
+:func:`~tvist.ident.map_fit.fit_map` reads. When the campaign ends, ringing modes that jump
+against their neighbouring poses are flagged in the file
+(:func:`~tvist.ident.pose_checks.flag_jumps`). On the twin each record lists every true mode
+below :data:`~tvist.ident.campaign_robots.TRUE_MODES_MAX_HZ` (:func:`true_modes_entries`).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 from tvist.ident.campaign_robots import RECORDED_FIELDS, CampaignRobot, TwinRobot, URRobot
 from tvist.ident.local_fit import FitOptions
 from tvist.ident.logs import Record
 from tvist.ident.pose import IDENTIFIED_JOINTS, identify_pose
+from tvist.ident.pose_checks import flag_jumps
 from tvist.ident.pose_plan import (
     PAPER_ANGLES_RAD,
     PAPER_PAYLOADS_KG,
@@ -109,11 +115,39 @@ def run_pose(robot: CampaignRobot, pose: CampaignPose, settings: _Settings) -> d
     record.update(plan)
     truth = robot.true_modes(pose.q)
     if truth is not None:
-        record["true_modes"] = [
-            {"joint": j, "wn_rad_s": wn, "zeta": zeta}
-            for j, (wn, zeta) in zip(IDENTIFIED_JOINTS, truth, strict=True)
-        ]
+        every = getattr(robot, "all_true_modes", None)
+        record["true_modes"] = true_modes_entries(truth, [] if every is None else every(pose.q))
     return record
+
+
+def true_modes_entries(
+    base_shoulder: list[tuple[float, float]], every: list
+) -> list[dict[str, Any]]:
+    """The record's ``true_modes``: every true mode (:class:`tvist.sim.family.TrueMode`,
+    lowest first) as ``{"freq_hz", "zeta", "joint_shares", "flange_direction", "link_share",
+    "wn_rad_s", "joint"}``, where ``joint`` is 0 (1) for the twin's base (shoulder) mode, the
+    mode that stores most of its strain energy in that joint (:meth:`tvist.sim.Twin.modes`),
+    else ``None``. A base or shoulder mode beyond the listed ones is added with the
+    ``joint``, ``wn_rad_s`` and ``zeta`` only."""
+    out: list[dict[str, Any]] = [
+        {
+            "freq_hz": float(m.freq_hz),
+            "zeta": float(m.zeta),
+            "joint_shares": [float(v) for v in m.joint_shares],
+            "flange_direction": [float(v) for v in m.flange_direction],
+            "link_share": float(m.link_share),
+            "wn_rad_s": 2.0 * math.pi * float(m.freq_hz),
+            "joint": None,
+        }
+        for m in every
+    ]
+    for joint, (wn, zeta) in zip(IDENTIFIED_JOINTS, base_shoulder, strict=True):
+        match = [e for e in out if e["joint"] is None and abs(e["wn_rad_s"] / wn - 1.0) < 1e-6]
+        if match:
+            match[0]["joint"] = joint
+        else:
+            out.append({"joint": joint, "wn_rad_s": float(wn), "zeta": float(zeta)})
+    return out
 
 
 #: One twin per worker process and payload (building a MuJoCo model takes a while).
@@ -245,6 +279,7 @@ def run_campaign(
         finally:
             if bar is not None:
                 bar.close()
+        store.replace_all(flag_jumps(store.records))
         return list(store.records)
 
 

@@ -17,7 +17,17 @@ import numpy as np
 from tvist.ident.excitation import Excitation, to_urscript
 from tvist.ident.logs import Record, read_rtde_csv
 
-__all__ = ["RECORDED_FIELDS", "CampaignRobot", "TwinRobot", "URRobot", "new_run_folder"]
+#: A twin campaign records every true mode up to this frequency (Hz).
+TRUE_MODES_MAX_HZ = 60.0
+
+__all__ = [
+    "RECORDED_FIELDS",
+    "TRUE_MODES_MAX_HZ",
+    "CampaignRobot",
+    "TwinRobot",
+    "URRobot",
+    "new_run_folder",
+]
 
 #: RTDE fields recorded on a real robot (what :func:`read_rtde_csv` needs, plus the pose).
 RECORDED_FIELDS = (
@@ -139,6 +149,13 @@ class TwinRobot:
 
     def true_modes(self, q: np.ndarray) -> list[tuple[float, float]] | None:
         return self._require_twin().modes(q)
+
+    def all_true_modes(self, q: np.ndarray, max_freq_hz: float = TRUE_MODES_MAX_HZ) -> list:
+        """Every vibration mode of the twin at ``q`` up to ``max_freq_hz``, lowest first
+        (:class:`tvist.sim.family.TrueMode`)."""
+        from tvist.sim.family import modes_of
+
+        return modes_of(self._require_twin(), q, max_freq_hz=max_freq_hz)
 
 
 class URRobot:

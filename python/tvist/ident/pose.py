@@ -10,9 +10,27 @@ record the campaign writes and :func:`~tvist.ident.map_fit.fit_map` reads
      "inertia_kg_m2": [J_0, ..., J_5],  # joint-axis inertias at q (robot model + payload)
      "gravity_torque_nm": [τ_0, ..., τ_5],
      "modes": [{"joint": 0, "wn_rad_s": ..., "zeta": ..., "wn_se_rad_s": ..., "zeta_se": ...,
-                "low_confidence": false, "reasons": [], "method": "two-mode", ...},
+                "low_confidence": false, "reasons": [], "method": "two-mode",
+                "ringing_index": 0, ...},
                {"joint": 1, ...}],       # or {"joint": j, "error": "..."} if it failed
+     "ringing": [{"log_joint": 0, "wn_rad_s": ..., "zeta": ..., "wn_se_rad_s": ...,
+                  "zeta_se": ..., "amplitude_m_s2": ..., "flange_direction": [x, y, z],
+                  "low_confidence": false, "reasons": [], "tangent_share": ...}, ...],
      "error": null}
+
+``ringing`` lists every mode that rings in each log (1-3 per log,
+:mod:`tvist.ident.ringing`), with its direction at the flange in the base frame. ``modes``
+keeps one mode per excited joint for the paper's map: **the base mode** (``modes`` joint 0)
+is the base log's mode that moves the flange along the base joint's tangent, separated from
+the shoulder mode (:mod:`tvist.ident.base_mode`); the shoulder mode likewise from the
+shoulder log. ``ringing_index`` names the ``ringing`` entry of the same log that is that mode
+(the one closest in frequency, within :data:`SAME_MODE_RATIO`); ``None`` if none is (the
+entry is then flagged: the mode is not among those that ring).
+
+Checks across the two logs (:func:`cross_check_logs`): a mode found in both the base and
+the shoulder log must agree, within :data:`AGREEMENT_SE` combined standard errors and at
+least :data:`AGREEMENT_FLOOR`; otherwise both entries are flagged. Checks across poses are
+in :mod:`tvist.ident.pose_checks`.
 
 plus whatever the producer adds (the campaign: ``angle_rad``, ``radius_m``, ``wrist_joint``,
 ``true_modes`` on the twin).
@@ -20,6 +38,8 @@ plus whatever the producer adds (the campaign: ``angle_rad``, ``radius_m``, ``wr
 
 from __future__ import annotations
 
+import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -29,13 +49,25 @@ from tvist.ident.base_mode import separate_base_mode, separated_base_mode
 from tvist.ident.local_fit import FitOptions, LocalFit, identify_local
 from tvist.ident.logs import Record, is_uniform, resample_uniform
 from tvist.ident.preprocess import quiet_samples
+from tvist.ident.ringing import RingingMode, ringing_from_log
 
-__all__ = ["IDENTIFIED_JOINTS", "PoseRecord", "identify_pose", "pose_of"]
+__all__ = ["IDENTIFIED_JOINTS", "PoseRecord", "cross_check_logs", "identify_pose", "pose_of"]
 
 #: Joints identified at every pose (base, shoulder).
 IDENTIFIED_JOINTS = (0, 1)
 #: Two logs are of the same pose if their starting poses agree to this, rad.
 SAME_POSE_TOL_RAD = 0.02
+#: Modes of the two logs closer than this frequency ratio are taken for the same mode; a
+#: ``modes`` entry is the ``ringing`` entry within this ratio.
+SAME_MODE_RATIO = 1.15
+#: The same mode in two logs agrees if the frequencies differ by at most this many combined
+#: standard errors (sqrt(se_a² + se_b²), relative) ... (two, not three: on arms unlike the
+#: twin the standard errors leave out the model's mismatch, and at three a merged pair of
+#: modes 2.5-3.5 % off passed as agreeing)
+AGREEMENT_SE = 2.0
+#: ... or by at most this fraction (the two logs' fits differ in the input and the noise,
+#: not in the mode: a floor under standard errors that come out very small).
+AGREEMENT_FLOOR = 0.01
 _CORE_KEYS = (
     "key",
     "q",
@@ -44,6 +76,7 @@ _CORE_KEYS = (
     "inertia_kg_m2",
     "gravity_torque_nm",
     "modes",
+    "ringing",
     "error",
 )
 
@@ -66,6 +99,9 @@ class PoseRecord:
         Per identified joint: the :class:`LocalFit` or the error message (str).
     error
         Why the pose has no result at all (e.g. ``"unreachable"``).
+    ringing
+        Every mode that rings in each log (:class:`~tvist.ident.ringing.RingingMode`),
+        base log first, each log's lowest frequency first.
     extra
         Further fields kept as they are (the campaign's plan coordinates, a twin's true
         modes).
@@ -80,6 +116,7 @@ class PoseRecord:
     modes: dict[int, LocalFit | str] = field(default_factory=dict)
     error: str | None = None
     extra: dict[str, Any] = field(default_factory=dict)
+    ringing: tuple[RingingMode, ...] = ()
 
     def mode(self, joint: int) -> LocalFit | None:
         """The fit of ``joint``'s mode, or ``None`` if it failed or is missing."""
@@ -101,8 +138,15 @@ class PoseRecord:
         modes = []
         for joint in sorted(self.modes):
             fit = self.modes[joint]
-            modes.append({"joint": joint, "error": fit} if isinstance(fit, str) else fit.to_dict())
+            if isinstance(fit, str):
+                modes.append({"joint": joint, "error": fit})
+                continue
+            entry = fit.to_dict()
+            if self.ringing:
+                entry["ringing_index"] = _ringing_index(fit, joint, self.ringing)
+            modes.append(entry)
         out["modes"] = modes
+        out["ringing"] = [m.to_dict() for m in self.ringing]
         out["error"] = self.error
         out.update(self.extra)
         return out
@@ -132,7 +176,68 @@ class PoseRecord:
             modes=modes,
             error=data.get("error"),
             extra={k: v for k, v in data.items() if k not in _CORE_KEYS},
+            ringing=tuple(RingingMode.from_dict(m) for m in data.get("ringing") or ()),
         )
+
+
+def _ringing_index(fit: LocalFit, joint: int, ringing: tuple[RingingMode, ...]) -> int | None:
+    """Index of the ``ringing`` entry of ``joint``'s log that is ``fit``'s mode (closest in
+    frequency within :data:`SAME_MODE_RATIO`), or ``None``."""
+    best = None
+    for i, mode in enumerate(ringing):
+        if mode.log_joint != joint:
+            continue
+        distance = abs(math.log(mode.wn_rad_s / fit.wn_rad_s))
+        if distance < math.log(SAME_MODE_RATIO) and (best is None or distance < best[0]):
+            best = (distance, i)
+    return None if best is None else best[1]
+
+
+def _relative_se(mode: RingingMode) -> float:
+    return mode.wn_se_rad_s / mode.wn_rad_s
+
+
+def _rings(mode: RingingMode) -> bool:
+    """Whether the mode rings clearly (not flagged weak or below noise)."""
+    return not any(r.startswith(("weak ringing", "below noise")) for r in mode.reasons)
+
+
+def cross_check_logs(ringing: list[RingingMode]) -> list[RingingMode]:
+    """``ringing`` with the modes found in both logs checked against each other.
+
+    Modes of the base and the shoulder log closer than :data:`SAME_MODE_RATIO`, at least one
+    of them confident and neither weak (a weak mode may be no mode), are paired, closest
+    first; a pair whose frequencies differ by more than
+    ``max(AGREEMENT_SE · sqrt(se_a² + se_b²), AGREEMENT_FLOOR)`` (relative) is flagged in
+    both logs, naming the difference (a doubtful partner widens the tolerance by its larger
+    standard error, but still counts).
+    """
+    out = list(ringing)
+    base = [i for i, m in enumerate(out) if m.log_joint == 0]
+    shoulder = [i for i, m in enumerate(out) if m.log_joint == 1]
+    pairs = sorted(
+        (abs(math.log(out[a].wn_rad_s / out[b].wn_rad_s)), a, b)
+        for a in base
+        for b in shoulder
+        if abs(math.log(out[a].wn_rad_s / out[b].wn_rad_s)) < math.log(SAME_MODE_RATIO)
+        and not (out[a].low_confidence and out[b].low_confidence)
+        and _rings(out[a])
+        and _rings(out[b])
+        and math.isfinite(_relative_se(out[a]) + _relative_se(out[b]))
+    )
+    used: set[int] = set()
+    for distance, a, b in pairs:
+        if a in used or b in used:
+            continue
+        used |= {a, b}
+        combined = math.hypot(_relative_se(out[a]), _relative_se(out[b]))
+        tolerance = max(AGREEMENT_SE * combined, AGREEMENT_FLOOR)
+        if distance > tolerance:
+            diff = 100.0 * (math.exp(distance) - 1.0)
+            allowed = f"more than the {100 * tolerance:.1f} % the standard errors allow"
+            out[a] = out[a].flagged(f"disagrees with the shoulder log ({diff:.1f} %, {allowed})")
+            out[b] = out[b].flagged(f"disagrees with the base log ({diff:.1f} %, {allowed})")
+    return out
 
 
 def pose_of(record: Record) -> np.ndarray:
@@ -229,6 +334,15 @@ def identify_pose(
             modes[joint] = fits[joint]
         except (ValueError, RuntimeError) as exc:
             modes[joint] = str(exc)
+    ringing: list[RingingMode] = []
+    for joint, fit in fits.items():
+        try:
+            ringing += ringing_from_log(
+                logs[joint], joint, robot, fit, q, options=opts, accel_frame=accel_frame
+            )
+        except (ValueError, RuntimeError, np.linalg.LinAlgError) as exc:
+            warnings.warn(f"joint {joint}: no multi-mode fit ({exc})", stacklevel=2)
+    ringing = cross_check_logs(ringing)
     if separate_modes and 0 in fits:
         base = fits[0]
         shoulder = fits.get(1)
@@ -243,8 +357,77 @@ def identify_pose(
         payload_com_m=tuple(float(v) for v in getattr(payload, "com_m", (0.0, 0.0, 0.0))),  # type: ignore[arg-type]
         inertia_kg_m2=tuple(float(v) for v in robot.joint_inertia(q)),
         gravity_torque_nm=tuple(float(v) for v in robot.gravity_torque(q)),
-        modes=modes,
+        modes=_linked(modes, ringing),
+        ringing=tuple(ringing),
     )
+
+
+#: Reasons of a ringing entry that doubt the mode itself (not only its precision): a
+#: ``modes`` entry that is that mode inherits them where the entry's frequency is also
+#: uncertain (:func:`_unresolved_merge`).
+_WRONG_MODE = ("merged neighbours",)
+
+
+def _unresolved_merge(mode: RingingMode) -> bool:
+    """Whether the multi-mode fit cannot resolve the modes at this entry's frequency: flagged
+    as merged neighbours and with an uncertain frequency."""
+    reasons = mode.reasons
+    return any(r.startswith(_WRONG_MODE) for r in reasons) and any(
+        r.startswith("uncertain frequency") for r in reasons
+    )
+
+
+#: A ``modes`` entry agrees with its log's multi-mode fit within ``AGREEMENT_SE`` combined
+#: standard errors or this fraction: the two estimators model the same log differently (the
+#: paper map's entry has no feedthrough or a second mode only), so they differ by up to 1-2 %
+#: on the twin where both are right.
+LINK_FLOOR = 0.02
+
+
+def _linked(
+    modes: dict[int, LocalFit | str], ringing: list[RingingMode]
+) -> dict[int, LocalFit | str]:
+    """``modes`` with a confident entry flagged where its log's multi-mode fit does not
+    confirm it: no ringing mode near its frequency, the nearest one is an unresolved merge
+    (:func:`_unresolved_merge`), or it differs by more than the standard errors allow (as between
+    two logs, :func:`cross_check_logs`); a single-mode or two-mode fit that merged two
+    neighbours is caught so."""
+    if not ringing:
+        return modes
+    out = dict(modes)
+    for joint, fit in modes.items():
+        if isinstance(fit, str) or fit.low_confidence or fit.no_ringing:
+            continue
+        if not any(m.log_joint == joint for m in ringing):
+            continue
+        index = _ringing_index(fit, joint, tuple(ringing))
+        found = ", ".join(f"{m.fn_hz:.2f}" for m in ringing if m.log_joint == joint)
+        reason = None
+        if index is None:
+            reason = (
+                f"not among the modes that ring in the log ({fit.fn_hz:.2f} Hz; the multi-mode "
+                f"fit finds {found} Hz)"
+            )
+        elif _unresolved_merge(ringing[index]):
+            mode = ringing[index]
+            why = next(r for r in mode.reasons if r.startswith(_WRONG_MODE))
+            reason = f"the multi-mode fit of the same log doubts it ({mode.fn_hz:.2f} Hz: {why})"
+        else:
+            mode = ringing[index]
+            distance = abs(math.log(mode.wn_rad_s / fit.wn_rad_s))
+            combined = math.hypot(_relative_se(mode), fit.wn_se_rad_s / fit.wn_rad_s)
+            tolerance = max(AGREEMENT_SE * combined, LINK_FLOOR)
+            if distance > tolerance:
+                reason = (
+                    f"disagrees with the multi-mode fit of the same log "
+                    f"({100 * (math.exp(distance) - 1):.1f} %: {fit.fn_hz:.2f} Hz against "
+                    f"{found} Hz)"
+                )
+        if reason is not None:
+            from dataclasses import replace
+
+            out[joint] = replace(fit, low_confidence=True, reasons=(*fit.reasons, reason))
+    return out
 
 
 def _separate_alone(

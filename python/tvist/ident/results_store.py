@@ -158,6 +158,16 @@ class ResultsStore:
         append_record(self.path, record)
         self.records.append(record)
 
+    def replace_all(self, records: list[dict]) -> None:
+        """Write ``records`` (this store's poses, e.g. with flags from checks across poses)
+        in place of the file's, atomically; records keep their fingerprints."""
+        if records == self.records:
+            return
+        tmp = self.path.with_name(self.path.name + ".tmp")
+        tmp.write_text("".join(json.dumps(r) + "\n" for r in records), encoding="utf-8")
+        os.replace(tmp, self.path)
+        self.records = list(records)
+
     def _read_and_quarantine(self) -> list[dict]:
         if not self.path.exists():
             return []
