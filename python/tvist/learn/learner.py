@@ -5,11 +5,18 @@ estimate of per-joint stiffness and damping scale factors.
 that ring: the base and shoulder modes (:mod:`tvist.learn.decay`). A handful of such moves
 cannot determine the 3 load-law coefficients of every flexible joint (30 numbers for the
 demo's five joints), but they do determine how much stiffer or softer each joint is than the
-map says. The state is therefore ``θ = [ln s_k(j) for every flexible joint j] +
-[ln s_c(j) for every mode joint j]``: joint ``j``'s stiffness law is ``s_k(j) k_j(L)`` and its
-damping law ``s_c(j) c_j(L)`` (whole laws scaled, their load shape kept from the prior map).
-Joints that no observed mode depends on keep their prior scale: the estimator's prior holds
-them.
+map says, and how much more it stiffens with load. The state is therefore ``θ = [ln s_k(j)
+for every flexible joint j] + [ln s_c(j) for every mode joint j] + [g(j) for every loaded
+flexible joint j]``: joint ``j``'s stiffness law is ``s_k(j) (k_j(L) + max(g(j), 0) k_j(0)
+|L| / L_ref)`` (:data:`LOAD_REF_NM`; a gear that stiffens with load more than the prior says,
+e.g. a strain-wave gear, whose tangent stiffness can triple at rated torque) and its damping
+law ``s_c(j) c_j(L)``. A joint is loaded if its gravity torque varies by more than
+:data:`MIN_LOAD_SPAN_NM` over the workspace (not the base, whose axis is vertical). Joints
+that no observed mode depends on keep their prior values: the estimator's prior holds them.
+
+**Prior.** A modal map is the prior as it is. A paper10 map (the paper's published map) is
+first converted into the modal map whose laws fit its modes over the workspace
+(:mod:`tvist.learn.prior`), with a prior uncertainty widened by the conversion's error.
 
 **How.** An extended Kalman filter on ``θ`` with the prior map at ``θ = 0`` and
 :data:`PRIOR_LOG_SIGMA`; each observed mode gives ``ω_n`` and ``ζ`` with the estimator's
@@ -22,8 +29,8 @@ the map is right at its end pose to within what a ZV shaper tolerates
 - an observation whose innovation is implausible (normalised innovation squared above the
   :data:`GATE_PROBABILITY` quantile) is not used; if a payload other than the declared one
   explains it, the payload change is reported (:class:`PayloadReport`);
-- every step is bounded to :data:`MAX_LOG_STEP` per parameter (a shortened gain, whose
-  covariance keeps the uncertainty of the step not taken);
+- every step is bounded to :data:`MAX_STEP_SIGMAS` prior standard deviations per parameter
+  (a shortened gain, whose covariance keeps the uncertainty of the step not taken);
 - the map (:attr:`MapLearner.map`) takes the estimate only when it is statistically
   significant (a likelihood-ratio test on the modes observed so far,
   :data:`SIGNIFICANCE_PROBABILITY`) and the predicted residual vibration (the
@@ -46,8 +53,11 @@ import numpy as np
 from scipy import optimize, stats
 
 import tvist
+from tvist.dynmap import DynamicMap
 from tvist.ident.logs import Record, read_rtde_csv
 from tvist.learn.decay import Decay, ModeObservation, observe_decay
+from tvist.learn.prior import ConvertedPrior, converted_prior_log_sigma, modal_prior_from_paper10
+from tvist.learn.twin_moves import random_poses
 from tvist.modal_map import ModalMap
 from tvist.robots import Payload, Robot
 from tvist.units import UnitError, check_log
@@ -76,8 +86,16 @@ GATE_PROBABILITY = 0.999
 #: The estimate replaces the map when it lowers the misfit of the observed modes by more than
 #: this chi-square quantile (one degree of freedom).
 SIGNIFICANCE_PROBABILITY = 0.95
-#: Largest change of any log scale factor per observation (0.1: ~10 % stiffness).
-MAX_LOG_STEP = 0.1
+#: Largest change of any parameter per observation, in prior standard deviations (0.5: 0.1,
+#: ~10 % stiffness, at :data:`PRIOR_LOG_SIGMA`).
+MAX_STEP_SIGMAS = 0.5
+#: Load of the load-stiffening term, N m: ``g = 1`` doubles the stiffness at this load.
+LOAD_REF_NM = 100.0
+#: Prior uncertainty of the load-stiffening gains ``g`` (prior mean 0: the prior map's law).
+PRIOR_LOAD_SIGMA = 0.5
+#: A joint whose gravity torque varies by less than this over the workspace has no load
+#: stiffening to learn, N m.
+MIN_LOAD_SPAN_NM = 5.0
 #: Relative finite-difference step of the Jacobian.
 _FD_STEP = 1e-4
 #: Two predicted modes closer than this frequency ratio are told apart by the direction they
@@ -222,35 +240,60 @@ class MapLearner:
     """
 
     def __init__(
-        self, robot: Robot, modal_map: ModalMap, *, prior_log_sigma: float = PRIOR_LOG_SIGMA
+        self,
+        robot: Robot,
+        modal_map: ModalMap | DynamicMap,
+        *,
+        prior_log_sigma: float = PRIOR_LOG_SIGMA,
     ) -> None:
+        self.converted: ConvertedPrior | None = None
+        if isinstance(modal_map, DynamicMap):
+            self.converted = modal_prior_from_paper10(robot, modal_map)
+            prior_log_sigma = converted_prior_log_sigma(self.converted, prior_log_sigma)
+            modal_map = self.converted.map
         if not isinstance(modal_map, ModalMap):
-            raise ValueError("modal_map: the learner refines a modal map (kind 'modal')")
+            raise ValueError("modal_map: the learner refines a modal map or a paper10 map")
         self.robot = robot
         self.prior = modal_map
+        self.prior_log_sigma = prior_log_sigma
         self.flex_joints = [int(f["joint"]) for f in modal_map.flex_joints]
         self.mode_joints = [int(j) for j in modal_map.mode_joints]
-        self.names = [f"stiffness scale, joint {j}" for j in self.flex_joints] + [
-            f"damping scale, joint {j}" for j in self.mode_joints
-        ]
-        n = len(self.names)
-        self.theta = np.zeros(n)
-        self.cov = np.eye(n) * prior_log_sigma**2
-        self._published = np.zeros(n)
+        span = np.ptp(
+            robot.gravity_torque_many(random_poses(robot, 50, np.random.default_rng(0))), axis=0
+        )
+        self.load_joints = [j for j in self.flex_joints if span[j] > MIN_LOAD_SPAN_NM]
+        self.names = (
+            [f"stiffness scale, joint {j}" for j in self.flex_joints]
+            + [f"damping scale, joint {j}" for j in self.mode_joints]
+            + [f"load stiffening, joint {j}" for j in self.load_joints]
+        )
+        n_log = len(self.flex_joints) + len(self.mode_joints)
+        sigma = np.array([prior_log_sigma] * n_log + [PRIOR_LOAD_SIGMA] * len(self.load_joints))
+        self._max_step = MAX_STEP_SIGMAS * sigma
+        self.theta = np.zeros(sigma.size)
+        self.cov = np.diag(sigma**2)
+        self._published = np.zeros(sigma.size)
         self._map = modal_map
         self._seen: list[_Seen] = []
         self.history: list[Observation] = []
 
     # -- the map at a parameter vector -------------------------------------------------------
     def map_at(self, theta: np.ndarray) -> ModalMap:
-        """The prior map with its laws scaled by ``exp(theta)``."""
+        """The prior map with its laws scaled by ``exp(theta)`` and stiffened with load by the
+        gains ``theta`` holds for the loaded joints."""
         n_flex = len(self.flex_joints)
+        n_log = n_flex + len(self.mode_joints)
         entries = copy.deepcopy(self.prior.flex_joints)
         for i, entry in enumerate(entries):
+            j = entry["joint"]
+            law = list(entry["stiffness_nm_per_rad"])
+            if j in self.load_joints:
+                gain = max(float(theta[n_log + self.load_joints.index(j)]), 0.0)
+                law[1] += gain * law[0] / LOAD_REF_NM
             scale_k = math.exp(theta[i])
-            entry["stiffness_nm_per_rad"] = [v * scale_k for v in entry["stiffness_nm_per_rad"]]
-            if entry["joint"] in self.mode_joints:
-                scale_c = math.exp(theta[n_flex + self.mode_joints.index(entry["joint"])])
+            entry["stiffness_nm_per_rad"] = [v * scale_k for v in law]
+            if j in self.mode_joints:
+                scale_c = math.exp(theta[n_flex + self.mode_joints.index(j)])
                 entry["damping_nms_per_rad"] = [v * scale_c for v in entry["damping_nms_per_rad"]]
         return ModalMap(entries, self.mode_joints, self.prior.metadata)
 
@@ -263,10 +306,16 @@ class MapLearner:
         return self._map
 
     @property
+    def _n_log(self) -> int:
+        return len(self.flex_joints) + len(self.mode_joints)
+
+    @property
     def scales(self) -> dict[str, float]:
-        """The learned map's scale factors, by name."""
+        """The learned map's scale factors and load-stiffening gains, by name."""
+        n = self._n_log
         return {
-            name: float(math.exp(v)) for name, v in zip(self.names, self._published, strict=True)
+            name: float(math.exp(v) if k < n else max(v, 0.0))
+            for k, (name, v) in enumerate(zip(self.names, self._published, strict=True))
         }
 
     # -- predicted residual vibration -------------------------------------------------------
@@ -363,12 +412,13 @@ class MapLearner:
                 Observation(source, False, reason, decay, False, before, before, payload)
             )
         gain = self.cov @ jac.T @ np.linalg.inv(s)
-        # A bounded step: the gain shortened so that no scale moves by more than
-        # MAX_LOG_STEP; the Joseph form below is the exact covariance for any gain, so the
-        # estimate keeps the uncertainty of the step it did not take.
-        largest = float(np.max(np.abs(gain @ nu)))
-        if largest > MAX_LOG_STEP:
-            gain = gain * (MAX_LOG_STEP / largest)
+        # A bounded step: the gain shortened so that no parameter moves by more than
+        # MAX_STEP_SIGMAS prior standard deviations; the Joseph form below is the exact
+        # covariance for any gain, so the estimate keeps the uncertainty of the step it did
+        # not take.
+        largest = float(np.max(np.abs(gain @ nu) / self._max_step))
+        if largest > 1.0:
+            gain = gain / largest
         self.theta = self.theta + gain @ nu
         ikh = np.eye(len(self.theta)) - gain @ jac
         self.cov = ikh @ self.cov @ ikh.T + gain @ np.diag(r_diag) @ gain.T
@@ -527,7 +577,25 @@ class MapLearner:
                     "change_percent": 100.0 * math.expm1(v),
                     "log_se": float(s),
                 }
-                for name, v, s in zip(self.names, self._published, se, strict=True)
+                for name, v, s in zip(self.names[: self._n_log], self._published, se, strict=False)
+            },
+            # g: the joint's stiffness at LOAD_REF_NM of load is (1 + g) times the prior law's.
+            "load_stiffening": {
+                name: {"gain": max(float(v), 0.0), "se": float(s), "load_ref_nm": LOAD_REF_NM}
+                for name, v, s in zip(
+                    self.names[self._n_log :],
+                    self._published[self._n_log :],
+                    se[self._n_log :],
+                    strict=True,
+                )
+            },
+            "prior_conversion": None
+            if self.converted is None
+            else {
+                "from": "paper10",
+                "frequency_rms_percent": 100.0 * self.converted.wn_rel_rms,
+                "frequency_max_percent": 100.0 * self.converted.wn_rel_max,
+                "prior_log_sigma": self.prior_log_sigma,
             },
             "predicted_residual": _json(self.predicted_residual()),
             "predicted_residual_prior": _json(self.predicted_residual(np.zeros_like(self.theta))),
