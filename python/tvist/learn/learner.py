@@ -56,7 +56,12 @@ import tvist
 from tvist.dynmap import DynamicMap
 from tvist.ident.logs import Record, read_rtde_csv
 from tvist.learn.decay import Decay, ModeObservation, observe_decay
-from tvist.learn.prior import ConvertedPrior, converted_prior_log_sigma, modal_prior_from_paper10
+from tvist.learn.prior import (
+    GUESSED_LOG_SIGMA,
+    ConvertedPrior,
+    converted_prior_log_sigma,
+    modal_prior_from_paper10,
+)
 from tvist.learn.twin_moves import random_poses
 from tvist.modal_map import ModalMap
 from tvist.robots import Payload, Robot
@@ -267,8 +272,12 @@ class MapLearner:
             + [f"damping scale, joint {j}" for j in self.mode_joints]
             + [f"load stiffening, joint {j}" for j in self.load_joints]
         )
-        n_log = len(self.flex_joints) + len(self.mode_joints)
-        sigma = np.array([prior_log_sigma] * n_log + [PRIOR_LOAD_SIGMA] * len(self.load_joints))
+        guessed = () if self.converted is None else self.converted.guessed_joints
+        sigma = np.array(
+            [GUESSED_LOG_SIGMA if j in guessed else prior_log_sigma for j in self.flex_joints]
+            + [prior_log_sigma] * len(self.mode_joints)
+            + [PRIOR_LOAD_SIGMA] * len(self.load_joints)
+        )
         self._max_step = MAX_STEP_SIGMAS * sigma
         self.theta = np.zeros(sigma.size)
         self.cov = np.diag(sigma**2)
@@ -505,8 +514,10 @@ class MapLearner:
         gain = self.misfit(self._published) - self.misfit(self.theta)
         if gain <= stats.chi2.ppf(SIGNIFICANCE_PROBABILITY, 1):
             return False
+        # Never worse: the estimate must lower the predicted residual vibration on the modes
+        # of the moves seen so far (the first modes seen have none to compare with).
         new, old = self.predicted_residual(self.theta), self.predicted_residual(self._published)
-        if math.isfinite(old) and not new <= old:
+        if math.isfinite(old) and not new < old:
             return False
         self._published = self.theta.copy()
         self._map = self.map_at(self._published)
