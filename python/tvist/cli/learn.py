@@ -53,9 +53,8 @@ def _cmd_learn(args: argparse.Namespace) -> int:
     from tvist.cli.args import map_payload, payload_from_args
     from tvist.ident.logs import log_payload
     from tvist.learn import MapLearner
-    from tvist.robots import Robot, params
-
     from tvist.map_files import load_map
+    from tvist.robots import Robot, params
 
     prior = load_map(args.map)
     out = Path(args.out)
