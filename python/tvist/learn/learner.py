@@ -56,12 +56,7 @@ import tvist
 from tvist.dynmap import DynamicMap
 from tvist.ident.logs import Record, read_rtde_csv
 from tvist.learn.decay import Decay, ModeObservation, observe_decay
-from tvist.learn.prior import (
-    GUESSED_LOG_SIGMA,
-    ConvertedPrior,
-    converted_prior_log_sigma,
-    modal_prior_from_paper10,
-)
+from tvist.learn.prior import ConvertedPrior, converted_prior_log_sigma, modal_prior_from_paper10
 from tvist.learn.twin_moves import random_poses
 from tvist.modal_map import ModalMap
 from tvist.robots import Payload, Robot
@@ -272,10 +267,8 @@ class MapLearner:
             + [f"damping scale, joint {j}" for j in self.mode_joints]
             + [f"load stiffening, joint {j}" for j in self.load_joints]
         )
-        guessed = () if self.converted is None else self.converted.guessed_joints
         sigma = np.array(
-            [GUESSED_LOG_SIGMA if j in guessed else prior_log_sigma for j in self.flex_joints]
-            + [prior_log_sigma] * len(self.mode_joints)
+            [prior_log_sigma] * (len(self.flex_joints) + len(self.mode_joints))
             + [PRIOR_LOAD_SIGMA] * len(self.load_joints)
         )
         self._max_step = MAX_STEP_SIGMAS * sigma

@@ -41,10 +41,6 @@ STIFF_JOINT_FACTOR = 5.0
 #: Weight of the log-damping errors against the log-frequency errors (a ZV shaper is ~10
 #: times less sensitive to its damping ratio than to its frequency).
 ZETA_WEIGHT = 0.1
-#: Prior uncertainty of the log stiffness of the joints the published map says nothing about
-#: (the elbow and wrists: their stiffness is a guess, :data:`STIFF_JOINT_FACTOR`): a factor
-#: e ≈ 2.7 either way.
-GUESSED_LOG_SIGMA = 1.0
 #: Log errors beyond this count linearly, not squared (a robust fit: the published map is
 #: a curve fit of one arm's modes along its test motions, far from physical at some poses).
 ROBUST_SCALE = 0.05
@@ -70,8 +66,6 @@ class ConvertedPrior:
     wn_rel_max: float
     zeta_rel_rms: float
     wn_rel_median: float
-    guessed_joints: tuple[int, ...] = ()
-    """The flexible joints whose stiffness is a guess (prior :data:`GUESSED_LOG_SIGMA`)."""
 
 
 def _by_frequency(modes: np.ndarray) -> np.ndarray:
@@ -182,7 +176,6 @@ def modal_prior_from_paper10(robot: Robot, paper: DynamicMap) -> ConvertedPrior:
         float(np.nanmax(np.abs(wn_rel))),
         float(np.sqrt(np.nanmean(zeta_rel**2))),
         float(np.nanmedian(np.abs(wn_rel))),
-        tuple(j for j in CONVERSION_FLEX_JOINTS if j not in (0, 1)),
     )
 
 
