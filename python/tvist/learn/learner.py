@@ -101,6 +101,11 @@ _FD_STEP = 1e-4
 #: Two predicted modes closer than this frequency ratio are told apart by the direction they
 #: ring in, farther ones by frequency.
 CLOSE_MODES_RATIO = 1.1
+#: Flags of a fit that rings but is too uncertain to learn from (:meth:`MapLearner.observe`
+#: still checks it for a payload change).
+_UNCERTAINTY_FLAGS = ("uncertain frequency", "uncertain damping")
+#: ... if its frequency's standard error is below this fraction of ω_n ...
+FLAGGED_MAX_WN_REL_SE = 0.05
 #: A payload estimate that differs from the declared one by less than this is no change, kg.
 MIN_PAYLOAD_CHANGE_KG = 0.5
 #: Step of the payload search, kg.
@@ -354,16 +359,12 @@ class MapLearner:
         if not modes:
             if decay.flagged:
                 reasons = "; ".join(r for m in decay.flagged for r in m.reasons)
+                payload = self._flagged_payload_check(decay)
+                reason = f"low-confidence fit: {reasons}"
+                if payload is not None:
+                    reason = f"{payload.message}; not learned from ({reason})"
                 return self._note(
-                    Observation(
-                        source,
-                        False,
-                        f"low-confidence fit: {reasons}",
-                        decay,
-                        False,
-                        before,
-                        before,
-                    )
+                    Observation(source, False, reason, decay, False, before, before, payload)
                 )
             if decay.amplitude_m_s2 > QUIET_NOISE_FACTOR * decay.noise_m_s2:
                 return self._note(
@@ -517,7 +518,48 @@ class MapLearner:
         return True
 
     # -- payload ---------------------------------------------------------------------------
-    def _payload_check(self, decay: Decay) -> PayloadReport | None:
+    def _flagged_payload_check(self, decay: Decay) -> PayloadReport | None:
+        """A payload change shown by fits too uncertain to learn from: modes that ring
+        (flagged only for the standard errors of their frequency or damping, not for weak
+        ringing or a poor fit, the frequency's below :data:`FLAGGED_MAX_WN_REL_SE`), whose
+        frequencies fail the gate of :meth:`observe` (each the nearest predicted mode, their
+        standard errors and the map form's error, the estimate's uncertainty). A report only:
+        such fits never touch the estimate."""
+        ringing = [
+            m
+            for m in decay.flagged
+            if all(r.startswith(_UNCERTAINTY_FLAGS) for r in m.reasons)
+            and m.wn_se_rad_s < FLAGGED_MAX_WN_REL_SE * m.wn_rad_s
+        ]
+        if not ringing:
+            return None
+        q = np.asarray(decay.q_end, dtype=float)
+        predicted = self._modes(self.theta, q)[:, 0]
+        chosen: dict[int, ModeObservation] = {}
+        for m in ringing:
+            i = int(np.argmin(np.abs(np.log(m.wn_rad_s / predicted))))
+            if i not in chosen or m.wn_se_rad_s / m.wn_rad_s < (
+                chosen[i].wn_se_rad_s / chosen[i].wn_rad_s
+            ):
+                chosen[i] = m
+        idx = sorted(chosen)
+
+        def h_of(theta: np.ndarray) -> np.ndarray:
+            return self._modes(theta, q)[idx, 0]
+
+        h = predicted[idx]
+        jac = self._jacobian(h_of, h)
+        z = np.array([chosen[i].wn_rad_s for i in idx])
+        r = np.array([chosen[i].wn_se_rad_s ** 2 for i in idx]) + (MODEL_WN_REL_SIGMA * z) ** 2
+        nu = z - h
+        nis = float(nu @ np.linalg.solve(jac @ self.cov @ jac.T + np.diag(r), nu))
+        if nis <= stats.chi2.ppf(GATE_PROBABILITY, len(idx)):
+            return None
+        return self._payload_check(decay, [chosen[i] for i in idx])
+
+    def _payload_check(
+        self, decay: Decay, modes: Sequence[ModeObservation] | None = None
+    ) -> PayloadReport | None:
         """The payload that makes the learned map predict the observed modes, if it differs
         from the declared one by more than :data:`MIN_PAYLOAD_CHANGE_KG`.
 
@@ -528,8 +570,9 @@ class MapLearner:
         """
         declared = self.robot.payload
         q = np.asarray(decay.q_end, dtype=float)
-        wn = np.array([m.wn_rad_s for m in decay.modes])
-        sigma = np.hypot([m.wn_se_rad_s / m.wn_rad_s for m in decay.modes], MODEL_WN_REL_SIGMA)
+        modes = decay.modes if modes is None else modes
+        wn = np.array([m.wn_rad_s for m in modes])
+        sigma = np.hypot([m.wn_se_rad_s / m.wn_rad_s for m in modes], MODEL_WN_REL_SIGMA)
 
         def log_errors(mass: float) -> np.ndarray:
             payload = Payload(mass, tuple(declared.com_m), declared.inertia_kg_m2)
