@@ -1,5 +1,5 @@
 """Learn the modal map from the ringing after ordinary moves: a bounded, gated recursive
-estimate of per-joint stiffness and damping scale factors.
+estimate of per-joint stiffness and damping scale factors and load-stiffening gains.
 
 **What is estimated.** An ordinary move shows the modes at its end pose only, and only those
 that ring: the base and shoulder modes (:mod:`tvist.learn.decay`). A handful of such moves
@@ -15,7 +15,7 @@ law ``s_c(j) c_j(L)``. A joint is loaded if its gravity torque varies by more th
 that no observed mode depends on keep their prior values: the estimator's prior holds them.
 
 **Prior.** A modal map is the prior as it is. A paper10 map (the paper's published map) is
-first converted into the modal map whose laws fit its modes over the workspace
+first converted into the modal map whose laws fit its modes along the paper's test motions
 (:mod:`tvist.learn.prior`), with a prior uncertainty widened by the conversion's error.
 
 **How.** An extended Kalman filter on ``θ`` with the prior map at ``θ = 0`` and
@@ -28,14 +28,15 @@ the map is right at its end pose to within what a ZV shaper tolerates
 
 - an observation whose innovation is implausible (normalised innovation squared above the
   :data:`GATE_PROBABILITY` quantile) is not used; if a payload other than the declared one
-  explains it, the payload change is reported (:class:`PayloadReport`);
+  explains it, the payload change is reported (:class:`PayloadReport`); fits that ring but
+  are too uncertain to learn from are checked the same way (a report, never learned from);
 - every step is bounded to :data:`MAX_STEP_SIGMAS` prior standard deviations per parameter
   (a shortened gain, whose covariance keeps the uncertainty of the step not taken);
 - the map (:attr:`MapLearner.map`) takes the estimate only when it is statistically
   significant (a likelihood-ratio test on the modes observed so far,
   :data:`SIGNIFICANCE_PROBABILITY`) and the predicted residual vibration (the
   ZV shaper of the map's modes on the observed modes, :func:`tvist.prv`) over all moves seen
-  so far does not increase;
+  so far decreases;
 - a log with wrong units, a misplaced column, an outside force, or only flagged fits is
   rejected with its reason and never touches the estimate.
 """
