@@ -12,6 +12,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from tvist import robots
 from tvist.demo.experiment import run_motion
@@ -171,15 +172,18 @@ def test_corrupted_logs_are_rejected_and_never_make_the_map_worse():
     )
 
 
-def test_payload_change_is_detected_within_three_moves():
+# Seed 0: after the switch the moves' fits are too uncertain to learn from (frequency standard
+# errors 1.3-2.3 %) but 20 % off the map: reported from them.
+@pytest.mark.parametrize(("seed", "light_seed"), [(7, 8), (0, 500)])
+def test_payload_change_is_detected_within_three_moves(seed, light_seed):
     robot = _robot(PAYLOAD_KG)
-    twin = _twin(7)
+    twin = _twin(seed)
     learner = MapLearner(robot, _wrong_map(twin))
-    poses = random_poses(robot, 8, np.random.default_rng(7))
+    poses = random_poses(robot, 8, np.random.default_rng(seed))
     for record in _moves(twin, robot, learner, poses, 8):
         obs = learner.observe(record)
         assert obs.payload is None, obs.reason  # no false alarm at the declared payload
-    light = _twin(8, payload_kg=2.0)
+    light = _twin(light_seed, payload_kg=2.0)
     reports = []
     for record in _moves(light, robot, learner, poses, 3, first=8):
         obs = learner.observe(record)
