@@ -536,13 +536,26 @@ class MapLearner:
             return None
         q = np.asarray(decay.q_end, dtype=float)
         predicted = self._modes(self.theta, q)[:, 0]
-        chosen: dict[int, ModeObservation] = {}
-        for m in ringing:
-            i = int(np.argmin(np.abs(np.log(m.wn_rad_s / predicted))))
-            if i not in chosen or m.wn_se_rad_s / m.wn_rad_s < (
-                chosen[i].wn_se_rad_s / chosen[i].wn_rad_s
+        # Fits of one mode (within CLOSE_MODES_RATIO): the one with the smaller error. As
+        # many distinct modes as the map has: they are its modes in order of frequency (a
+        # payload change moves all of them, so the nearest predicted mode can be another's);
+        # fewer: each is the nearest predicted mode.
+        distinct: list[ModeObservation] = []
+        for m in sorted(ringing, key=lambda m: m.wn_se_rad_s / m.wn_rad_s):
+            if all(
+                abs(math.log(m.wn_rad_s / d.wn_rad_s)) > math.log(CLOSE_MODES_RATIO)
+                for d in distinct
             ):
-                chosen[i] = m
+                distinct.append(m)
+        chosen: dict[int, ModeObservation] = {}
+        if len(distinct) == predicted.size:
+            order = np.argsort(predicted)
+            for k, m in enumerate(sorted(distinct, key=lambda m: m.wn_rad_s)):
+                chosen[int(order[k])] = m
+        else:
+            for m in distinct:
+                i = int(np.argmin(np.abs(np.log(m.wn_rad_s / predicted))))
+                chosen.setdefault(i, m)
         idx = sorted(chosen)
 
         def h_of(theta: np.ndarray) -> np.ndarray:
