@@ -12,6 +12,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from tvist import robots
 from tvist.demo.experiment import run_motion
@@ -100,6 +101,37 @@ def test_learned_map_reaches_99_percent_on_the_demo_moves():
         assert learned_pct > wrong_pct
 
 
+def test_learning_from_the_published_paper10_map_improves_the_demo_moves():
+    """The paper's published map (91.0 % on Q1->Q3 on this twin) as the prior: converted into
+    a modal map, then 20 ordinary moves between 10 random poses."""
+    import tvist
+
+    twin, robot = _twin(3), _robot()
+    paper = tvist.DynamicMap.paper_ur5e()
+    learner = MapLearner(robot, paper)
+    assert learner.converted is not None
+    poses = random_poses(robot, 10, np.random.default_rng(3))
+    for record in _moves(twin, robot, learner, poses, 20):
+        learner.observe(record)
+    assert any(o.map_updated for o in learner.history)
+    rows = [m for m in default_methods() if m.key in ("unshaped", "fd-tvist-paper-map")]
+    rows.append(fd_tvist_modal("learned", "learned", learner.map))
+    quiet_twin = Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M)
+    results = {}
+    for motion in MOTIONS:
+        run = run_motion(motion, rows, quiet_twin, robot, with_slow_down=False)
+        paper_pct, learned_pct = (r.reduction_percent for r in run.runs[1:])
+        results[motion.name] = (paper_pct, learned_pct)
+    # Measured (seed 3): the paper map 99.20 / 91.03 / 96.21 %, learned 99.58 / 98.65 /
+    # 98.28 %. Not yet the 99 % asked of a learned map (the twin's true modes reach 99.25 %
+    # on Q1->Q3): the converted prior guesses the elbow and wrists, which 20 moves do not
+    # correct. Asserted: every move at least 98 % and no move worse than with the paper
+    # map; the two moves the paper map leaves at 91-96 % gain at least 2 points.
+    for name, (paper_pct, learned_pct) in results.items():
+        assert learned_pct >= 98.0 and learned_pct >= paper_pct, (name, results)
+    assert all(results[name][1] >= results[name][0] + 2.0 for name in ("Q1->Q3", "Q3->Q1"))
+
+
 def _corrupted(record: Record, kind: str) -> Record:
     if kind == "g-units":
         return replace(record, tool_accel=record.tool_accel / 9.80665)
@@ -149,15 +181,18 @@ def test_corrupted_logs_are_rejected_and_never_make_the_map_worse():
     )
 
 
-def test_payload_change_is_detected_within_three_moves():
+# Seed 0: after the switch the moves' fits are too uncertain to learn from (frequency standard
+# errors 1.3-2.3 %) but 20 % off the map: reported from them.
+@pytest.mark.parametrize(("seed", "light_seed"), [(7, 8), (0, 500)])
+def test_payload_change_is_detected_within_three_moves(seed, light_seed):
     robot = _robot(PAYLOAD_KG)
-    twin = _twin(7)
+    twin = _twin(seed)
     learner = MapLearner(robot, _wrong_map(twin))
-    poses = random_poses(robot, 8, np.random.default_rng(7))
+    poses = random_poses(robot, 8, np.random.default_rng(seed))
     for record in _moves(twin, robot, learner, poses, 8):
         obs = learner.observe(record)
         assert obs.payload is None, obs.reason  # no false alarm at the declared payload
-    light = _twin(8, payload_kg=2.0)
+    light = _twin(light_seed, payload_kg=2.0)
     reports = []
     for record in _moves(light, robot, learner, poses, 3, first=8):
         obs = learner.observe(record)
@@ -180,6 +215,15 @@ def _save_wrong_map(twin: Twin, path: Path) -> Path:
         {**wrong.metadata, "payload": {"mass_kg": PAYLOAD_KG, "com_m": list(PAYLOAD_COM_M)}},
     ).save(path)
     return path
+
+
+def _assert_modes_up_at_q1(prior_path: Path, learned_path: Path, robot) -> None:
+    """Both modes of the learned map at Q1 are more than 1.5 % above the prior's (a 3 %
+    stiffer joint; the stiffness may be learned as a scale or as stiffening with load)."""
+    q1 = MOTIONS[2].q_end
+    prior = np.array(ModalMap.load(prior_path).modes(robot, q1))
+    learned = np.array(ModalMap.load(learned_path).modes(robot, q1))
+    assert np.all(learned[:, 0] > 1.015 * prior[:, 0]), (prior, learned)
 
 
 def _run_cli(*argv: str):
@@ -213,14 +257,36 @@ def test_learn_command_writes_a_map_with_provenance(tmp_path):
     logs = {Path(e["source"]).name: e for e in learned["logs"]}
     assert logs["q3-q1.csv"]["accepted"] and logs["q3-q1.csv"]["map_updated"]
     assert not logs["knocked.csv"]["accepted"] and "outside force" in logs["knocked.csv"]["reason"]
-    # The Q1 modes show the map 15 % soft: the learned base and shoulder stiffness go up.
-    scales = learned["scale_factors"]
-    assert scales["stiffness scale, joint 0"]["change_percent"] > 3.0
-    assert scales["stiffness scale, joint 1"]["change_percent"] > 3.0
+    # The Q1 modes show the map 15 % soft: the learned base and shoulder modes there go up.
+    _assert_modes_up_at_q1(wrong_path, out, robot)
     # A user error: one line, exit code 2.
     same = _run_cli("learn", str(good), "--map", str(wrong_path), "--out", str(wrong_path))
     assert same.returncode == 2 and len(same.stderr.strip().splitlines()) == 1
     assert "--out" in same.stderr and "Traceback" not in same.stderr
+
+
+def test_learn_command_starts_from_a_paper10_map(tmp_path):
+    import json
+
+    import tvist
+
+    twin, robot = _twin(31), _robot()
+    paper = tmp_path / "paper.json"
+    tvist.DynamicMap.paper_ur5e().save(paper)
+    motion = MOTIONS[2]
+    log = twin.run(move(motion.q_start, motion.q_end, robot)).to_csv(tmp_path / "q3-q1.csv")
+    out = tmp_path / "m2.json"
+    com = [str(v) for v in PAYLOAD_COM_M]
+    argv = ["learn", str(log), "--map", str(paper), "--out", str(out), "--payload-kg", "5"]
+    done = _run_cli(*argv, "--payload-com", *com)
+    assert done.returncode == 0, done.stderr
+    assert "a paper10 map, converted into a modal map" in done.stderr
+    document = json.loads(out.read_text())
+    assert document["kind"] == "modal"
+    conversion = document["metadata"]["learned"]["prior_conversion"]
+    # The prior is wider than a modal map's (0.2): the conversion's error is added.
+    assert conversion["from"] == "paper10" and conversion["prior_log_sigma"] > 0.2
+    assert tvist.load_map(out).mode_joints == [0, 1]
 
 
 def _run_against_twin(monkeypatch, twin: Twin, knock: bool = False) -> list[Path]:
@@ -281,10 +347,8 @@ def test_run_learn_updates_the_map_file_and_keeps_the_previous_one(tmp_path, mon
     learned = json.loads(map_path.read_text())["metadata"]["learned"]
     assert [Path(e["source"]) for e in learned["logs"]] == logs
     assert learned["logs"][0]["accepted"] and learned["logs"][0]["map_updated"]
-    # The Q3->Q1 decay shows the prior 15 % soft: base and shoulder stiffness go up.
-    scales = learned["scale_factors"]
-    assert scales["stiffness scale, joint 0"]["change_percent"] > 3.0
-    assert scales["stiffness scale, joint 1"]["change_percent"] > 3.0
+    # The Q3->Q1 decay shows the prior 15 % soft: base and shoulder modes at Q1 go up.
+    _assert_modes_up_at_q1(tmp_path / "m.json.bak", map_path, _robot())
 
 
 def test_run_learn_leaves_the_map_file_alone_when_the_log_is_rejected(

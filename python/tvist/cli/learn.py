@@ -22,7 +22,12 @@ def add_learn_command(sub: argparse._SubParsersAction) -> None:
         "logs were used, what changed and by how much.",
     )
     p.add_argument("logs", nargs="+", help="RTDE CSV logs of moves, in the order they were run")
-    p.add_argument("--map", required=True, help="the modal map file to start from")
+    p.add_argument(
+        "--map",
+        required=True,
+        help="the map file to start from: a modal map, or a paper10 map (converted into the "
+        "modal map that fits its modes along the paper's test motions, with a wider prior)",
+    )
     p.add_argument("--out", required=True, help="the learned map file to write")
     add_robot_and_payload(
         p,
@@ -48,9 +53,10 @@ def _cmd_learn(args: argparse.Namespace) -> int:
     from tvist.cli.args import map_payload, payload_from_args
     from tvist.ident.logs import log_payload
     from tvist.learn import MapLearner
+    from tvist.map_files import load_map
     from tvist.robots import Robot, params
 
-    prior = modal_prior(args.map, "--map")
+    prior = load_map(args.map)
     out = Path(args.out)
     if out.resolve() == Path(args.map).resolve():
         raise ValueError("--out names the --map file; write the learned map to a new file")
@@ -65,6 +71,14 @@ def _cmd_learn(args: argparse.Namespace) -> int:
         out=sys.stderr,
     )
     learner = MapLearner(Robot(params(args.robot), payload), prior)
+    if learner.converted is not None:
+        c = learner.converted
+        print(
+            f"{args.map}: a paper10 map, converted into a modal map (its frequencies within "
+            f"{100 * c.wn_rel_median:.1f} % of the published map's at the median pose of the "
+            f"test motions; prior uncertainty {learner.prior_log_sigma:.2f} in log stiffness)",
+            file=sys.stderr,
+        )
     for log in args.logs:
         obs = learner.observe(log)
         if not args.json:

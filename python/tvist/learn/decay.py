@@ -19,6 +19,7 @@ right at that pose (:mod:`tvist.learn.learner` uses it so).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -151,10 +152,69 @@ def stop_index(target_q: np.ndarray, tol_rad: float = STOP_TOL_RAD) -> int:
 #: The estimator's flag for an input with few acceleration changes: a free decay is the
 #: response to one pulse by construction, so the flag says nothing about it.
 _PULSE_FLAG = "weak excitation"
+#: The estimator's energy flags, judged over its whole window (:func:`_ringing_window_flags`
+#: judges them again over the part of a decay where the mode rings).
+_ENERGY_FLAGS = ("weak ringing", "poor fit")
+#: Shortest ringing window, s (five periods of a 50 Hz mode).
+MIN_RINGING_WINDOW_S = 0.1
 
 
-def _observation(fit: LocalFit, joint: int) -> ModeObservation:
-    reasons = tuple(r for r in fit.reasons if not r.startswith(_PULSE_FLAG))
+def _ringing_window_flags(
+    fit: LocalFit, psi: np.ndarray, dt: float, noise: float, options: FitOptions
+) -> tuple[str, ...]:
+    """The estimator's energy flags (ringing SNR, fit percentage) judged over the ringing
+    window: from the pulse until the fitted mode's envelope falls to the noise level
+    (at least :data:`MIN_RINGING_WINDOW_S`).
+
+    The estimator judges them over its whole 1 s window; a free decay with ``ζ ω_n`` of
+    10-30 /s is below the noise after 0.1-0.3 s, and the noise of the rest of the window
+    dilutes the ratio though it carries no information about the mode either way (its
+    frequency standard error, which the learner weights by, is the estimator's over the whole
+    window). The mode's response is the least-squares damped cosine of the fitted ``ω_n, ζ``
+    (free amplitude and phase, an offset) on the samples after the pulse.
+    """
+    t = np.arange(psi.size) * dt
+    sigma = fit.zeta * fit.wn_rad_s
+    wd = fit.wn_rad_s * np.sqrt(max(1.0 - fit.zeta**2, 1e-12))
+    env = np.exp(-sigma * t)
+    basis = np.column_stack([env * np.cos(wd * t), env * np.sin(wd * t), np.ones_like(t)])
+    used = slice(PULSE_SAMPLES, None)
+    coef, *_ = np.linalg.lstsq(basis[used], psi[used], rcond=None)
+    amplitude = float(np.hypot(coef[0], coef[1]))
+    t_ring = math.log(max(amplitude / max(noise, 1e-300), 1.0)) / max(sigma, 1e-9)
+    n = min(max(int(round(max(t_ring, MIN_RINGING_WINDOW_S) / dt)), PULSE_SAMPLES + 3), psi.size)
+    y = psi[PULSE_SAMPLES:n] - coef[2]
+    residual = y - basis[PULSE_SAMPLES:n, :2] @ coef[:2]
+    noise_energy = max(float(residual @ residual), 1e-300)
+    ringing_energy = max(float(y @ y) - noise_energy, 0.0)
+    snr_db = 10.0 * math.log10(max(ringing_energy / noise_energy, 1e-10))
+    fit_percent = 100.0 * (1.0 - math.sqrt(noise_energy / max(float(y @ y), 1e-300)))
+    reasons = []
+    if snr_db < options.min_confident_snr_db:
+        reasons.append(
+            f"weak ringing: the mode's ringing is {snr_db:+.1f} dB against the residual noise "
+            f"over its {n * dt:.2f} s ringing window (needs at least "
+            f"{options.min_confident_snr_db:+.0f} dB)"
+        )
+    if fit_percent < options.min_fit_percent:
+        reasons.append(
+            f"poor fit: {fit_percent:.1f} % < {options.min_fit_percent:.0f} % over the "
+            f"{n * dt:.2f} s ringing window"
+        )
+    return tuple(reasons)
+
+
+def _observation(
+    fit: LocalFit, joint: int, window_flags: tuple[str, ...] | None = None
+) -> ModeObservation:
+    """``fit`` as an observation; its energy flags replaced by ``window_flags`` if given."""
+    reasons = tuple(
+        r
+        for r in fit.reasons
+        if not r.startswith(_PULSE_FLAG)
+        and (window_flags is None or not r.startswith(_ENERGY_FLAGS))
+    )
+    reasons += window_flags or ()
     return ModeObservation(
         joint=joint,
         wn_rad_s=float(fit.wn_rad_s),
@@ -268,7 +328,9 @@ def observe_decay(
             u, psi, dt, fit, mask=mask, f_min_hz=options.f_min_hz, f_max_hz=options.f_max_hz
         )
         found = _split_observations(split, j, options) if split.significant else []
-        for obs in found or [_observation(fit, j)]:
+        if not found:
+            found = [_observation(fit, j, _ringing_window_flags(fit, psi, dt, sigma, options))]
+        for obs in found:
             (flagged if obs.low_confidence else modes).append(obs)
     return Decay(
         float(record.t_s[k0]),

@@ -1,15 +1,22 @@
 """Learn the modal map from the ringing after ordinary moves: a bounded, gated recursive
-estimate of per-joint stiffness and damping scale factors.
+estimate of per-joint stiffness and damping scale factors and load-stiffening gains.
 
 **What is estimated.** An ordinary move shows the modes at its end pose only, and only those
 that ring: the base and shoulder modes (:mod:`tvist.learn.decay`). A handful of such moves
 cannot determine the 3 load-law coefficients of every flexible joint (30 numbers for the
 demo's five joints), but they do determine how much stiffer or softer each joint is than the
-map says. The state is therefore ``θ = [ln s_k(j) for every flexible joint j] +
-[ln s_c(j) for every mode joint j]``: joint ``j``'s stiffness law is ``s_k(j) k_j(L)`` and its
-damping law ``s_c(j) c_j(L)`` (whole laws scaled, their load shape kept from the prior map).
-Joints that no observed mode depends on keep their prior scale: the estimator's prior holds
-them.
+map says, and how much more it stiffens with load. The state is therefore ``θ = [ln s_k(j)
+for every flexible joint j] + [ln s_c(j) for every mode joint j] + [g(j) for every loaded
+flexible joint j]``: joint ``j``'s stiffness law is ``s_k(j) (k_j(L) + max(g(j), 0) k_j(0)
+|L| / L_ref)`` (:data:`LOAD_REF_NM`; a gear that stiffens with load more than the prior says,
+e.g. a strain-wave gear, whose tangent stiffness can triple at rated torque) and its damping
+law ``s_c(j) c_j(L)``. A joint is loaded if its gravity torque varies by more than
+:data:`MIN_LOAD_SPAN_NM` over the workspace (not the base, whose axis is vertical). Joints
+that no observed mode depends on keep their prior values: the estimator's prior holds them.
+
+**Prior.** A modal map is the prior as it is. A paper10 map (the paper's published map) is
+first converted into the modal map whose laws fit its modes along the paper's test motions
+(:mod:`tvist.learn.prior`), with a prior uncertainty widened by the conversion's error.
 
 **How.** An extended Kalman filter on ``θ`` with the prior map at ``θ = 0`` and
 :data:`PRIOR_LOG_SIGMA`; each observed mode gives ``ω_n`` and ``ζ`` with the estimator's
@@ -21,14 +28,15 @@ the map is right at its end pose to within what a ZV shaper tolerates
 
 - an observation whose innovation is implausible (normalised innovation squared above the
   :data:`GATE_PROBABILITY` quantile) is not used; if a payload other than the declared one
-  explains it, the payload change is reported (:class:`PayloadReport`);
-- every step is bounded to :data:`MAX_LOG_STEP` per parameter (a shortened gain, whose
-  covariance keeps the uncertainty of the step not taken);
+  explains it, the payload change is reported (:class:`PayloadReport`); fits that ring but
+  are too uncertain to learn from are checked the same way (a report, never learned from);
+- every step is bounded to :data:`MAX_STEP_SIGMAS` prior standard deviations per parameter
+  (a shortened gain, whose covariance keeps the uncertainty of the step not taken);
 - the map (:attr:`MapLearner.map`) takes the estimate only when it is statistically
   significant (a likelihood-ratio test on the modes observed so far,
   :data:`SIGNIFICANCE_PROBABILITY`) and the predicted residual vibration (the
   ZV shaper of the map's modes on the observed modes, :func:`tvist.prv`) over all moves seen
-  so far does not increase;
+  so far decreases;
 - a log with wrong units, a misplaced column, an outside force, or only flagged fits is
   rejected with its reason and never touches the estimate.
 """
@@ -46,8 +54,11 @@ import numpy as np
 from scipy import optimize, stats
 
 import tvist
+from tvist.dynmap import DynamicMap
 from tvist.ident.logs import Record, read_rtde_csv
 from tvist.learn.decay import Decay, ModeObservation, observe_decay
+from tvist.learn.prior import ConvertedPrior, converted_prior_log_sigma, modal_prior_from_paper10
+from tvist.learn.twin_moves import random_poses
 from tvist.modal_map import ModalMap
 from tvist.robots import Payload, Robot
 from tvist.units import UnitError, check_log
@@ -76,13 +87,26 @@ GATE_PROBABILITY = 0.999
 #: The estimate replaces the map when it lowers the misfit of the observed modes by more than
 #: this chi-square quantile (one degree of freedom).
 SIGNIFICANCE_PROBABILITY = 0.95
-#: Largest change of any log scale factor per observation (0.1: ~10 % stiffness).
-MAX_LOG_STEP = 0.1
+#: Largest change of any parameter per observation, in prior standard deviations (0.5: 0.1,
+#: ~10 % stiffness, at :data:`PRIOR_LOG_SIGMA`).
+MAX_STEP_SIGMAS = 0.5
+#: Load of the load-stiffening term, N m: ``g = 1`` doubles the stiffness at this load.
+LOAD_REF_NM = 100.0
+#: Prior uncertainty of the load-stiffening gains ``g`` (prior mean 0: the prior map's law).
+PRIOR_LOAD_SIGMA = 0.5
+#: A joint whose gravity torque varies by less than this over the workspace has no load
+#: stiffening to learn, N m.
+MIN_LOAD_SPAN_NM = 5.0
 #: Relative finite-difference step of the Jacobian.
 _FD_STEP = 1e-4
 #: Two predicted modes closer than this frequency ratio are told apart by the direction they
 #: ring in, farther ones by frequency.
 CLOSE_MODES_RATIO = 1.1
+#: Flags of a fit that rings but is too uncertain to learn from (:meth:`MapLearner.observe`
+#: still checks it for a payload change).
+_UNCERTAINTY_FLAGS = ("uncertain frequency", "uncertain damping")
+#: ... if its frequency's standard error is below this fraction of ω_n ...
+FLAGGED_MAX_WN_REL_SE = 0.05
 #: A payload estimate that differs from the declared one by less than this is no change, kg.
 MIN_PAYLOAD_CHANGE_KG = 0.5
 #: Step of the payload search, kg.
@@ -222,10 +246,19 @@ class MapLearner:
     """
 
     def __init__(
-        self, robot: Robot, modal_map: ModalMap, *, prior_log_sigma: float = PRIOR_LOG_SIGMA
+        self,
+        robot: Robot,
+        modal_map: ModalMap | DynamicMap,
+        *,
+        prior_log_sigma: float = PRIOR_LOG_SIGMA,
     ) -> None:
+        self.converted: ConvertedPrior | None = None
+        if isinstance(modal_map, DynamicMap):
+            self.converted = modal_prior_from_paper10(robot, modal_map)
+            prior_log_sigma = converted_prior_log_sigma(self.converted, prior_log_sigma)
+            modal_map = self.converted.map
         if not isinstance(modal_map, ModalMap):
-            raise ValueError("modal_map: the learner refines a modal map (kind 'modal')")
+            raise ValueError("modal_map: the learner refines a modal map or a paper10 map")
         if modal_map.mode_joints is None:
             raise ValueError(
                 "modal_map: the learner refines a modal map that names its modes by joint "
@@ -233,29 +266,47 @@ class MapLearner:
             )
         self.robot = robot
         self.prior = modal_map
+        self.prior_log_sigma = prior_log_sigma
         self.flex_joints = [int(f["joint"]) for f in modal_map.flex_joints]
         self.mode_joints = [int(j) for j in modal_map.mode_joints]
-        self.names = [f"stiffness scale, joint {j}" for j in self.flex_joints] + [
-            f"damping scale, joint {j}" for j in self.mode_joints
-        ]
-        n = len(self.names)
-        self.theta = np.zeros(n)
-        self.cov = np.eye(n) * prior_log_sigma**2
-        self._published = np.zeros(n)
+        span = np.ptp(
+            robot.gravity_torque_many(random_poses(robot, 50, np.random.default_rng(0))), axis=0
+        )
+        self.load_joints = [j for j in self.flex_joints if span[j] > MIN_LOAD_SPAN_NM]
+        self.names = (
+            [f"stiffness scale, joint {j}" for j in self.flex_joints]
+            + [f"damping scale, joint {j}" for j in self.mode_joints]
+            + [f"load stiffening, joint {j}" for j in self.load_joints]
+        )
+        sigma = np.array(
+            [prior_log_sigma] * (len(self.flex_joints) + len(self.mode_joints))
+            + [PRIOR_LOAD_SIGMA] * len(self.load_joints)
+        )
+        self._max_step = MAX_STEP_SIGMAS * sigma
+        self.theta = np.zeros(sigma.size)
+        self.cov = np.diag(sigma**2)
+        self._published = np.zeros(sigma.size)
         self._map = modal_map
         self._seen: list[_Seen] = []
         self.history: list[Observation] = []
 
     # -- the map at a parameter vector -------------------------------------------------------
     def map_at(self, theta: np.ndarray) -> ModalMap:
-        """The prior map with its laws scaled by ``exp(theta)``."""
+        """The prior map with its laws scaled by ``exp(theta)`` and stiffened with load by the
+        gains ``theta`` holds for the loaded joints."""
         n_flex = len(self.flex_joints)
+        n_log = n_flex + len(self.mode_joints)
         entries = copy.deepcopy(self.prior.flex_joints)
         for i, entry in enumerate(entries):
+            j = entry["joint"]
+            law = list(entry["stiffness_nm_per_rad"])
+            if j in self.load_joints:
+                gain = max(float(theta[n_log + self.load_joints.index(j)]), 0.0)
+                law[1] += gain * law[0] / LOAD_REF_NM
             scale_k = math.exp(theta[i])
-            entry["stiffness_nm_per_rad"] = [v * scale_k for v in entry["stiffness_nm_per_rad"]]
-            if entry["joint"] in self.mode_joints:
-                scale_c = math.exp(theta[n_flex + self.mode_joints.index(entry["joint"])])
+            entry["stiffness_nm_per_rad"] = [v * scale_k for v in law]
+            if j in self.mode_joints:
+                scale_c = math.exp(theta[n_flex + self.mode_joints.index(j)])
                 entry["damping_nms_per_rad"] = [v * scale_c for v in entry["damping_nms_per_rad"]]
         return ModalMap(entries, self.mode_joints, self.prior.metadata)
 
@@ -268,10 +319,16 @@ class MapLearner:
         return self._map
 
     @property
+    def _n_log(self) -> int:
+        return len(self.flex_joints) + len(self.mode_joints)
+
+    @property
     def scales(self) -> dict[str, float]:
-        """The learned map's scale factors, by name."""
+        """The learned map's scale factors and load-stiffening gains, by name."""
+        n = self._n_log
         return {
-            name: float(math.exp(v)) for name, v in zip(self.names, self._published, strict=True)
+            name: float(math.exp(v) if k < n else max(v, 0.0))
+            for k, (name, v) in enumerate(zip(self.names, self._published, strict=True))
         }
 
     # -- predicted residual vibration -------------------------------------------------------
@@ -308,16 +365,12 @@ class MapLearner:
         if not modes:
             if decay.flagged:
                 reasons = "; ".join(r for m in decay.flagged for r in m.reasons)
+                payload = self._flagged_payload_check(decay)
+                reason = f"low-confidence fit: {reasons}"
+                if payload is not None:
+                    reason = f"{payload.message}; not learned from ({reason})"
                 return self._note(
-                    Observation(
-                        source,
-                        False,
-                        f"low-confidence fit: {reasons}",
-                        decay,
-                        False,
-                        before,
-                        before,
-                    )
+                    Observation(source, False, reason, decay, False, before, before, payload)
                 )
             if decay.amplitude_m_s2 > QUIET_NOISE_FACTOR * decay.noise_m_s2:
                 return self._note(
@@ -368,12 +421,13 @@ class MapLearner:
                 Observation(source, False, reason, decay, False, before, before, payload)
             )
         gain = self.cov @ jac.T @ np.linalg.inv(s)
-        # A bounded step: the gain shortened so that no scale moves by more than
-        # MAX_LOG_STEP; the Joseph form below is the exact covariance for any gain, so the
-        # estimate keeps the uncertainty of the step it did not take.
-        largest = float(np.max(np.abs(gain @ nu)))
-        if largest > MAX_LOG_STEP:
-            gain = gain * (MAX_LOG_STEP / largest)
+        # A bounded step: the gain shortened so that no parameter moves by more than
+        # MAX_STEP_SIGMAS prior standard deviations; the Joseph form below is the exact
+        # covariance for any gain, so the estimate keeps the uncertainty of the step it did
+        # not take.
+        largest = float(np.max(np.abs(gain @ nu) / self._max_step))
+        if largest > 1.0:
+            gain = gain / largest
         self.theta = self.theta + gain @ nu
         ikh = np.eye(len(self.theta)) - gain @ jac
         self.cov = ikh @ self.cov @ ikh.T + gain @ np.diag(r_diag) @ gain.T
@@ -460,15 +514,71 @@ class MapLearner:
         gain = self.misfit(self._published) - self.misfit(self.theta)
         if gain <= stats.chi2.ppf(SIGNIFICANCE_PROBABILITY, 1):
             return False
+        # Never worse: the estimate must lower the predicted residual vibration on the modes
+        # of the moves seen so far (the first modes seen have none to compare with).
         new, old = self.predicted_residual(self.theta), self.predicted_residual(self._published)
-        if math.isfinite(old) and not new <= old:
+        if math.isfinite(old) and not new < old:
             return False
         self._published = self.theta.copy()
         self._map = self.map_at(self._published)
         return True
 
     # -- payload ---------------------------------------------------------------------------
-    def _payload_check(self, decay: Decay) -> PayloadReport | None:
+    def _flagged_payload_check(self, decay: Decay) -> PayloadReport | None:
+        """A payload change shown by fits too uncertain to learn from: modes that ring
+        (flagged only for the standard errors of their frequency or damping, not for weak
+        ringing or a poor fit, the frequency's below :data:`FLAGGED_MAX_WN_REL_SE`), whose
+        frequencies fail the gate of :meth:`observe` (each the nearest predicted mode, their
+        standard errors and the map form's error, the estimate's uncertainty). A report only:
+        such fits never touch the estimate."""
+        ringing = [
+            m
+            for m in decay.flagged
+            if all(r.startswith(_UNCERTAINTY_FLAGS) for r in m.reasons)
+            and m.wn_se_rad_s < FLAGGED_MAX_WN_REL_SE * m.wn_rad_s
+        ]
+        if not ringing:
+            return None
+        q = np.asarray(decay.q_end, dtype=float)
+        predicted = self._modes(self.theta, q)[:, 0]
+        # Fits of one mode (within CLOSE_MODES_RATIO): the one with the smaller error. As
+        # many distinct modes as the map has: they are its modes in order of frequency (a
+        # payload change moves all of them, so the nearest predicted mode can be another's);
+        # fewer: each is the nearest predicted mode.
+        distinct: list[ModeObservation] = []
+        for m in sorted(ringing, key=lambda m: m.wn_se_rad_s / m.wn_rad_s):
+            if all(
+                abs(math.log(m.wn_rad_s / d.wn_rad_s)) > math.log(CLOSE_MODES_RATIO)
+                for d in distinct
+            ):
+                distinct.append(m)
+        chosen: dict[int, ModeObservation] = {}
+        if len(distinct) == predicted.size:
+            order = np.argsort(predicted)
+            for k, m in enumerate(sorted(distinct, key=lambda m: m.wn_rad_s)):
+                chosen[int(order[k])] = m
+        else:
+            for m in distinct:
+                i = int(np.argmin(np.abs(np.log(m.wn_rad_s / predicted))))
+                chosen.setdefault(i, m)
+        idx = sorted(chosen)
+
+        def h_of(theta: np.ndarray) -> np.ndarray:
+            return self._modes(theta, q)[idx, 0]
+
+        h = predicted[idx]
+        jac = self._jacobian(h_of, h)
+        z = np.array([chosen[i].wn_rad_s for i in idx])
+        r = np.array([chosen[i].wn_se_rad_s ** 2 for i in idx]) + (MODEL_WN_REL_SIGMA * z) ** 2
+        nu = z - h
+        nis = float(nu @ np.linalg.solve(jac @ self.cov @ jac.T + np.diag(r), nu))
+        if nis <= stats.chi2.ppf(GATE_PROBABILITY, len(idx)):
+            return None
+        return self._payload_check(decay, [chosen[i] for i in idx])
+
+    def _payload_check(
+        self, decay: Decay, modes: Sequence[ModeObservation] | None = None
+    ) -> PayloadReport | None:
         """The payload that makes the learned map predict the observed modes, if it differs
         from the declared one by more than :data:`MIN_PAYLOAD_CHANGE_KG`.
 
@@ -479,8 +589,9 @@ class MapLearner:
         """
         declared = self.robot.payload
         q = np.asarray(decay.q_end, dtype=float)
-        wn = np.array([m.wn_rad_s for m in decay.modes])
-        sigma = np.hypot([m.wn_se_rad_s / m.wn_rad_s for m in decay.modes], MODEL_WN_REL_SIGMA)
+        modes = decay.modes if modes is None else modes
+        wn = np.array([m.wn_rad_s for m in modes])
+        sigma = np.hypot([m.wn_se_rad_s / m.wn_rad_s for m in modes], MODEL_WN_REL_SIGMA)
 
         def log_errors(mass: float) -> np.ndarray:
             payload = Payload(mass, tuple(declared.com_m), declared.inertia_kg_m2)
@@ -532,7 +643,25 @@ class MapLearner:
                     "change_percent": 100.0 * math.expm1(v),
                     "log_se": float(s),
                 }
-                for name, v, s in zip(self.names, self._published, se, strict=True)
+                for name, v, s in zip(self.names[: self._n_log], self._published, se, strict=False)
+            },
+            # g: the joint's stiffness at LOAD_REF_NM of load is (1 + g) times the prior law's.
+            "load_stiffening": {
+                name: {"gain": max(float(v), 0.0), "se": float(s), "load_ref_nm": LOAD_REF_NM}
+                for name, v, s in zip(
+                    self.names[self._n_log :],
+                    self._published[self._n_log :],
+                    se[self._n_log :],
+                    strict=True,
+                )
+            },
+            "prior_conversion": None
+            if self.converted is None
+            else {
+                "from": "paper10",
+                "frequency_rms_percent": 100.0 * self.converted.wn_rel_rms,
+                "frequency_max_percent": 100.0 * self.converted.wn_rel_max,
+                "prior_log_sigma": self.prior_log_sigma,
             },
             "predicted_residual": _json(self.predicted_residual()),
             "predicted_residual_prior": _json(self.predicted_residual(np.zeros_like(self.theta))),
