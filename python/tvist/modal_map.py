@@ -12,9 +12,11 @@ The shaped modes are named in one of two ways:
   when their frequencies cross. Another eigenmode is blended in only where it veers with that
   one (frequencies within about 6 %, weights by the shares), so the mode stays continuous where
   two close modes swap; two far-apart modes that share the joint are never averaged.
-- ``shaped_modes`` (an integer K): the K lowest-frequency eigenmodes, in frequency order,
-  whatever joint they strain most; continuous along a motion, and two veering modes are both
-  shaped. :func:`modes_to_shape` picks K for a move.
+- ``shaped_modes`` (an integer K): the K lowest-frequency eigenmodes as a set, whatever
+  joint they strain most, shaped in slots ordered by the joint each strains most (so two modes
+  of the set that cross keep their filters, and a filter's damping does not jump where modes
+  of different damping cross); veering pairs are blended as above. :func:`modes_to_shape`
+  picks K for a move.
 
 Stiffness and damping grow with the static load ``L`` (gravity
 torque, N m): ``v(L) = v_0 + v_1 |L|_s + v_2 L²``; the stiffness of joint ``j`` reads its own

@@ -257,8 +257,9 @@ fn the_dominant_mode_is_continuous_through_a_veering_swap() {
 #[test]
 fn shaped_modes_are_the_lowest_frequencies_in_order() {
     // Frequency-ranked selection: the K lowest eigenmodes of the closed-form 2 × 2 problem,
-    // ascending, whatever joint dominates them, and continuous where the joints swap (the
-    // sorted roots are). Tolerance as in the characteristic-equation test.
+    // whatever joint dominates them (in slots by joint, so compared as a set); two roots
+    // closer than VEERING_GAP are a veering pair, blended, so each slot lies between them.
+    // Tolerance as in the characteristic-equation test.
     let mut rng = robot_support::Rng(5);
     for _ in 0..200 {
         let (m11, m22) = (0.5 + 10.0 * rng.next_f64(), 0.5 + 10.0 * rng.next_f64());
@@ -273,11 +274,16 @@ fn shaped_modes_are_the_lowest_frequencies_in_order() {
             assert!(map
                 .modes_from_mass_matrix(&[m11, m12, m12, m22], 2, &[], &mut out)
                 .is_ok());
-            for (o, w) in out.iter().zip(&want) {
-                assert!(
-                    (o.wn_rad_s.powi(2) / w - 1.0).abs() < 1e-10,
-                    "{out:?} vs {want:?}"
-                );
+            let mut got: Vec<f64> = out.iter().map(|o| o.wn_rad_s.powi(2)).collect();
+            got.sort_by(f64::total_cmp);
+            let veering = 0.5 * (want[1] / want[0]).ln() < tvist_core::modal_map::VEERING_GAP;
+            for (g, w) in got.iter().zip(&want) {
+                if veering {
+                    let inside = *g >= want[0] * (1.0 - 1e-10) && *g <= want[1] * (1.0 + 1e-10);
+                    assert!(inside, "{out:?} vs {want:?}");
+                } else {
+                    assert!((g / w - 1.0).abs() < 1e-10, "{out:?} vs {want:?}");
+                }
             }
         }
     }
