@@ -27,6 +27,7 @@ import numpy as np
 
 from tvist.robots._params import JointPlacements, Payload, RobotParams
 from tvist.robots._robot import Robot
+from tvist.robots.inertial import lump
 
 __all__ = [
     "SHIPPED_URDFS",
@@ -73,19 +74,6 @@ def _moved(body: tuple[float, np.ndarray, np.ndarray], pose: np.ndarray) -> tupl
     mass, com, tensor = body
     rot = pose[:3, :3]
     return mass, pose[:3, 3] + rot @ com, rot @ tensor @ rot.T
-
-
-def _combined(a: tuple, b: tuple) -> tuple:
-    """Two bodies in one frame rigidly joined (parallel-axis theorem)."""
-    mass = a[0] + b[0]
-    if mass <= 0.0:
-        return a
-    com = (a[0] * a[1] + b[0] * b[1]) / mass
-    tensor = np.zeros((3, 3))
-    for m, c, inertia in (a, b):
-        d = c - com
-        tensor += inertia + m * (d @ d * np.eye(3) - np.outer(d, d))
-    return mass, com, tensor
 
 
 def _chain(urdf: Any, base_link: str, tip_link: str, where: str) -> list[Any]:
@@ -159,7 +147,7 @@ def urdf_params(
             to_current = to_current @ origin
             body = _body(child, where)
             if bodies and body is not None:  # links fixed to the base do not move
-                bodies[-1] = _combined(bodies[-1], _moved(body, to_current))
+                bodies[-1] = lump(bodies[-1], _moved(body, to_current))
             continue
         if joint.type not in _MOVING:
             raise ValueError(

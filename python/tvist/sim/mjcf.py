@@ -29,13 +29,11 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from tvist.robots import Payload, RobotParams, inertia_tensor
+from tvist.robots.inertial import NEGLIGIBLE, Inertial, lump
 from tvist.sim.beams import LinkBeams, split_link
 
 #: Gravity along -z of the base frame (m/s²); the same value as :class:`tvist.robots.Robot`.
 GRAVITY_M_S2 = 9.81
-
-#: A mass or inertia below this is treated as absent (kg, kg m²).
-_NEGLIGIBLE = 1e-12
 
 
 def _fmt(values: np.ndarray | list[float] | tuple[float, ...]) -> str:
@@ -77,10 +75,6 @@ def _inertial(
     )
 
 
-Inertial = tuple[float, np.ndarray, np.ndarray]
-"""``(mass_kg, com_m (3,), inertia about the COM (3, 3) kg m²)`` in one frame."""
-
-
 def _payload_inertial(payload: Payload) -> Inertial:
     tensor = (
         np.zeros((3, 3))
@@ -88,22 +82,6 @@ def _payload_inertial(payload: Payload) -> Inertial:
         else inertia_tensor(np.asarray(payload.inertia_kg_m2))
     )
     return payload.mass_kg, np.asarray(payload.com_m, dtype=float), tensor
-
-
-def _lump(first: Inertial, second: Inertial) -> Inertial:
-    """One rigid body equivalent to two bodies fixed to each other (parallel-axis theorem)."""
-    m1, c1, i1 = first
-    m2, c2, i2 = second
-    mass = m1 + m2
-    if mass <= _NEGLIGIBLE:
-        return 0.0, np.zeros(3), np.zeros((3, 3))
-    com = (m1 * c1 + m2 * c2) / mass
-
-    def shifted(m: float, c: np.ndarray) -> np.ndarray:
-        r = c - com
-        return m * (float(r @ r) * np.eye(3) - np.outer(r, r))
-
-    return mass, com, i1 + shifted(m1, c1) + i2 + shifted(m2, c2)
 
 
 def _beam_link(
@@ -226,7 +204,7 @@ def build_mjcf(
         inertia_frame_i = inertias[i]
         if i == n - 1 and payload is not None:
             # The flange is DH frame n, so the payload is given in the same frame as link n.
-            mass, com_frame_i, inertia_frame_i = _lump(
+            mass, com_frame_i, inertia_frame_i = lump(
                 (mass, com_frame_i, inertia_frame_i), _payload_inertial(payload)
             )
         com_body = offset + rotation @ com_frame_i
@@ -234,7 +212,7 @@ def build_mjcf(
         if beams is not None and i in beams.links:
             body, pos_in_parent = _beam_link(body, i, offset, mass, com_body, inertia_body, beams)
         else:
-            if mass > _NEGLIGIBLE:
+            if mass > NEGLIGIBLE:
                 _inertial(body, mass, com_body, inertia_body)
             # Visual segment from the joint axis to the next frame origin (no mass, no contact).
             if np.linalg.norm(offset) > 1e-6:
@@ -301,8 +279,8 @@ def _placed_arm(parent: ET.Element, params: RobotParams, payload: Payload | None
                 placed.flange_xyz_m + flange_rot @ com,
                 flange_rot @ tensor @ flange_rot.T,
             )
-            inertial = _lump(inertial, moved)
-        if inertial[0] > _NEGLIGIBLE:
+            inertial = lump(inertial, moved)
+        if inertial[0] > NEGLIGIBLE:
             _inertial(body, *inertial)
         next_origin = placed.flange_xyz_m if i == n - 1 else placed.origin_xyz_m[i + 1]
         if np.linalg.norm(next_origin) > 1e-6:
