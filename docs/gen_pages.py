@@ -1,7 +1,8 @@
 """Pages generated while the site builds (mkdocs-gen-files runs this file).
 
-Nothing here types a result by hand: every number on these pages is computed now or read
-from what `make demo` / `make bench` wrote into out/.
+Nothing here types a result by hand: every number this file appends is computed now or read
+from what `make demo` / `make bench` wrote into out/. (A page's hand-written part may record
+an earlier run, under its own heading, with the command that produced it.)
 
 - reference/cli.md: the help of every `tvist` command, from the parser itself.
 - results/zero-delay.md: the zero-delay benchmark, computed now (a fraction of a second).

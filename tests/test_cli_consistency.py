@@ -1,5 +1,5 @@
 """One spelling and one unit per quantity across the command line, and the small things a new
-user trips over: flag names, units in help texts, printed frequencies, the README's command
+user trips over: flag names, units in help texts, printed frequencies, the documentation's command
 list, status names, maps of another robot, the approach move, running a shaped file."""
 
 from __future__ import annotations
@@ -105,7 +105,7 @@ def test_shape_prints_undamped_frequencies_as_modes_takes_them(move_csv, tmp_pat
     assert "7.63" not in text
 
 
-# --------------------------------------------------------------------------- help and README
+# --------------------------------------------------------------------------- help and documentation
 
 
 @pytest.mark.parametrize(
@@ -126,26 +126,38 @@ def test_fit_map_help_shows_where_the_map_goes():
     assert "map file to write (default out/map.json)" in _subparsers()["fit-map"].format_help()
 
 
-def test_readme_command_list_names_every_command():
-    readme = (ROOT / "README.md").read_text()
-    paragraph = " ".join(readme.split("The command line: ", 1)[1].split("\n\n", 1)[0].split())
+def test_the_command_line_reference_lists_every_command():
+    # The hand-written list of docs/reference/cli.md (the generated part, every command's
+    # help, is appended when the site is built and is not in the file).
+    page = (ROOT / "docs" / "reference" / "cli.md").read_text()
+    paragraph = " ".join(page.split("The command line: ", 1)[1].split("\n\n", 1)[0].split())
     listed = set(re.findall(r"`tvist ([a-z-]+)", paragraph))
     assert {name for name, _ in COMMANDS} <= listed
 
 
-def test_readme_says_to_activate_the_venv():
+def test_the_install_instructions_say_to_activate_the_venv():
     readme = (ROOT / "README.md").read_text()
     install = readme.split("## Install and the two commands", 1)[1].split("\n## ", 1)[0]
     assert "source .venv/bin/activate" in install
+    # The install page shows the same lines: it includes the README's (the docs build fails
+    # if the README loses the marked section).
+    page = (ROOT / "docs" / "install.md").read_text()
+    from_a_clone = page.split("## From a clone", 1)[1].split("\n## ", 1)[0]
+    assert '--8<-- "README.md:install"' in from_a_clone
+    marked = readme.split("[start:install]", 1)[1].split("[end:install]", 1)[0]
+    assert "source .venv/bin/activate" in marked
 
 
-def test_a_shaped_file_is_run_with_unshaped_as_help_and_readme_say():
+def test_a_shaped_file_is_run_with_unshaped_as_help_and_docs_say():
     shape_help = " ".join(_subparsers()["shape"].format_help().split())
     run_help = " ".join(_subparsers()["run"].format_help().split())
     assert "tvist run OUT --robot-ip IP --unshaped" in shape_help
     assert "for a file 'tvist shape' has shaped already" in run_help
-    readme = (ROOT / "README.md").read_text()
-    assert re.search(r"tvist run shaped\.csv --robot-ip \S+ --unshaped", readme)
+    # The twin-server guide's commands and the README's quick start (which the docs' quick
+    # start page includes).
+    for page in ("docs/guides/twin-server.md", "README.md"):
+        text = (ROOT / page).read_text()
+        assert re.search(r"tvist run shaped\.csv --robot-ip \S+ --unshaped", text), page
 
 
 # --------------------------------------------------------------------------- Status

@@ -80,10 +80,11 @@ def test_bad_arrays_are_refused(ur5e):
 
 
 def test_shaping_keeps_a_joint_space_line_and_bends_a_curved_joint_path(ur5e):
-    # The README's statement. A phase-synchronized double-S move (the demo's Q1 -> Q3) is a
-    # straight line in joint space; ZV shaping blends points of that line with positive
-    # weights, so the flange stays on the planned path up to the resolution of the polyline
-    # through the 2 ms samples (its chords cut the arcs by at most ~2 µm here).
+    # The statement of docs/guides/planners.md. A phase-synchronized double-S move (the
+    # demo's Q1 -> Q3) is a straight line in joint space; ZV shaping blends points of that
+    # line with positive weights, so the flange stays on the planned path up to the
+    # resolution of the polyline through the 2 ms samples (its chords cut the arcs by at
+    # most ~2 µm here).
     from tvist.trajectory import PAPER_POSES, double_s
 
     traj = double_s(PAPER_POSES["Q1"], PAPER_POSES["Q3"], dt_s=0.002, t_post_s=0.2)
