@@ -611,12 +611,16 @@ class MapLearner:
         self, decay: Decay, modes: Sequence[ModeObservation] | None = None
     ) -> PayloadReport | None:
         """The payload that makes the learned map predict the observed modes, if it differs
-        from the declared one by more than :data:`MIN_PAYLOAD_CHANGE_KG`.
+        from the declared one by more than :data:`MIN_PAYLOAD_CHANGE_KG` and the declared
+        one explains them worse by more than the :data:`SIGNIFICANCE_PROBABILITY`
+        chi-square quantile (one degree of freedom).
 
         Which map mode an observed mode is depends on the payload (all of them move), so at
-        every candidate payload each observed mode is compared with the nearest predicted one
-        (log-frequency); a grid over the payload (:data:`PAYLOAD_GRID_KG` steps up to twice
-        the rated payload), refined around its best point.
+        every candidate payload each observed mode is compared with the nearest of all the
+        map's eigenmodes (log-frequency), weighted by the fit's standard error, the map
+        form's error and the map's own uncertainty at this pose (the estimate's covariance
+        through the modes' Jacobian); a grid over the payload (:data:`PAYLOAD_GRID_KG` steps
+        up to twice the rated payload), refined around its local minima.
         """
         declared = self.robot.payload
         q = np.asarray(decay.q_end, dtype=float)
