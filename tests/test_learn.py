@@ -49,11 +49,16 @@ def _wrong_map(twin: Twin) -> ModalMap:
     return ModalMap(entries, prior.mode_joints, {"robot": "ur5e", "source": "gear laws x0.85"})
 
 
-def _moves(twin, robot, learner, poses, n, first=0):
-    """``n`` moves around ``poses``, unshaped and shaped with the learner's map in turn."""
+def _moves(twin, robot, learner, poses, n, first=0, *, swap_each_round=False):
+    """``n`` moves around ``poses``, unshaped and shaped with the learner's map in turn.
+
+    With an even number of poses the turns fall on the same poses every round, so half of
+    them are never reached unshaped; ``swap_each_round`` swaps the turns after each round, so
+    that every pose rings unshaped once in two rounds."""
     for k in range(first, first + n):
         a, b = poses[k % len(poses)], poses[(k + 1) % len(poses)]
-        shaped = learner.map if k % 2 else None
+        turn = k + (k // len(poses) if swap_each_round else 0)
+        shaped = learner.map if turn % 2 else None
         yield twin.run(move(a, b, robot, shaped))
 
 
@@ -93,10 +98,14 @@ def test_learned_map_reaches_99_percent_on_the_demo_moves():
         run = run_motion(motion, rows, quiet_twin, robot, with_slow_down=False)
         wrong_pct, learned_pct = (r.reduction_percent for r in run.runs[1:])
         # Measured: the wrong map 98.6 / 96.0 / 97.6 %, the learned map (base and shoulder
-        # by joint) 99.41 / 98.58 / 98.90 %. The floor asked of a learned map is 99 %; with
-        # load-stiffening gains in the learner Q1->Q3 and Q3->Q1 miss it (99.26 / 99.33 %
-        # before them, with the elbow mode shaped too), so 98.5 % is asserted until it does.
-        assert learned_pct >= 98.5, (motion.name, wrong_pct, learned_pct)
+        # by joint) 99.41 / 98.58 / 98.90 %. The floor asked of a learned map, 99 %, holds on
+        # Q1->Q2. Q1->Q3 has a third mode at Q3 that two shaped modes leave (the twin's exact
+        # gear laws: 99.23 %); Q3->Q1 ends at Q1, whose shoulder gravity torque (107 N m) is
+        # beyond any pose this set of moves rings unshaped (every other pose is reached
+        # shaped only: the turns fall on the same poses each round), so the stiffening with
+        # load there is extrapolated. 98.5 % is asserted on those two.
+        floor = 99.0 if motion.name == "Q1->Q2" else 98.5
+        assert learned_pct >= floor, (motion.name, wrong_pct, learned_pct)
         assert learned_pct > wrong_pct
 
 
@@ -117,7 +126,8 @@ def test_learned_map_shaped_with_the_modes_the_rule_picks():
 
 def test_learning_from_the_published_paper10_map_improves_the_demo_moves():
     """The paper's published map (91.0 % on Q1->Q3 on this twin) as the prior: converted into
-    a modal map, then 20 ordinary moves between 10 random poses."""
+    a modal map, then 20 ordinary moves between 10 random poses, each pose reached once
+    unshaped."""
     import tvist
 
     twin, robot = _twin(3), _robot()
@@ -125,8 +135,14 @@ def test_learning_from_the_published_paper10_map_improves_the_demo_moves():
     learner = MapLearner(robot, paper)
     assert learner.converted is not None
     poses = random_poses(robot, 10, np.random.default_rng(3))
-    for record in _moves(twin, robot, learner, poses, 20):
-        learner.observe(record)
+    for record in _moves(twin, robot, learner, poses, 20, swap_each_round=True):
+        obs = learner.observe(record)
+        # The payload is the declared one throughout. The unshaped move to the 4th pose
+        # (shoulder gravity torque 101 N m; the shoulder mode was seen at 39-48 N m before)
+        # shows the gear stiffening with load, which the converted prior lacks: it was taken
+        # for a payload change while the filter's negative stiffening gain, clipped to 0 in
+        # the map, hid that gain's uncertainty from the gate.
+        assert obs.payload is None, obs.reason
     assert any(o.map_updated for o in learner.history)
     rows = [m for m in default_methods() if m.key in ("unshaped", "fd-tvist-paper-map")]
     rows.append(fd_tvist_modal("learned", "learned", learner.map))
@@ -136,13 +152,20 @@ def test_learning_from_the_published_paper10_map_improves_the_demo_moves():
         run = run_motion(motion, rows, quiet_twin, robot, with_slow_down=False)
         paper_pct, learned_pct = (r.reduction_percent for r in run.runs[1:])
         results[motion.name] = (paper_pct, learned_pct)
-    # Measured (seed 3): the paper map 99.20 / 91.03 / 96.21 %, learned 99.58 / 98.65 /
-    # 98.28 %. Not yet the 99 % asked of a learned map (the twin's true modes reach 99.25 %
-    # on Q1->Q3): the converted prior guesses the elbow and wrists, which 20 moves do not
-    # correct. Asserted: every move at least 98 % and no move worse than with the paper
-    # map; the two moves the paper map leaves at 91-96 % gain at least 2 points.
+    # Measured (seed 3): the paper map 99.20 / 91.03 / 96.21 %, learned 99.74 / 98.30 /
+    # 99.35 % (before the gains were kept >= 0: 99.39 / 99.38 / 98.20 %, the move to the
+    # 4th pose rejected as a payload change; with the turns not swapped, so that only
+    # 39-48 N m of shoulder load is seen unshaped: 99.61 / 98.48 / 98.90 %). The floor asked
+    # of a learned map, 99 %, is asserted on Q1->Q2 and Q3->Q1 (the twin's true modes:
+    # 99.98 / 99.37 %). Not on Q1->Q3: with two modes shaped even the twin's exact gear laws
+    # reach only 99.23 % there (a third mode, 48 Hz at Q3, elbow and wrists, holds ~3 % of
+    # the ringing; 99.83 % with it shaped), and the converted prior guesses the wrists 8
+    # times too stiff, which no ordinary move of this set rings (the learned base mode at Q3
+    # is 4 % high, the third mode 10 %): asserted at least 98 % and 2 points above the paper
+    # map.
     for name, (paper_pct, learned_pct) in results.items():
         assert learned_pct >= 98.0 and learned_pct >= paper_pct, (name, results)
+    assert results["Q1->Q2"][1] >= 99.0 and results["Q3->Q1"][1] >= 99.0, results
     assert all(results[name][1] >= results[name][0] + 2.0 for name in ("Q1->Q3", "Q3->Q1"))
 
 
@@ -195,18 +218,37 @@ def test_corrupted_logs_are_rejected_and_never_make_the_map_worse():
     )
 
 
+def _family_twin(name: str, seed: int, payload_kg: float = PAYLOAD_KG) -> Twin:
+    from tvist.sim.family import parse_family_name
+
+    variant = parse_family_name(name)
+    assert variant is not None
+    return variant.twin(
+        payload_kg=payload_kg, payload_com_m=PAYLOAD_COM_M, accel_noise_std=NOISE, seed=seed
+    )
+
+
 # Seed 0: after the switch the moves' fits are too uncertain to learn from (frequency standard
-# errors 1.3-2.3 %) but 20 % off the map: reported from them.
-@pytest.mark.parametrize(("seed", "light_seed"), [(7, 8), (0, 500)])
-def test_payload_change_is_detected_within_three_moves(seed, light_seed):
+# errors 1.3-2.3 %) but 20 % off the map: reported from them. Family variant 5 (servos in
+# series, its own gear-law map 15 % soft): its first move's mode is 4 % below the map,
+# which the map's prior uncertainty (~10 % in frequency) covers; it was reported as a
+# payload change (5.8 or 3.5 kg) while the payload check ignored the map's uncertainty.
+@pytest.mark.parametrize(
+    ("seed", "light_seed", "variant"),
+    [(7, 8, None), (0, 500, None), (5, 505, "family:ur5e:5")],
+)
+def test_payload_change_is_detected_within_three_moves(seed, light_seed, variant):
     robot = _robot(PAYLOAD_KG)
-    twin = _twin(seed)
+    twin = _twin(seed) if variant is None else _family_twin(variant, seed)
     learner = MapLearner(robot, _wrong_map(twin))
     poses = random_poses(robot, 8, np.random.default_rng(seed))
     for record in _moves(twin, robot, learner, poses, 8):
         obs = learner.observe(record)
         assert obs.payload is None, obs.reason  # no false alarm at the declared payload
-    light = _twin(light_seed, payload_kg=2.0)
+    if variant is None:
+        light = _twin(light_seed, payload_kg=2.0)
+    else:
+        light = _family_twin(variant, light_seed, payload_kg=2.0)
     reports = []
     for record in _moves(light, robot, learner, poses, 3, first=8):
         obs = learner.observe(record)

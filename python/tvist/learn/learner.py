@@ -28,10 +28,16 @@ the map is right at its end pose to within what a ZV shaper tolerates
 
 - an observation whose innovation is implausible (normalised innovation squared above the
   :data:`GATE_PROBABILITY` quantile) is not used; if a payload other than the declared one
-  explains it, the payload change is reported (:class:`PayloadReport`); fits that ring but
-  are too uncertain to learn from are checked the same way (a report, never learned from);
+  explains it better than the map's own uncertainty at that pose does, the payload change is
+  reported (:class:`PayloadReport`); fits that ring but are too uncertain to learn from are
+  checked the same way (a report, never learned from);
 - every step is bounded to :data:`MAX_STEP_SIGMAS` prior standard deviations per parameter
   (a shortened gain, whose covariance keeps the uncertainty of the step not taken);
+- the load-stiffening gains stay ``>= 0`` (a step that would make one negative is projected
+  back onto ``g = 0``, the parameters it covaries with taking up the difference), so the
+  filter never sits where the map does not depend on a gain and keeps seeing its
+  uncertainty: a mode observed at a heavier load than any before is learned from, not
+  mistaken for a payload change;
 - the map (:attr:`MapLearner.map`) takes the estimate only when it is statistically
   significant (a likelihood-ratio test on the modes observed so far,
   :data:`SIGNIFICANCE_PROBABILITY`) and the predicted residual vibration (the
@@ -313,6 +319,13 @@ class MapLearner:
     def _modes(self, theta: np.ndarray, q: np.ndarray, robot: Robot | None = None) -> np.ndarray:
         return self.map_at(theta).modes_many(robot or self.robot, q[None, :])[0]
 
+    def _all_modes(
+        self, theta: np.ndarray, q: np.ndarray, robot: Robot | None = None
+    ) -> np.ndarray:
+        """Natural frequencies (rad/s) of every eigenmode of the map at ``theta``, pose ``q``."""
+        every = ModalMap(self.map_at(theta).flex_joints, shaped_modes=len(self.flex_joints))
+        return every.modes_many(robot or self.robot, q[None, :])[0, :, 0]
+
     @property
     def map(self) -> ModalMap:
         """The learned map (the prior until a significant, non-worsening update)."""
@@ -428,13 +441,31 @@ class MapLearner:
         largest = float(np.max(np.abs(gain @ nu) / self._max_step))
         if largest > 1.0:
             gain = gain / largest
-        self.theta = self.theta + gain @ nu
         ikh = np.eye(len(self.theta)) - gain @ jac
         self.cov = ikh @ self.cov @ ikh.T + gain @ np.diag(r_diag) @ gain.T
+        self.theta = self._feasible(self.theta + gain @ nu)
         self._seen.append(seen)
         updated = self._maybe_publish()
         after = self.predicted_residual()
         return self._note(Observation(source, True, what, decay, updated, before, after))
+
+    def _feasible(self, theta: np.ndarray) -> np.ndarray:
+        """``theta`` with every negative load-stiffening gain set to zero and the other
+        parameters moved by what they covary with it (the projection onto the constraint
+        ``g >= 0`` in the metric of the inverse covariance).
+
+        The map reads ``max(g, 0)``: a negative gain would leave the estimate where the map
+        does not depend on it, so the Jacobian, the gate and the update would no longer see
+        that joint's stiffening or its uncertainty (a mode observed at a load the map
+        extrapolates to would then fail the gate instead of being learned from).
+        """
+        active = self._n_log + np.flatnonzero(theta[self._n_log :] < 0.0)
+        if active.size == 0:
+            return theta
+        cross = self.cov[:, active]
+        theta = theta - cross @ np.linalg.solve(self.cov[np.ix_(active, active)], theta[active])
+        theta[active] = 0.0
+        return theta
 
     def _note(self, obs: Observation) -> Observation:
         obs = replace(obs, scales=self._published.copy())
@@ -580,27 +611,45 @@ class MapLearner:
         self, decay: Decay, modes: Sequence[ModeObservation] | None = None
     ) -> PayloadReport | None:
         """The payload that makes the learned map predict the observed modes, if it differs
-        from the declared one by more than :data:`MIN_PAYLOAD_CHANGE_KG`.
+        from the declared one by more than :data:`MIN_PAYLOAD_CHANGE_KG` and the declared
+        one explains them worse by more than the :data:`SIGNIFICANCE_PROBABILITY`
+        chi-square quantile (one degree of freedom).
 
         Which map mode an observed mode is depends on the payload (all of them move), so at
-        every candidate payload each observed mode is compared with the nearest predicted one
-        (log-frequency); a grid over the payload (:data:`PAYLOAD_GRID_KG` steps up to twice
-        the rated payload), refined around its best point.
+        every candidate payload each observed mode is compared with the nearest of all the
+        map's eigenmodes (log-frequency), weighted by the fit's standard error, the map
+        form's error and the map's own uncertainty at this pose (the estimate's covariance
+        through the modes' Jacobian); a grid over the payload (:data:`PAYLOAD_GRID_KG` steps
+        up to twice the rated payload), refined around its local minima.
         """
         declared = self.robot.payload
         q = np.asarray(decay.q_end, dtype=float)
         modes = decay.modes if modes is None else modes
         wn = np.array([m.wn_rad_s for m in modes])
-        sigma = np.hypot([m.wn_se_rad_s / m.wn_rad_s for m in modes], MODEL_WN_REL_SIGMA)
+        measured = np.hypot([m.wn_se_rad_s / m.wn_rad_s for m in modes], MODEL_WN_REL_SIGMA)
+        # The map's own uncertainty at this pose, what it has not learned yet: the relative
+        # standard deviation of each of its modes' frequencies under the estimate's
+        # covariance. Without it, a map a few per cent off an arm it was not identified on is
+        # explained better by another payload than by its own error.
+        log_wn = np.log(self._all_modes(self.theta, q))
+        jac = self._jacobian(lambda theta: np.log(self._all_modes(theta, q)), log_wn)
+        map_rel = np.sqrt(np.einsum("ij,jk,ik->i", jac, self.cov, jac))
+
+        def assigned(mass: float) -> tuple[np.ndarray, np.ndarray]:
+            # Every eigenmode of the map, not only the shaped ones: a mode of a joint the map
+            # does not shape (a soft elbow at a folded pose) is no payload change.
+            payload = Payload(mass, tuple(declared.com_m), declared.inertia_kg_m2)
+            pred = self._all_modes(self._published, q, Robot(self.robot.params, payload))
+            errors = np.log(wn[:, None] / pred[None, :])
+            nearest = np.argmin(np.abs(errors), axis=1)
+            return errors[np.arange(wn.size), nearest], nearest
 
         def log_errors(mass: float) -> np.ndarray:
-            payload = Payload(mass, tuple(declared.com_m), declared.inertia_kg_m2)
-            pred = self._modes(self._published, q, Robot(self.robot.params, payload))[:, 0]
-            errors = np.log(wn[:, None] / pred[None, :])
-            return errors[np.arange(wn.size), np.argmin(np.abs(errors), axis=1)]
+            return assigned(mass)[0]
 
         def misfit(mass: float) -> float:
-            return float(np.sum((log_errors(mass) / sigma) ** 2))
+            errors, nearest = assigned(mass)
+            return float(np.sum(errors**2 / (measured**2 + map_rel[nearest] ** 2)))
 
         upper = 2.0 * max(float(self.robot.params.max_payload_kg), declared.mass_kg)
         grid = np.arange(0.0, upper + PAYLOAD_GRID_KG / 2, PAYLOAD_GRID_KG)
@@ -615,6 +664,10 @@ class MapLearner:
             found.append((float(best.fun), float(best.x)))
         found.sort()
         limit = found[0][0] + stats.chi2.ppf(SIGNIFICANCE_PROBABILITY, 1)
+        # The declared payload explains the modes as well (a likelihood-ratio test against
+        # the best payload), or a payload that does lies within MIN_PAYLOAD_CHANGE_KG of it.
+        if misfit(declared.mass_kg) <= limit:
+            return None
         masses = [m for f, m in found if f <= limit]
         if any(abs(m - declared.mass_kg) < MIN_PAYLOAD_CHANGE_KG for m in masses):
             return None
