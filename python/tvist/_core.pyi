@@ -197,6 +197,8 @@ class ModalDynamics:
 SHAPERS: list[str]
 STATUS_FLAGS: dict[str, int]
 MAX_DOF: int
+MAX_LN_WN_RATE_PER_S: float
+MAX_ZETA_RATE_PER_S: float
 MAX_MODES: int
 MAX_MAP_FILE_BYTES: int
 MAX_DELAY_LINE_BYTES: int
