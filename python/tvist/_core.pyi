@@ -177,6 +177,7 @@ class ModalMap:
         mass_kg_m2: npt.NDArray[np.float64],
         n_dof: int,
         gravity_torque_nm: npt.NDArray[np.float64] | None = None,
+        tracked: bool = False,
     ) -> npt.NDArray[np.float64]: ...
 
 class ModalDynamics:

@@ -141,6 +141,12 @@ def shape_samples(
         shaper_ = tvist.TvShaper(
             _provider(dynamics), dt_s=dt_s, n_dof=q.shape[1], shaper=shaper, interp=interp, **kwargs
         )
+        # A frequency-ranked modal map shapes the K lowest modes this move needs.
+        from tvist.modal_residual import set_modes_for_move
+
+        choice = set_modes_for_move(shaper_, dynamics, q, dt_s)
+        if choice is not None:
+            end_modes = sorted(end_modes)[: choice.n_modes]
         end_delay = tvist.convolve(*(tvist.shaper(shaper, w, z) for w, z in end_modes))
         # Hold the end pose until every impulse's interpolation stencil reads only it.
         n_tail = math.ceil(end_delay.duration_s / dt_s - 1e-9) + _STENCIL_LEAD[interp]
