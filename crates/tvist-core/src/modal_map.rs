@@ -625,13 +625,19 @@ impl ModeTrack {
     /// Each slot's eigenmode in `sol`: the greedy assignment by [`Self::likeness`], the most
     /// alike (slot, eigenmode) pair first, each eigenmode to one slot at most.
     fn follow(&self, sol: &ModalSolution, picks: &mut [usize]) {
+        let mut scores = [[f64::NAN; MAX_FLEX_JOINTS]; MAX_FLEX_JOINTS];
+        for (s, row) in scores.iter_mut().enumerate().take(picks.len()) {
+            for (i, score) in row.iter_mut().enumerate().take(sol.n) {
+                *score = self.likeness(s, sol, i);
+            }
+        }
         let mut used = [false; MAX_FLEX_JOINTS];
         let mut done = [false; MAX_FLEX_JOINTS];
         for _ in 0..picks.len() {
             let mut best: Option<(usize, usize, f64)> = None;
             for s in (0..picks.len()).filter(|&s| !done[s]) {
                 for i in (0..sol.n).filter(|&i| !used[i]) {
-                    let score = self.likeness(s, sol, i);
+                    let score = scores[s][i];
                     // A NaN score never wins.
                     if best.is_none_or(|(_, _, b)| score > b) && score >= 0.0 {
                         best = Some((s, i, score));
