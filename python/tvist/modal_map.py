@@ -15,14 +15,15 @@ The shaped modes are named in one of two ways:
   :func:`modes_to_shape` picks K for a move.
 
 Each shaped mode is an eigenmode as it is. That rule picks the eigenmodes at a pose; along a
-motion the streaming shaper applies it at the start (and whenever it comes to rest) and then
-lets each slot follow its eigenmode branch (same mode shape, nearby frequency), so no filter
-jumps between two eigenmodes mid-move where dominance or order changes, and a filter keeps its
-mode and damping where two modes cross (module docs of ``modal_map.rs``).
+motion the streaming shaper keeps each member of the rule's set in the filter whose eigenmode
+it continues (same mode shape, nearby frequency), so a filter keeps its mode and damping where
+two modes cross, and where the rule's pick for a filter becomes another eigenmode (dominance
+swaps, or the K-th and the next cross) the filter hands over gradually (0.004 in ln ω and ζ
+per cycle) instead of jumping (module docs of ``modal_map.rs``).
 :meth:`ModalMap.modes_many` evaluates the rule at each pose alone (for checks at independent
-poses: a map against measured modes); ``tracked=True`` follows the branches along a path of
-poses as the shaper does. At the end of a move the shaper has come to rest and re-picked, so
-its modes (and delay) there are the rule's at the end pose.
+poses: a map against measured modes); ``tracked=True`` evaluates a path of poses as the
+shaper does. Once the shaper rests at the end of a move its modes (and delay) are the rule's
+at the end pose.
 
 Stiffness and damping grow with the static load ``L`` (gravity
 torque, N m): ``v(L) = v_0 + v_1 |L|_s + v_2 L²``; the stiffness of joint ``j`` reads its own

@@ -64,26 +64,30 @@
 //! both strain the shoulder swap which strains it most (measured on a simulated UR5e variant:
 //! the shoulder slot from 14.9 to 30.9 Hz in one 2 ms cycle), or the `K`-th and the next
 //! cross. A jump in a filter's delay is a step in the shaped reference. So the streaming
-//! evaluation ([`ModalMap::modes_tracked`], used by the provider every cycle) applies the rule
-//! only at its first evaluation (after a start, a reset, a replacement of the map or a change
-//! of `K`, and whenever the shaper has come to rest: [`crate::TvShaper`]); after that each slot
-//! takes the eigenmode most like its own of the previous cycle: the same mode shape `y` (modal
-//! assurance criterion) at a nearby frequency ([`ModeTrack`]). Hence:
+//! evaluation ([`ModalMap::modes_tracked`], used by the provider every cycle) remembers each
+//! slot's eigenmode of the previous cycle (its mode shape `y` and frequency, [`ModeTrack`]):
 //!
-//! - where two uncoupled modes cross, each slot keeps its mode, frequency and damping
-//!   continuous (slots in frequency order would swap there, and where the two differ in
-//!   damping, the UR5e's base and shoulder near Q1 with ζ 0.28 and 0.14, a slot's ζ would
-//!   jump: measured on the twin, Q3→Q1 left 88.9 % where slots that keep their mode leave
-//!   98.9 %);
-//! - where two coupled modes veer, each slot follows its branch through the veering (its
-//!   shape turns continuously from one joint to the other): frequency and damping are
-//!   continuous, so no blending of the two eigenmodes is needed (the per-pose rule once
-//!   blended veering pairs to hide the jump of the dominant one; following the branch has no
-//!   jump to hide, and every shaped mode is an eigenmode, as a free decay measures it);
-//! - where the rule's set changes mid-motion (the `K`-th and the next cross, or a joint's
-//!   dominant eigenmode becomes another far-apart one), the slots keep their eigenmodes until
-//!   the shaper is next at rest; there every delay line holds one value, so a new pick changes
-//!   nothing in the output, and the rule picks the set for the next move.
+//! - for `shaped_modes`, the rule's set is given to the slots whose eigenmodes its members
+//!   continue (the same shape at a nearby frequency, modal assurance criterion): where two
+//!   modes of the set cross, each slot keeps its mode, frequency and damping continuous
+//!   (slots in frequency order would swap there, and where the two differ in damping, the
+//!   UR5e's base and shoulder near Q1 with ζ 0.28 and 0.14, a slot's ζ would jump: measured
+//!   on the twin, Q3→Q1 left 88.9 % where slots that keep their mode leave 98.9 %);
+//! - where a slot's eigenmode from the rule is another than the one it had (a joint's
+//!   dominant eigenmode becomes another far-apart one, or the `K`-th and the next cross, so
+//!   the set changes), the slot *hands over*: it starts from its previous mode and moves to
+//!   the new eigenmode's by [`HANDOVER_STEP`] per cycle in `ln ω` and `ζ`, so its filter's
+//!   delay and amplitudes change gradually, not in a step. The set the rule chooses is
+//!   always the one shaped (modes that cross into the `K` lowest during a long move are
+//!   shaped when it stops), only reached gradually;
+//! - where two coupled modes veer, the rule's pick swaps branch at the swap of dominance, two
+//!   frequencies a few per cent apart: a short handover. No blending of eigenmodes is needed
+//!   (the per-pose rule once blended veering pairs to hide that jump); every shaped mode is an
+//!   eigenmode, as a free decay measures it, except during a handover.
+//!
+//! After a start, a reset, a replacement of the map or a change of `K`, and whenever the
+//! shaper has come to rest ([`crate::TvShaper`]: every delay line holds one value, so no mode
+//! changes the output), the track is empty and the slots take the rule's picks as they are.
 //!
 //! The per-pose rule ([`ModalMap::modes_from_mass_matrix`]) remains for checks at
 //! independent poses (a map against measured modes). Whatever the provider, the shaper also
@@ -494,12 +498,12 @@ impl ModalMap {
         self.modes_tracked(mass, n_dof, tau_g, &mut fresh, out)
     }
 
-    /// The shaped modes as [`Self::modes_from_mass_matrix`], each slot following the
-    /// eigenmode branch it followed at the previous call with the same `track` ("Slots follow
-    /// their branch" in the module docs): the map's rule picks the slots at the first call
-    /// with an empty track ([`ModeTrack::default`], or after [`ModeTrack::clear`]); after that
-    /// each slot takes the current eigenmode most like its previous one. A call without a
-    /// valid solution leaves `track` as it was. Allocation-free, panic-free.
+    /// The shaped modes as [`Self::modes_from_mass_matrix`], continuing the previous call with
+    /// the same `track` ("Slots follow their branch" in the module docs): the rule's set, each
+    /// member in the slot whose eigenmode it continues, and a slot whose eigenmode changed
+    /// handing over gradually. With an empty track ([`ModeTrack::default`], or after
+    /// [`ModeTrack::clear`]) the rule's picks as they are. A call without a valid solution
+    /// leaves `track` as it was. Allocation-free, panic-free.
     pub fn modes_tracked(
         &self,
         mass: &[f64],
@@ -522,19 +526,16 @@ impl ModalMap {
         };
         let k = out.len().min(sol.n);
         let mut picks = [NO_MODE; MAX_FLEX_JOINTS];
-        if track.slots == k && k > 0 {
+        self.select(&sol, &mut picks[..k]);
+        let following = track.slots == k && k > 0;
+        if following && matches!(self.shaped, ShapedModes::Lowest(_)) {
+            // The set's members to the slots whose eigenmodes they continue.
             track.follow(&sol, &mut picks[..k]);
-        } else {
-            self.select(&sol, &mut picks[..k]);
         }
-        track.record(&sol, &picks[..k]);
-        for (o, &i) in out.iter_mut().zip(&picks[..k]) {
-            *o = if i < sol.n {
-                Mode::new(sol.wn_rad_s[i], sol.zeta[i])
-            } else {
-                Mode::new(f64::NAN, f64::NAN)
-            };
+        for (s, o) in out.iter_mut().enumerate().take(k) {
+            *o = track.output(s, &sol, picks[s], following);
         }
+        track.record(&sol, &picks[..k], out);
         Status::OK
     }
 
@@ -598,6 +599,12 @@ pub struct ModeTrack {
     wn_rad_s: [f64; MAX_FLEX_JOINTS],
     /// Number of entries of each `shape` (the map's flexible joints).
     n: usize,
+    /// Per slot, the mode it gave at the latest call.
+    given: [Mode; MAX_FLEX_JOINTS],
+    /// Per slot, how far its mode still is from its eigenmode's after a handover:
+    /// `ln ω_given − ln ω_eigenmode` and `ζ_given − ζ_eigenmode`, each brought to 0 by
+    /// [`HANDOVER_STEP`] per call.
+    offset: [(f64, f64); MAX_FLEX_JOINTS],
 }
 
 impl Default for ModeTrack {
@@ -607,6 +614,8 @@ impl Default for ModeTrack {
             shape: [[Complex64::new(0.0, 0.0); MAX_FLEX_JOINTS]; MAX_FLEX_JOINTS],
             wn_rad_s: [0.0; MAX_FLEX_JOINTS],
             n: 0,
+            given: [Mode::new(f64::NAN, f64::NAN); MAX_FLEX_JOINTS],
+            offset: [(0.0, 0.0); MAX_FLEX_JOINTS],
         }
     }
 }
@@ -622,35 +631,75 @@ impl ModeTrack {
         self.slots > 0
     }
 
-    /// Each slot's eigenmode in `sol`: the greedy assignment by [`Self::likeness`], the most
-    /// alike (slot, eigenmode) pair first, each eigenmode to one slot at most.
+    /// The eigenmodes of `picks` (the rule's set) reassigned to the slots whose eigenmodes
+    /// they continue: the greedy assignment by [`Self::likeness`], the most alike (slot,
+    /// member) pair first.
     fn follow(&self, sol: &ModalSolution, picks: &mut [usize]) {
+        let k = picks.len();
         let mut scores = [[f64::NAN; MAX_FLEX_JOINTS]; MAX_FLEX_JOINTS];
-        for (s, row) in scores.iter_mut().enumerate().take(picks.len()) {
-            for (i, score) in row.iter_mut().enumerate().take(sol.n) {
-                *score = self.likeness(s, sol, i);
+        for (s, row) in scores.iter_mut().enumerate().take(k) {
+            for (p, score) in row.iter_mut().enumerate().take(k) {
+                if picks[p] < sol.n {
+                    *score = self.likeness(s, sol, picks[p]);
+                }
             }
         }
-        let mut used = [false; MAX_FLEX_JOINTS];
+        let mut members = [NO_MODE; MAX_FLEX_JOINTS];
+        members[..k].copy_from_slice(picks);
+        let mut placed = [false; MAX_FLEX_JOINTS];
         let mut done = [false; MAX_FLEX_JOINTS];
-        for _ in 0..picks.len() {
+        for _ in 0..k {
             let mut best: Option<(usize, usize, f64)> = None;
-            for s in (0..picks.len()).filter(|&s| !done[s]) {
-                for i in (0..sol.n).filter(|&i| !used[i]) {
-                    let score = scores[s][i];
+            for s in (0..k).filter(|&s| !done[s]) {
+                for p in (0..k).filter(|&p| !placed[p]) {
+                    let score = scores[s][p];
                     // A NaN score never wins.
                     if best.is_none_or(|(_, _, b)| score > b) && score >= 0.0 {
-                        best = Some((s, i, score));
+                        best = Some((s, p, score));
                     }
                 }
             }
-            let Some((s, i, _)) = best else {
-                break; // the remaining slots get no eigenmode (NaN modes, held by the shaper)
+            let Some((s, p, _)) = best else {
+                break; // the rest keep the rule's order
             };
-            picks[s] = i;
+            picks[s] = members[p];
             done[s] = true;
-            used[i] = true;
+            placed[p] = true;
         }
+        // Slots left without a member take the members left, in the rule's order.
+        let mut rest = (0..k).filter(|&p| !placed[p]);
+        for s in (0..k).filter(|&s| !done[s]) {
+            picks[s] = rest.next().map_or(NO_MODE, |p| members[p]);
+        }
+    }
+
+    /// Slot `s`'s mode with eigenmode `i` of `sol`: the eigenmode's, or, where the slot hands
+    /// over from another eigenmode (it is not like the slot's previous one), the slot's
+    /// previous mode, brought to the eigenmode's by [`HANDOVER_STEP`] per call.
+    fn output(&mut self, s: usize, sol: &ModalSolution, i: usize, following: bool) -> Mode {
+        if i >= sol.n {
+            return Mode::new(f64::NAN, f64::NAN);
+        }
+        let (wn, zeta) = (sol.wn_rad_s[i], sol.zeta[i]);
+        if !following {
+            self.offset[s] = (0.0, 0.0);
+        } else if self.likeness(s, sol, i) < HANDOVER_LIKENESS {
+            let given = self.given[s];
+            self.offset[s] = if given.is_valid() {
+                ((given.wn_rad_s / wn).ln(), given.zeta - zeta)
+            } else {
+                (0.0, 0.0)
+            };
+        }
+        let (ln_wn, dz) = self.offset[s];
+        if ln_wn == 0.0 && dz == 0.0 {
+            return Mode::new(wn, zeta);
+        }
+        // ζ stays a damping ratio while the eigenmode's own ζ moves under the offset.
+        let mode = Mode::new(wn * ln_wn.exp(), (zeta + dz).max(0.0));
+        let toward_zero = |x: f64| x - x.clamp(-HANDOVER_STEP, HANDOVER_STEP);
+        self.offset[s] = (toward_zero(ln_wn), toward_zero(dz));
+        mode
     }
 
     /// How much eigenmode `i` of `sol` is slot `s`'s previous eigenmode: its modal assurance
@@ -670,9 +719,9 @@ impl ModeTrack {
         mac / (1.0 + gap / TRACK_FREQUENCY_SCALE)
     }
 
-    /// Keeps the eigenmodes of `picks` as the slots' branches; an empty track if any slot
-    /// has none (the next call then picks by the map's rule again).
-    fn record(&mut self, sol: &ModalSolution, picks: &[usize]) {
+    /// Keeps the eigenmodes of `picks` as the slots' branches and `given` as their modes; an
+    /// empty track if any slot has none (the next call then starts afresh).
+    fn record(&mut self, sol: &ModalSolution, picks: &[usize], given: &[Mode]) {
         if picks.is_empty() || picks.iter().any(|&i| i >= sol.n) {
             self.slots = 0;
             return;
@@ -680,6 +729,7 @@ impl ModeTrack {
         for (s, &i) in picks.iter().enumerate() {
             self.shape[s] = sol.shape[i];
             self.wn_rad_s[s] = sol.wn_rad_s[i];
+            self.given[s] = given[s];
         }
         self.slots = picks.len();
         self.n = sol.n;
@@ -734,6 +784,18 @@ pub const JACOBI_TOLERANCE: f64 = 1e-2;
 /// orthogonal shape. The gap decides only where the shapes cannot: a veering so sharp that
 /// the shapes turn by about 45° within one cycle, where the branch nearer in frequency wins.
 pub const TRACK_FREQUENCY_SCALE: f64 = 0.1;
+
+/// Likeness ([`ModeTrack`]) below which a slot's eigenmode is another than its previous one:
+/// a handover. From one cycle to the next a slot's own eigenmode keeps a likeness near 1; the
+/// rule's pick turns to another eigenmode only with a nearly orthogonal shape (near 0).
+pub const HANDOVER_LIKENESS: f64 = 0.5;
+
+/// Per call, how much of a handover's remaining gap a slot closes: `0.004` in `ln ω_n` and in
+/// `ζ`. At a 2 ms cycle that is 2/s, below the shaper's slew limit of 5/s
+/// ([`crate::multimode::MAX_LN_WN_RATE_PER_S`]), so a handover is never reported as a jump
+/// down to a 0.8 ms cycle; a handover from 15 to 31 Hz (`Δ ln ω = 0.73`) takes 0.37 s at
+/// 2 ms.
+pub const HANDOVER_STEP: f64 = 0.004;
 
 #[cfg(test)]
 mod tests {

@@ -151,6 +151,8 @@ fn the_ur5e_provider_gives_valid_modes_above_its_delay_bound() {
     let mut out = [Mode::new(0.0, 0.0); 2];
     for _ in 0..2000 {
         let q = rng.pose(6);
+        // Unrelated poses, each a fresh start (no branch to follow between them).
+        provider.restart();
         assert!(provider.modes(&q, &mut out).is_ok());
         for (m, s) in out.iter().zip(&slowest) {
             assert!(m.is_valid(), "{q:?}: {m:?}");
@@ -224,9 +226,9 @@ fn far_apart_modes_sharing_the_base_are_not_blended() {
 fn the_tracked_mode_is_continuous_through_a_veering_swap() {
     // Base (J 4) and shoulder (J 6) coupled at 2 % (|M_01| / √(M_00 M_11)): sweeping the base
     // stiffness takes the two branches through a veering, where the base-dominated
-    // eigenmode swaps branch. The tracked slot follows its branch, so it moves by no more than
-    // the sweep moves the frequencies: 0.125 % in k is 0.06 % in ω, far below the ~2 % gap a
-    // jump between the branches would be. Bound: 0.3 % per step.
+    // eigenmode swaps branch. The tracked slot hands over from one branch to the other by
+    // HANDOVER_STEP (0.4 %) per step, on top of what the sweep moves the frequencies (0.125 %
+    // in k is 0.06 % in ω), instead of the ~2 % jump between the branches. Bound: 0.5 %.
     let m01 = 0.02 * 24f64.sqrt();
     let mass = [4.0, m01, m01, 6.0];
     let mut previous: Option<Mode> = None;
@@ -248,7 +250,7 @@ fn the_tracked_mode_is_continuous_through_a_veering_swap() {
         if let Some(prev) = previous {
             let change = (out[0].wn_rad_s / prev.wn_rad_s - 1.0).abs();
             assert!(
-                change < 0.003,
+                change < 0.005,
                 "base mode jumped by {change} at step {step}"
             );
         }

@@ -3,6 +3,7 @@
 //! shaper limits and reports any faster change of a provider's mode.
 
 use core::f64::consts::PI;
+use tvist_core::modal_map::HANDOVER_STEP;
 use tvist_core::multimode::MAX_LN_WN_RATE_PER_S;
 use tvist_core::{
     Dynamics, FlexJoint, LoadLaw, ModalMap, Mode, ModeTrack, ShapedModes, ShaperKind, Status,
@@ -73,8 +74,10 @@ fn slots_follow_their_branch_through_a_far_dominance_swap() {
     // the path (a rotation by 90° over 2000 poses, 0.045° a pose) while the 45 Hz one stays:
     // the shoulder's largest share passes from the 15 Hz mode to the 31 Hz one, and the two
     // lowest swap which joint they strain most. Chosen per pose, the shoulder slot (and a
-    // slot of the two lowest) jumps between the two, 15 to 31 Hz; following its branch, it
-    // keeps its mode. Light damping (ζ about 0.02) keeps the modes nearly those built.
+    // slot of the two lowest) jumps between the two, 15 to 31 Hz. Tracked, a slot of the two
+    // lowest keeps its mode (the set does not change); the shoulder slot hands over from the
+    // 15 Hz mode to the 31 Hz one by HANDOVER_STEP a step. Light damping (ζ about 0.02)
+    // keeps the modes nearly those built.
     let k = [26_000.0, 22_000.0, 90_000.0];
     let freq_hz = [15.0, 31.0, 45.0];
     let u = unit([0.6, 1.0, 0.1]);
@@ -109,10 +112,15 @@ fn slots_follow_their_branch_through_a_far_dominance_swap() {
             "{shaped:?}: the per-pose rule jumps by only {jump}"
         );
         // Tracked: the shapes turn by 0.045° a pose, the frequencies move only through the
-        // damping coupling; far below one cycle's slew limit (1 % at 2 ms).
+        // damping coupling (below 1e-4 a pose), plus a handover's HANDOVER_STEP: below one
+        // cycle's slew limit (1 % at 2 ms), which never binds.
         let (step, _) = largest_steps(&map, &path, true);
+        let bound = match shaped {
+            ShapedModes::Lowest(_) => 1e-4,
+            ShapedModes::ByJoint(_) => HANDOVER_STEP + 1e-4,
+        };
         assert!(
-            step < 0.1 * MAX_LN_WN_RATE_PER_S * DT_S,
+            step < bound && step < MAX_LN_WN_RATE_PER_S * DT_S,
             "{shaped:?}: a tracked slot changes by {step} in ln ω in one step"
         );
     }
@@ -123,9 +131,10 @@ fn slot_damping_stays_continuous_where_the_kth_and_the_next_mode_cross() {
     // Three uncoupled joints (diagonal M); the two lowest are shaped. Joint 0 stays at 10 Hz;
     // joint 1's inertia grows so that its mode (ζ 0.28) falls through joint 2's (ζ 0.14,
     // 20 Hz), exactly crossing it. Chosen per pose, the second slot goes from joint 2's mode
-    // to joint 1's at the crossing: its ζ jumps by 0.14. Following its branch, the slot keeps
-    // joint 2's mode (the set changes only at rest): ζ constant to rounding (1e-12), and ω
-    // moves by no more than the swept mode's 0.1 % per pose.
+    // to joint 1's at the crossing: its ζ jumps by 0.14. Tracked, the slot hands over: ζ
+    // moves by HANDOVER_STEP a pose at most (rounding 1e-12), and ω by no more than the swept
+    // mode's 0.1 % per pose plus the gap the handover closes, below that 0.1 % (the two
+    // frequencies meet at the crossing): 2.1e-3.
     let k = 2.0e4_f64;
     let damping = |zeta: f64, inertia: f64| 2.0 * zeta * (k * inertia).sqrt();
     let inertia_at = |hz: f64| k / (2.0 * PI * hz).powi(2);
@@ -175,17 +184,17 @@ fn slot_damping_stays_continuous_where_the_kth_and_the_next_mode_cross() {
         "the per-pose rule must swap: {static_zeta_jump}"
     );
     assert!(
-        tracked_zeta_step < 1e-12,
+        tracked_zeta_step < HANDOVER_STEP + 1e-12,
         "a tracked slot's ζ changes by {tracked_zeta_step}"
     );
     assert!(
-        tracked_wn_step < 1.1e-3,
+        tracked_wn_step < 2.1e-3,
         "a tracked slot's ω changes by {tracked_wn_step}"
     );
-    // At the end the slots hold joint 0's and joint 2's modes, though joint 1's is now lower.
+    // At the end the slots hold the two lowest, joint 0's and joint 1's modes.
     let end = previous_tracked.expect("evaluated");
     assert!(
-        (end[0].zeta - 0.1).abs() < 1e-12 && (end[1].zeta - 0.14).abs() < 1e-12,
+        (end[0].zeta - 0.1).abs() < 1e-12 && (end[1].zeta - 0.28).abs() < 1e-12,
         "{end:?}"
     );
 }
