@@ -674,7 +674,7 @@ impl ModeTrack {
     }
 
     /// Slot `s`'s mode with eigenmode `i` of `sol`: the eigenmode's, or, where the slot hands
-    /// over from another eigenmode (it is not like the slot's previous one), the slot's
+    /// over from another eigenmode (`i` does not continue the slot's previous one), the slot's
     /// previous mode, brought to the eigenmode's by [`HANDOVER_STEP`] per call.
     fn output(&mut self, s: usize, sol: &ModalSolution, i: usize, following: bool) -> Mode {
         if i >= sol.n {
@@ -683,7 +683,7 @@ impl ModeTrack {
         let (wn, zeta) = (sol.wn_rad_s[i], sol.zeta[i]);
         if !following {
             self.offset[s] = (0.0, 0.0);
-        } else if self.likeness(s, sol, i) < HANDOVER_LIKENESS {
+        } else if !self.continues(s, sol, i) {
             let given = self.given[s];
             self.offset[s] = if given.is_valid() {
                 ((given.wn_rad_s / wn).ln(), given.zeta - zeta)
@@ -700,6 +700,16 @@ impl ModeTrack {
         let toward_zero = |x: f64| x - x.clamp(-HANDOVER_STEP, HANDOVER_STEP);
         self.offset[s] = (toward_zero(ln_wn), toward_zero(dz));
         mode
+    }
+
+    /// Whether eigenmode `i` of `sol` continues slot `s`'s previous eigenmode: it is the most
+    /// alike of all ([`Self::likeness`]).
+    fn continues(&self, s: usize, sol: &ModalSolution, i: usize) -> bool {
+        let own = self.likeness(s, sol, i);
+        (0..sol.n).all(|j| {
+            j == i
+                || self.likeness(s, sol, j).partial_cmp(&own) != Some(std::cmp::Ordering::Greater)
+        })
     }
 
     /// How much eigenmode `i` of `sol` is slot `s`'s previous eigenmode: its modal assurance
@@ -784,11 +794,6 @@ pub const JACOBI_TOLERANCE: f64 = 1e-2;
 /// orthogonal shape. The gap decides only where the shapes cannot: a veering so sharp that
 /// the shapes turn by about 45° within one cycle, where the branch nearer in frequency wins.
 pub const TRACK_FREQUENCY_SCALE: f64 = 0.1;
-
-/// Likeness ([`ModeTrack`]) below which a slot's eigenmode is another than its previous one:
-/// a handover. From one cycle to the next a slot's own eigenmode keeps a likeness near 1; the
-/// rule's pick turns to another eigenmode only with a nearly orthogonal shape (near 0).
-pub const HANDOVER_LIKENESS: f64 = 0.5;
 
 /// Per call, how much of a handover's remaining gap a slot closes: `0.004` in `ln ω_n` and in
 /// `ζ`. At a 2 ms cycle that is 2/s, below the shaper's slew limit of 5/s
