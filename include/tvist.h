@@ -74,8 +74,13 @@ typedef enum TvistError {
 /* A mode at or above the Nyquist frequency (wn_rad_s >= pi / dt_s): it cannot be cancelled at
  * this rate. Shaped as given (impulses within one sample, a sub-sample smoothing). */
 #define TVIST_STATUS_MODE_ABOVE_NYQUIST 64
+/* A mode changed faster than a slowly varying mode can (its natural frequency by more than
+ * 5/s in ln wn, i.e. 1 % per 2 ms cycle, or its damping ratio by more than 5/s): the provider's
+ * mode jumped (e.g. a map that switched eigenmodes) and the filter approached it at that limit
+ * instead, so that the shaped reference gets no step. */
+#define TVIST_STATUS_MODE_SLEW_LIMITED 128
 /* Number of status flags: flag k is bit (1 << k) (tvist_shaper_status_counts). */
-#define TVIST_N_STATUS_FLAGS 7
+#define TVIST_N_STATUS_FLAGS 8
 
 /* Largest number of joint channels of a handle. */
 #define TVIST_MAX_DOF 4096

@@ -436,3 +436,19 @@ def test_run_learn_refuses_a_paper10_map_and_dry_run_before_the_arm_moves(
         assert len(err) == 1 and all(w in err[0] for w in words), err
         assert "Traceback" not in err[0]
     assert logs == []  # never streamed
+
+
+def test_a_frequency_ranked_prior_is_learned_by_its_shaped_physical_modes():
+    # A fit-map output shapes its K lowest modes (shaped_modes) and lists the physical modes
+    # it shaped: the learner observes and refines those joints' modes and the learned map
+    # shapes the K lowest again; without that list, base and shoulder.
+    wrong = _wrong_map(_twin(0))
+    report = [{"joint": 0, "shaped": True}, {"joint": 1, "shaped": True}, {"joint": 2}]
+    meta = {**wrong.metadata, "fit_statistics": {"physical_modes": report}}
+    ranked = ModalMap(wrong.flex_joints, metadata=meta, shaped_modes=2)
+    learner = MapLearner(_robot(), ranked)
+    assert learner.mode_joints == [0, 1]
+    assert learner.learned_map().shaped_modes == 2
+    assert learner.learned_map().mode_joints is None
+    bare = ModalMap(wrong.flex_joints, metadata=wrong.metadata, shaped_modes=3)
+    assert MapLearner(_robot(), bare).mode_joints == [0, 1]

@@ -248,3 +248,40 @@ def test_a_mode_close_to_a_significant_one_is_shaped_too():
 
     choice = ShapingChoice(1, (mode(0, 8.0, 1.0), mode(1, 8.4, 0.0), mode(2, 10.4, 0.0)), 1.0, 0.01)
     assert [m.rank for m in choice.significant] == [0, 1]
+
+
+def test_set_modes_for_move_shapes_the_modes_each_move_needs():
+    from tvist.modal_map import set_modes_for_move
+
+    # The one place the commands and demo rows choose K: for a frequency-ranked map it sets
+    # the shaper to the K modes_to_shape gives for the move (the move as a trajectory or as
+    # its samples), and leaves any other provider alone.
+    lowest = tvist.MapDynamics(ROBOT, _map(shaped_modes=3))
+    for a, b in [("Q1", "Q2"), ("Q1", "Q3"), ("Q3", "Q1")]:
+        move = tvist.trajectory.double_s(PAPER_POSES[a], PAPER_POSES[b], DT_S)
+        want = modes_to_shape(_map(shaped_modes=3), ROBOT, move).n_modes
+        for given in (move, move.q):
+            shaper = tvist.TvShaper(lowest, DT_S, 6)
+            choice = set_modes_for_move(shaper, lowest, given, DT_S)
+            assert choice is not None and choice.n_modes == want, (a, b)
+            shaper.shape(move.q)
+            assert len(shaper.current_modes) == want
+    named = tvist.MapDynamics(ROBOT, _map(mode_joints=[0, 1]))
+    shaper = tvist.TvShaper(named, DT_S, 6)
+    assert set_modes_for_move(shaper, named, move) is None
+    assert len(shaper.max_delay_s) == 2
+
+
+def test_tracked_evaluation_along_a_move_is_continuous():
+    # Along the samples of a move, tracked=True lets each of the 3 lowest follow its branch
+    # (as the streaming shaper does): it starts with the per-pose rule and no mode changes
+    # by more than the shaper's slew limit per sample (1 % at 2 ms; the pose-driven change
+    # is about 0.1 %), so the limit never has to bind.
+    modal = _map(shaped_modes=3)
+    move = tvist.trajectory.double_s(PAPER_POSES["Q3"], PAPER_POSES["Q1"], DT_S).q
+    tracked = modal.modes_many(ROBOT, move, tracked=True)
+    per_pose = modal.modes_many(ROBOT, move)
+    np.testing.assert_array_equal(tracked[0], per_pose[0])
+    steps = np.abs(np.diff(np.log(tracked[:, :, 0]), axis=0))
+    assert steps.max() < tvist.MAX_LN_WN_RATE_PER_S * DT_S
+    assert np.abs(np.diff(tracked[:, :, 1], axis=0)).max() < tvist.MAX_ZETA_RATE_PER_S * DT_S

@@ -310,6 +310,30 @@ def test_invalid_modes_from_a_callable_are_held() -> None:
     assert never.last_status == tvist.Status.MODES_HELD | tvist.Status.UNSHAPED
 
 
+def test_a_jumping_mode_is_slew_limited_and_reported() -> None:
+    # A callback whose mode jumps from 14.9 to 30.9 Hz mid-move: the filter approaches it by
+    # 1 % a cycle (tvist.MAX_LN_WN_RATE_PER_S = 5/s at 2 ms), so the delay never steps, and
+    # every cycle that binds is reported. ln(30.9/14.9) / 0.01 = 72.9: 72 limited cycles,
+    # the 73rd lands on the mode.
+    calls = {"n": 0}
+
+    def jumping(q: np.ndarray) -> list[tuple[float, float]]:
+        calls["n"] += 1
+        return [(2 * np.pi * (14.9 if calls["n"] < 100 else 30.9), 0.1)]
+
+    assert tvist.MAX_LN_WN_RATE_PER_S * DT_S == pytest.approx(0.01)
+    shaper = tvist.TvShaper(jumping, DT_S, 1, shaper="zv", max_delay_s=0.1)
+    delays = []
+    for i in range(300):
+        shaper.step(np.array([1e-3 * i]))
+        delays.append(shaper.delay_s)
+    assert shaper.status_counts["mode_slew_limited"] == 72
+    # ZV delay pi / ω_d changes by at most 1 % of itself a cycle (rounding: 1e-9).
+    ratio = np.array(delays[1:]) / np.array(delays[:-1])
+    assert np.all(np.abs(np.log(ratio)) <= 0.01 * (1 + 1e-9))
+    assert delays[-1] == pytest.approx(tvist.shaper("zv", 2 * np.pi * 30.9, 0.1).duration_s)
+
+
 def test_delays_beyond_the_buffer_are_clamped() -> None:
     # ZV delay at 10 rad/s is 0.316 s; the line holds 0.1 s. The read stays inside the buffer.
     shaper = tvist.TvShaper(lambda q: [(10.0, 0.1)], DT_S, 1, max_delay_s=0.1)

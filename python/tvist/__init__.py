@@ -20,8 +20,10 @@ from tvist.ztdis import ZeroDelayResult, zero_delay
 __all__ = [
     "MAX_DELAY_LINE_BYTES",
     "MAX_DOF",
+    "MAX_LN_WN_RATE_PER_S",
     "MAX_MAP_FILE_BYTES",
     "MAX_MODES",
+    "MAX_ZETA_RATE_PER_S",
     "SHAPERS",
     "ConstantModes",
     "DynamicMap",
@@ -78,6 +80,11 @@ MAX_DELAY_LINE_BYTES: int = _core.MAX_DELAY_LINE_BYTES
 MAX_MODES: int = _core.MAX_MODES
 #: Longest map file read, bytes (1 MiB): a longer file or a device is refused unread.
 MAX_MAP_FILE_BYTES: int = _core.MAX_MAP_FILE_BYTES
+#: Fastest change of a shaped mode a shaper follows, per second: ``|d ln ω_n/dt|`` and
+#: ``|dζ/dt|`` (1 % and 0.01 per 2 ms cycle); a faster one (a provider's mode that jumps) is
+#: approached at this rate and reported as ``Status.MODE_SLEW_LIMITED``.
+MAX_LN_WN_RATE_PER_S: float = _core.MAX_LN_WN_RATE_PER_S
+MAX_ZETA_RATE_PER_S: float = _core.MAX_ZETA_RATE_PER_S
 
 
 def shaper(

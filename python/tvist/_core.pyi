@@ -177,6 +177,7 @@ class ModalMap:
         mass_kg_m2: npt.NDArray[np.float64],
         n_dof: int,
         gravity_torque_nm: npt.NDArray[np.float64] | None = None,
+        tracked: bool = False,
     ) -> npt.NDArray[np.float64]: ...
 
 class ModalDynamics:
@@ -197,6 +198,8 @@ class ModalDynamics:
 SHAPERS: list[str]
 STATUS_FLAGS: dict[str, int]
 MAX_DOF: int
+MAX_LN_WN_RATE_PER_S: float
+MAX_ZETA_RATE_PER_S: float
 MAX_MODES: int
 MAX_MAP_FILE_BYTES: int
 MAX_DELAY_LINE_BYTES: int

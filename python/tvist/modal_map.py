@@ -9,14 +9,21 @@ The shaped modes are named in one of two ways:
 
 - ``mode_joints`` (e.g. ``[0, 1]``): mode ``m`` is the eigenmode that stores the largest share
   of its strain energy in joint ``mode_joints[m]``, so "base" and "shoulder" keep their meaning
-  when their frequencies cross. Another eigenmode is blended in only where it veers with that
-  one (frequencies within about 6 %, weights by the shares), so the mode stays continuous where
-  two close modes swap; two far-apart modes that share the joint are never averaged.
+  when their frequencies cross.
 - ``shaped_modes`` (an integer K): the K lowest-frequency eigenmodes as a set, whatever
-  joint they strain most, shaped in slots ordered by the joint each strains most (so two modes
-  of the set that cross keep their filters, and a filter's damping does not jump where modes
-  of different damping cross); veering pairs are blended as above. :func:`modes_to_shape`
-  picks K for a move.
+  joint they strain most, shaped in slots ordered by the joint each strains most.
+  :func:`modes_to_shape` picks K for a move.
+
+Each shaped mode is an eigenmode as it is. That rule picks the eigenmodes at a pose; along a
+motion the streaming shaper keeps each member of the rule's set in the filter whose eigenmode
+it continues (same mode shape, nearby frequency), so a filter keeps its mode and damping where
+two modes cross, and where the rule's pick for a filter becomes another eigenmode (dominance
+swaps, or the K-th and the next cross) the filter hands over gradually (0.004 in ln ω and ζ
+per cycle) instead of jumping (module docs of ``modal_map.rs``).
+:meth:`ModalMap.modes_many` evaluates the rule at each pose alone (for checks at independent
+poses: a map against measured modes); ``tracked=True`` evaluates a path of poses as the
+shaper does. Once the shaper rests at the end of a move its modes (and delay) are the rule's
+at the end pose.
 
 Stiffness and damping grow with the static load ``L`` (gravity
 torque, N m): ``v(L) = v_0 + v_1 |L|_s + v_2 L²``; the stiffness of joint ``j`` reads its own
@@ -49,7 +56,7 @@ import numpy as np
 
 from tvist import _core
 from tvist.map_files import MapDocument, RobotModesMixin
-from tvist.modal_residual import ModeResidual, ShapingChoice, modes_to_shape
+from tvist.modal_residual import ModeResidual, ShapingChoice, modes_to_shape, set_modes_for_move
 from tvist.robots import Robot
 
 __all__ = [
@@ -61,6 +68,7 @@ __all__ = [
     "ShapingChoice",
     "modal_map_from_flex",
     "modes_to_shape",
+    "set_modes_for_move",
 ]
 
 SCHEMA_VERSION: int = _core.MAP_SCHEMA_VERSION
@@ -181,10 +189,18 @@ class ModalMap(MapDocument):
         return self._core.joint_laws_many(np.ascontiguousarray(tau))[0]
 
     def modes_from_mass_matrix_many(
-        self, mass_kg_m2: np.ndarray, gravity_torque_nm: np.ndarray | None = None
+        self,
+        mass_kg_m2: np.ndarray,
+        gravity_torque_nm: np.ndarray | None = None,
+        *,
+        tracked: bool = False,
     ) -> np.ndarray:
         """Shaped modes for mass matrices ``(n_poses, n_dof, n_dof)`` (kg m²) and gravity
         torques ``(n_poses, n_dof)`` (N m; needed when :attr:`uses_gravity`).
+
+        ``tracked``: the poses are a path (e.g. the samples of a move), each mode following its
+        eigenmode branch from the first pose on, as the streaming shaper does; otherwise the
+        rule at each pose alone (module docs).
 
         Returns ``(n_poses, n_modes, 2)``: ``[..., 0]`` ``wn_rad_s``, ``[..., 1]`` ``zeta``;
         NaN where the mass block is not positive definite or not finite.
@@ -201,14 +217,15 @@ class ModalMap(MapDocument):
                 raise ValueError(
                     f"gravity_torque_nm must have shape {(m.shape[0], n_dof)}, got {tau.shape}"
                 )
-        return self._core.modes_from_mass_matrix_many(flat, n_dof, tau)
+        return self._core.modes_from_mass_matrix_many(flat, n_dof, tau, bool(tracked))
 
-    def modes_many(self, robot: Robot, q: np.ndarray) -> np.ndarray:
+    def modes_many(self, robot: Robot, q: np.ndarray, *, tracked: bool = False) -> np.ndarray:
         """Shaped modes at every configuration ``q`` ``(n_poses, n_dof)`` of ``robot``
-        (payload included): ``(n_poses, n_modes, 2)``."""
+        (payload included): ``(n_poses, n_modes, 2)``; ``tracked`` as in
+        :meth:`modes_from_mass_matrix_many` (``q`` a path)."""
         q = np.ascontiguousarray(np.atleast_2d(q), dtype=float)
         tau = robot.gravity_torque_many(q) if self.uses_gravity else None
-        return self.modes_from_mass_matrix_many(robot.mass_matrix_many(q), tau)
+        return self.modes_from_mass_matrix_many(robot.mass_matrix_many(q), tau, tracked=tracked)
 
     def modes(self, robot: Robot, q: Sequence[float] | np.ndarray) -> list[tuple[float, float]]:
         """Shaped modes ``[(wn_rad_s, zeta), ...]`` at configuration ``q`` of ``robot``."""

@@ -44,7 +44,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.linalg
@@ -61,6 +61,7 @@ __all__ = [
     "ModeResidual",
     "ShapingChoice",
     "modes_to_shape",
+    "set_modes_for_move",
     "velocity_torque_many",
 ]
 
@@ -316,3 +317,54 @@ def modes_to_shape(
     choice = ShapingChoice(1, modes, total, threshold)
     n_modes = max((m.rank for m in choice.significant), default=0) + 1
     return ShapingChoice(n_modes, modes, total, threshold)
+
+
+def set_modes_for_move(
+    shaper: Any, provider: Any, move: Trajectory | np.ndarray, dt_s: float | None = None
+) -> ShapingChoice | None:
+    """Before shaping ``move`` with ``shaper`` (between moves: at rest), shape the modes that
+    move needs: for a shaper driven by a frequency-ranked modal map (``provider`` a
+    :class:`tvist.ModalDynamics` whose map has ``shaped_modes``), ``shaper.set_shaped_modes(K)``
+    with ``K`` from :func:`modes_to_shape` for the move. The one place the commands (``tvist
+    shape``, ``tvist run``) and the demo rows choose ``K`` per move.
+
+    ``move``: the move's :class:`~tvist.trajectory.Trajectory`, or its reference samples
+    ``(n_samples, n_dof)`` on the grid ``dt_s`` (velocity and acceleration by differences, the
+    move ending at its last change). Returns the choice, or ``None`` (nothing changed) for any
+    other provider or map. ``K`` is at most the map's own ``shaped_modes``.
+    """
+    from tvist.modal_map import ModalMap
+
+    modal = getattr(provider, "dynmap", None)
+    if not isinstance(modal, ModalMap) or modal.shaped_modes is None:
+        return None
+    if not isinstance(move, Trajectory):
+        if dt_s is None:
+            raise ValueError("give dt_s with a move given as samples")
+        move = _trajectory_of_samples(np.asarray(move, dtype=float), dt_s)
+    choice = modes_to_shape(modal, provider.robot, move)
+    k = min(choice.n_modes, modal.shaped_modes)
+    shaper.set_shaped_modes(k)
+    return ShapingChoice(k, choice.modes, choice.total_m_s2, choice.threshold)
+
+
+def _trajectory_of_samples(q: np.ndarray, dt_s: float) -> Trajectory:
+    """A :class:`~tvist.trajectory.Trajectory` of reference samples ``q`` on the grid ``dt_s``:
+    central differences for velocity and acceleration, moving from the first change to the
+    last."""
+    if q.ndim != 2 or q.shape[0] < 3:
+        raise ValueError(f"a move needs samples (n_samples >= 3, n_dof), got {q.shape}")
+    qd = np.gradient(q, dt_s, axis=0)
+    qdd = np.gradient(qd, dt_s, axis=0)
+    changes = np.flatnonzero(np.any(np.diff(q, axis=0) != 0.0, axis=1))
+    first, last = (int(changes[0]), int(changes[-1]) + 1) if changes.size else (0, 0)
+    t = np.arange(q.shape[0]) * dt_s
+    return Trajectory(
+        t_s=t,
+        q=q,
+        qd=qd,
+        qdd=qdd,
+        dt_s=dt_s,
+        t_motion_start_s=float(t[first]),
+        t_motion_end_s=float(t[last]),
+    )

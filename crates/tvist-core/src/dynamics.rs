@@ -27,6 +27,12 @@ pub trait Dynamics {
         None
     }
 
+    /// Forgets whatever the provider carries from one call to the next (a modal map: the
+    /// eigenmode each shaped mode follows), so that the next call chooses as at a first one.
+    /// The shaper calls it at a start or reset and whenever it has come to rest, where a new
+    /// choice cannot change its output. Allocation-free.
+    fn restart(&mut self) {}
+
     /// `true` if [`Self::modes`] writes the same valid modes every call, whatever `q`, and
     /// reports no status: a shaper then asks once after each start or reset and reuses them.
     fn modes_are_constant(&self) -> bool {
@@ -95,6 +101,9 @@ impl<D: Dynamics + ?Sized> Dynamics for Box<D> {
     fn n_dof(&self) -> Option<usize> {
         (**self).n_dof()
     }
+    fn restart(&mut self) {
+        (**self).restart()
+    }
     fn modes_are_constant(&self) -> bool {
         (**self).modes_are_constant()
     }
@@ -160,6 +169,14 @@ impl<C: Dynamics> Dynamics for Provider<C> {
             Provider::Map(p) => p.n_dof(),
             Provider::Modal(p) => p.n_dof(),
             Provider::Callback(p) => p.n_dof(),
+        }
+    }
+    fn restart(&mut self) {
+        match self {
+            Provider::Constant(p) => p.restart(),
+            Provider::Map(p) => p.restart(),
+            Provider::Modal(p) => p.restart(),
+            Provider::Callback(p) => p.restart(),
         }
     }
     #[inline]

@@ -128,6 +128,12 @@ impl Status {
     /// within one sample: a sub-sample smoothing that changes the reference by little); the
     /// flag says that the mode is out of reach.
     pub const MODE_ABOVE_NYQUIST: Status = Status(64);
+    /// A mode changed faster than a slowly varying mode can
+    /// ([`crate::multimode::MAX_LN_WN_RATE_PER_S`], [`crate::multimode::MAX_ZETA_RATE_PER_S`]):
+    /// the provider's mode jumped (a map that switched eigenmodes, a callback that switched
+    /// modes) and the filter approached it at that limit instead, so that the shaped
+    /// reference gets no step.
+    pub const MODE_SLEW_LIMITED: Status = Status(128);
 
     /// Every flag with its name: the one list the bindings and `tvist.h` are checked against.
     /// Flag `k` of this list is bit `1 << k`.
@@ -139,6 +145,7 @@ impl Status {
         ("BAD_LENGTH", Status::BAD_LENGTH),
         ("ZETA_CLAMPED", Status::ZETA_CLAMPED),
         ("MODE_ABOVE_NYQUIST", Status::MODE_ABOVE_NYQUIST),
+        ("MODE_SLEW_LIMITED", Status::MODE_SLEW_LIMITED),
     ];
 
     /// True if every bit of `flag` is set.
@@ -155,7 +162,7 @@ impl Status {
 }
 
 /// Number of status flags ([`Status::FLAGS`]).
-pub const N_STATUS_FLAGS: usize = 7;
+pub const N_STATUS_FLAGS: usize = 8;
 
 /// How many cycles reported each status flag: `counts()[k]` counts flag `Status::FLAGS[k]`.
 /// Allocation-free; counts saturate at `u64::MAX`.

@@ -62,6 +62,18 @@ impl HeldInput {
         (value, status, first)
     }
 
+    /// Whether `input` would change the held sample: the filter has started, every value of
+    /// `input` is finite and one differs from the held one (bit for bit).
+    #[inline]
+    pub fn moves(&self, input: &[f64]) -> bool {
+        self.started
+            && input.iter().fold(true, |all, v| all & v.is_finite())
+            && input
+                .iter()
+                .zip(&self.value)
+                .any(|(a, b)| a.to_bits() != b.to_bits())
+    }
+
     /// Sets the held sample to `x0` (non-finite entries taken as 0) and marks the filter
     /// started.
     pub fn set(&mut self, x0: &[f64]) {

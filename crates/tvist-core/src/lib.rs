@@ -57,7 +57,7 @@ pub use dynmap::{DynamicMap, InertiaRange, MapCoefficients, ModeMap};
 pub use error::{Error, Status, StatusCounter};
 pub use map_dynamics::MapDynamics;
 pub use modal_dynamics::ModalDynamics;
-pub use modal_map::{FlexJoint, LoadLaw, ModalMap, ShapedModes};
+pub use modal_map::{FlexJoint, LoadLaw, ModalMap, ModeTrack, ShapedModes};
 pub use multimode::{TvShaper, TvShaperConfig};
 pub use placement::{JointPlacement, Origin};
 pub use prv::prv;

@@ -47,12 +47,16 @@ impl ModeLaw for DynamicMap {
         DynamicMap::uses_gravity(self)
     }
 
+    /// Modes are a function of the pose alone.
+    type Track = ();
+
     #[inline]
     fn modes_from_robot(
         &self,
         inertia: &[f64],
         _n_dof: usize,
         tau_g: &[f64],
+        _track: &mut (),
         out: &mut [Mode],
     ) -> Status {
         self.modes_from_inertia(inertia, tau_g, out)

@@ -3,7 +3,7 @@
 //! at the previous shaped output, and the map's eigenproblem.
 
 use crate::error::{Error, Status};
-use crate::modal_map::ModalMap;
+use crate::modal_map::{ModalMap, ModeTrack};
 use crate::robot::Robot;
 use crate::robot_modes::{ModeLaw, RobotModes};
 use crate::shaper::Mode;
@@ -50,15 +50,19 @@ impl ModeLaw for ModalMap {
         ModalMap::uses_gravity(self)
     }
 
+    /// The eigenmode branch each slot follows (module docs of [`crate::modal_map`]).
+    type Track = ModeTrack;
+
     #[inline]
     fn modes_from_robot(
         &self,
         mass: &[f64],
         n_dof: usize,
         tau_g: &[f64],
+        track: &mut ModeTrack,
         out: &mut [Mode],
     ) -> Status {
-        self.modes_from_mass_matrix(mass, n_dof, tau_g, out)
+        self.modes_tracked(mass, n_dof, tau_g, track, out)
     }
 
     fn invalid_mode_message(&self, m: usize, q: &[f64], _mass: &[f64], mode: Mode) -> String {
@@ -71,8 +75,15 @@ impl ModeLaw for ModalMap {
 
     /// Rayleigh: ω² = φᵀKφ / φᵀMφ >= k_min / λ_max(M_ff), with k_min >= the smallest
     /// zero-load stiffness (the laws only grow with load) and λ_max(M_ff) <= trace(M_ff)
-    /// <= Σ of the joints' inertia upper bounds. A sound bound for every configuration.
+    /// <= Σ of the joints' inertia upper bounds. A sound bound for every configuration and
+    /// every eigenmode. A slot follows its eigenmode branch along a motion, which may be
+    /// another slot's at the sampled poses: every slot is bounded by the highest sampled ζ of
+    /// all of them.
     fn lower_frequency_bound(&self, robot: &Robot, _mass: &[f64], slowest: &mut [Mode]) {
+        let zeta_max = slowest.iter().map(|s| s.zeta).fold(0.0, f64::max);
+        for s in slowest.iter_mut() {
+            s.zeta = zeta_max;
+        }
         let j_max = robot.joint_inertia_upper_bound();
         let k_min = self
             .flex_joints()

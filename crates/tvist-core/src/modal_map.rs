@@ -48,38 +48,51 @@
 //! non-negative and `k_0 > 0`, so stiffness is positive everywhere.
 //!
 //! **Which modes are shaped.** A map names its shaped modes in one of two ways
-//! ([`ShapedModes`]):
+//! ([`ShapedModes`]); the rule picks one eigenmode per slot (cascade filter) at a pose:
 //!
-//! - **By joint** (`mode_joints`, e.g. `[0, 1]` for base then shoulder): mode `m` is the
+//! - **By joint** (`mode_joints`, e.g. `[0, 1]` for base then shoulder): slot `m` takes the
 //!   (damped) eigenmode that stores the largest share of its strain energy in joint
-//!   `mode_joints[m]`, so "base" and "shoulder" keep their meaning when the frequencies cross;
-//!   among the eigenmodes not already taken by an earlier mode, so two modes never shape the
-//!   same eigenmode (where one eigenmode strains both base and shoulder most, the shoulder
-//!   mode is the next one in the shoulder).
-//!   Another eigenmode is blended in only if it forms a *veering pair* with that dominant one
-//!   (see below); otherwise the dominant eigenmode is the shaped mode as it is.
-//! - **By frequency** (`shaped_modes: K`): the `K` lowest-frequency eigenmodes as a set,
-//!   shaped in slots ordered by the flexible joint each strains most (then by frequency),
-//!   each slot then evaluated as a joint-named mode restricted to the set. Two modes of the
-//!   set that cross keep their slots: frequency-ordered slots would swap them, and where the
-//!   two differ in damping (the UR5e's base and shoulder cross near Q1 with ζ 0.28 and 0.14)
-//!   a slot's ζ would jump, a step in its time-varying filter's amplitudes and so in the
-//!   shaped reference (measured on the twin: Q3→Q1 left 88.9 % where slots by joint leave
-//!   98.9 %). Which modes are in the set changes only where the `K`-th and the next cross.
+//!   `mode_joints[m]`, among the eigenmodes not already taken by an earlier slot, so two slots
+//!   never shape the same eigenmode (where one eigenmode strains both base and shoulder most,
+//!   the shoulder slot takes the next one in the shoulder).
+//! - **By frequency** (`shaped_modes: K`): the `K` lowest-frequency eigenmodes as a set, in
+//!   slots ordered by the flexible joint each strains most, each slot taking the member of the
+//!   set that strains its joint most.
 //!
-//! **Veering pairs.** Where two eigenmodes swap the joint they dominate, the dominant one
-//! jumps from one branch to the other; a jump in a filter's delay is a step in the shaped
-//! reference. Close to such a swap the two are blended, weights `(s_i/s_d)^4 · h(g)` against
-//! 1 for the dominant `d`, with `s` the shares of the naming joint and `g = |ln(ω_i/ω_d)|` the
-//! frequency gap; `h` is 1 up to [`VEERING_FULL_GAP`] and falls smoothly to 0 at
-//! [`VEERING_GAP`]. At the swap the two shares are equal and the blend is symmetric, so the
-//! shaped mode is continuous there. Two weakly coupled modes swap where their frequencies are
-//! closest, a gap of about the coupling `|M_ij|/√(M_ii M_jj)` (a few per cent or less): a
-//! veering pair, blended, with every blended frequency within [`VEERING_GAP`] of the dominant
-//! one, which a ZV filter still suppresses to a few per cent. Two strongly coupled modes far
-//! apart (17 and 35 Hz, base shares 0.49 and 0.37) are two physical modes that both move the
-//! joint; their share-weighted mean (21.4 Hz) is neither and shapes neither, so the dominant
-//! one is taken and the other is left to a frequency-ranked map.
+//! **Slots follow their branch.** Applied afresh at every pose, either rule makes a slot jump
+//! between two far-apart eigenmodes where the dominance or the order changes: two modes that
+//! both strain the shoulder swap which strains it most (measured on a simulated UR5e variant:
+//! the shoulder slot from 14.9 to 30.9 Hz in one 2 ms cycle), or the `K`-th and the next
+//! cross. A jump in a filter's delay is a step in the shaped reference. So the streaming
+//! evaluation ([`ModalMap::modes_tracked`], used by the provider every cycle) remembers each
+//! slot's eigenmode of the previous cycle (its mode shape `y` and frequency, [`ModeTrack`]):
+//!
+//! - for `shaped_modes`, the rule's set is given to the slots whose eigenmodes its members
+//!   continue (the same shape at a nearby frequency, modal assurance criterion): where two
+//!   modes of the set cross, each slot keeps its mode, frequency and damping continuous
+//!   (slots in frequency order would swap there, and where the two differ in damping, the
+//!   UR5e's base and shoulder near Q1 with ζ 0.28 and 0.14, a slot's ζ would jump: measured
+//!   on the twin, Q3→Q1 left 88.9 % where slots that keep their mode leave 98.9 %);
+//! - where a slot's eigenmode from the rule is another than the one it had (a joint's
+//!   dominant eigenmode becomes another far-apart one, or the `K`-th and the next cross, so
+//!   the set changes), the slot *hands over*: it starts from its previous mode and moves to
+//!   the new eigenmode's by [`HANDOVER_STEP`] per cycle in `ln ω` and `ζ`, so its filter's
+//!   delay and amplitudes change gradually, not in a step. The set the rule chooses is
+//!   always the one shaped (modes that cross into the `K` lowest during a long move are
+//!   shaped when it stops), only reached gradually;
+//! - where two coupled modes veer, the rule's pick swaps branch at the swap of dominance, two
+//!   frequencies a few per cent apart: a short handover. No blending of eigenmodes is needed
+//!   (the per-pose rule once blended veering pairs to hide that jump); every shaped mode is an
+//!   eigenmode, as a free decay measures it, except during a handover.
+//!
+//! After a start, a reset, a replacement of the map or a change of `K`, and whenever the
+//! shaper has come to rest ([`crate::TvShaper`]: every delay line holds one value, so no mode
+//! changes the output), the track is empty and the slots take the rule's picks as they are.
+//!
+//! The per-pose rule ([`ModalMap::modes_from_mass_matrix`]) remains for checks at
+//! independent poses (a map against measured modes). Whatever the provider, the shaper also
+//! limits how fast any slot's mode may change ([`crate::multimode::MAX_LN_WN_RATE_PER_S`]) and
+//! reports it when that binds, so a jump that reaches it anyway is spread out and flagged.
 //!
 //! Evaluation ([`ModalMap::modes_from_mass_matrix`]) uses fixed-size arrays only: no
 //! allocation, no panic.
@@ -178,6 +191,10 @@ pub struct ModalSolution {
     /// `strain_share[i][f]`: share of mode `i`'s strain energy in flexible joint `f` (the
     /// `f`-th entry of [`ModalMap::flex_joints`]); each row sums to 1.
     pub strain_share: [[f64; MAX_FLEX_JOINTS]; MAX_FLEX_JOINTS],
+    /// `shape[i][f]`: mode `i` as the unit vector `y` in `K^{1/2}`-scaled coordinates of the
+    /// flexible joints (module docs; complex for a damped mode, its phase arbitrary):
+    /// `strain_share[i][f] = |shape[i][f]|²`.
+    pub shape: [[Complex64; MAX_FLEX_JOINTS]; MAX_FLEX_JOINTS],
 }
 
 /// Which eigenmodes a modal map shapes, in cascade order (module docs).
@@ -185,7 +202,7 @@ pub struct ModalSolution {
 pub enum ShapedModes {
     /// Mode `m` is the eigenmode dominated by joint `joints[m]` (a joint index, 0 = base).
     ByJoint(Vec<usize>),
-    /// The `k` lowest-frequency eigenmodes, in frequency order.
+    /// The `k` lowest-frequency eigenmodes, in slots by the joint each strains most.
     Lowest(usize),
 }
 
@@ -410,6 +427,7 @@ impl ModalMap {
             wn_rad_s: [0.0; MAX_FLEX_JOINTS],
             zeta: [0.0; MAX_FLEX_JOINTS],
             strain_share: [[0.0; MAX_FLEX_JOINTS]; MAX_FLEX_JOINTS],
+            shape: [[Complex64::new(0.0, 0.0); MAX_FLEX_JOINTS]; MAX_FLEX_JOINTS],
         };
         // Undamped modes and their projected damping: the start of the damped solve, and the
         // answer where it fails (module docs).
@@ -445,6 +463,7 @@ impl ModalMap {
                 for f in 0..nf {
                     let y: Complex64 = (0..nf).map(|j| v[f][j] * damped.vectors[j][i]).sum();
                     out.strain_share[i][f] = y.norm_sqr();
+                    out.shape[i][f] = y;
                 }
             }
         } else {
@@ -452,6 +471,7 @@ impl ModalMap {
             for i in 0..nf {
                 for f in 0..nf {
                     out.strain_share[i][f] = v[f][i] * v[f][i];
+                    out.shape[i][f] = Complex64::new(v[f][i], 0.0);
                 }
             }
         }
@@ -459,14 +479,37 @@ impl ModalMap {
     }
 
     /// The shaped modes, in cascade order, from the mass matrix and gravity torques (see
-    /// [`Self::solve`]). Writes NaN modes and returns [`Status::BAD_LENGTH`] on wrong lengths
-    /// (`out` must hold [`Self::n_modes`]); NaN modes with [`Status::OK`] when the input is not
-    /// finite or not positive definite (the shaper then holds its last valid modes).
+    /// [`Self::solve`]), each slot's eigenmode picked by the map's rule at this pose alone
+    /// ("Which modes are shaped" in the module docs). Writes NaN modes and returns
+    /// [`Status::BAD_LENGTH`] on wrong lengths (`out` must hold [`Self::n_modes`]); NaN modes
+    /// with [`Status::OK`] when the input is not finite or not positive definite (the shaper
+    /// then holds its last valid modes).
+    ///
+    /// The per-pose rule, for accuracy checks at independent poses; along a motion the
+    /// streaming shaper follows each slot's eigenmode branch instead ([`Self::modes_tracked`]).
     pub fn modes_from_mass_matrix(
         &self,
         mass: &[f64],
         n_dof: usize,
         tau_g: &[f64],
+        out: &mut [Mode],
+    ) -> Status {
+        let mut fresh = ModeTrack::default();
+        self.modes_tracked(mass, n_dof, tau_g, &mut fresh, out)
+    }
+
+    /// The shaped modes as [`Self::modes_from_mass_matrix`], continuing the previous call with
+    /// the same `track` ("Slots follow their branch" in the module docs): the rule's set, each
+    /// member in the slot whose eigenmode it continues, and a slot whose eigenmode changed
+    /// handing over gradually. With an empty track ([`ModeTrack::default`], or after
+    /// [`ModeTrack::clear`]) the rule's picks as they are. A call without a valid solution
+    /// leaves `track` as it was. Allocation-free, panic-free.
+    pub fn modes_tracked(
+        &self,
+        mass: &[f64],
+        n_dof: usize,
+        tau_g: &[f64],
+        track: &mut ModeTrack,
         out: &mut [Mode],
     ) -> Status {
         let bad_length = out.len() != self.n_modes()
@@ -477,15 +520,28 @@ impl ModalMap {
             out.fill(Mode::new(f64::NAN, f64::NAN));
             return Status::BAD_LENGTH;
         }
-        match self.solve(mass, n_dof, tau_g) {
-            Some(sol) => self.assign(&sol, out),
-            None => out.fill(Mode::new(f64::NAN, f64::NAN)),
+        let Some(sol) = self.solve(mass, n_dof, tau_g) else {
+            out.fill(Mode::new(f64::NAN, f64::NAN));
+            return Status::OK;
+        };
+        let k = out.len().min(sol.n);
+        let mut picks = [NO_MODE; MAX_FLEX_JOINTS];
+        self.select(&sol, &mut picks[..k]);
+        let following = track.slots == k && k > 0;
+        if following && matches!(self.shaped, ShapedModes::Lowest(_)) {
+            // The set's members to the slots whose eigenmodes they continue.
+            track.follow(&sol, &mut picks[..k]);
         }
+        for (s, o) in out.iter_mut().enumerate().take(k) {
+            *o = track.output(s, &sol, picks[s], following);
+        }
+        track.record(&sol, &picks[..k], out);
         Status::OK
     }
 
-    /// The shaped modes of the eigenmodes `sol` (module docs), into `out` ([`Self::n_modes`]).
-    fn assign(&self, sol: &ModalSolution, out: &mut [Mode]) {
+    /// The map's rule at one pose (module docs): the eigenmode of each slot, into `picks`
+    /// ([`NO_MODE`] where no eigenmode strains the slot's joint).
+    fn select(&self, sol: &ModalSolution, picks: &mut [usize]) {
         match self.shaped {
             ShapedModes::Lowest(_) => {
                 // Insertion sort of the (at most MAX_FLEX_JOINTS) eigenmodes by frequency; a
@@ -502,10 +558,8 @@ impl ModalMap {
                     }
                 }
                 // The K lowest as a set, in slots ordered by the flexible joint each strains
-                // most (then by frequency), each slot evaluated as a joint-named mode among
-                // the set (module docs): no slot changes branch where two modes of the set
-                // cross, and veering pairs are blended as for joint-named modes.
-                let k = out.len().min(sol.n);
+                // most, each slot taking the member of the set that strains its joint most.
+                let k = picks.len().min(sol.n);
                 let mut claimed = [true; MAX_FLEX_JOINTS];
                 let mut slot_joint = [0usize; MAX_FLEX_JOINTS];
                 for (r, &i) in order[..k].iter().enumerate() {
@@ -514,18 +568,181 @@ impl ModalMap {
                 }
                 let slots = &mut slot_joint[..k];
                 slots.sort_unstable();
-                for (o, &f) in out.iter_mut().zip(slots.iter()) {
-                    *o = dominated_by(sol, f, &mut claimed);
+                for (p, &f) in picks.iter_mut().zip(slots.iter()) {
+                    *p = dominated_by(sol, f, &mut claimed);
                 }
             }
             ShapedModes::ByJoint(_) => {
                 // Each eigenmode is dominant for one shaped mode at most (cascade order).
                 let mut claimed = [false; MAX_FLEX_JOINTS];
-                for (o, &f) in out.iter_mut().zip(&self.mode_flex_index) {
-                    *o = dominated_by(sol, f, &mut claimed);
+                for (p, &f) in picks.iter_mut().zip(&self.mode_flex_index) {
+                    *p = dominated_by(sol, f, &mut claimed);
                 }
             }
         }
+    }
+}
+
+/// A slot without an eigenmode (its mode is NaN).
+const NO_MODE: usize = usize::MAX;
+
+/// Which eigenmode branch each shaped mode follows: the state of a streaming evaluation
+/// ([`ModalMap::modes_tracked`]). Plain data on the stack; the default is empty (the map's
+/// rule picks afresh).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ModeTrack {
+    /// Number of slots followed; 0 when empty.
+    slots: usize,
+    /// Per slot, the unit mode vector `y` (module docs) of its eigenmode at the latest call.
+    shape: [[Complex64; MAX_FLEX_JOINTS]; MAX_FLEX_JOINTS],
+    /// Per slot, that eigenmode's natural frequency, rad/s.
+    wn_rad_s: [f64; MAX_FLEX_JOINTS],
+    /// Number of entries of each `shape` (the map's flexible joints).
+    n: usize,
+    /// Per slot, the mode it gave at the latest call.
+    given: [Mode; MAX_FLEX_JOINTS],
+    /// Per slot, how far its mode still is from its eigenmode's after a handover:
+    /// `ln ω_given − ln ω_eigenmode` and `ζ_given − ζ_eigenmode`, each brought to 0 by
+    /// [`HANDOVER_STEP`] per call.
+    offset: [(f64, f64); MAX_FLEX_JOINTS],
+}
+
+impl Default for ModeTrack {
+    fn default() -> ModeTrack {
+        ModeTrack {
+            slots: 0,
+            shape: [[Complex64::new(0.0, 0.0); MAX_FLEX_JOINTS]; MAX_FLEX_JOINTS],
+            wn_rad_s: [0.0; MAX_FLEX_JOINTS],
+            n: 0,
+            given: [Mode::new(f64::NAN, f64::NAN); MAX_FLEX_JOINTS],
+            offset: [(0.0, 0.0); MAX_FLEX_JOINTS],
+        }
+    }
+}
+
+impl ModeTrack {
+    /// Forgets the branches: the next evaluation picks the slots by the map's rule.
+    pub fn clear(&mut self) {
+        self.slots = 0;
+    }
+
+    /// Whether slots are being followed.
+    pub fn is_following(&self) -> bool {
+        self.slots > 0
+    }
+
+    /// The eigenmodes of `picks` (the rule's set) reassigned to the slots whose eigenmodes
+    /// they continue: the greedy assignment by [`Self::likeness`], the most alike (slot,
+    /// member) pair first.
+    fn follow(&self, sol: &ModalSolution, picks: &mut [usize]) {
+        let k = picks.len();
+        let mut scores = [[f64::NAN; MAX_FLEX_JOINTS]; MAX_FLEX_JOINTS];
+        for (s, row) in scores.iter_mut().enumerate().take(k) {
+            for (p, score) in row.iter_mut().enumerate().take(k) {
+                if picks[p] < sol.n {
+                    *score = self.likeness(s, sol, picks[p]);
+                }
+            }
+        }
+        let mut members = [NO_MODE; MAX_FLEX_JOINTS];
+        members[..k].copy_from_slice(picks);
+        let mut placed = [false; MAX_FLEX_JOINTS];
+        let mut done = [false; MAX_FLEX_JOINTS];
+        for _ in 0..k {
+            let mut best: Option<(usize, usize, f64)> = None;
+            for s in (0..k).filter(|&s| !done[s]) {
+                for p in (0..k).filter(|&p| !placed[p]) {
+                    let score = scores[s][p];
+                    // A NaN score never wins.
+                    if best.is_none_or(|(_, _, b)| score > b) && score >= 0.0 {
+                        best = Some((s, p, score));
+                    }
+                }
+            }
+            let Some((s, p, _)) = best else {
+                break; // the rest keep the rule's order
+            };
+            picks[s] = members[p];
+            done[s] = true;
+            placed[p] = true;
+        }
+        // Slots left without a member take the members left, in the rule's order.
+        let mut rest = (0..k).filter(|&p| !placed[p]);
+        for s in (0..k).filter(|&s| !done[s]) {
+            picks[s] = rest.next().map_or(NO_MODE, |p| members[p]);
+        }
+    }
+
+    /// Slot `s`'s mode with eigenmode `i` of `sol`: the eigenmode's, or, where the slot hands
+    /// over from another eigenmode (`i` does not continue the slot's previous one), the slot's
+    /// previous mode, brought to the eigenmode's by [`HANDOVER_STEP`] per call.
+    fn output(&mut self, s: usize, sol: &ModalSolution, i: usize, following: bool) -> Mode {
+        if i >= sol.n {
+            return Mode::new(f64::NAN, f64::NAN);
+        }
+        let (wn, zeta) = (sol.wn_rad_s[i], sol.zeta[i]);
+        if !following {
+            self.offset[s] = (0.0, 0.0);
+        } else if !self.continues(s, sol, i) {
+            let given = self.given[s];
+            self.offset[s] = if given.is_valid() {
+                ((given.wn_rad_s / wn).ln(), given.zeta - zeta)
+            } else {
+                (0.0, 0.0)
+            };
+        }
+        let (ln_wn, dz) = self.offset[s];
+        if ln_wn == 0.0 && dz == 0.0 {
+            return Mode::new(wn, zeta);
+        }
+        // ζ stays a damping ratio while the eigenmode's own ζ moves under the offset.
+        let mode = Mode::new(wn * ln_wn.exp(), (zeta + dz).max(0.0));
+        let toward_zero = |x: f64| x - x.clamp(-HANDOVER_STEP, HANDOVER_STEP);
+        self.offset[s] = (toward_zero(ln_wn), toward_zero(dz));
+        mode
+    }
+
+    /// Whether eigenmode `i` of `sol` continues slot `s`'s previous eigenmode: it is the most
+    /// alike of all ([`Self::likeness`]).
+    fn continues(&self, s: usize, sol: &ModalSolution, i: usize) -> bool {
+        let own = self.likeness(s, sol, i);
+        (0..sol.n).all(|j| {
+            j == i
+                || self.likeness(s, sol, j).partial_cmp(&own) != Some(std::cmp::Ordering::Greater)
+        })
+    }
+
+    /// How much eigenmode `i` of `sol` is slot `s`'s previous eigenmode: its modal assurance
+    /// criterion `|y_sᴴ y_i|² / (|y_s|² |y_i|²)` (1 for the same shape, 0 for orthogonal ones:
+    /// the undamped modes are exactly orthogonal in `y`) divided by `1 + g /`
+    /// [`TRACK_FREQUENCY_SCALE`], `g = |ln(ω_i/ω_s)|`.
+    fn likeness(&self, s: usize, sol: &ModalSolution, i: usize) -> f64 {
+        let (mut dot, mut norm_s, mut norm_i) = (Complex64::new(0.0, 0.0), 0.0, 0.0);
+        for f in 0..self.n.min(sol.n) {
+            let (a, b) = (self.shape[s][f], sol.shape[i][f]);
+            dot += a.conj() * b;
+            norm_s += a.norm_sqr();
+            norm_i += b.norm_sqr();
+        }
+        let mac = dot.norm_sqr() / (norm_s * norm_i);
+        let gap = (sol.wn_rad_s[i] / self.wn_rad_s[s]).ln().abs();
+        mac / (1.0 + gap / TRACK_FREQUENCY_SCALE)
+    }
+
+    /// Keeps the eigenmodes of `picks` as the slots' branches and `given` as their modes; an
+    /// empty track if any slot has none (the next call then starts afresh).
+    fn record(&mut self, sol: &ModalSolution, picks: &[usize], given: &[Mode]) {
+        if picks.is_empty() || picks.iter().any(|&i| i >= sol.n) {
+            self.slots = 0;
+            return;
+        }
+        for (s, &i) in picks.iter().enumerate() {
+            self.shape[s] = sol.shape[i];
+            self.wn_rad_s[s] = sol.wn_rad_s[i];
+            self.given[s] = given[s];
+        }
+        self.slots = picks.len();
+        self.n = sol.n;
     }
 }
 
@@ -541,11 +758,10 @@ fn dominant_joint(sol: &ModalSolution, i: usize) -> usize {
     best
 }
 
-/// The eigenmode `d` that stores the largest share of its strain energy in flexible joint
-/// `f` among those not `claimed` by an earlier shaped mode (then claimed), blended with the
-/// eigenmodes that veer with it (module docs): weights `(s_i/s_d)^4 h(g_i)` against 1 for `d`.
-/// NaN if no unclaimed eigenmode strains the joint.
-fn dominated_by(sol: &ModalSolution, f: usize, claimed: &mut [bool; MAX_FLEX_JOINTS]) -> Mode {
+/// The eigenmode that stores the largest share of its strain energy in flexible joint `f`
+/// among those not `claimed` by an earlier slot (then claimed); [`NO_MODE`] if none strains
+/// the joint.
+fn dominated_by(sol: &ModalSolution, f: usize, claimed: &mut [bool; MAX_FLEX_JOINTS]) -> usize {
     let share = |i: usize| sol.strain_share[i][f];
     let mut dominant: Option<usize> = None;
     for i in (0..sol.n).filter(|&i| !claimed[i]) {
@@ -554,39 +770,13 @@ fn dominated_by(sol: &ModalSolution, f: usize, claimed: &mut [bool; MAX_FLEX_JOI
         }
     }
     let Some(d) = dominant else {
-        return Mode::new(f64::NAN, f64::NAN);
+        return NO_MODE;
     };
     claimed[d] = true;
-    let s_d = share(d);
-    if s_d.is_nan() || s_d <= 0.0 {
-        return Mode::new(f64::NAN, f64::NAN);
-    }
-    let (mut sum_w, mut wn, mut zeta) = (1.0, sol.wn_rad_s[d], sol.zeta[d]);
-    for i in (0..sol.n).filter(|&i| i != d) {
-        let gap = (sol.wn_rad_s[i] / sol.wn_rad_s[d]).ln().abs();
-        let w = (share(i) / s_d).powi(ASSIGNMENT_POWER)
-            * smooth_window(gap, VEERING_FULL_GAP, VEERING_GAP);
-        if w > 0.0 {
-            sum_w += w;
-            wn += w * sol.wn_rad_s[i];
-            zeta += w * sol.zeta[i];
-        }
-    }
-    Mode::new(wn / sum_w, zeta / sum_w)
-}
-
-/// 1 for a frequency gap `g = |ln(ω_i/ω_j)|` up to `full`, 0 from `zero` on (and for a NaN
-/// gap), a smoothstep between (continuous with its slope): `h(g)` of veering pairs with
-/// `full`, `zero` = [`VEERING_FULL_GAP`], [`VEERING_GAP`].
-#[inline]
-fn smooth_window(gap: f64, full: f64, zero: f64) -> f64 {
-    if gap <= full {
-        1.0
-    } else if gap < zero {
-        let t = (zero - gap) / (zero - full);
-        t * t * (3.0 - 2.0 * t)
+    if share(d) > 0.0 {
+        d
     } else {
-        0.0
+        NO_MODE
     }
 }
 
@@ -598,20 +788,19 @@ fn smooth_window(gap: f64, full: f64, zero: f64) -> f64 {
 /// per full step at `1e-4`, `benches/modal_step.rs`).
 pub const JACOBI_TOLERANCE: f64 = 1e-2;
 
-/// Exponent of the strain-energy share ratios that weigh a veering eigenmode against the
-/// dominant one.
-pub const ASSIGNMENT_POWER: i32 = 4;
+/// Frequency gap `|ln(ω_i/ω_s)|` that halves how alike a tracked slot and an eigenmode count
+/// ([`ModeTrack`]): 10 %. From one cycle to the next a slot's own eigenmode moves by about
+/// `1e-3` in `ln ω` and keeps its shape (likeness near 1); any other eigenmode has a nearly
+/// orthogonal shape. The gap decides only where the shapes cannot: a veering so sharp that
+/// the shapes turn by about 45° within one cycle, where the branch nearer in frequency wins.
+pub const TRACK_FREQUENCY_SCALE: f64 = 0.1;
 
-/// Frequency gap `|ln(ω_i/ω_d)|` up to which a veering eigenmode is blended with full weight
-/// (module docs).
-pub const VEERING_FULL_GAP: f64 = 0.03;
-
-/// Frequency gap `|ln(ω_i/ω_d)|` from which two eigenmodes are never blended: about 6 %.
-/// A blended mode's frequency then stays within 6 % of the dominant eigenmode's, where a ZV
-/// filter leaves at most `sin(π/2 · 0.06) ≈ 9 %` of the vibration (less with damping), and
-/// two weakly coupled joints (coupling `|M_ij|/√(M_ii M_jj)` below 3 %) swap inside the
-/// full-weight band.
-pub const VEERING_GAP: f64 = 0.06;
+/// Per call, how much of a handover's remaining gap a slot closes: `0.004` in `ln ω_n` and in
+/// `ζ`. At a 2 ms cycle that is 2/s, below the shaper's slew limit of 5/s
+/// ([`crate::multimode::MAX_LN_WN_RATE_PER_S`]), so a handover is never reported as a jump
+/// down to a 0.8 ms cycle; a handover from 15 to 31 Hz (`Δ ln ω = 0.73`) takes 0.37 s at
+/// 2 ms.
+pub const HANDOVER_STEP: f64 = 0.004;
 
 #[cfg(test)]
 mod tests {

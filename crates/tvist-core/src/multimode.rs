@@ -20,6 +20,31 @@ pub const DEFAULT_SAFETY_FACTOR: f64 = 1.5;
 /// resolution (about 1e-5 rad): the output step a replacement at rest may cause.
 pub const REST_TOLERANCE: f64 = 1e-9;
 
+/// Fastest change of a shaped mode's natural frequency the shaper follows, `|d ln ω_n/dt|`
+/// per second (1 % per cycle at 2 ms); a faster one is approached at this rate and reported
+/// ([`Status::MODE_SLEW_LIMITED`]).
+///
+/// Why 5/s: a mode that changes with the pose moves by a few 10 % over a move of 0.5 s or
+/// more, about 0.6/s on average (`1e-3` per 2 ms cycle): a margin of 8 before the limit binds.
+/// A filter's delay `τ` (half a damped period for ZV) scales with `1/ω_n`, so the limit bounds
+/// its rate `|dτ/dt| = τ |d ln ω_n/dt|` to `5 τ`: 0.17 for a ZV filter at 15 Hz (τ = 33 ms),
+/// below 1/2 for every filter with a delay under 0.1 s (ZV above 5 Hz, ZVD above 10 Hz). At
+/// `|dτ/dt| = 1` the filter would read its input standing still (the reference would stop);
+/// well below it the shaped velocity is changed by no more than that fraction. A jump between
+/// two far-apart eigenmodes (14.9 to 30.9 Hz, `Δ ln ω = 0.73`) is spread over 0.15 s.
+pub const MAX_LN_WN_RATE_PER_S: f64 = 5.0;
+
+/// Fastest change of a shaped mode's damping ratio the shaper follows, `|dζ/dt|` per second
+/// (0.01 per cycle at 2 ms); a faster one is approached at this rate and reported
+/// ([`Status::MODE_SLEW_LIMITED`]).
+///
+/// Why 5/s: ζ changes with the load of a joint (0.1 over a move, 0.2/s) and, fastest, along a
+/// branch through a veering of two modes of different damping (0.14 to 0.28 within some
+/// 50 ms of a move, about 3/s). A ZV filter's first amplitude changes by about `0.8 Δζ`
+/// (ζ near 0.1), which moves the output by `0.8 Δζ · v τ` for a velocity `v`: at the limit
+/// the shaped velocity changes by `0.8 · 5 τ`, 13 % for τ = 33 ms.
+pub const MAX_ZETA_RATE_PER_S: f64 = 5.0;
+
 /// Setup of a [`TvShaper`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct TvShaperConfig {
@@ -66,6 +91,17 @@ pub struct TvShaper<D: Dynamics> {
     dt_s: f64,
     /// The configuration the shaper was built with (a replacement of its provider reuses it).
     config: TvShaperConfig,
+    /// Consecutive cycles whose input did not change (counted up to `rest_cycles`).
+    still_cycles: usize,
+    /// Cycles of unchanged input after which every delay line holds that input alone (the
+    /// sum of the filters' capacities plus margin): the shaper is at rest and a new mode
+    /// changes nothing in its output.
+    rest_cycles: usize,
+    /// Largest factor by which a mode's `ω_n` may change in one cycle
+    /// (`exp(MAX_LN_WN_RATE_PER_S dt_s)`).
+    wn_step_factor: f64,
+    /// Largest change of a mode's `ζ` in one cycle (`MAX_ZETA_RATE_PER_S dt_s`).
+    zeta_step: f64,
 }
 
 impl<D: Dynamics> TvShaper<D> {
@@ -149,6 +185,12 @@ impl<D: Dynamics> TvShaper<D> {
         for max_delay in max_delays_s {
             filters.push(ModeFilter::new(shaper, n_dof, dt_s, max_delay, interp)?);
         }
+        // A Lagrange read of order 3 reaches two samples past the delay: 4 per filter is ample.
+        let rest_cycles = filters
+            .iter()
+            .map(|f| (f.max_delay_s() / dt_s).ceil() as usize + 4)
+            .sum::<usize>()
+            + 1;
         Ok(TvShaper {
             dynamics,
             filters,
@@ -158,6 +200,10 @@ impl<D: Dynamics> TvShaper<D> {
             n_dof,
             dt_s,
             config: config.clone(),
+            still_cycles: 0,
+            rest_cycles,
+            wn_step_factor: (MAX_LN_WN_RATE_PER_S * dt_s).exp(),
+            zeta_step: MAX_ZETA_RATE_PER_S * dt_s,
         })
     }
 
@@ -170,6 +216,8 @@ impl<D: Dynamics> TvShaper<D> {
             f.forget_mode();
         }
         self.designed = false;
+        self.dynamics.restart();
+        self.still_cycles = self.rest_cycles;
     }
 
     /// Whether the shaper is between moves: not started, or every filter's whole delay line
@@ -235,6 +283,7 @@ impl<D: Dynamics> TvShaper<D> {
             f.forget_mode();
         }
         self.designed = false;
+        self.dynamics.restart();
     }
 
     /// One control cycle: shapes `input` (length `n_dof`) into `output` (length `n_dof`).
@@ -266,7 +315,9 @@ impl<D: Dynamics> TvShaper<D> {
         ) else {
             return Status::BAD_LENGTH;
         };
+        let moves = self.input.moves(input);
         let (mut stage, mut status, first) = self.input.accept_fixed(input);
+        self.count_rest(moves, first);
         if first {
             self.start_at_input();
         }
@@ -278,6 +329,7 @@ impl<D: Dynamics> TvShaper<D> {
             }
         } else {
             status |= self.ask_modes();
+            status |= self.limit_mode_slew();
             // Every filter takes its mode first (a design never depends on the signal), then
             // the signal runs through the cascade.
             for (filter, &mode) in self.filters.iter_mut().zip(&self.modes) {
@@ -297,13 +349,16 @@ impl<D: Dynamics> TvShaper<D> {
         if input.len() != self.n_dof || output.len() != self.n_dof {
             return Status::BAD_LENGTH;
         }
+        let moves = self.input.moves(input);
         let (mut status, first) = self.input.accept(input);
+        self.count_rest(moves, first);
         if first {
             self.start_at_input();
         }
         let constant = self.designed && self.dynamics.modes_are_constant();
         if !constant {
             status |= self.ask_modes();
+            status |= self.limit_mode_slew();
         }
         // Filter m shapes the output of filter m − 1 (the held input for the first).
         let mut stage: &[f64] = self.input.value();
@@ -330,6 +385,59 @@ impl<D: Dynamics> TvShaper<D> {
             None => self.input.value(),
         };
         self.dynamics.modes(previous_output, &mut self.modes)
+    }
+
+    /// Counts the cycles of unchanged input; at the cycle the shaper comes to rest (and at a
+    /// first sample, where it starts at rest) the provider may choose its modes afresh
+    /// ([`Dynamics::restart`]): every delay line then holds one value, so no choice of modes
+    /// changes the output.
+    #[inline]
+    fn count_rest(&mut self, moves: bool, first: bool) {
+        if first {
+            self.still_cycles = self.rest_cycles;
+            self.dynamics.restart();
+        } else if moves {
+            self.still_cycles = 0;
+        } else if self.still_cycles < self.rest_cycles {
+            self.still_cycles += 1;
+            if self.still_cycles == self.rest_cycles {
+                self.dynamics.restart();
+            }
+        }
+    }
+
+    /// Limits each mode's change from the one its filter holds to the per-cycle steps of
+    /// [`MAX_LN_WN_RATE_PER_S`] and [`MAX_ZETA_RATE_PER_S`] ([`Status::MODE_SLEW_LIMITED`]
+    /// where that binds), except at rest, where a mode changes nothing in the output. Invalid
+    /// modes are left to the filters (they hold theirs).
+    #[inline]
+    fn limit_mode_slew(&mut self) -> Status {
+        if self.still_cycles >= self.rest_cycles {
+            return Status::OK;
+        }
+        let mut status = Status::OK;
+        for (mode, filter) in self.modes.iter_mut().zip(&self.filters) {
+            let Some(held) = filter.held_mode() else {
+                continue;
+            };
+            if !mode.is_valid() {
+                continue;
+            }
+            // max/min rather than clamp: no panic whatever the values.
+            let wn = mode
+                .wn_rad_s
+                .max(held.wn_rad_s / self.wn_step_factor)
+                .min(held.wn_rad_s * self.wn_step_factor);
+            let zeta = mode
+                .zeta
+                .max(held.zeta - self.zeta_step)
+                .min(held.zeta + self.zeta_step);
+            if wn != mode.wn_rad_s || zeta != mode.zeta {
+                *mode = Mode::new(wn, zeta);
+                status |= Status::MODE_SLEW_LIMITED;
+            }
+        }
+        status
     }
 
     /// At rest on the held input: history and outputs (so the previous output) equal it.
@@ -360,7 +468,8 @@ impl<D: Dynamics> TvShaper<D> {
         self.filters.iter().map(ModeFilter::delay_s).sum()
     }
 
-    /// The modes used in the latest cycle, as returned by the provider (possibly invalid).
+    /// The modes used in the latest cycle: the provider's (possibly invalid), each limited to
+    /// the change a cycle allows ([`MAX_LN_WN_RATE_PER_S`], [`MAX_ZETA_RATE_PER_S`]).
     pub fn current_modes(&self) -> &[Mode] {
         &self.modes
     }

@@ -35,13 +35,17 @@ pub trait ModeLaw {
     fn required_joints(&self) -> usize;
     /// Whether the law reads gravity torques.
     fn uses_gravity(&self) -> bool;
-    /// Modes from the robot's inertias (or mass matrix) and gravity torques at one pose.
-    /// Allocation-free; invalid modes for input that gives none.
+    /// What the law carries from one cycle to the next (the modal map: the eigenmode branch
+    /// each slot follows); the default is the state of a fresh start.
+    type Track: Clone + core::fmt::Debug + Default;
+    /// Modes from the robot's inertias (or mass matrix) and gravity torques at one pose,
+    /// continuing `track`. Allocation-free; invalid modes for input that gives none.
     fn modes_from_robot(
         &self,
         inertia: &[f64],
         n_dof: usize,
         tau_g: &[f64],
+        track: &mut Self::Track,
         out: &mut [Mode],
     ) -> Status;
     /// The setup error for mode `m`, invalid at pose `q` where the robot gave `inertia`.
@@ -54,7 +58,7 @@ pub trait ModeLaw {
 
 /// Per-cycle modes from `robot` and a mode law. Allocation-free after construction.
 #[derive(Debug, Clone)]
-pub struct RobotModes<L> {
+pub struct RobotModes<L: ModeLaw> {
     robot: Robot,
     law: L,
     /// Joint inertias (`n`) or mass matrix (`n × n`) of the latest evaluation, kg m² (only
@@ -62,6 +66,8 @@ pub struct RobotModes<L> {
     inertia: Vec<f64>,
     tau_g: Vec<f64>,
     slowest: Vec<Mode>,
+    /// The law's state carried from cycle to cycle ([`ModeLaw::Track`]).
+    track: L::Track,
     last: LastCall,
 }
 
@@ -107,6 +113,7 @@ impl<L: ModeLaw> RobotModes<L> {
             tau_g: vec![0.0; n],
             slowest: vec![Mode::new(f64::INFINITY, 0.0); law.n_modes()],
             last: LastCall::new(n, law.n_modes()),
+            track: L::Track::default(),
             robot,
             law,
         };
@@ -123,6 +130,8 @@ impl<L: ModeLaw> RobotModes<L> {
         let mut modes = vec![Mode::new(0.0, 0.0); self.law.n_modes()];
         for k in 1..=VALIDATION_POSES {
             halton_pose_with(k, &primes, &mut q);
+            // Unrelated poses: each is a fresh start.
+            self.restart();
             self.modes(&q, &mut modes);
             for (m, mode) in modes.iter().enumerate() {
                 if !mode.is_valid() {
@@ -133,6 +142,7 @@ impl<L: ModeLaw> RobotModes<L> {
                 *s = Mode::new(s.wn_rad_s.min(mode.wn_rad_s), s.zeta.max(mode.zeta));
             }
         }
+        self.restart();
         self.law
             .lower_frequency_bound(&self.robot, &self.inertia, &mut self.slowest);
         Ok(())
@@ -189,7 +199,7 @@ impl<L: ModeLaw> Dynamics for RobotModes<L> {
         let n = self.robot.n_dof();
         let status = self
             .law
-            .modes_from_robot(&self.inertia, n, &self.tau_g, out);
+            .modes_from_robot(&self.inertia, n, &self.tau_g, &mut self.track, out);
         self.last.record(q, out, status);
         status
     }
@@ -204,6 +214,11 @@ impl<L: ModeLaw> Dynamics for RobotModes<L> {
 
     fn n_dof(&self) -> Option<usize> {
         Some(self.robot.n_dof())
+    }
+
+    fn restart(&mut self) {
+        self.track = L::Track::default();
+        self.last.valid = false;
     }
 }
 

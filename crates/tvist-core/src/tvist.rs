@@ -311,6 +311,12 @@ impl ModeFilter {
         }
     }
 
+    /// The mode the filter holds (the last valid one it took), if any.
+    #[inline]
+    pub fn held_mode(&self) -> Option<Mode> {
+        self.shaping.then_some(self.held)
+    }
+
     /// The output of the latest cycle.
     #[inline]
     pub fn output(&self) -> &[f64] {

@@ -7,7 +7,9 @@ mod robot_support;
 mod alloc_support;
 
 use alloc_support::{allocations_in, the_counter_sees_this_thread_only};
-use tvist_core::{FlexJoint, LoadLaw, ModalDynamics, ModalMap, Mode, ShapedModes, ShaperKind};
+use tvist_core::{
+    FlexJoint, LoadLaw, ModalDynamics, ModalMap, Mode, ModeTrack, ShapedModes, ShaperKind,
+};
 
 fn ur5e_like_map() -> ModalMap {
     let law = |v0: f64, v1: f64, v2: f64| LoadLaw {
@@ -70,8 +72,15 @@ fn modal_map_provider_and_shaper_never_allocate() {
         let lowest = map.shaping_lowest(k).expect("valid");
         assert_eq!(lowest.shaped_modes(), &ShapedModes::Lowest(k));
         let mut modes = vec![Mode::new(0.0, 0.0); k];
+        let mut track = ModeTrack::default();
         let n = allocations_in(|| {
             lowest.modes_from_mass_matrix(&mass, 6, &tau, &mut modes);
+            // Tracked: the first call picks by the rule, the next ones follow the branches.
+            for _ in 0..3 {
+                lowest.modes_tracked(&mass, 6, &tau, &mut track, &mut modes);
+            }
+            lowest.modes_tracked(&mass[..30], 6, &tau, &mut track, &mut modes);
+            lowest.modes_tracked(&[f64::NAN; 36], 6, &tau, &mut track, &mut modes);
             lowest.modes_from_mass_matrix(&mass[..30], 6, &tau, &mut modes);
             lowest.modes_from_mass_matrix(&[f64::NAN; 36], 6, &tau, &mut modes);
         });

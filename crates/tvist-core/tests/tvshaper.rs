@@ -226,8 +226,9 @@ fn every_filter_takes_its_mode_at_the_previous_final_output() {
     }
 }
 
-/// Modes that change every cycle; `zeta_every` > 1 keeps ζ for that many cycles (only ω_n
-/// changes in between).
+/// Modes that change every cycle, as fast as the shaper follows (ω_n by up to 0.85 % per
+/// cycle, below the 1 % of `MAX_LN_WN_RATE_PER_S` at 2 ms); `zeta_every` > 1 keeps ζ for that
+/// many cycles (only ω_n changes in between).
 struct Changing {
     k: usize,
     zeta_every: usize,
@@ -237,7 +238,7 @@ impl Changing {
     fn mode(&self) -> Mode {
         let z = (self.k / self.zeta_every) as f64;
         Mode::new(
-            40.0 + 7.0 * (0.37 * self.k as f64).sin(),
+            40.0 + 7.0 * (0.04 * self.k as f64).sin(),
             0.1 + 0.08 * (0.011 * z).sin(),
         )
     }

@@ -179,14 +179,17 @@ impl PyModalMap {
 
     /// Shaped modes for every pose: mass matrices (n_poses, n_dof * n_dof) row-major, gravity
     /// torques (n_poses, n_dof) or None when the map reads none -> (n_poses, n_modes, 2) of
-    /// (wn_rad_s, zeta); NaN where the eigenproblem has no valid solution.
-    #[pyo3(signature = (mass_kg_m2, n_dof, gravity_torque_nm=None))]
+    /// (wn_rad_s, zeta); NaN where the eigenproblem has no valid solution. `tracked`: the
+    /// poses are a path, each slot following its eigenmode branch from the first pose on (as
+    /// the streaming shaper does); otherwise the map's rule at each pose alone.
+    #[pyo3(signature = (mass_kg_m2, n_dof, gravity_torque_nm=None, tracked=false))]
     fn modes_from_mass_matrix_many<'py>(
         &self,
         py: Python<'py>,
         mass_kg_m2: PyReadonlyArray2<'py, f64>,
         n_dof: usize,
         gravity_torque_nm: Option<PyReadonlyArray2<'py, f64>>,
+        tracked: bool,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let need = self.inner.required_joints();
         if n_dof < need {
@@ -216,16 +219,21 @@ impl PyModalMap {
         let mut modes = vec![Mode::new(0.0, 0.0); m];
         let mut out = vec![0.0; n * m * 2];
         let nn = n_dof * n_dof;
+        let mut track = core::ModeTrack::default();
         for (r, chunk) in out.chunks_exact_mut(2 * m).enumerate() {
             let tau_row = if tau.is_empty() {
                 &[][..]
             } else {
                 &tau[r * n_dof..(r + 1) * n_dof]
             };
-            self.inner.modes_from_mass_matrix(
+            if !tracked {
+                track.clear();
+            }
+            self.inner.modes_tracked(
                 &mass[r * nn..(r + 1) * nn],
                 n_dof,
                 tau_row,
+                &mut track,
                 &mut modes,
             );
             for (pair, mode) in chunk.chunks_exact_mut(2).zip(&modes) {

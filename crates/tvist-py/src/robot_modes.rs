@@ -33,6 +33,8 @@ pub fn modes_at<L: ModeLaw>(
     let q = q.as_slice()?;
     check_len("q", q.len(), provider.robot().n_dof())?;
     let mut out = vec![Mode::new(0.0, 0.0); provider.n_modes()];
+    // At `q` alone: nothing carried over from an earlier call (a modal map's branches).
+    provider.restart();
     provider.modes(q, &mut out);
     Ok(pairs(&out))
 }
@@ -61,7 +63,7 @@ macro_rules! robot_modes_class {
                 Ok($class { inner })
             }
 
-            /// Modes [(wn_rad_s, zeta), ...] at configuration q (invalid ones as NaN).
+            /// Modes [(wn_rad_s, zeta), ...] at configuration q alone (invalid ones as NaN).
             fn modes(&mut self, q: numpy::PyReadonlyArray1<'_, f64>) -> PyResult<Vec<(f64, f64)>> {
                 $crate::robot_modes::modes_at(&mut self.inner, q)
             }

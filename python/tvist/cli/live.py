@@ -24,6 +24,7 @@ def _shaper(args: argparse.Namespace, Q):  # noqa: N803 (the move, as elsewhere)
     from tvist.cli.args import map_dynamics, map_from_args, payload_from_args, robot_from_args
     from tvist.cli.shape import parse_modes
     from tvist.dynmap import range_report_of
+    from tvist.modal_residual import set_modes_for_move
 
     n_dof = Q.shape[1]
     if args.unshaped:
@@ -45,7 +46,12 @@ def _shaper(args: argparse.Namespace, Q):  # noqa: N803 (the move, as elsewhere)
         report = range_report_of(provider, Q)
         if report is not None:
             print(f"tvist run: warning: {report}", file=sys.stderr)
-    return tvist.TvShaper(provider, dt_s=args.dt_s, n_dof=n_dof, shaper=args.shaper)
+    shaper = tvist.TvShaper(provider, dt_s=args.dt_s, n_dof=n_dof, shaper=args.shaper)
+    # A frequency-ranked modal map shapes the modes this move needs.
+    choice = set_modes_for_move(shaper, provider, Q, args.dt_s)
+    if choice is not None:
+        print(f"shaping the {choice.n_modes} lowest mode(s) of the modal map for this move")
+    return shaper
 
 
 def _learner(args: argparse.Namespace):

@@ -394,8 +394,11 @@ def run_motion(
                 f"{motion.name:8} {'slow down instead':36} {len(slow.candidates) - 1} profiles "
                 f"({time.perf_counter() - start:.1f} s)"
             )
+    # A map row's modes at the end pose: those its shaper shaped there (a frequency-ranked
+    # map shapes the modes the move needs), else the map's.
+    shaped_end = {r.method.label: r.details.get("end_modes") for r in runs}
     map_end = {
-        m.label: m.dynmap.modes(robot, motion.q_end)
+        m.label: shaped_end.get(m.label) or m.dynmap.modes(robot, motion.q_end)
         for m in methods
         if m.dynmap is not None and m.applies_to(motion)
     }

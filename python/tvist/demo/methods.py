@@ -115,8 +115,15 @@ def _unshaped(ctx: MotionContext) -> Reference:
     return Reference(np.array(ctx.trajectory.q), {"shaper": None})
 
 
-def _run_tv_shaper(shaper: Any, ctx: MotionContext, provider_name: str) -> Reference:
+def _run_tv_shaper(
+    shaper: Any, ctx: MotionContext, provider_name: str, provider: Any = None
+) -> Reference:
+    """Shapes the motion with ``shaper``; with ``provider`` (the shaper's) a frequency-ranked
+    modal map shapes the modes this move needs (:func:`tvist.modal_map.set_modes_for_move`)."""
+    from tvist.modal_map import set_modes_for_move
+
     q = np.ascontiguousarray(ctx.trajectory.q)
+    set_modes_for_move(shaper, provider, ctx.trajectory)
     shaper.reset(np.ascontiguousarray(q[0]))
     shaped = np.array(shaper.shape(q))
     counts = dict(shaper.status_counts)
@@ -133,6 +140,8 @@ def _run_tv_shaper(shaper: Any, ctx: MotionContext, provider_name: str) -> Refer
             "shaper": f"{TVIST_SHAPER} x {shaper.n_modes} modes (FD-TVIST cascade)",
             "provider": provider_name,
             "delay_at_end_pose_s": float(shaper.delay_s),
+            # The modes shaped at the end pose (the shaper is at rest there): their delay.
+            "end_modes": [(float(w), float(z)) for w, z in shaper.current_modes],
             "status_counts": counts,
         },
     )
@@ -163,7 +172,7 @@ def fd_tvist_map(key: str, label: str, dynmap: DynamicMap) -> Method:
             provider, ctx.trajectory.dt_s, ctx.trajectory.n_dof, shaper=TVIST_SHAPER
         )
         source = dynmap.metadata.get("source") or "dynamic map"
-        ref = _run_tv_shaper(shaper, ctx, f"MapDynamics: {source}")
+        ref = _run_tv_shaper(shaper, ctx, f"MapDynamics: {source}", provider)
         return Reference(ref.q, {**ref.details, "map_use": map_use(dynmap, ctx.robot, ref.q)})
 
     return Method(key=key, label=label, build=build, dynmap=dynmap)

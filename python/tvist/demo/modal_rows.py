@@ -27,7 +27,8 @@ DEMO_FLEX_JOINTS = (0, 1, 2, 3, 4)
 
 
 def fd_tvist_modal(key: str, label: str, modal: ModalMap) -> Method:
-    """A two-mode ZV FD-TVIST row driven by ``modal`` through :class:`tvist.MapDynamics`."""
+    """A ZV FD-TVIST row driven by ``modal`` through :class:`tvist.MapDynamics` (a
+    frequency-ranked map shapes the modes each move needs)."""
 
     def build(ctx: MotionContext) -> Reference:
         provider = tvist.MapDynamics(ctx.robot, modal)
@@ -35,7 +36,7 @@ def fd_tvist_modal(key: str, label: str, modal: ModalMap) -> Method:
             provider, ctx.trajectory.dt_s, ctx.trajectory.n_dof, shaper=TVIST_SHAPER
         )
         source = modal.metadata.get("source") or "modal map"
-        return _run_tv_shaper(shaper, ctx, f"MapDynamics (modal): {source}")
+        return _run_tv_shaper(shaper, ctx, f"MapDynamics (modal): {source}", provider)
 
     # ``dynmap`` only needs ``modes(robot, q)`` (the mode tracks of the report).
     return Method(key=key, label=label, build=build, dynmap=modal)  # type: ignore[arg-type]

@@ -19,7 +19,8 @@ its mode suffice: on a 26-pose simulated campaign of ``family:ur5e:14`` whose re
 base and shoulder modes only, the elbow's stiffness came out with a 4 % standard error and
 its mode 12.6 % RMS off the arm's true elbow mode.
 
-:func:`shaping_field` turns the report into the map file's field naming the shaped modes.
+:func:`shaping_field` turns the report into the map file's field naming the shaped modes: the
+``K`` lowest (frequency-ranked), ``K`` covering every shaped physical mode.
 """
 
 from __future__ import annotations
@@ -81,11 +82,21 @@ def physical_modes(fit: Any) -> list[dict[str, Any]]:
 
 def shaping_field(report: list[dict[str, Any]]) -> dict[str, Any]:
     """The map file's field naming the shaped modes of ``report`` (:func:`physical_modes`):
-    ``{"mode_joints": [joints of the shaped modes, ascending]}``.
+    ``{"shaped_modes": K}``, the frequency-ranked form, with ``K`` the largest
+    ``frequency_rank`` of the shaped physical modes: the ``K`` lowest eigenmodes then include
+    every shaped physical mode at every pose of the campaign.
 
-    The one place that chooses the field: the frequency-ranked form ``{"shaped_modes": K}``
-    would be ``K = max(frequency_rank of the shaped modes)`` (the K lowest eigenmodes then
-    include every shaped physical mode at every pose).
+    The one place that chooses the field. Frequency-ranked because the streaming shaper then
+    follows each of the ``K`` lowest eigenmodes along a motion (two that cross or veer keep
+    their filters) and shapes per move only the lowest ones that move makes ring
+    (:func:`tvist.modal_map.set_modes_for_move`, at most ``K``); a joint-named mode would
+    follow the one eigenmode that strains its joint most, which can be another far-apart one
+    at the next pose. Raises ``ValueError`` if no mode was identified often enough.
     """
-    joints = [m["joint"] for m in report if m["shaped"]]
-    return {"mode_joints": sorted(joints)}
+    ranks = [m["frequency_rank"] for m in report if m["shaped"]]
+    if not ranks:
+        raise ValueError(
+            f"no mode was identified at {MIN_IDENTIFIED_SHARE:.0%} of the poses or more: "
+            "nothing to shape (excite more poses, or check the records' ringing modes)"
+        )
+    return {"shaped_modes": int(max(ranks))}

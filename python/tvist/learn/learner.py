@@ -265,16 +265,18 @@ class MapLearner:
             modal_map = self.converted.map
         if not isinstance(modal_map, ModalMap):
             raise ValueError("modal_map: the learner refines a modal map or a paper10 map")
-        if modal_map.mode_joints is None:
-            raise ValueError(
-                "modal_map: the learner refines a modal map that names its modes by joint "
-                "(mode_joints), not one shaping its lowest-frequency modes (shaped_modes)"
-            )
         self.robot = robot
         self.prior = modal_map
         self.prior_log_sigma = prior_log_sigma
         self.flex_joints = [int(f["joint"]) for f in modal_map.flex_joints]
-        self.mode_joints = [int(j) for j in modal_map.mode_joints]
+        #: The modes the learner observes and refines, named by the joint each strains most.
+        self.mode_joints = _observed_mode_joints(modal_map)
+        #: The learned map shapes what the prior shaped (its mode_joints or shaped_modes).
+        self._shaping = (
+            {"mode_joints": self.mode_joints}
+            if modal_map.mode_joints is not None
+            else {"shaped_modes": modal_map.shaped_modes}
+        )
         span = np.ptp(
             robot.gravity_torque_many(random_poses(robot, 50, np.random.default_rng(0))), axis=0
         )
@@ -725,4 +727,20 @@ class MapLearner:
         meta = dict(self.prior.metadata)
         meta["learned"] = self.provenance()
         meta["source"] = f"learned from {len(self.history)} logs; prior: {meta.get('source')}"
-        return ModalMap(self._map.flex_joints, self.mode_joints, meta)
+        return ModalMap(self._map.flex_joints, metadata=meta, **self._shaping)
+
+
+def _observed_mode_joints(modal_map: ModalMap) -> list[int]:
+    """The joints whose modes the learner observes and refines: a joint-named map's
+    ``mode_joints``; for a frequency-ranked map (``shaped_modes``) the joints of the physical
+    modes its fit shaped (``metadata.fit_statistics.physical_modes``), else base and shoulder
+    among its flexible joints."""
+    if modal_map.mode_joints is not None:
+        return [int(j) for j in modal_map.mode_joints]
+    report = (modal_map.metadata.get("fit_statistics") or {}).get("physical_modes") or []
+    shaped = [int(m["joint"]) for m in report if m.get("shaped")]
+    flex = [int(f["joint"]) for f in modal_map.flex_joints]
+    joints = [j for j in shaped if j in flex] or [j for j in (0, 1) if j in flex]
+    if not joints:
+        raise ValueError("modal_map: the learner needs the base or the shoulder flexible")
+    return sorted(joints)

@@ -141,11 +141,24 @@ def shape_samples(
         shaper_ = tvist.TvShaper(
             _provider(dynamics), dt_s=dt_s, n_dof=q.shape[1], shaper=shaper, interp=interp, **kwargs
         )
+        # A frequency-ranked modal map shapes the K lowest modes this move needs.
+        from tvist.modal_residual import set_modes_for_move
+
+        choice = set_modes_for_move(shaper_, dynamics, q, dt_s)
+        if choice is not None:
+            end_modes = sorted(end_modes)[: choice.n_modes]
         end_delay = tvist.convolve(*(tvist.shaper(shaper, w, z) for w, z in end_modes))
         # Hold the end pose until every impulse's interpolation stencil reads only it.
         n_tail = math.ceil(end_delay.duration_s / dt_s - 1e-9) + _STENCIL_LEAD[interp]
         padded = np.vstack([q, np.repeat(q[-1:], n_tail, axis=0)])
         out = shaper_.shape(padded)
+        # The shaper's own delay at the end (its filters keep the modes they followed along the
+        # move until it rests) may exceed that of the modes at the end pose: hold on until it
+        # too has read only the end pose.
+        extra = math.ceil(shaper_.delay_s / dt_s - 1e-9) + _STENCIL_LEAD[interp] - n_tail
+        if extra > 0:
+            out = np.vstack([out, shaper_.shape(np.repeat(q[-1:], extra, axis=0))])
+            n_tail += extra
         return out, n_tail * dt_s, end_modes, math.nan, dict(shaper_.status_counts)
     result = tvist.zero_delay(
         q,

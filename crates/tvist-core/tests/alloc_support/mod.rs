@@ -109,6 +109,8 @@ pub fn assert_robot_provider_never_allocates<D: tvist_core::Dynamics>(
             provider.modes(q, &mut modes);
         }
         provider.modes(&[0.0; 4], &mut modes);
+        provider.restart();
+        provider.modes(&poses[0], &mut modes);
     });
     assert_eq!(n, 0, "{name}::modes allocated {n} times");
 
@@ -121,6 +123,12 @@ pub fn assert_robot_provider_never_allocates<D: tvist_core::Dynamics>(
             // Large jumps between random poses make the modes change every cycle.
             statuses |= shaper.step(q, &mut out);
         }
+        // At rest on the last pose (longer than any delay line): the provider restarts.
+        if let Some(q) = poses.last() {
+            for _ in 0..2000 {
+                statuses |= shaper.step(q, &mut out);
+            }
+        }
         let mut bad = [0.0; 6];
         bad[2] = f64::NAN;
         statuses |= shaper.step(&bad, &mut out);
@@ -128,4 +136,6 @@ pub fn assert_robot_provider_never_allocates<D: tvist_core::Dynamics>(
     });
     assert_eq!(n, 0, "TvShaper<{name}>::step allocated {n} times");
     assert!(statuses.contains(Status::INPUT_HELD) && statuses.contains(Status::BAD_LENGTH));
+    // The modes of random poses jump: the slew limit binds (and allocates nothing).
+    assert!(statuses.contains(Status::MODE_SLEW_LIMITED));
 }
