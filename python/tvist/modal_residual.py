@@ -140,6 +140,11 @@ def _flex_system(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Per pose of ``q`` ``(n, n_dof)``: ``M_ff``, ``M_f·``, ``K``, ``C`` (diagonals) and
     the flange's translational Jacobian on the flexible joints."""
+    if modal_map.link_hinges:
+        raise ValueError(
+            "link_hinges: the residual vibration of a move is modelled for flexible joints "
+            "only; a map with bending links cannot choose its modes this way"
+        )
     joints = [int(f["joint"]) for f in modal_map.flex_joints]
     mass = robot.mass_matrix_many(q)
     laws = modal_map.core.joint_laws_many(np.ascontiguousarray(robot.gravity_torque_many(q)))

@@ -264,6 +264,11 @@ class MapLearner:
                 "modal_map: the learner refines a modal map that names its modes by joint "
                 "(mode_joints), not one shaping its lowest-frequency modes (shaped_modes)"
             )
+        if modal_map.link_hinges:
+            raise ValueError(
+                "modal_map: the learner refines the joints of a modal map with rigid links, "
+                "not one with link_hinges (bending links)"
+            )
         self.robot = robot
         self.prior = modal_map
         self.prior_log_sigma = prior_log_sigma
