@@ -25,6 +25,13 @@ poses: a map against measured modes); ``tracked=True`` evaluates a path of poses
 shaper does. Once the shaper rests at the end of a move its modes (and delay) are the rule's
 at the end pose.
 
+**Bending links** (``link_hinges``, optional): a link that bends is a lumped hinge pair about
+the two axes perpendicular to it, at ``at_fraction`` of its length, with a spring
+``stiffness_nm_per_rad`` and a damper ``damping_nms_per_rad`` about each axis; the link's
+inertia is split between its halves so that with straight hinges the arm is the rigid one.
+The flexible coordinates are then the joints plus two per hinge (at most 9 in all) and
+``M_ff`` is the mass-matrix block of the hinged arm (:meth:`tvist.Robot.with_link_hinges`).
+
 Stiffness and damping grow with the static load ``L`` (gravity
 torque, N m): ``v(L) = v_0 + v_1 |L|_s + v_2 L²``; the stiffness of joint ``j`` reads its own
 gravity torque, its damping that of ``damping_load_joint``.
@@ -39,7 +46,9 @@ Python, Rust and C; errors name the field path, e.g. ``flex_joints[1].stiffness_
      "mode_joints": [0, 1],          (or "shaped_modes": 3: exactly one of the two)
      "flex_joints": [{"joint": 0, "stiffness_nm_per_rad": [k_0, k_1, k_2],
                       "damping_nms_per_rad": [c_0, c_1, c_2], "damping_load_joint": 1},
-                     ...]}
+                     ...],
+     "link_hinges": [{"link": 1, "at_fraction": 0.5, "stiffness_nm_per_rad": k_h,
+                      "damping_nms_per_rad": c_h}, ...]}       (optional; rigid links without)
 
 ``metadata`` is as in a paper10 map file (:mod:`tvist.dynmap`): ``metadata.robot`` names the
 robot the map was identified on, and :class:`ModalDynamics` refuses the map for another
@@ -58,6 +67,7 @@ from tvist import _core
 from tvist.map_files import MapDocument, RobotModesMixin
 from tvist.modal_residual import ModeResidual, ShapingChoice, modes_to_shape, set_modes_for_move
 from tvist.robots import Robot
+from tvist.robots._robot import HingedArm
 
 __all__ = [
     "KIND",
@@ -109,7 +119,11 @@ class ModalMap(MapDocument):
         ``robot``, ``source``, ``fit_statistics`` and anything else JSON-ready.
     shaped_modes
         Instead of ``mode_joints``: the number K of lowest-frequency modes shaped, in
-        frequency order (1 to the number of flexible joints).
+        frequency order (1 to the number of flexible coordinates).
+    link_hinges
+        Bending links: one mapping per hinged link with ``link``, ``at_fraction``,
+        ``stiffness_nm_per_rad`` and ``damping_nms_per_rad`` (module docstring); none by
+        default.
 
     Raises
     ------
@@ -126,6 +140,7 @@ class ModalMap(MapDocument):
         metadata: Mapping[str, Any] | None = None,
         *,
         shaped_modes: int | None = None,
+        link_hinges: Sequence[Mapping[str, Any]] | None = None,
     ) -> None:
         if isinstance(flex_joints, (str, bytes)) or not isinstance(flex_joints, Sequence):
             raise ValueError("flex_joints: must be a list of flexible-joint objects")
@@ -151,6 +166,8 @@ class ModalMap(MapDocument):
             **selection,
             "flex_joints": _plain(flex_joints),
         }
+        if link_hinges:
+            document["link_hinges"] = _plain(link_hinges)
         core, self.metadata = _core.map_from_document(document)
         self._core: _core.ModalMap = core
 
@@ -163,6 +180,19 @@ class ModalMap(MapDocument):
     def core(self) -> _core.ModalMap:
         """The Rust map (pass-through for :class:`ModalDynamics`)."""
         return self._core
+
+    @property
+    def link_hinges(self) -> list[dict[str, Any]]:
+        """The bending links (see the constructor), in link order; empty for rigid links."""
+        return self._core.link_hinges
+
+    def evaluated_arm(self, robot: Robot) -> Robot | HingedArm:
+        """The arm whose mass matrix the map reads: ``robot`` itself, or with link hinges
+        the hinged arm (:meth:`tvist.Robot.with_link_hinges`)."""
+        hinges = self.link_hinges
+        if not hinges:
+            return robot
+        return robot.with_link_hinges([(h["link"], h["at_fraction"]) for h in hinges])
 
     @property
     def flex_joints(self) -> list[dict[str, Any]]:
@@ -224,8 +254,9 @@ class ModalMap(MapDocument):
         (payload included): ``(n_poses, n_modes, 2)``; ``tracked`` as in
         :meth:`modes_from_mass_matrix_many` (``q`` a path)."""
         q = np.ascontiguousarray(np.atleast_2d(q), dtype=float)
-        tau = robot.gravity_torque_many(q) if self.uses_gravity else None
-        return self.modes_from_mass_matrix_many(robot.mass_matrix_many(q), tau, tracked=tracked)
+        arm = self.evaluated_arm(robot)
+        tau = arm.gravity_torque_many(q) if self.uses_gravity else None
+        return self.modes_from_mass_matrix_many(arm.mass_matrix_many(q), tau, tracked=tracked)
 
     def modes(self, robot: Robot, q: Sequence[float] | np.ndarray) -> list[tuple[float, float]]:
         """Shaped modes ``[(wn_rad_s, zeta), ...]`` at configuration ``q`` of ``robot``."""

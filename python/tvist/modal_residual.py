@@ -141,6 +141,11 @@ def _flex_system(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Per pose of ``q`` ``(n, n_dof)``: ``M_ff``, ``M_f·``, ``K``, ``C`` (diagonals) and
     the flange's translational Jacobian on the flexible joints."""
+    if modal_map.link_hinges:
+        raise ValueError(
+            "link_hinges: the residual vibration of a move is modelled for flexible joints "
+            "only; a map with bending links cannot choose its modes this way"
+        )
     joints = [int(f["joint"]) for f in modal_map.flex_joints]
     mass = robot.mass_matrix_many(q)
     laws = modal_map.core.joint_laws_many(np.ascontiguousarray(robot.gravity_torque_many(q)))
@@ -331,12 +336,17 @@ def set_modes_for_move(
     ``move``: the move's :class:`~tvist.trajectory.Trajectory`, or its reference samples
     ``(n_samples, n_dof)`` on the grid ``dt_s`` (velocity and acceleration by differences, the
     move ending at its last change). Returns the choice, or ``None`` (nothing changed) for any
-    other provider or map. ``K`` is at most the map's own ``shaped_modes``.
+    other provider or map, and for a map with bending links (``link_hinges``), whose ``K``
+    lowest modes all stay shaped. ``K`` is at most the map's own ``shaped_modes``.
     """
     from tvist.modal_map import ModalMap
 
     modal = getattr(provider, "dynmap", None)
     if not isinstance(modal, ModalMap) or modal.shaped_modes is None:
+        return None
+    if modal.link_hinges:
+        # The residual model (:func:`modes_to_shape`) covers flexible joints only: with bending
+        # links every one of the map's K lowest modes stays shaped.
         return None
     if not isinstance(move, Trajectory):
         if dt_s is None:

@@ -3,7 +3,8 @@
 //!
 //! A full 6-DOF, two-mode ZV step of the UR5e (5 kg payload): the published 10-coefficient map
 //! (joint inertias + map) next to the modal map (mass matrix + gravity torques + 3 × 3
-//! eigenproblem of base, shoulder and elbow; 5 × 5 with wrists 1-2), and each provider's
+//! eigenproblem of base, shoulder and elbow; 5 × 5 with wrists 1-2; 9 × 9 with wrists 1-2 and
+//! bending upper arm and forearm, on the hinged arm's 10 × 10 mass matrix), and each provider's
 //! evaluation alone. The cases
 //! are interleaved in rounds (order alternating) in one process, each with the same number
 //! of steps per round, and reported as min and median over the rounds, so that the load of a
@@ -12,8 +13,8 @@
 use std::hint::black_box;
 use std::time::Instant;
 use tvist_core::{
-    DynamicMap, Dynamics, FlexJoint, LoadLaw, MapDynamics, ModalDynamics, ModalMap, Mode,
-    ShaperKind, TvShaper, TvShaperConfig,
+    DynamicMap, Dynamics, FlexJoint, LinkHinge, LoadLaw, MapDynamics, ModalDynamics, ModalMap,
+    Mode, ShaperKind, TvShaper, TvShaperConfig,
 };
 
 #[path = "../tests/robot_support/mod.rs"]
@@ -108,6 +109,21 @@ fn main() {
         &config,
     )
     .expect("valid config");
+    // Bending upper arm and forearm: hinge pairs at their middles (about 40-50 Hz bending).
+    let hinge = |link| LinkHinge {
+        link,
+        at_fraction: 0.5,
+        stiffness_nm_per_rad: 140_000.0,
+        damping_nms_per_rad: 13.0,
+    };
+    let hinged = modal_map(true)
+        .with_link_hinges(vec![hinge(1), hinge(2)])
+        .expect("valid hinges");
+    let mut modal9_shaper = TvShaper::new(
+        ModalDynamics::new(robot(), hinged).expect("valid map"),
+        &config,
+    )
+    .expect("valid config");
     let mut paper = MapDynamics::new(robot(), DynamicMap::paper_ur5e()).expect("valid map");
     let mut modal = ModalDynamics::new(robot(), modal_map(false)).expect("valid map");
     let (mut q, mut out) = ([0.0f64; 6], [0.0f64; 6]);
@@ -121,10 +137,11 @@ fn main() {
         "modal map provider alone",
         "full step, modal map with 5 flexible joints (5x5 eigen)",
         "of the modal provider: 3x3 mass block + gravity torques (one pass)",
+        "full step, modal map, 5 joints + 2 bending links (9x9 eigen)",
     ];
     let mut times: Vec<Vec<f64>> = vec![Vec::with_capacity(ROUNDS); names.len()];
     for round in 0..ROUNDS {
-        let mut order = [0usize, 1, 2, 3, 4, 5];
+        let mut order = [0usize, 1, 2, 3, 4, 5, 6];
         if round % 2 == 1 {
             order.reverse();
         }
@@ -149,6 +166,10 @@ fn main() {
                 4 => time_round(|k| {
                     pose(k, &mut q);
                     black_box(modal5_shaper.step(black_box(&q), &mut out));
+                }),
+                6 => time_round(|k| {
+                    pose(k, &mut q);
+                    black_box(modal9_shaper.step(black_box(&q), &mut out));
                 }),
                 _ => time_round(|k| {
                     pose(k, &mut q);

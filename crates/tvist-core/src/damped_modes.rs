@@ -359,7 +359,7 @@ pub fn damped_modes(
     n: usize,
     start: &[Complex64; MAX_DIM],
 ) -> Option<DampedModes> {
-    // One instance per size: fixed-size loops the compiler unrolls (MAX_DIM is 6).
+    // One instance per size: fixed-size loops the compiler unrolls (at most MAX_DIM).
     match n {
         1 => solve_sized::<1>(a, g, start),
         2 => solve_sized::<2>(a, g, start),
@@ -367,6 +367,9 @@ pub fn damped_modes(
         4 => solve_sized::<4>(a, g, start),
         5 => solve_sized::<5>(a, g, start),
         6 => solve_sized::<6>(a, g, start),
+        7 => solve_sized::<7>(a, g, start),
+        8 => solve_sized::<8>(a, g, start),
+        9 => solve_sized::<9>(a, g, start),
         _ => None,
     }
 }

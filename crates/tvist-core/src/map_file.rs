@@ -17,7 +17,9 @@
 //!  "metadata": {...as above...},
 //!  "mode_joints": [0, 1]   |   "shaped_modes": 3,
 //!  "flex_joints": [{"joint": 0, "stiffness_nm_per_rad": [k_0, k_1, k_2],
-//!                   "damping_nms_per_rad": [c_0, c_1, c_2], "damping_load_joint": 1}, ...]}
+//!                   "damping_nms_per_rad": [c_0, c_1, c_2], "damping_load_joint": 1}, ...],
+//!  "link_hinges": [{"link": 1, "at_fraction": 0.5, "stiffness_nm_per_rad": k_h,
+//!                   "damping_nms_per_rad": c_h}, ...]}                        (optional)
 //! ```
 //!
 //! - `schema_version` is the integer 1 (not `1.0`, not `true`).
@@ -26,7 +28,12 @@
 //!   [`crate::modal_map`] ([`MapForm::Modal`]: load laws `[at_zero, per_nm, per_nm2]` of
 //!   every flexible joint, and which modes are shaped: exactly one of `mode_joints`, the
 //!   joints naming the shaped modes in cascade order, or `shaped_modes`, the number of
-//!   lowest-frequency modes shaped, 1 to the number of flexible joints). Files
+//!   lowest-frequency modes shaped, 1 to the number of flexible coordinates). The optional
+//!   `link_hinges` makes links bend ([`crate::modal_map::LinkHinge`]: a hinge pair about the
+//!   two axes perpendicular to link `link` at `at_fraction` of its length, stiffness and
+//!   damping per axis); the flexible coordinates are then the joints plus two per hinge, at
+//!   most [`crate::modal_map::MAX_FLEX_JOINTS`]. Without it (every file written before it
+//!   existed) the links are rigid. Files
 //!   written before `kind` named the form carry
 //!   `"tvist.dynamic_map"` or no `kind`; both are read as `"paper10"` (and written back as it).
 //!   Another form is one more [`MapForm`] variant and one more arm in [`MapForm::parse`] and
@@ -50,7 +57,7 @@
 
 use crate::dynmap::{DynamicMap, InertiaRange, MapCoefficients, ModeMap, MAX_JOINT_INDEX};
 use crate::error::Error;
-use crate::modal_map::{FlexJoint, LoadLaw, ModalMap, ShapedModes};
+use crate::modal_map::{FlexJoint, LinkHinge, LoadLaw, ModalMap, ShapedModes};
 use serde::de::{Deserialize, Deserializer, Error as _, MapAccess, SeqAccess, Visitor};
 use serde_json::{Map, Number, Value};
 use std::io::Read;
@@ -64,6 +71,14 @@ pub const KIND_PAPER10: &str = "paper10";
 
 /// `kind` of the modal map ([`MapForm::Modal`]).
 pub const KIND_MODAL: &str = "modal";
+
+/// Fields of one link hinge of a `modal` map, in the order they are written.
+pub const LINK_HINGE_FIELDS: [&str; 4] = [
+    "link",
+    "at_fraction",
+    "stiffness_nm_per_rad",
+    "damping_nms_per_rad",
+];
 
 /// Fields of one flexible joint of a `modal` map, in the order they are written.
 pub const FLEX_JOINT_FIELDS: [&str; 4] = [
@@ -127,7 +142,7 @@ impl MapForm {
     fn fields(kind: &str) -> Option<&'static [&'static str]> {
         match kind {
             KIND_PAPER10 | LEGACY_KIND => Some(&["modes"]),
-            KIND_MODAL => Some(&["mode_joints", "shaped_modes", "flex_joints"]),
+            KIND_MODAL => Some(&["mode_joints", "shaped_modes", "flex_joints", "link_hinges"]),
             _ => None,
         }
     }
@@ -187,7 +202,15 @@ impl MapForm {
                     "flex_joints",
                     Value::Array(map.flex_joints().iter().map(flex_to_value).collect()),
                 ),
-            ],
+            ]
+            .into_iter()
+            .chain((!map.link_hinges().is_empty()).then(|| {
+                (
+                    "link_hinges",
+                    Value::Array(map.link_hinges().iter().map(hinge_to_value).collect()),
+                )
+            }))
+            .collect(),
         }
     }
 
@@ -646,14 +669,32 @@ fn modal_from(doc: &Map<String, Value>) -> Result<ModalMap, Error> {
             ))
         }
     };
+    let hinges = match doc.get("link_hinges") {
+        None => Vec::new(),
+        Some(Value::Array(entries)) => entries
+            .iter()
+            .enumerate()
+            .map(|(i, e)| hinge_from(e, &format!("link_hinges[{i}]")))
+            .collect::<Result<Vec<_>, _>>()?,
+        Some(other) => {
+            return Err(Error::document(
+                "link_hinges",
+                format!("must be a list of link-hinge objects, got {other}"),
+            ))
+        }
+    };
     // The flexible joints first (count, duplicates, signs: the map's own checks, whose
-    // messages name the joint), with a mode they certainly have; then the mode joints.
+    // messages name the joint), with a mode they certainly have; then the hinges; then the
+    // mode joints.
     let first = flex.first().map_or(0, |f| f.joint);
-    ModalMap::new(flex.clone(), &[first]).map_err(|e| Error::document("flex_joints", reason(e)))?;
+    ModalMap::new(flex.clone(), &[first])
+        .map_err(|e| Error::document("flex_joints", reason(e)))?
+        .with_link_hinges(hinges.clone())
+        .map_err(|e| Error::document("link_hinges", reason(e)))?;
     let mode_joints = match mode_joints {
         Ok(joints) => joints,
         Err(k) => {
-            let n = flex.len();
+            let n = flex.len() + 2 * hinges.len();
             let k = k
                 .as_u64()
                 .filter(|&k| k >= 1 && k <= n as u64)
@@ -661,12 +702,12 @@ fn modal_from(doc: &Map<String, Value>) -> Result<ModalMap, Error> {
                     Error::document(
                         "shaped_modes",
                         format!(
-                            "must be an integer from 1 to {n} (the number of flexible joints), \
-                             got {k}"
+                            "must be an integer from 1 to {n} (the number of flexible \
+                             coordinates: joints plus two per link hinge), got {k}"
                         ),
                     )
                 })?;
-            return ModalMap::shaping(flex, ShapedModes::Lowest(k as usize))
+            return ModalMap::shaping_hinged(flex, hinges, ShapedModes::Lowest(k as usize))
                 .map_err(|e| Error::document("shaped_modes", reason(e)));
         }
     };
@@ -687,7 +728,49 @@ fn modal_from(doc: &Map<String, Value>) -> Result<ModalMap, Error> {
             ));
         }
     }
-    ModalMap::new(flex, &mode_joints).map_err(|e| Error::document("mode_joints", reason(e)))
+    ModalMap::shaping_hinged(flex, hinges, ShapedModes::ByJoint(mode_joints))
+        .map_err(|e| Error::document("mode_joints", reason(e)))
+}
+
+fn hinge_from(value: &Value, path: &str) -> Result<LinkHinge, Error> {
+    let entry = value.as_object().ok_or_else(|| {
+        Error::document(
+            path,
+            format!(
+                "must be an object with fields {}",
+                LINK_HINGE_FIELDS.join(", ")
+            ),
+        )
+    })?;
+    let unknown: Vec<&str> = entry
+        .keys()
+        .map(String::as_str)
+        .filter(|k| !LINK_HINGE_FIELDS.contains(k))
+        .collect();
+    if !unknown.is_empty() {
+        return Err(Error::document(
+            path,
+            format!("unknown field(s) {}", unknown.join(", ")),
+        ));
+    }
+    let field = |key: &str| format!("{path}.{key}");
+    let value = |key: &str| number(entry.get(key), &field(key));
+    Ok(LinkHinge {
+        link: joint_index(entry.get("link"), &field("link"))?,
+        at_fraction: value("at_fraction")?,
+        stiffness_nm_per_rad: value("stiffness_nm_per_rad")?,
+        damping_nms_per_rad: value("damping_nms_per_rad")?,
+    })
+}
+
+/// One link hinge of a `modal` map as written in a map file.
+pub fn hinge_to_value(h: &LinkHinge) -> Value {
+    let mut out = Map::new();
+    out.insert("link".into(), Value::from(h.link));
+    out.insert("at_fraction".into(), float(h.at_fraction));
+    out.insert("stiffness_nm_per_rad".into(), float(h.stiffness_nm_per_rad));
+    out.insert("damping_nms_per_rad".into(), float(h.damping_nms_per_rad));
+    Value::Object(out)
 }
 
 fn flex_from(value: &Value, path: &str) -> Result<FlexJoint, Error> {
@@ -1300,7 +1383,7 @@ mod tests {
         assert!(written.get("mode_joints").is_none());
         assert_eq!(MapFile::parse(&file.to_json()).expect("round trip"), file);
         let cases = [
-            (text.replacen("\"shaped_modes\": 2", "\"shaped_modes\": 3", 1), "shaped_modes: must be an integer from 1 to 2 (the number of flexible joints), got 3"),
+            (text.replacen("\"shaped_modes\": 2", "\"shaped_modes\": 3", 1), "shaped_modes: must be an integer from 1 to 2 (the number of flexible coordinates: joints plus two per link hinge), got 3"),
             (text.replacen("\"shaped_modes\": 2", "\"shaped_modes\": 0", 1), "shaped_modes: must be an integer from 1 to 2"),
             (text.replacen("\"shaped_modes\": 2", "\"shaped_modes\": 1.5", 1), "shaped_modes: must be an integer from 1 to 2"),
             (text.replacen("\"shaped_modes\": 2", "\"shaped_modes\": [0]", 1), "shaped_modes: must be an integer from 1 to 2"),

@@ -18,6 +18,7 @@ pub type ModalDynamics = RobotModes<ModalMap>;
 impl ModalDynamics {
     /// Mass matrix of the latest [`crate::Dynamics::modes`] call, row-major `n × n`, kg m²
     /// (only the leading block of the joints the map reads is evaluated; other entries stay 0).
+    /// With link hinges, that of the hinged arm ([`crate::Robot::with_link_hinges`]).
     pub fn last_mass_matrix(&self) -> &[f64] {
         self.last_evaluation()
     }
@@ -44,6 +45,14 @@ impl ModeLaw for ModalMap {
 
     fn required_joints(&self) -> usize {
         ModalMap::required_joints(self)
+    }
+
+    fn link_hinges(&self) -> Vec<(usize, f64)> {
+        self.hinge_placements()
+    }
+
+    fn model_joints(&self) -> usize {
+        ModalMap::model_joints(self)
     }
 
     fn uses_gravity(&self) -> bool {
@@ -74,11 +83,12 @@ impl ModeLaw for ModalMap {
     }
 
     /// Rayleigh: ω² = φᵀKφ / φᵀMφ >= k_min / λ_max(M_ff), with k_min >= the smallest
-    /// zero-load stiffness (the laws only grow with load) and λ_max(M_ff) <= trace(M_ff)
-    /// <= Σ of the joints' inertia upper bounds. A sound bound for every configuration and
-    /// every eigenmode. A slot follows its eigenmode branch along a motion, which may be
-    /// another slot's at the sampled poses: every slot is bounded by the highest sampled ζ of
-    /// all of them.
+    /// zero-load stiffness (the laws only grow with load; hinge stiffness is constant) and
+    /// λ_max(M_ff) <= trace(M_ff) <= Σ of the coordinates' inertia upper bounds (of the
+    /// evaluated arm `robot`: hinged if the map has hinges). A sound bound for every
+    /// configuration and every eigenmode. A slot follows its eigenmode branch along a motion,
+    /// which may be another slot's at the sampled poses: every slot is bounded by the highest
+    /// sampled ζ of all of them.
     fn lower_frequency_bound(&self, robot: &Robot, _mass: &[f64], slowest: &mut [Mode]) {
         let zeta_max = slowest.iter().map(|s| s.zeta).fold(0.0, f64::max);
         for s in slowest.iter_mut() {
@@ -89,8 +99,9 @@ impl ModeLaw for ModalMap {
             .flex_joints()
             .iter()
             .map(|f| f.stiffness_nm_per_rad.at_zero)
+            .chain(self.link_hinges().iter().map(|h| h.stiffness_nm_per_rad))
             .fold(f64::INFINITY, f64::min);
-        let trace_max: f64 = self.flex_joints().iter().map(|f| j_max[f.joint]).sum();
+        let trace_max: f64 = self.coordinates().iter().map(|&c| j_max[c]).sum();
         let bound = (k_min / trace_max).sqrt();
         if bound.is_finite() && bound > 0.0 {
             for s in slowest {

@@ -94,17 +94,30 @@
 //! limits how fast any slot's mode may change ([`crate::multimode::MAX_LN_WN_RATE_PER_S`]) and
 //! reports it when that binds, so a jump that reaches it anyway is spread out and flagged.
 //!
+//! **Bending links** ([`LinkHinge`]). A link that bends is modelled as a lumped hinge pair at a
+//! point along it, about the two axes perpendicular to the link ([`crate::link_hinges`]: the
+//! link's inertia split between its two halves so that at zero hinge angle the arm is the
+//! rigid one), with a rotational spring `k_h` and damper `c_h` per axis (the same about both
+//! axes, as for a round tube). The flexible coordinates are then the flexible joints followed
+//! by the hinge pairs (in link order), at most [`MAX_FLEX_JOINTS`] in all; `M_ff` is the
+//! mass-matrix block of the hinged arm ([`crate::Robot::with_link_hinges`]) at the current
+//! pose with straight hinges, and `K`, `C` carry `k_h`, `c_h` on the hinge coordinates. A
+//! mode's strain shares then include the hinges'; the shaped modes stay named by joints (a
+//! hinge-dominated mode is shaped by a frequency-ranked map). Without hinges the mass matrix is
+//! the robot's own.
+//!
 //! Evaluation ([`ModalMap::modes_from_mass_matrix`]) uses fixed-size arrays only: no
 //! allocation, no panic.
 
 use crate::damped_modes::damped_modes;
 use crate::dynmap::smooth_abs_torque_nm;
 use crate::error::{Error, Status};
+use crate::link_hinges::hinged_index;
 use crate::shaper::Mode;
 use crate::sym_eigen::{sym_diagonalize, MAX_DIM};
 use num_complex::Complex64;
 
-/// Largest number of flexible joints.
+/// Largest number of flexible coordinates: flexible joints plus two per link hinge.
 pub const MAX_FLEX_JOINTS: usize = MAX_DIM;
 // A modal map shapes at most one mode per flexible joint: within the shared mode limit.
 const _: () = assert!(MAX_FLEX_JOINTS <= crate::limits::MAX_MODES);
@@ -178,6 +191,20 @@ pub struct FlexJoint {
     pub damping_load_joint: usize,
 }
 
+/// A bending link: a hinge pair about the two axes perpendicular to link `link`, at
+/// `at_fraction` of its joint-to-joint length from its joint (module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinkHinge {
+    /// Link index (link `i` turns with joint `i`).
+    pub link: usize,
+    /// Position of the hinge along the link, a fraction in `(0, 1)` (0.5: the middle).
+    pub at_fraction: f64,
+    /// Bending stiffness about each of the two axes, N m/rad.
+    pub stiffness_nm_per_rad: f64,
+    /// Bending damping about each of the two axes, N m s/rad.
+    pub damping_nms_per_rad: f64,
+}
+
 /// All modes of the flexible joints at one pose, sorted by the flexible joints' order of
 /// the eigen-solver (not by frequency). Plain data on the stack.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -188,8 +215,9 @@ pub struct ModalSolution {
     pub wn_rad_s: [f64; MAX_FLEX_JOINTS],
     /// Damping ratios `−Re λ / |λ|`.
     pub zeta: [f64; MAX_FLEX_JOINTS],
-    /// `strain_share[i][f]`: share of mode `i`'s strain energy in flexible joint `f` (the
-    /// `f`-th entry of [`ModalMap::flex_joints`]); each row sums to 1.
+    /// `strain_share[i][f]`: share of mode `i`'s strain energy in flexible coordinate `f`
+    /// (the `f`-th entry of [`ModalMap::flex_joints`], then two per entry of
+    /// [`ModalMap::link_hinges`]); each row sums to 1.
     pub strain_share: [[f64; MAX_FLEX_JOINTS]; MAX_FLEX_JOINTS],
     /// `shape[i][f]`: mode `i` as the unit vector `y` in `K^{1/2}`-scaled coordinates of the
     /// flexible joints (module docs; complex for a damped mode, its phase arbitrary):
@@ -210,6 +238,12 @@ pub enum ShapedModes {
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModalMap {
     flex: Vec<FlexJoint>,
+    /// Bending links, in increasing link order.
+    hinges: Vec<LinkHinge>,
+    /// Per flexible coordinate (flex joints, then two per hinge) its index in the hinged
+    /// arm's joints; per flex joint the hinged index of its damping load joint.
+    coordinate: Vec<usize>,
+    load_coordinate: Vec<usize>,
     shaped: ShapedModes,
     /// For [`ShapedModes::ByJoint`], per shaped mode the index into `flex` of the joint that
     /// must dominate it; empty for [`ShapedModes::Lowest`].
@@ -237,6 +271,17 @@ impl ModalMap {
     /// [`Self::new`]) or the `k` lowest-frequency modes, `1 <= k <= flex.len()`.
     /// The robot is unknown until [`Self::for_robot`].
     pub fn shaping(flex: Vec<FlexJoint>, shaped: ShapedModes) -> Result<ModalMap, Error> {
+        ModalMap::shaping_hinged(flex, Vec::new(), shaped)
+    }
+
+    /// As [`Self::shaping`], with bending links ([`Self::with_link_hinges`]); `k` lowest modes
+    /// up to the number of flexible coordinates (joints plus two per hinge).
+    pub fn shaping_hinged(
+        flex: Vec<FlexJoint>,
+        hinges: Vec<LinkHinge>,
+        shaped: ShapedModes,
+    ) -> Result<ModalMap, Error> {
+        let n_coordinates = flex.len() + 2 * hinges.len();
         if flex.is_empty() || flex.len() > MAX_FLEX_JOINTS {
             return Err(Error::InvalidParameter(format!(
                 "a modal map needs 1 to {MAX_FLEX_JOINTS} flexible joints, got {}",
@@ -258,12 +303,10 @@ impl ModalMap {
         let mode_joints: &[usize] = match &shaped {
             ShapedModes::ByJoint(joints) => joints,
             ShapedModes::Lowest(k) => {
-                if *k == 0 || *k > flex.len() {
+                if *k == 0 || *k > n_coordinates {
                     return Err(Error::InvalidParameter(format!(
-                        "shaped_modes = {k}: a modal map with {} flexible joint(s) shapes 1 to \
-                         {} of its lowest-frequency modes",
-                        flex.len(),
-                        flex.len()
+                        "shaped_modes = {k}: a modal map with {n_coordinates} flexible \
+                         coordinate(s) shapes 1 to {n_coordinates} of its lowest-frequency modes"
                     )));
                 }
                 &[]
@@ -298,20 +341,119 @@ impl ModalMap {
         let uses_gravity = flex
             .iter()
             .any(|f| f.stiffness_nm_per_rad.uses_load() || f.damping_nms_per_rad.uses_load());
-        Ok(ModalMap {
+        let coordinate = flex.iter().map(|f| f.joint).collect();
+        let load_coordinate = flex.iter().map(|f| f.damping_load_joint).collect();
+        ModalMap {
             flex,
+            hinges: Vec::new(),
+            coordinate,
+            load_coordinate,
             shaped,
             mode_flex_index,
             robot: None,
             required_joints,
             uses_gravity,
-        })
+        }
+        .with_link_hinges(hinges)
     }
 
     /// The same map, marked as identified on robot `name` (for example `"ur5e"`).
     pub fn for_robot(mut self, name: impl Into<String>) -> ModalMap {
         self.robot = Some(name.into());
         self
+    }
+
+    /// The same map with bending links `hinges` (module docs): distinct links, each hinge at a
+    /// fraction in `(0, 1)`, stiffness finite and `> 0`, damping finite and `>= 0`, and at
+    /// most [`MAX_FLEX_JOINTS`] flexible coordinates (joints plus two per hinge). Whether a
+    /// link is long enough to bend is checked against the robot
+    /// ([`crate::Robot::with_link_hinges`]).
+    pub fn with_link_hinges(mut self, mut hinges: Vec<LinkHinge>) -> Result<ModalMap, Error> {
+        hinges.sort_by_key(|h| h.link);
+        let n_coordinates = self.flex.len() + 2 * hinges.len();
+        if n_coordinates > MAX_FLEX_JOINTS {
+            return Err(Error::InvalidParameter(format!(
+                "{} flexible joint(s) and {} link hinge(s) make {n_coordinates} flexible \
+                 coordinates, at most {MAX_FLEX_JOINTS}",
+                self.flex.len(),
+                hinges.len()
+            )));
+        }
+        for (i, h) in hinges.iter().enumerate() {
+            if i > 0 && hinges[i - 1].link == h.link {
+                return Err(Error::InvalidParameter(format!(
+                    "link {} has two hinges",
+                    h.link
+                )));
+            }
+            let ok = h.at_fraction > 0.0
+                && h.at_fraction < 1.0
+                && h.stiffness_nm_per_rad > 0.0
+                && h.stiffness_nm_per_rad.is_finite()
+                && h.damping_nms_per_rad >= 0.0
+                && h.damping_nms_per_rad.is_finite();
+            if !ok {
+                return Err(Error::InvalidParameter(format!(
+                    "hinge of link {}: needs at_fraction in (0, 1), finite stiffness > 0 and \
+                     damping >= 0, got {h:?}",
+                    h.link
+                )));
+            }
+        }
+        let links: Vec<usize> = hinges.iter().map(|h| h.link).collect();
+        self.coordinate = self
+            .flex
+            .iter()
+            .map(|f| hinged_index(f.joint, &links))
+            .collect();
+        for &l in &links {
+            let first = hinged_index(l, &links) + 1;
+            self.coordinate.extend([first, first + 1]);
+        }
+        self.load_coordinate = self
+            .flex
+            .iter()
+            .map(|f| hinged_index(f.damping_load_joint, &links))
+            .collect();
+        let longest = links.iter().map(|&l| l + 1).max().unwrap_or(0);
+        self.required_joints = self.required_joints.max(longest);
+        self.hinges = hinges;
+        Ok(self)
+    }
+
+    /// The bending links, in increasing link order (empty for a map of joints only).
+    pub fn link_hinges(&self) -> &[LinkHinge] {
+        &self.hinges
+    }
+
+    /// `(link, at_fraction)` of every hinge: what [`crate::Robot::with_link_hinges`] needs.
+    pub fn hinge_placements(&self) -> Vec<(usize, f64)> {
+        self.hinges
+            .iter()
+            .map(|h| (h.link, h.at_fraction))
+            .collect()
+    }
+
+    /// Number of flexible coordinates (joints plus two per hinge).
+    pub fn n_coordinates(&self) -> usize {
+        self.coordinate.len()
+    }
+
+    /// Index of each flexible coordinate (joints, then two per hinge) among the joints of the
+    /// evaluated arm (the hinged arm if the map has hinges).
+    pub fn coordinates(&self) -> &[usize] {
+        &self.coordinate
+    }
+
+    /// Joints of the arm the map evaluates (the hinged arm if it has hinges) that it reads:
+    /// largest coordinate or load index + 1.
+    pub fn model_joints(&self) -> usize {
+        self.coordinate
+            .iter()
+            .chain(&self.load_coordinate)
+            .map(|&c| c + 1)
+            .max()
+            .unwrap_or(0)
     }
 
     /// The robot the map was identified on, if known.
@@ -341,7 +483,11 @@ impl ModalMap {
     /// The same flexible joints shaping their `k` lowest-frequency modes
     /// ([`ShapedModes::Lowest`]), `1 <= k <=` the number of flexible joints; the robot is kept.
     pub fn shaping_lowest(&self, k: usize) -> Result<ModalMap, Error> {
-        let map = ModalMap::shaping(self.flex.clone(), ShapedModes::Lowest(k))?;
+        let map = ModalMap::shaping_hinged(
+            self.flex.clone(),
+            self.hinges.clone(),
+            ShapedModes::Lowest(k),
+        )?;
         Ok(ModalMap {
             robot: self.robot.clone(),
             ..map
@@ -387,14 +533,16 @@ impl ModalMap {
         (stiffness, damping)
     }
 
-    /// Every mode of the flexible joints from the mass matrix `mass` (row-major
+    /// Every mode of the flexible coordinates from the mass matrix `mass` (row-major
     /// `n_dof × n_dof`, kg m²) and gravity torques `tau_g` (`n_dof` values, N m; may be empty
-    /// when [`Self::uses_gravity`] is false). `None` on wrong lengths, non-finite input or a
-    /// mass block that is not positive definite.
+    /// when [`Self::uses_gravity`] is false), both of the arm the map evaluates: the robot,
+    /// or with [`Self::link_hinges`] the hinged arm ([`crate::Robot::with_link_hinges`]) with
+    /// straight hinges. `None` on wrong lengths, non-finite input or a mass block that is not
+    /// positive definite.
     #[allow(clippy::needless_range_loop)] // index loops mirror the matrix formulas
     pub fn solve(&self, mass: &[f64], n_dof: usize, tau_g: &[f64]) -> Option<ModalSolution> {
-        let nf = self.flex.len();
-        let need = self.required_joints();
+        let nf = self.coordinate.len();
+        let need = self.model_joints();
         if mass.len() != n_dof * n_dof || n_dof < need {
             return None;
         }
@@ -402,7 +550,19 @@ impl ModalMap {
         if gravity && tau_g.len() < need {
             return None;
         }
-        let (stiffness, damping) = self.joint_laws_at(tau_g);
+        let mut stiffness = [0.0; MAX_FLEX_JOINTS];
+        let mut damping = [0.0; MAX_FLEX_JOINTS];
+        let load = |c: usize| if gravity { tau_g[c] } else { 0.0 };
+        for (i, f) in self.flex.iter().enumerate() {
+            stiffness[i] = f.stiffness_nm_per_rad.value(load(self.coordinate[i]));
+            damping[i] = f.damping_nms_per_rad.value(load(self.load_coordinate[i]));
+        }
+        for (h, hinge) in self.hinges.iter().enumerate() {
+            for i in [self.flex.len() + 2 * h, self.flex.len() + 2 * h + 1] {
+                stiffness[i] = hinge.stiffness_nm_per_rad;
+                damping[i] = hinge.damping_nms_per_rad;
+            }
+        }
         let mut inv_sqrt_k = [0.0; MAX_FLEX_JOINTS];
         let mut c_over_k = [0.0; MAX_FLEX_JOINTS];
         for i in 0..nf {
@@ -414,9 +574,9 @@ impl ModalMap {
             c_over_k[i] = c / k;
         }
         let mut b = [[0.0; MAX_DIM]; MAX_DIM];
-        for (r, fr) in self.flex.iter().enumerate() {
-            for (s, fs) in self.flex.iter().enumerate().skip(r) {
-                b[r][s] = mass[fr.joint * n_dof + fs.joint] * inv_sqrt_k[r] * inv_sqrt_k[s];
+        for (r, &cr) in self.coordinate.iter().enumerate() {
+            for (s, &cs) in self.coordinate.iter().enumerate().skip(r) {
+                b[r][s] = mass[cr * n_dof + cs] * inv_sqrt_k[r] * inv_sqrt_k[s];
             }
         }
         // Nearly diagonal (module docs): the damped solve works with the rotated matrix as it is.
@@ -514,8 +674,8 @@ impl ModalMap {
     ) -> Status {
         let bad_length = out.len() != self.n_modes()
             || mass.len() != n_dof * n_dof
-            || n_dof < self.required_joints()
-            || (self.uses_gravity() && tau_g.len() < self.required_joints());
+            || n_dof < self.model_joints()
+            || (self.uses_gravity() && tau_g.len() < self.model_joints());
         if bad_length {
             out.fill(Mode::new(f64::NAN, f64::NAN));
             return Status::BAD_LENGTH;

@@ -1204,6 +1204,12 @@ fn sym_from_six(s: &[f64; 6]) -> [f64; 9] {
     [s[0], s[3], s[4], s[3], s[1], s[5], s[4], s[5], s[2]]
 }
 
+/// Principal moments (ascending) of an inertia `[xx, yy, zz, xy, xz, yz]`; NaN for
+/// non-finite input. Setup-time only.
+pub(crate) fn principal_moments(inertia: &[f64; 6]) -> [f64; 3] {
+    sym_eigenvalues(&sym_from_six(inertia))
+}
+
 /// Eigenvalues of a symmetric 3×3 matrix in ascending order, by the cyclic Jacobi method of
 /// [`crate::sym_eigen`]: each within a few ulp of the matrix's largest entry of the exact one,
 /// also for equal or nearly equal eigenvalues (a thin rod's two equal moments, a disc's

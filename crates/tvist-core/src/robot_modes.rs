@@ -10,6 +10,7 @@
 
 use crate::dynamics::Dynamics;
 use crate::error::{Error, Status};
+use crate::link_hinges::hinged_index;
 use crate::robot::Robot;
 use crate::shaper::Mode;
 
@@ -31,8 +32,18 @@ pub trait ModeLaw {
     fn n_modes(&self) -> usize;
     /// The robot the law was identified on, if known.
     fn robot(&self) -> Option<&str>;
-    /// Number of joints read (largest index + 1): only these are evaluated.
+    /// Number of the robot's joints read (largest index + 1).
     fn required_joints(&self) -> usize;
+    /// Hinges `(link, at_fraction)` the law inserts into the robot's links
+    /// ([`Robot::with_link_hinges`]): the arm it evaluates. Empty (the default): the robot.
+    fn link_hinges(&self) -> Vec<(usize, f64)> {
+        Vec::new()
+    }
+    /// Number of joints of the evaluated arm read (largest index + 1): only these are
+    /// evaluated. The robot's [`Self::required_joints`] without hinges.
+    fn model_joints(&self) -> usize {
+        self.required_joints()
+    }
     /// Whether the law reads gravity torques.
     fn uses_gravity(&self) -> bool;
     /// What the law carries from one cycle to the next (the modal map: the eigenmode branch
@@ -51,8 +62,8 @@ pub trait ModeLaw {
     /// The setup error for mode `m`, invalid at pose `q` where the robot gave `inertia`.
     fn invalid_mode_message(&self, m: usize, q: &[f64], inertia: &[f64], mode: Mode) -> String;
     /// Lowers the sampled `slowest[m].wn_rad_s` to an analytic bound valid at every pose, where
-    /// the law has one. `inertia` is the latest evaluation (a template for the joints the
-    /// bound does not set).
+    /// the law has one. `robot` is the evaluated arm (hinged, if the law has hinges);
+    /// `inertia` is the latest evaluation (a template for the joints the bound does not set).
     fn lower_frequency_bound(&self, robot: &Robot, inertia: &[f64], slowest: &mut [Mode]);
 }
 
@@ -61,8 +72,12 @@ pub trait ModeLaw {
 pub struct RobotModes<L: ModeLaw> {
     robot: Robot,
     law: L,
+    /// The arm evaluated when the law inserts link hinges ([`ModeLaw::link_hinges`]), its
+    /// configuration (hinge angles stay 0) and where each real joint sits in it.
+    hinged: Option<HingedArm>,
     /// Joint inertias (`n`) or mass matrix (`n × n`) of the latest evaluation, kg m² (only
-    /// the joints the law reads are evaluated; other entries stay 0).
+    /// the joints the law reads are evaluated; other entries stay 0; `n` of the evaluated
+    /// arm).
     inertia: Vec<f64>,
     tau_g: Vec<f64>,
     slowest: Vec<Mode>,
@@ -108,9 +123,23 @@ impl<L: ModeLaw> RobotModes<L> {
                 got: law.required_joints(),
             });
         }
+        let hinges = law.link_hinges();
+        let hinged = if hinges.is_empty() {
+            None
+        } else {
+            let arm = robot.with_link_hinges(&hinges)?;
+            let links: Vec<usize> = hinges.iter().map(|h| h.0).collect();
+            Some(HingedArm {
+                q: vec![0.0; arm.n_dof()],
+                index: (0..n).map(|j| hinged_index(j, &links)).collect(),
+                arm,
+            })
+        };
+        let m = hinged.as_ref().map_or(n, |h| h.arm.n_dof());
         let mut provider = RobotModes {
-            inertia: vec![0.0; if L::READS_MASS_MATRIX { n * n } else { n }],
-            tau_g: vec![0.0; n],
+            inertia: vec![0.0; if L::READS_MASS_MATRIX { m * m } else { m }],
+            tau_g: vec![0.0; m],
+            hinged,
             slowest: vec![Mode::new(f64::INFINITY, 0.0); law.n_modes()],
             last: LastCall::new(n, law.n_modes()),
             track: L::Track::default(),
@@ -143,8 +172,9 @@ impl<L: ModeLaw> RobotModes<L> {
             }
         }
         self.restart();
+        let arm = self.hinged.as_ref().map_or(&self.robot, |h| &h.arm);
         self.law
-            .lower_frequency_bound(&self.robot, &self.inertia, &mut self.slowest);
+            .lower_frequency_bound(arm, &self.inertia, &mut self.slowest);
         Ok(())
     }
 
@@ -184,19 +214,30 @@ impl<L: ModeLaw> Dynamics for RobotModes<L> {
         } else {
             None
         };
-        let joints = self.law.required_joints();
+        let joints = self.law.model_joints();
+        let (arm, q_arm) = match &mut self.hinged {
+            None => (&mut self.robot, q),
+            Some(h) => {
+                if q.len() != h.index.len() {
+                    out.fill(Mode::new(f64::NAN, f64::NAN));
+                    return Status::BAD_LENGTH;
+                }
+                for (&i, &v) in h.index.iter().zip(q) {
+                    h.q[i] = v;
+                }
+                (&mut h.arm, h.q.as_slice())
+            }
+        };
         let status = if L::READS_MASS_MATRIX {
-            self.robot
-                .leading_mass_matrix_and_gravity(q, joints, &mut self.inertia, tau)
+            arm.leading_mass_matrix_and_gravity(q_arm, joints, &mut self.inertia, tau)
         } else {
-            self.robot
-                .leading_joint_inertia_and_gravity(q, joints, &mut self.inertia, tau)
+            arm.leading_joint_inertia_and_gravity(q_arm, joints, &mut self.inertia, tau)
         };
         if !status.is_ok() {
             out.fill(Mode::new(f64::NAN, f64::NAN));
             return status;
         }
-        let n = self.robot.n_dof();
+        let n = arm.n_dof();
         let status = self
             .law
             .modes_from_robot(&self.inertia, n, &self.tau_g, &mut self.track, out);
@@ -220,6 +261,16 @@ impl<L: ModeLaw> Dynamics for RobotModes<L> {
         self.track = L::Track::default();
         self.last.valid = false;
     }
+}
+
+/// The arm with link hinges a law evaluates, and the scratch configuration that carries the
+/// robot's joint angles into it (hinge angles 0).
+#[derive(Debug, Clone)]
+struct HingedArm {
+    arm: Robot,
+    q: Vec<f64>,
+    /// Index in `arm` of each of the robot's joints.
+    index: Vec<usize>,
 }
 
 /// The pose and result of a provider's latest evaluation: modes are a function of the pose

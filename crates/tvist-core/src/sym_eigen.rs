@@ -2,13 +2,13 @@
 //! cyclic Jacobi method: fixed-size arrays, no allocation, no panic, a bounded number of
 //! sweeps.
 //!
-//! Jacobi is the method of choice here: the matrices are tiny (2-6), it is unconditionally
+//! Jacobi is the method of choice here: the matrices are tiny (2-9), it is unconditionally
 //! stable, gives orthonormal eigenvectors to machine precision even for (nearly) repeated
 //! eigenvalues, and converges quadratically (3-6 sweeps for a 3 × 3 matrix to full
 //! precision).
 
 /// Largest matrix dimension handled.
-pub const MAX_DIM: usize = 6;
+pub const MAX_DIM: usize = 9;
 
 /// A `MAX_DIM × MAX_DIM` matrix whose leading block is used.
 pub type Matrix = [[f64; MAX_DIM]; MAX_DIM];
@@ -63,6 +63,9 @@ pub fn sym_diagonalize(
         4 => jacobi::<4>(a, off_tolerance),
         5 => jacobi::<5>(a, off_tolerance),
         6 => jacobi::<6>(a, off_tolerance),
+        7 => jacobi::<7>(a, off_tolerance),
+        8 => jacobi::<8>(a, off_tolerance),
+        9 => jacobi::<9>(a, off_tolerance),
         _ => None,
     }
 }
@@ -213,6 +216,6 @@ mod tests {
         assert_eq!(&vals[..2], &[2.0, 2.0]);
         assert!(sym_eigen(&embed(&[&[f64::NAN]]), 1).is_none());
         assert!(sym_eigen(&embed(&[&[1.0]]), 0).is_none());
-        assert!(sym_eigen(&embed(&[&[1.0]]), 7).is_none());
+        assert!(sym_eigen(&embed(&[&[1.0]]), MAX_DIM + 1).is_none());
     }
 }

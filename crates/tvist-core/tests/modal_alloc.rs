@@ -8,7 +8,8 @@ mod alloc_support;
 
 use alloc_support::{allocations_in, the_counter_sees_this_thread_only};
 use tvist_core::{
-    FlexJoint, LoadLaw, ModalDynamics, ModalMap, Mode, ModeTrack, ShapedModes, ShaperKind,
+    FlexJoint, LinkHinge, LoadLaw, ModalDynamics, ModalMap, Mode, ModeTrack, ShapedModes,
+    ShaperKind,
 };
 
 fn ur5e_like_map() -> ModalMap {
@@ -91,11 +92,30 @@ fn modal_map_provider_and_shaper_never_allocate() {
     let poses: Vec<Vec<f64>> = (0..200).map(|_| rng.pose(6)).collect();
     // The DH chain and the same arm placed as URDF places it (DH steps, general steps), each
     // with the joint-named modes and with the three lowest.
-    for robot in [
-        robot_support::ur_robot("ur5e", 5.0),
-        robot_support::ur_robot_placed("ur5e", 5.0, &[]),
-        robot_support::ur_robot_placed("ur5e", 5.0, &robot_support::GENERAL_TURNS),
-        robot_support::ur_robot_tilted("ur5e", 5.0),
+    // With bending upper arm and forearm: a 7-coordinate eigenproblem on the hinged arm.
+    let hinge = |link| LinkHinge {
+        link,
+        at_fraction: 0.5,
+        stiffness_nm_per_rad: 150_000.0,
+        damping_nms_per_rad: 15.0,
+    };
+    let hinged = map
+        .clone()
+        .with_link_hinges(vec![hinge(1), hinge(2)])
+        .expect("valid hinges");
+    for (robot, map) in [
+        (robot_support::ur_robot("ur5e", 5.0), &map),
+        (robot_support::ur_robot_placed("ur5e", 5.0, &[]), &map),
+        (
+            robot_support::ur_robot_placed("ur5e", 5.0, &robot_support::GENERAL_TURNS),
+            &map,
+        ),
+        (robot_support::ur_robot_tilted("ur5e", 5.0), &map),
+        (robot_support::ur_robot("ur5e", 5.0), &hinged),
+        (
+            robot_support::ur_robot_placed("ur5e", 5.0, &robot_support::GENERAL_TURNS),
+            &hinged,
+        ),
     ] {
         let provider = ModalDynamics::new(robot, map.clone()).expect("valid map");
         let lowest = provider.shaping_lowest(3).expect("valid");

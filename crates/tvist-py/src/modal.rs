@@ -112,6 +112,32 @@ impl PyModalMap {
             .collect()
     }
 
+    /// The bending links as dicts (`link`, `at_fraction`, `stiffness_nm_per_rad`,
+    /// `damping_nms_per_rad`), in link order; empty for a map of joints only.
+    #[getter]
+    fn link_hinges<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        self.inner
+            .link_hinges()
+            .iter()
+            .map(|h| {
+                let d = PyDict::new(py);
+                d.set_item("link", h.link)?;
+                d.set_item("at_fraction", h.at_fraction)?;
+                d.set_item("stiffness_nm_per_rad", h.stiffness_nm_per_rad)?;
+                d.set_item("damping_nms_per_rad", h.damping_nms_per_rad)?;
+                Ok(d)
+            })
+            .collect()
+    }
+
+    /// Joints of the evaluated arm (the hinged arm, `Robot.with_link_hinges`, if the map has
+    /// link hinges) that the map reads: the `n_dof` that `modes_from_mass_matrix_many` needs
+    /// at least.
+    #[getter]
+    fn model_joints(&self) -> usize {
+        self.inner.model_joints()
+    }
+
     /// The robot the map was identified on (`metadata.robot` of its file), or None.
     #[getter]
     fn robot(&self) -> Option<String> {
@@ -191,7 +217,7 @@ impl PyModalMap {
         gravity_torque_nm: Option<PyReadonlyArray2<'py, f64>>,
         tracked: bool,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let need = self.inner.required_joints();
+        let need = self.inner.model_joints();
         if n_dof < need {
             return Err(PyValueError::new_err(format!(
                 "the modal map reads {need} joints, got n_dof = {n_dof}"

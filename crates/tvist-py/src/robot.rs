@@ -264,6 +264,54 @@ impl PyRobot {
     fn joint_inertia_upper_bound(&self) -> Vec<f64> {
         self.inner.joint_inertia_upper_bound()
     }
+
+    /// The robot with a hinge pair inserted in each of `links` (increasing) at `fractions`
+    /// of its length (tvist-core `Robot::with_link_hinges`): the arm a modal map with link
+    /// hinges evaluates.
+    fn with_link_hinges(&self, links: Vec<usize>, fractions: Vec<f64>) -> PyResult<PyRobot> {
+        check_len("fractions", fractions.len(), links.len())?;
+        let hinges: Vec<(usize, f64)> = links.into_iter().zip(fractions).collect();
+        Ok(PyRobot {
+            inner: self
+                .inner
+                .with_link_hinges(&hinges)
+                .map_err(convert::value_error)?,
+        })
+    }
+}
+
+/// The segments of a link (tvist-core `link_hinges::split_link`): offset of the next joint
+/// (3,), mass, centre of mass (3,), inertia about it (3, 3) in the link's frame, hinge
+/// fractions -> ([(hinge point or None, mass, com, inertia (3, 3))], bending axes (2, 3)).
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+fn split_link(
+    offset_m: [f64; 3],
+    mass_kg: f64,
+    com_m: [f64; 3],
+    inertia_kg_m2: [[f64; 3]; 3],
+    hinge_fractions: Vec<f64>,
+) -> PyResult<(
+    Vec<(Option<[f64; 3]>, f64, [f64; 3], [[f64; 3]; 3])>,
+    [[f64; 3]; 2],
+)> {
+    let i = inertia_kg_m2;
+    let body = core::RigidBody {
+        mass_kg,
+        com_m,
+        inertia_kg_m2: [i[0][0], i[1][1], i[2][2], i[0][1], i[0][2], i[1][2]],
+    };
+    let (segments, axes) =
+        core::split_link(offset_m, &body, &hinge_fractions).map_err(convert::value_error)?;
+    let out = segments
+        .iter()
+        .map(|s| {
+            let [xx, yy, zz, xy, xz, yz] = s.body.inertia_kg_m2;
+            let inertia = [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]];
+            (s.hinge_m, s.body.mass_kg, s.body.com_m, inertia)
+        })
+        .collect();
+    Ok((out, axes))
 }
 
 /// A map document (Python object) checked by the core's map-file validation.
@@ -683,6 +731,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MAP_KIND_PAPER10", map_file::KIND_PAPER10)?;
     m.add("MAP_KIND_MODAL", map_file::KIND_MODAL)?;
     m.add("ROBOT_DATA_JSON", robot_data::UR_E_SERIES_JSON)?;
+    m.add_function(wrap_pyfunction!(split_link, m)?)?;
     m.add_function(wrap_pyfunction!(map_from_document, m)?)?;
     m.add_function(wrap_pyfunction!(load_map_file, m)?)?;
     m.add_function(wrap_pyfunction!(evaluate_trial_mode, m)?)?;

@@ -23,6 +23,11 @@ def _error(message: str) -> int:
     return 2
 
 
+def _what(entry: Mapping[str, Any]) -> str:
+    """``joint j`` or ``link l bending`` of a test, coefficient or mode entry."""
+    return f"link {entry['link']} bending" if "link" in entry else f"joint {entry['joint']}"
+
+
 def _se(se: float | None) -> str:
     return "?" if se is None else f"{se:.2g}"
 
@@ -54,16 +59,19 @@ def fit_modal_command(records: Sequence[Mapping[str, Any]], args: argparse.Names
         f"(frequency error {100 * stats['frequency_error_matched']['rms']:.2f} % RMS)"
     )
     level = stats["joint_test_level"]
-    print(f"  flexible joints {stats['flexible_joints']} (kept at p < {level:g})")
+    print(
+        f"  flexible joints {stats['flexible_joints']}, bending links "
+        f"{stats.get('bending_links', [])} (kept at p < {level:g})"
+    )
     for test in stats["joint_tests"]:
         verdict = "made rigid" if test.get("made_rigid") else "flexible"
         print(
-            f"    joint {test['joint']}: χ² gain {test['chi2_gain']:.1f} on {test['dof']} "
+            f"    {_what(test)}: χ² gain {test['chi2_gain']:.1f} on {test['dof']} "
             f"parameter(s), p = {test['p_value']:.2g}: {verdict}"
         )
     for c in stats["coefficients"]:
         print(
-            f"  joint {c['joint']} {c['what']} {c['term']}: {c['value']:.5g} ± {_se(c['se'])} "
+            f"  {_what(c)} {c['what']} {c['term']}: {c['value']:.5g} ± {_se(c['se'])} "
             f"({_UNITS[c['what']]}{_PER[c['term']]})"
         )
     dropped = [d for d in stats["dropped"] if not d.startswith("joint ")]
@@ -73,8 +81,8 @@ def fit_modal_command(records: Sequence[Mapping[str, Any]], args: argparse.Names
     for m in stats["physical_modes"]:
         f = m["freq_hz"]
         print(
-            f"    joint {m['joint']}: {f[0]:.1f} / {f[1]:.1f} / {f[2]:.1f} Hz, participation "
-            f"median {100 * m['flange_participation'][0]:.0f} %, max "
+            f"    {m.get('name', _what(m))}: {f[0]:.1f} / {f[1]:.1f} / {f[2]:.1f} Hz, "
+            f"participation median {100 * m['flange_participation'][0]:.0f} %, max "
             f"{100 * m['flange_participation'][1]:.0f} %, identified at "
             f"{100 * m['identified_at_poses']:.0f} % of the poses: "
             f"{'shaped' if m['shaped'] else 'not shaped'}"

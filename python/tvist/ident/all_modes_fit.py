@@ -28,6 +28,19 @@ than the ``1 − JOINT_P`` quantile of χ² with as many degrees of freedom as t
 stiffness parameters when the joint is flexible (a likelihood-ratio test at level
 :data:`JOINT_P`); the weakest joint is removed first and the test repeated.
 
+**Bending links.** A link that bends (a bending mode of the upper arm or forearm, which a
+model of joints alone can only absorb into wrong joint stiffnesses) is a hinge pair at its
+middle about the two axes perpendicular to it (:class:`tvist.ModalMap` ``link_hinges``), one
+stiffness and one damping for both axes (a round tube) and no load law. Each candidate link
+of ``candidate_links`` (upper arm and forearm) enters the fit like a candidate joint: its
+stiffness is one parameter (start: its own mode at :data:`HINGE_START_HZ`, bounds a factor
+:data:`STIFFNESS_SPAN` either way) and it is kept only if the same likelihood-ratio test
+keeps it (one degree of freedom); a rigid link's hinge is stiff, explains nothing and is
+removed, which leaves the model of joints alone exactly (at straight hinges the hinged arm's
+mass matrix on the joints is the rigid arm's). Internally the fit works in the columns of
+the hinged arm's arrays (:meth:`~tvist.ident.observed_modes.ObservedModes.column`); a
+hinge's key is its first coordinate's column.
+
 **A servo of finite stiffness** ``k_s`` in series with a gear ``k_g`` is not fitted as a
 parameter of its own: with the motor's inertia neglected (as the core's model, and the twin,
 take it: the motor is held by the servo) the pair is exactly one spring
@@ -42,23 +55,27 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from scipy import optimize, stats
 
 from tvist.ident.model_modes import ModelModes, joint_laws, model_modes, undamped_frequencies
-from tvist.ident.observed_modes import ObservedModes, observed_modes
+from tvist.ident.observed_modes import HINGE_AT_FRACTION, ObservedModes, observed_modes
 from tvist.modal_map import ModalMap
 
-__all__ = ["CANDIDATE_JOINTS", "AllModesFit", "fit_all_modes", "match_modes"]
+__all__ = ["CANDIDATE_JOINTS", "CANDIDATE_LINKS", "AllModesFit", "fit_all_modes", "match_modes"]
 
 #: Joints that may be flexible: base, shoulder, elbow, wrists 1-2 (wrist 3, the tool axis,
 #: hardly moves the flange in the arm's modes).
 CANDIDATE_JOINTS = (0, 1, 2, 3, 4)
 #: Always flexible: the joints whose excitation logs the campaign records.
 ALWAYS_FLEXIBLE = (0, 1)
+#: Links that may bend: the upper arm and the forearm (the long links of a UR-type arm).
+CANDIDATE_LINKS = (1, 2)
+#: Start of a link hinge's stiffness: its own mode (hinge inertia alone) at this frequency.
+HINGE_START_HZ = 60.0
 #: Matching scales: relative frequency difference and sine of the angle between directions.
 F_TOL = 0.05
 D_TOL = 0.35
@@ -108,12 +125,15 @@ def match_modes(obs: ObservedModes, model: ModelModes, f_tol: float = F_TOL) -> 
 
 @dataclass
 class _Model:
-    """Parameters of one candidate model: flexible joints and kept terms."""
+    """Parameters of one candidate model: flexible joints and link hinges (by column of the
+    model arrays, a hinge by its first coordinate's), and kept terms."""
 
     flex: tuple[int, ...]
     load_terms: dict[int, list[int]]  # joint -> stiffness load terms kept (1: |L|, 2: L²)
     damped: tuple[int, ...]
     damp_terms: dict[int, list[int]]  # joint -> damping terms kept (0, 1, 2)
+    hinges: tuple[int, ...] = ()  # the keys in ``flex`` that are link hinges
+    damping_load: dict[int, int] = field(default_factory=dict)  # column -> load column
 
     def stiffness_names(self) -> list[tuple[int, int]]:
         return [(j, 0) for j in self.flex] + [(j, t) for j in self.flex for t in self.load_terms[j]]
@@ -139,19 +159,24 @@ def _entries(
     if x_damp is not None:
         for v, (j, t) in zip(x_damp, model.damping_names(), strict=True):
             c[j][t] = float(v)
-    return [
-        {
-            "joint": j,
-            "stiffness_nm_per_rad": k[j],
-            "damping_nms_per_rad": c[j],
-            "damping_load_joint": DAMPING_LOAD.get(j, j),
-        }
-        for j in model.flex
-    ]
+    out = []
+    for j in model.flex:
+        # A hinge: both of its coordinates, with the same laws.
+        for column in (j, j + 1) if j in model.hinges else (j,):
+            out.append(
+                {
+                    "joint": column,
+                    "stiffness_nm_per_rad": k[j],
+                    "damping_nms_per_rad": c[j],
+                    "damping_load_joint": model.damping_load.get(j, column),
+                }
+            )
+    return out
 
 
-def _mass_ff(obs: ObservedModes, flex: Sequence[int]) -> np.ndarray:
-    idx = np.asarray(flex)
+def _mass_ff(obs: ObservedModes, model: _Model) -> np.ndarray:
+    """The mass-matrix blocks on the model's flexible coordinates (a hinge's two)."""
+    idx = np.asarray([e["joint"] for e in _entries(model, np.zeros(len(model.stiffness_names())))])
     return obs.mass_kg_m2[:, idx][:, :, idx]
 
 
@@ -174,7 +199,7 @@ def _fit_frequencies(
     obs: ObservedModes, model: _Model, x0: np.ndarray, bounds: tuple[list, list]
 ) -> _FreqFit:
     """Match-then-fit passes of the stiffness on the matched frequencies (undamped modes)."""
-    mff = _mass_ff(obs, model.flex)
+    mff = _mass_ff(obs, model)
     sigma = _sigma(obs.wn_rad_s, obs.wn_se_rad_s, MIN_RELATIVE_SE[0])
     x = np.clip(x0, *bounds)
     assignment = np.full(obs.wn_rad_s.size, -1)
@@ -221,24 +246,26 @@ def _robust_scale(r: np.ndarray) -> float:
     return max(1.4826 * float(np.median(np.abs(r))), 1e-6) if r.size else 1.0
 
 
-def _start(obs: ObservedModes, flex: Sequence[int], elbow_factor: float) -> dict[int, float]:
-    """Start stiffnesses: base and shoulder ``ω² M_jj`` of the lowest mode of their own log,
-    the elbow ``elbow_factor`` times the shoulder's, the wrists' own mode at
-    :data:`WRIST_START_HZ`."""
+def _start(obs: ObservedModes, model: _Model, elbow_factor: float) -> dict[int, float]:
+    """Start stiffnesses (by column): base and shoulder ``ω² M_jj`` of the lowest mode of
+    their own log, the elbow ``elbow_factor`` times the shoulder's, the wrists' own mode at
+    :data:`WRIST_START_HZ`, a link hinge's at :data:`HINGE_START_HZ`."""
     start: dict[int, float] = {}
     for j in ALWAYS_FLEXIBLE:
+        c = obs.column(j)
         vals = []
         for p in range(obs.n_poses):
             sel = (obs.pose == p) & (obs.log_joint == j)
             if sel.any():
-                vals.append(obs.wn_rad_s[sel].min() ** 2 * obs.mass_kg_m2[p, j, j])
-        start[j] = float(np.median(vals)) if vals else 2.0e4
-    for j in flex:
-        if j == 2:
-            start[j] = elbow_factor * start[1]
+                vals.append(obs.wn_rad_s[sel].min() ** 2 * obs.mass_kg_m2[p, c, c])
+        start[c] = float(np.median(vals)) if vals else 2.0e4
+    for j in model.flex:
+        if j == obs.column(2) and j not in model.hinges:
+            start[j] = elbow_factor * start[obs.column(1)]
         elif j not in start:
+            hz = HINGE_START_HZ if j in model.hinges else WRIST_START_HZ
             inertia = float(np.median(obs.mass_kg_m2[:, j, j]))
-            start[j] = (2 * math.pi * WRIST_START_HZ) ** 2 * inertia
+            start[j] = (2 * math.pi * hz) ** 2 * inertia
     return start
 
 
@@ -261,9 +288,9 @@ def _best_frequency_fit(
     """The stiffness fit of ``model`` from every start (:data:`ELBOW_STARTS`), least cost;
     with ``warm`` (parameter values by name, e.g. of a larger model's fit) from that alone."""
     best, best_start = None, {}
-    factors = ELBOW_STARTS if 2 in model.flex and warm is None else (1.0,)
+    factors = ELBOW_STARTS if obs.column(2) in model.flex and warm is None else (1.0,)
     for factor in factors:
-        start = _start(obs, model.flex, factor)
+        start = _start(obs, model, factor)
         names = model.stiffness_names()
         x0 = np.array([math.log(start[j]) if t == 0 else 0.0 for j, t in names])
         if warm is not None:
@@ -293,11 +320,30 @@ def _standard_errors(jac: np.ndarray, residual: np.ndarray) -> np.ndarray:
 
 
 def _candidate(obs: ObservedModes, flex: Sequence[int]) -> _Model:
+    """The model with flexible columns ``flex`` (joints and hinge keys), every load term
+    where the load spans :data:`MIN_LOAD_SPAN_NM` (none for a hinge)."""
+    hinges = tuple(j for j in flex if j in _hinge_keys(obs))
     load = {
-        j: [1, 2] if np.ptp(np.abs(obs.gravity_torque_nm[:, j])) > MIN_LOAD_SPAN_NM else []
+        j: [1, 2]
+        if j not in hinges and np.ptp(np.abs(obs.gravity_torque_nm[:, j])) > MIN_LOAD_SPAN_NM
+        else []
         for j in flex
     }
-    return _Model(tuple(flex), load, (), {})
+    damping_load = {obs.column(j): obs.column(k) for j, k in DAMPING_LOAD.items()}
+    return _Model(tuple(flex), load, (), {}, hinges, damping_load)
+
+
+def _hinge_keys(obs: ObservedModes) -> dict[int, int]:
+    """Key (first coordinate's column) -> link of every hinge the arrays of ``obs`` have."""
+    return {obs.hinge_columns(link)[0]: link for link in obs.hinged_links}
+
+
+def _name(obs: ObservedModes, key: int) -> dict[str, int]:
+    """``{"joint": j}`` or ``{"link": l}`` of a column key."""
+    link = _hinge_keys(obs).get(key)
+    if link is not None:
+        return {"link": link}
+    return {"joint": int(np.flatnonzero([obs.column(j) == key for j in range(obs.q.shape[1])])[0])}
 
 
 def _drop_weak_load_terms(
@@ -317,7 +363,7 @@ def _drop_weak_load_terms(
             return fit, start
         j, t = model.stiffness_names()[min(weak)[1]]
         model.load_terms[j].remove(t)
-        dropped.append(f"stiffness term {t} of joint {j}")
+        dropped.append(f"stiffness term {t} of joint {_name(obs, j)['joint']}")
 
 
 def _select_joints(
@@ -328,12 +374,13 @@ def _select_joints(
     model = _candidate(obs, candidates)
     fit, start = _drop_weak_load_terms(obs, model, drop_t, dropped)
     tests: list[dict[str, Any]] = []
+    always = {obs.column(j) for j in ALWAYS_FLEXIBLE}
     while True:
         scale = _robust_scale(fit.residual)
         chi2_full = _truncated_chi2(fit, scale)
         trials = []
         for j in model.flex:
-            if j in ALWAYS_FLEXIBLE:
+            if j in always:
                 continue
             rigid = _candidate(obs, [i for i in model.flex if i != j])
             for i in rigid.flex:
@@ -343,14 +390,18 @@ def _select_joints(
             dof = 1 + len(model.load_terms[j])
             gain = _truncated_chi2(trial, scale) - chi2_full
             p_value = float(stats.chi2.sf(max(gain, 0.0), dof))
-            trials.append({"joint": j, "chi2_gain": gain, "dof": dof, "p_value": p_value})
+            trials.append({**_name(obs, j), "chi2_gain": gain, "dof": dof, "p_value": p_value})
+            trials[-1]["_key"] = j
         weakest = max(trials, key=lambda t: t["p_value"], default=None)
         tests += trials
         if weakest is None or weakest["p_value"] < JOINT_P:
+            for t in tests:
+                t.pop("_key", None)
             return model, fit, start, tests, dropped
         weakest["made_rigid"] = True
-        dropped.append(f"joint {weakest['joint']} made rigid (p = {weakest['p_value']:.2g})")
-        kept = {i: model.load_terms[i] for i in model.flex if i != weakest["joint"]}
+        what = f"link {weakest['link']}" if "link" in weakest else f"joint {weakest['joint']}"
+        dropped.append(f"{what} made rigid (p = {weakest['p_value']:.2g})")
+        kept = {i: model.load_terms[i] for i in model.flex if i != weakest["_key"]}
         model = _candidate(obs, list(kept))
         model.load_terms = kept
         fit, start = _drop_weak_load_terms(obs, model, drop_t, dropped)
@@ -428,7 +479,11 @@ class AllModesFit:
     Attributes
     ----------
     entries
-        The flexible joints' laws (a modal map's ``flex_joints``).
+        The flexible coordinates' laws in the columns of ``observed``'s arrays (a hinge's two
+        coordinates each with the hinge's laws): what :func:`model_modes` evaluates.
+    map_fields
+        The modal map's ``flex_joints`` (by the robot's joint indices) and, if a link bends,
+        ``link_hinges``.
     observed
         The identified modes the fit used.
     assignment
@@ -439,9 +494,25 @@ class AllModesFit:
     """
 
     entries: list[dict[str, Any]]
+    map_fields: dict[str, Any]
     observed: ObservedModes
     assignment: np.ndarray
     statistics: dict[str, Any]
+
+    def coordinate_names(self) -> list[str]:
+        """Per entry of :attr:`entries`: ``"joint j"`` or ``"link l bending"`` (axis ``a``:
+        0 about the axis parallel to the link's joint, 1 across it)."""
+        keys = _hinge_keys(self.observed)
+        out = []
+        for e in self.entries:
+            c = int(e["joint"])
+            if c in keys:
+                out.append(f"link {keys[c]} bending (axis 0)")
+            elif c - 1 in keys:
+                out.append(f"link {keys[c - 1]} bending (axis 1)")
+            else:
+                out.append(f"joint {_name(self.observed, c)['joint']}")
+        return out
 
     def model_modes(self, obs: ObservedModes | None = None) -> ModelModes:
         """The fitted model's every mode at the poses of ``obs`` (default: the fit's)."""
@@ -456,8 +527,10 @@ def fit_all_modes(
     candidate_joints: Sequence[int] = CANDIDATE_JOINTS,
     drop_t: float = 3.0,
     include_low_confidence: bool = False,
+    candidate_links: Sequence[int] = CANDIDATE_LINKS,
 ) -> AllModesFit:
-    """Fit the flexible joints' laws to every identified mode (module docstring).
+    """Fit the flexible joints' laws, and of the bending links among ``candidate_links``
+    their hinges', to every identified mode (module docstring).
 
     Raises
     ------
@@ -467,27 +540,40 @@ def fit_all_modes(
     candidates = tuple(sorted(int(j) for j in candidate_joints))
     if not set(ALWAYS_FLEXIBLE) <= set(candidates):
         raise ValueError(f"candidate joints must include base and shoulder, got {candidates}")
-    obs = (
-        records
-        if isinstance(records, ObservedModes)
-        else observed_modes(records, robot_name, include_low_confidence=include_low_confidence)
-    )
+    links = tuple(sorted(int(link) for link in candidate_links))
+    if isinstance(records, ObservedModes):
+        obs = records
+    else:
+        obs = observed_modes(
+            records,
+            robot_name,
+            include_low_confidence=include_low_confidence,
+            hinged_links=links,
+        )
     if obs.wn_rad_s.size < 2 * len(candidates) + 2:
         raise ValueError(
             f"{obs.wn_rad_s.size} usable identified modes, need at least "
             f"{2 * len(candidates) + 2} to fit {len(candidates)} flexible joints"
         )
-    model, fit, start, joint_tests, dropped = _select_joints(obs, candidates, drop_t)
+    columns = [obs.column(j) for j in candidates] + list(_hinge_keys(obs))
+    model, fit, start, joint_tests, dropped = _select_joints(obs, sorted(columns), drop_t)
 
-    # Dampers: base and shoulder, and any joint dominating identified modes.
+    # Dampers: base and shoulder, and any joint or hinge dominating identified modes.
     modes = model_modes(_entries(model, fit.x), obs.mass_kg_m2, obs.gravity_torque_nm, obs.jacobian)
     used = fit.assignment >= 0
     dominant = modes.dominant_joint()[obs.pose[used], fit.assignment[used]]
-    damped = tuple(j for j in model.flex if j in ALWAYS_FLEXIBLE or np.sum(dominant == j) >= 5)
+    always = {obs.column(j) for j in ALWAYS_FLEXIBLE}
+
+    def dominates(j: int) -> int:
+        return int(np.sum(np.isin(dominant, [j, j + 1] if j in model.hinges else [j])))
+
+    damped = tuple(j for j in model.flex if j in always or dominates(j) >= 5)
     model.damped = damped
     for j in damped:
-        spans = np.ptp(np.abs(obs.gravity_torque_nm[:, DAMPING_LOAD.get(j, j)]))
-        model.damp_terms[j] = [0, 1, 2] if spans > MIN_LOAD_SPAN_NM else [0]
+        spans = np.ptp(np.abs(obs.gravity_torque_nm[:, model.damping_load.get(j, j)]))
+        model.damp_terms[j] = (
+            [0, 1, 2] if spans > MIN_LOAD_SPAN_NM and j not in model.hinges else [0]
+        )
     x_damp = _fit_damping(obs, model, fit.x, fit.assignment)
     x_stiff, assignment = fit.x, fit.assignment
     for _ in range(MATCH_PASSES):
@@ -506,14 +592,14 @@ def fit_all_modes(
     coefficients = []
     by_joint = {e["joint"]: e for e in entries}
     for i, (what, j, t) in enumerate(names):
-        field = "stiffness_nm_per_rad" if what == "stiffness" else "damping_nms_per_rad"
-        value = by_joint[j][field][t]
+        law = "stiffness_nm_per_rad" if what == "stiffness" else "damping_nms_per_rad"
+        value = by_joint[j][law][t]
         # d k_0 = k_0 d(log k_0); k_t = k_0 a_t: d k_t ≈ k_0 d a_t.
-        err = by_joint[j][field][0] * se[i] if what == "stiffness" else se[i]
+        err = by_joint[j][law][0] * se[i] if what == "stiffness" else se[i]
         coefficients.append(
             {
                 "what": what,
-                "joint": j,
+                **_name(obs, j),
                 "term": ("at_zero", "per_nm", "per_nm2")[t],
                 "value": float(value),
                 "se": float(err) if math.isfinite(err) else None,
@@ -526,8 +612,11 @@ def fit_all_modes(
         "n_poses": obs.n_poses,
         "identified_modes": int(obs.wn_rad_s.size),
         "matched_modes": int(used.sum()),
-        "flexible_joints": list(model.flex),
-        "damped_joints": list(model.damped),
+        "flexible_joints": [_name(obs, j)["joint"] for j in model.flex if j not in model.hinges],
+        "bending_links": [_name(obs, j)["link"] for j in model.hinges],
+        "damped_joints": [
+            _name(obs, j).get("joint") for j in model.damped if j not in model.hinges
+        ],
         "joint_tests": joint_tests,
         "joint_test_level": JOINT_P,
         "dropped": dropped,
@@ -537,7 +626,36 @@ def fit_all_modes(
             "max": float(np.max(np.abs(rel))) if rel.size else None,
         },
     }
-    return AllModesFit(entries, obs, assignment, statistics)
+    return AllModesFit(entries, _map_fields(obs, model, entries), obs, assignment, statistics)
+
+
+def _map_fields(
+    obs: ObservedModes, model: _Model, entries: Sequence[Mapping[str, Any]]
+) -> dict[str, Any]:
+    """The modal map's ``flex_joints`` and ``link_hinges`` of the fitted ``entries``."""
+    by_column = {e["joint"]: e for e in entries}
+    flex = []
+    hinges = []
+    for j in model.flex:
+        e = by_column[j]
+        if j in model.hinges:
+            hinges.append(
+                {
+                    "link": _name(obs, j)["link"],
+                    "at_fraction": HINGE_AT_FRACTION,
+                    "stiffness_nm_per_rad": float(e["stiffness_nm_per_rad"][0]),
+                    "damping_nms_per_rad": float(e["damping_nms_per_rad"][0]),
+                }
+            )
+        else:
+            flex.append(
+                {
+                    **e,
+                    "joint": _name(obs, j)["joint"],
+                    "damping_load_joint": _name(obs, e["damping_load_joint"])["joint"],
+                }
+            )
+    return {"flex_joints": flex, **({"link_hinges": hinges} if hinges else {})}
 
 
 def fitted_map(fit: AllModesFit, metadata: Mapping[str, Any] | None = None) -> ModalMap:
@@ -549,4 +667,9 @@ def fitted_map(fit: AllModesFit, metadata: Mapping[str, Any] | None = None) -> M
     meta = {"robot": fit.statistics["robot"], "source": "tvist.ident.fit_all_modes"}
     meta.update(metadata or {})
     meta["fit_statistics"] = {**fit.statistics, "physical_modes": report}
-    return ModalMap(fit.entries, metadata=meta, **shaping_field(report))
+    return ModalMap(
+        fit.map_fields["flex_joints"],
+        metadata=meta,
+        link_hinges=fit.map_fields.get("link_hinges"),
+        **shaping_field(report),
+    )

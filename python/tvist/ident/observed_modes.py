@@ -21,6 +21,10 @@ from tvist.robots import Payload, Robot, params
 __all__ = ["ObservedModes", "observed_modes"]
 
 
+#: Where along a bending link its model hinge pair sits (fraction of its length): the middle.
+HINGE_AT_FRACTION = 0.5
+
+
 @dataclass(frozen=True)
 class ObservedModes:
     """Poses (``n``) and their identified modes (``k``, flattened over poses).
@@ -28,8 +32,10 @@ class ObservedModes:
     Attributes
     ----------
     q, mass_kg_m2, gravity_torque_nm, jacobian
-        Per pose ``(n, n_dof)``, ``(n, n_dof, n_dof)``, ``(n, n_dof)``, ``(n, 6, n_dof)``
-        (robot model, payload included).
+        Per pose ``(n, n_robot)``, ``(n, n_dof, n_dof)``, ``(n, n_dof)``, ``(n, 6, n_dof)``
+        (robot model, payload included; with ``hinged_links`` the hinged arm's
+        (:meth:`tvist.Robot.with_link_hinges`) with straight hinges, ``n_dof = n_robot + 2 ×``
+        the number of hinged links).
     keys
         Pose keys.
     pose, log_joint
@@ -40,6 +46,9 @@ class ObservedModes:
         ``(k, 3)`` unit flange direction, NaN where unknown.
     true_modes
         Per pose, the record's ``true_modes`` list (a twin's campaign) or ``None``.
+    hinged_links
+        Links with a hinge pair at :data:`HINGE_AT_FRACTION` of their length (none: the
+        robot's own model).
     """
 
     q: np.ndarray
@@ -55,6 +64,16 @@ class ObservedModes:
     zeta_se: np.ndarray
     direction: np.ndarray
     true_modes: tuple[Any, ...]
+    hinged_links: tuple[int, ...] = ()
+
+    def column(self, joint: int) -> int:
+        """Index of the robot's joint ``joint`` in the model arrays."""
+        return joint + 2 * sum(1 for link in self.hinged_links if link < joint)
+
+    def hinge_columns(self, link: int) -> tuple[int, int]:
+        """Indices of the two hinge coordinates of hinged link ``link``."""
+        first = self.column(link) + 1
+        return first, first + 1
 
     @property
     def n_poses(self) -> int:
@@ -80,6 +99,7 @@ class ObservedModes:
             self.zeta_se[keep],
             self.direction[keep],
             tuple(self.true_modes[i] for i in index),
+            self.hinged_links,
         )
 
 
@@ -108,8 +128,11 @@ def observed_modes(
     robot_name: str,
     *,
     include_low_confidence: bool = False,
+    hinged_links: Sequence[int] = (),
 ) -> ObservedModes:
-    """The identified modes of every campaign record with a configuration ``q``.
+    """The identified modes of every campaign record with a configuration ``q``, with the
+    model arrays of the robot, or of the arm with a hinge pair in each of ``hinged_links``
+    at :data:`HINGE_AT_FRACTION` of its length.
 
     Raises
     ------
@@ -159,10 +182,17 @@ def observed_modes(
     if not qs:
         raise ValueError(f"no campaign record with a configuration 'q' among {len(records)}")
     q_all = np.array(qs)
-    mass = np.empty((len(qs), robot_params.n_dof, robot_params.n_dof))
-    tau = np.empty((len(qs), robot_params.n_dof))
-    jac = np.empty((len(qs), 6, robot_params.n_dof))
-    for key, model in robots.items():
+    hinged_links = tuple(sorted(int(link) for link in hinged_links))
+    n_model = robot_params.n_dof + 2 * len(hinged_links)
+    mass = np.empty((len(qs), n_model, n_model))
+    tau = np.empty((len(qs), n_model))
+    jac = np.empty((len(qs), 6, n_model))
+    for key, robot in robots.items():
+        model = (
+            robot.with_link_hinges([(link, HINGE_AT_FRACTION) for link in hinged_links])
+            if hinged_links
+            else robot
+        )
         rows = [i for i, k in enumerate(payload_of) if k == key]
         mass[rows] = model.mass_matrix_many(q_all[rows])
         tau[rows] = model.gravity_torque_many(q_all[rows])
@@ -181,4 +211,5 @@ def observed_modes(
         np.array(zeta_se),
         np.array(direction).reshape(-1, 3),
         tuple(truth),
+        hinged_links,
     )

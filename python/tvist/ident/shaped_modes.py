@@ -1,7 +1,9 @@
 """The physical modes of a fitted modal map, their participation at the flange, which to shape.
 
-A *physical mode* is the eigenmode dominated by one flexible joint (at each pose the modes
-and joints are paired one to one by strain-energy share), named by that joint. For each the
+A *physical mode* is the eigenmode dominated by one flexible coordinate (at each pose the
+modes and coordinates are paired one to one by strain-energy share), named by it: a joint, or
+one axis of a bending link's hinge pair ("link 1 bending": the upper arm bending about the
+axis parallel to its joint (axis 0) or across it (axis 1)). For each the
 report gives its frequency range over the campaign's poses, its flange participation
 (:attr:`tvist.ident.model_modes.ModelModes.flange_participation`: its share of the flange's
 residual vibration after a stop), how many identified modes were matched to it, and
@@ -49,8 +51,9 @@ def physical_index(shares: np.ndarray) -> np.ndarray:
 
 
 def physical_modes(fit: Any) -> list[dict[str, Any]]:
-    """Per flexible joint of ``fit`` (:class:`tvist.ident.all_modes_fit.AllModesFit`), its
-    physical mode: ``joint``, ``freq_hz`` (min, median, max over the poses),
+    """Per flexible coordinate of ``fit`` (:class:`tvist.ident.all_modes_fit.AllModesFit`),
+    its physical mode: ``name`` (``"joint 1"``, ``"link 2 bending (axis 0)"``), ``joint``
+    (or ``link`` and ``axis`` for a bending link), ``freq_hz`` (min, median, max over the poses),
     ``frequency_rank`` (max, 1-based), ``flange_participation`` (median, max),
     ``identified_at_poses`` (share of poses), ``shaped``."""
     modes = fit.model_modes()
@@ -59,16 +62,22 @@ def physical_modes(fit: Any) -> list[dict[str, Any]]:
     n = obs.n_poses
     used = fit.assignment >= 0
     out = []
-    for k, joint in enumerate(modes.flex_joints):
+    for k, name in enumerate(fit.coordinate_names()):
         rank = index[:, k]
         freq = modes.wn_rad_s[np.arange(n), rank] / (2 * np.pi)
         part = modes.flange_participation[np.arange(n), rank]
         hit = used & (fit.assignment == rank[obs.pose].clip(min=0))
         identified = np.unique(obs.pose[hit]).size / n
         participates = float(np.mean(part >= MIN_PARTICIPATION))
+        words = name.split()
+        if words[0] == "joint":
+            label: dict[str, Any] = {"joint": int(words[1])}
+        else:  # "link l bending (axis a)"
+            label = {"link": int(words[1]), "axis": int(words[-1].rstrip(")"))}
         out.append(
             {
-                "joint": int(joint),
+                "name": name,
+                **label,
                 "freq_hz": [float(freq.min()), float(np.median(freq)), float(freq.max())],
                 "frequency_rank": int(rank.max()) + 1,
                 "flange_participation": [float(np.median(part)), float(part.max())],

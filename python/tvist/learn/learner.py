@@ -265,6 +265,11 @@ class MapLearner:
             modal_map = self.converted.map
         if not isinstance(modal_map, ModalMap):
             raise ValueError("modal_map: the learner refines a modal map or a paper10 map")
+        if modal_map.link_hinges:
+            raise ValueError(
+                "modal_map: the learner refines the joints of a modal map with rigid links, "
+                "not one with link_hinges (bending links)"
+            )
         self.robot = robot
         self.prior = modal_map
         self.prior_log_sigma = prior_log_sigma

@@ -155,11 +155,63 @@ class Robot:
         """:meth:`gravity_torque` for every row of ``q``, ``(n_samples, n_dof)``."""
         return self._core.gravity_torque_many(_as_many(q, self.n_dof))
 
+    def with_link_hinges(self, hinges: Sequence[tuple[int, float]]) -> HingedArm:
+        """The arm with a hinge pair about the two axes perpendicular to each link ``link`` at
+        ``at_fraction`` of its length (``hinges``: ``(link, at_fraction)`` pairs): the arm a
+        modal map with link hinges evaluates (tvist-core ``Robot::with_link_hinges``)."""
+        hinges = sorted((int(link), float(at)) for link, at in hinges)
+        core = self._core.with_link_hinges([h[0] for h in hinges], [h[1] for h in hinges])
+        return HingedArm(core, self.n_dof, tuple(h[0] for h in hinges))
+
     def __repr__(self) -> str:
         return (
             f"Robot({self._params.name!r}, n_dof={self.n_dof}, "
             f"payload_kg={self._payload.mass_kg:g})"
         )
+
+
+class HingedArm:
+    """A :class:`Robot` with link hinges (:meth:`Robot.with_link_hinges`), evaluated at the
+    robot's joint angles with straight hinges.
+
+    Its joints are the robot's, each at :attr:`joint_index`, and after the joint of each
+    hinged link that link's two hinges (first about the axis parallel to the link's joint).
+    Batches take the robot's ``q`` ``(n_samples, n_robot)``; results are over all
+    :attr:`n_dof` joints."""
+
+    def __init__(self, core: _core.Robot, n_robot: int, hinged_links: tuple[int, ...]) -> None:
+        self._core = core
+        self.hinged_links = hinged_links
+        self.n_robot = n_robot
+        self.joint_index = np.array(
+            [j + 2 * sum(1 for link in hinged_links if link < j) for j in range(n_robot)]
+        )
+        #: Indices of the hinge coordinates, two per hinged link in link order.
+        self.hinge_index = np.array(
+            [self.joint_index[link] + k for link in hinged_links for k in (1, 2)], dtype=int
+        )
+
+    @property
+    def n_dof(self) -> int:
+        return self._core.n_dof
+
+    def _q(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
+        q = _as_many(q, self.n_robot)
+        full = np.zeros((q.shape[0], self.n_dof))
+        full[:, self.joint_index] = q
+        return full
+
+    def mass_matrix_many(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
+        """``(n_samples, n_dof, n_dof)`` mass matrices with straight hinges."""
+        return self._core.mass_matrix_many(self._q(q))
+
+    def gravity_torque_many(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
+        """``(n_samples, n_dof)`` gravity torques with straight hinges."""
+        return self._core.gravity_torque_many(self._q(q))
+
+    def jacobian_many(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
+        """``(n_samples, 6, n_dof)`` flange Jacobians with straight hinges."""
+        return self._core.jacobian_many(self._q(q))
 
 
 def _named(

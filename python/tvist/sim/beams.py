@@ -25,7 +25,8 @@ Structural damping: the hinge damper is the viscous equivalent of a hysteretic l
 ``c = η k / (2 π f_ref)``: a damping ratio of ``η / 2`` for a mode at ``f_ref``, rising in
 proportion to frequency above it (stiffness-proportional damping).
 
-Mass: the link's mass, centre of mass and inertia are distributed over the segments so that
+Mass (the core's ``split_link``, tvist-core ``link_hinges``, which the modal map's link hinges
+use too): the link's mass, centre of mass and inertia are distributed over the segments so that
 with straight hinges the segments together are exactly the rigid link: segment ``s`` gets
 the mass fraction ``f_s`` of its length, a centre of mass ``c + (x_s − x̄) e`` (``x_s`` the
 segment's middle along the link's unit axis ``e``, ``x̄ = Σ f_s x_s``), and the inertia about
@@ -42,9 +43,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tvist import _core
+
 __all__ = ["BeamSegment", "LinkBeams", "split_link"]
 
-#: Shortest link (joint-to-joint distance, m) that can be cut into segments.
+#: Shortest link (joint-to-joint distance, m) that can be cut into segments (the core's).
 MIN_LINK_LENGTH_M = 0.05
 
 
@@ -142,15 +145,6 @@ class BeamSegment:
     inertia_kg_m2: np.ndarray
 
 
-def _physical(inertia: np.ndarray) -> bool:
-    """A rigid body's inertia about its centre of mass: positive definite, and each principal
-    moment at most the sum of the other two (with MuJoCo's margin of rounding)."""
-    moments = np.linalg.eigvalsh(0.5 * (inertia + inertia.T))
-    if moments[0] <= 1e-9:
-        return False
-    return bool(moments[2] <= moments[0] + moments[1] + 1e-12)
-
-
 def split_link(
     offset_m: np.ndarray,
     mass_kg: float,
@@ -168,44 +162,24 @@ def split_link(
     The composite of the segments (parallel-axis theorem) equals ``(mass_kg, com_m,
     inertia_kg_m2)`` to rounding.
     """
-    offset = np.asarray(offset_m, dtype=float)
-    length = float(np.linalg.norm(offset))
-    if length < MIN_LINK_LENGTH_M:
-        raise ValueError(
-            f"a link of length {length:.3g} m is too short to bend (needs >= {MIN_LINK_LENGTH_M} m)"
-        )
-    axis = offset / length
-    first = np.array([0.0, 0.0, 1.0]) - axis[2] * axis
-    if np.linalg.norm(first) < 0.1:  # link along its own joint axis: any perpendicular
-        first = np.array([1.0, 0.0, 0.0]) - axis[0] * axis
-    first /= np.linalg.norm(first)
-    bending_axes = np.array([first, np.cross(axis, first)])
-
-    com = np.asarray(com_m, dtype=float)
-    inertia = np.asarray(inertia_kg_m2, dtype=float)
-    # The beam line: parallel to the link's axis, through its centre of mass.
-    sideways = com - float(com @ axis) * axis
     hinge_frac = (np.arange(n_hinges) + 0.5) / n_hinges
-    bounds = np.concatenate([[0.0], hinge_frac, [1.0]])
-    fractions = np.diff(bounds)  # of the length, so of the mass
-    middles = 0.5 * (bounds[:-1] + bounds[1:])
-    along = (middles - float(fractions @ middles)) * length  # from the centre of mass (m)
-    perpendicular = np.eye(3) - np.outer(axis, axis)
-    spread_unit = mass_kg * float(fractions @ along**2) * perpendicular
-    scale = 1.0
-    while not _physical(inertia - scale**2 * spread_unit):
-        scale *= 0.5
-        if scale < 1e-6:
-            scale = 0.0
-            break
-    segments = []
-    for s in range(n_hinges + 1):
-        segments.append(
-            BeamSegment(
-                hinge_m=None if s == 0 else sideways + hinge_frac[s - 1] * offset,
-                mass_kg=float(mass_kg * fractions[s]),
-                com_m=com + scale * along[s] * axis,
-                inertia_kg_m2=fractions[s] * (inertia - scale**2 * spread_unit),
-            )
+    try:
+        parts, axes = _core.split_link(
+            np.asarray(offset_m, dtype=float).tolist(),
+            float(mass_kg),
+            np.asarray(com_m, dtype=float).tolist(),
+            np.asarray(inertia_kg_m2, dtype=float).tolist(),
+            hinge_frac.tolist(),
         )
-    return segments, bending_axes
+    except ValueError as exc:
+        raise ValueError(str(exc).removeprefix("invalid parameter: ")) from None
+    segments = [
+        BeamSegment(
+            hinge_m=None if hinge is None else np.array(hinge),
+            mass_kg=float(mass),
+            com_m=np.array(com),
+            inertia_kg_m2=np.array(inertia),
+        )
+        for hinge, mass, com, inertia in parts
+    ]
+    return segments, np.array(axes)
