@@ -67,6 +67,8 @@ __all__ = [
 
 #: Names of family variants are ``family:<robot>:<seed>``.
 FAMILY_PREFIX = "family"
+#: The seed part of the nominal variant's name (the robot's default twin).
+NOMINAL = "nominal"
 
 #: Robots the family is defined for: nominal tube diameter of the bending links (m).
 _TUBE_DIAMETER_M = {"ur5e": 0.080, "ur10e": 0.100}
@@ -171,7 +173,7 @@ class Variant:
     @property
     def name(self) -> str:
         """``family:<robot>:<seed>`` (``family:<robot>:nominal`` for the nominal variant)."""
-        tail = "nominal" if self.seed is None else str(self.seed)
+        tail = NOMINAL if self.seed is None else str(self.seed)
         return f"{FAMILY_PREFIX}:{self.robot}:{tail}"
 
     @property
@@ -338,8 +340,14 @@ def sample_variant(robot: str, seed: int) -> Variant:
 
 def nominal_variant(robot: str) -> Variant:
     """The default twin of ``robot`` as a :class:`Variant`: every factor 1, nominal stiffening,
-    an ideal servo, rigid links."""
-    _check_robot(robot)
+    an ideal servo, rigid links. Defined for every robot with a
+    :func:`~tvist.sim.default_flex` (the family's draws only for :data:`_TUBE_DIAMETER_M`'s).
+
+    Raises
+    ------
+    ValueError
+        A robot without default flexibility.
+    """
     n = len(default_flex(robot).k1_nm_per_rad)
     return Variant(
         robot=robot,
@@ -364,9 +372,11 @@ def parse_family_name(name: str) -> Variant | None:
     parts = name.split(":")
     if parts[0] != FAMILY_PREFIX:
         return None
+    if len(parts) == 3 and parts[2] == NOMINAL:
+        return nominal_variant(parts[1])
     if len(parts) != 3 or not parts[2].isdigit():
         raise ValueError(
-            f"twin variant {name!r}: a family variant is named {FAMILY_PREFIX}:<robot>:<seed>, "
-            f"e.g. {FAMILY_PREFIX}:ur5e:17"
+            f"twin variant {name!r}: a family variant is named {FAMILY_PREFIX}:<robot>:<seed> "
+            f"or {FAMILY_PREFIX}:<robot>:{NOMINAL}, e.g. {FAMILY_PREFIX}:ur5e:17"
         )
     return sample_variant(parts[1], int(parts[2]))
