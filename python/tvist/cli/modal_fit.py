@@ -79,7 +79,10 @@ def fit_modal_command(records: Sequence[Mapping[str, Any]], args: argparse.Names
             f"{100 * m['identified_at_poses']:.0f} % of the poses: "
             f"{'shaped' if m['shaped'] else 'not shaped'}"
         )
-    print(f"  shaped modes: mode_joints {modal.mode_joints}")
+    if modal.mode_joints is not None:
+        print(f"  shaped modes: mode_joints {modal.mode_joints}")
+    else:
+        print(f"  shaped modes: the {modal.shaped_modes} lowest (shaped_modes)")
     modal.save(args.out)
     print(f"modal map written to {args.out}")
     return 0

@@ -21,12 +21,13 @@ the damping projected on the undamped modes (linear in the coefficients); (3) bo
 Load terms below ``drop_t`` standard errors are dropped.
 
 **Which joints are flexible** is decided by the data: starting from every candidate joint
-(base to wrist 2), a joint other than base and shoulder is made rigid when the evidence for
-its flexibility is weak: the truncated χ² of the frequency fit (each residual in units of the
-full model's robust scatter, capped at :data:`GATE` like an unmatched mode) must fall by more
-than the ``1 − JOINT_P`` quantile of χ² with as many degrees of freedom as the joint's
-stiffness parameters when the joint is flexible (a likelihood-ratio test at level
-:data:`JOINT_P`); the weakest joint is removed first and the test repeated.
+(:func:`flexible_candidates`: base to wrist 2 on a UR), a joint other than base and shoulder
+is made rigid when the evidence for its flexibility is weak: the truncated χ² of the
+frequency fit (each residual in units of the full model's robust scatter, capped at
+:data:`GATE` like an unmatched mode) must fall by more than the ``1 − JOINT_P`` quantile of
+χ² with as many degrees of freedom as the joint's stiffness parameters when the joint is
+flexible (a likelihood-ratio test at level :data:`JOINT_P`); the weakest joint is removed
+first and the test repeated.
 
 **A servo of finite stiffness** ``k_s`` in series with a gear ``k_g`` is not fitted as a
 parameter of its own: with the motor's inertia neglected (as the core's model, and the twin,
@@ -52,11 +53,23 @@ from tvist.ident.model_modes import ModelModes, joint_laws, model_modes, undampe
 from tvist.ident.observed_modes import ObservedModes, observed_modes
 from tvist.modal_map import ModalMap
 
-__all__ = ["CANDIDATE_JOINTS", "AllModesFit", "fit_all_modes", "match_modes"]
+__all__ = ["CANDIDATE_JOINTS", "AllModesFit", "fit_all_modes", "flexible_candidates", "match_modes"]
 
-#: Joints that may be flexible: base, shoulder, elbow, wrists 1-2 (wrist 3, the tool axis,
-#: hardly moves the flange in the arm's modes).
+#: Joints of a UR (DH) arm that may be flexible: base, shoulder, elbow, wrists 1-2 (wrist 3,
+#: the tool axis, hardly moves the flange in the arm's modes). An arm placed by its URDF:
+#: its proximal joints (:func:`flexible_candidates`).
 CANDIDATE_JOINTS = (0, 1, 2, 3, 4)
+
+
+def flexible_candidates(robot_name: str) -> tuple[int, ...]:
+    """The joints of ``robot_name`` that may be flexible: :data:`CANDIDATE_JOINTS` for a DH
+    arm, :data:`tvist.robots.urdf.PROXIMAL_JOINTS` for a URDF-placed arm."""
+    from tvist.robots import params
+    from tvist.robots.urdf import PROXIMAL_JOINTS
+
+    return CANDIDATE_JOINTS if params(robot_name).placements is None else PROXIMAL_JOINTS
+
+
 #: Always flexible: the joints whose excitation logs the campaign records.
 ALWAYS_FLEXIBLE = (0, 1)
 #: Matching scales: relative frequency difference and sine of the angle between directions.
@@ -453,17 +466,20 @@ def fit_all_modes(
     records: Sequence[Mapping[str, Any]] | ObservedModes,
     robot_name: str = "ur5e",
     *,
-    candidate_joints: Sequence[int] = CANDIDATE_JOINTS,
+    candidate_joints: Sequence[int] | None = None,
     drop_t: float = 3.0,
     include_low_confidence: bool = False,
 ) -> AllModesFit:
-    """Fit the flexible joints' laws to every identified mode (module docstring).
+    """Fit the flexible joints' laws to every identified mode (module docstring);
+    ``candidate_joints`` ``None``: :func:`flexible_candidates` of the robot.
 
     Raises
     ------
     ValueError
         Unusable records, too few identified modes, or candidates without base and shoulder.
     """
+    if candidate_joints is None:
+        candidate_joints = flexible_candidates(robot_name)
     candidates = tuple(sorted(int(j) for j in candidate_joints))
     if not set(ALWAYS_FLEXIBLE) <= set(candidates):
         raise ValueError(f"candidate joints must include base and shoulder, got {candidates}")

@@ -19,7 +19,8 @@ its mode suffice: on a 26-pose simulated campaign of ``family:ur5e:14`` whose re
 base and shoulder modes only, the elbow's stiffness came out with a 4 % standard error and
 its mode 12.6 % RMS off the arm's true elbow mode.
 
-:func:`shaping_field` turns the report into the map file's field naming the shaped modes.
+:func:`shaping_field` turns the report into the map file's field naming the shaped modes:
+by joint, or the K lowest as a set where a shaped mode climbs above an unshaped one.
 """
 
 from __future__ import annotations
@@ -80,12 +81,19 @@ def physical_modes(fit: Any) -> list[dict[str, Any]]:
 
 
 def shaping_field(report: list[dict[str, Any]]) -> dict[str, Any]:
-    """The map file's field naming the shaped modes of ``report`` (:func:`physical_modes`):
-    ``{"mode_joints": [joints of the shaped modes, ascending]}``.
+    """The map file's field naming the shaped modes of ``report`` (:func:`physical_modes`).
 
-    The one place that chooses the field: the frequency-ranked form ``{"shaped_modes": K}``
-    would be ``K = max(frequency_rank of the shaped modes)`` (the K lowest eigenmodes then
-    include every shaped physical mode at every pose).
+    The one place that chooses the field. ``{"mode_joints": [joints of the shaped modes,
+    ascending]}`` while the shaped physical modes are the lowest ones at every pose (each
+    one's largest ``frequency_rank`` is at most their number ``K``): then naming them by
+    joint shapes the K lowest modes, and keeps each filter on its mode where two cross. Where
+    a shaped mode climbs above an unshaped one at some pose (on a 7-joint arm, the base mode
+    at a pose where the arm stands over the base: 80 Hz and more, above the elbow's), the
+    joint-named set would shape that high mode and leave a lower one ringing; the map then
+    shapes the K lowest modes as a set, ``{"shaped_modes": K}``.
     """
-    joints = [m["joint"] for m in report if m["shaped"]]
-    return {"mode_joints": sorted(joints)}
+    shaped = [m for m in report if m["shaped"]]
+    joints = sorted(m["joint"] for m in shaped)
+    if shaped and max(m["frequency_rank"] for m in shaped) > len(shaped):
+        return {"shaped_modes": len(shaped)}
+    return {"mode_joints": joints}

@@ -31,6 +31,7 @@ from tvist.robots._robot import Robot
 from tvist.robots.inertial import lump
 
 __all__ = [
+    "PROXIMAL_JOINTS",
     "SHIPPED_URDFS",
     "dh_urdf",
     "from_urdf",
@@ -359,6 +360,12 @@ def dh_urdf(params: RobotParams) -> str:
     ET.indent(robot)
     return ET.tostring(robot, encoding="unicode") + "\n"
 
+
+#: The joints of a URDF-placed arm that may be flexible (a modal map's candidates, the
+#: joints a twin of it makes flexible): the proximal joints up to the elbow, which carry
+#: the big gears and most of the arm's inertia (joints 1-4 of a 7-joint arm). The wrist's
+#: small gears ring far above them; and the modal core solves at most 6 flexible joints.
+PROXIMAL_JOINTS: tuple[int, ...] = (0, 1, 2, 3)
 
 #: The arms shipped as URDF data (``urdf_data/``, provenance and license in each file):
 #: name → (file, base link, tip link, rated payload in kg). URDF gives no rated payload; the

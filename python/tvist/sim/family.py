@@ -53,7 +53,7 @@ from typing import NamedTuple
 import numpy as np
 
 from tvist.sim.beams import LinkBeams
-from tvist.sim.flex import FlexParams, default_flex
+from tvist.sim.flex import FlexParams, default_flex, stiffening_k3
 from tvist.sim.twin import Twin
 
 __all__ = [
@@ -119,21 +119,14 @@ class TrueMode(NamedTuple):
     link_share: float
 
 
-def _stiffening_k3(k1: float, rated_nm: float, growth: float) -> float:
-    """``k3`` (N m/rad³) such that ``k1 + 3 k3 δ²`` is ``growth`` x ``k1`` at the deflection
-    carrying ``rated_nm``: ``δ_r = 3 τ_r / ((growth + 2) k1)``, ``k3 = (growth − 1) k1 /
-    (3 δ_r²)``."""
-    delta_r = 3.0 * rated_nm / ((growth + 2.0) * k1)
-    return (growth - 1.0) * k1 / (3.0 * delta_r * delta_r)
-
-
 def rated_torque_nm(flex: FlexParams) -> np.ndarray:
     """Rated torque of each joint's gear (N m) implied by a nominal gear law: the torque at
     which its tangent stiffness has grown by :data:`NOMINAL_STIFFENING` (the inverse of
-    :func:`_stiffening_k3`)."""
+    :func:`~tvist.sim.flex.stiffening_k3`); infinite for a linear spring (``k3 = 0``)."""
     k1 = np.asarray(flex.k1_nm_per_rad, dtype=float)
     k3 = np.asarray(flex.k3_nm_per_rad3, dtype=float)
-    delta_r = np.sqrt((NOMINAL_STIFFENING - 1.0) * k1 / (3.0 * k3))
+    with np.errstate(divide="ignore"):
+        delta_r = np.sqrt((NOMINAL_STIFFENING - 1.0) * k1 / (3.0 * k3))
     return delta_r * (NOMINAL_STIFFENING + 2.0) * k1 / 3.0
 
 
@@ -183,7 +176,7 @@ class Variant:
         k1 = np.asarray(nominal.k1_nm_per_rad) * np.asarray(self.stiffness_factor)
         rated = rated_torque_nm(nominal)
         k3 = [
-            _stiffening_k3(float(k), float(t), float(g))
+            stiffening_k3(float(k), float(t), float(g))
             for k, t, g in zip(k1, rated, self.stiffening, strict=True)
         ]
         ratio = np.asarray(self.servo_ratio, dtype=float)

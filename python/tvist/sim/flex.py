@@ -292,12 +292,9 @@ def stiffening_k3(k1_nm_per_rad: float, rated_nm: float, growth: float = 1.25) -
     return (growth - 1.0) * k1_nm_per_rad / (3.0 * delta_r * delta_r)
 
 
-#: Joints that are flexible in the twins of the URDF arms below: the four proximal joints
-#: (base, shoulder, upper-arm roll, elbow), which carry the big gears and the arm's inertia;
-#: the modal map of such an arm models these four (``tvist fit-map --kind modal``).
-URDF_ARM_FLEX_JOINTS = (0, 1, 2, 3)
-
-#: Franka Research 3, design values (Franka publishes no joint stiffness or damping).
+#: Franka Research 3, design values (Franka publishes no joint stiffness or damping). Joints
+#: 1-4 are flexible (:data:`tvist.robots.urdf.PROXIMAL_JOINTS`: base, shoulder, upper-arm
+#: roll, elbow, the joints a modal map of the arm models), joints 5-7 stiff.
 #:
 #: - ``k1`` of the flexible joints 1-4 (87 N m rated torque, Franka's data sheet): the UR5e's
 #:   base stiffness scaled by rated torque, ``22 000 x 87 / 150 = 12 800`` N m/rad (the
