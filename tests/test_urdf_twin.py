@@ -132,3 +132,15 @@ def json_document(modal, tmp_path) -> dict:
     path = tmp_path / "map.json"
     modal.save(path)
     return json.loads(path.read_text())
+
+
+def test_demo_for_an_arm_without_a_default_twin_is_refused_in_one_line(capsys, tmp_path):
+    from tvist.cli import main
+
+    assert main(["demo", "--robot", "gen3", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert (
+        err.startswith("tvist demo: error: --robot gen3: no default FlexParams") and "\n" not in err
+    )
+    assert main(["demo", "--robot", "ur6e", "--out", str(tmp_path)]) == 2
+    assert "unknown robot 'ur6e'" in capsys.readouterr().err
