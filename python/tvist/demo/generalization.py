@@ -12,10 +12,11 @@ Per variant ``family:<robot>:<seed>``:
    of their own (:func:`evaluation_poses`: not the campaign's poses), with the demo's payload:
    each shaped mode of the map against the variant's true mode of the same name
    (:func:`matching_true_modes`), RMS and largest relative frequency error.
-4. **The demo's three moves** (:data:`tvist.demo.motions.MOTIONS`) on the variant's twin:
-   unshaped, shaped with the identified map (the demo's modal row), and the ceiling: ZV on
-   every true mode below :data:`TRUE_MODE_MAX_HZ` at the end pose; residual vibration
-   reduction of both, the shaped move's delay against ZV's analytic delay of the modes it
+4. **The demo's three moves** (:func:`tvist.demo.motions.demo_motions` of the robot) on the
+   variant's twin: unshaped, shaped with the identified map (the demo's modal row, time
+   varying), the identified map's modes at the end pose held over the move, and the ceiling:
+   ZV on every true mode below :data:`TRUE_MODE_MAX_HZ` at the end pose; residual vibration
+   reduction of each, the shaped move's delay against ZV's analytic delay of the modes it
    shapes.
 5. **Wrong and confident**: identifications not flagged low-confidence that lie more than
    :data:`WRONG_TOLERANCE` from every true mode of the pose (:func:`wrong_confident`).
@@ -24,6 +25,9 @@ Each variant's result is a JSON file (``<robot>-<seed>/result.json``; a rerun wi
 settings skips finished variants) and ``table.md`` lists them all::
 
     python -m tvist.demo.generalization --robot ur5e --seeds 0-4 --out out/generalization
+
+``--seeds nominal`` runs the robot's default twin instead (any robot with a default twin,
+e.g. ``--robot fr3``; ``tvist demo --robot fr3`` does this).
 
 At most :data:`MAX_WORKERS` variants run at once, one process each (the CLI steps of a
 variant run one after the other in its own process).
