@@ -85,10 +85,30 @@ class ReferenceModes:
         return [(float(self.wn_rad_s[i]), float(self.zeta[i])) for i in (base, shoulder)]
 
 
+def urdf_pinocchio_model(path, tip_link: str, payload: Payload):
+    """pinocchio's model of URDF ``path`` (its own parser, no tvist code) with ``payload`` on
+    ``tip_link`` (centre of mass and inertia in that link's frame)."""
+    pin = _pin()
+    model = pin.buildModelFromUrdf(str(path))
+    frame = model.frames[model.getFrameId(tip_link)]
+    six = np.zeros(6) if payload.inertia_kg_m2 is None else np.asarray(payload.inertia_kg_m2)
+    tensor = tvist.robots.inertia_tensor(six)
+    body = pin.Inertia(payload.mass_kg, np.asarray(payload.com_m), tensor)
+    model.appendBodyToJoint(frame.parentJoint, frame.placement.act(body), pin.SE3.Identity())
+    return model
+
+
 def flexible_joint_modes(
-    p: RobotParams, payload: Payload, flex, q_motor: np.ndarray, gravity_m_s2: float = 9.81
+    p: RobotParams,
+    payload: Payload,
+    flex,
+    q_motor: np.ndarray,
+    gravity_m_s2: float = 9.81,
+    model=None,
 ) -> ReferenceModes:
-    """Modes at rest with the motors at ``q_motor`` (see the module docstring).
+    """Modes at rest with the motors at ``q_motor`` (see the module docstring); ``model``:
+    the pinocchio model (default :func:`pinocchio_model` of the DH arm ``p``), e.g.
+    :func:`urdf_pinocchio_model` of a URDF arm (revolute joints only).
 
     Static equilibrium: the gear spring ``k1 δ + k3 δ³`` carries the gravity torque ``g(q)``,
     ``δ = q_motor − q``, solved by Newton with the Jacobian ``−K_gear(δ) − ∂g/∂q``.
@@ -96,7 +116,8 @@ def flexible_joint_modes(
     ``c0 (1 + c_load |L|_s)(1 + c_load2 |L|_s)`` at the static spring torques.
     """
     pin = _pin()
-    model, _ = pinocchio_model(p, payload)
+    if model is None:
+        model, _ = pinocchio_model(p, payload)
     model.gravity.linear = np.array([0.0, 0.0, -gravity_m_s2])
     data = model.createData()
     k1 = np.asarray(flex.k1_nm_per_rad, dtype=float)

@@ -44,7 +44,8 @@ def _campaign_records(
     path: Path, robot_name: str, truth: tvist.DynamicMap | tvist.ModalMap
 ) -> None:
     """Campaign-style records of ``truth``'s modes at random robot poses."""
-    robot = tvist.robots.Robot(tvist.robots.params(robot_name), tvist.robots.Payload(*_payload()))
+    payload = tvist.robots.Payload(_payload_kg(robot_name), COM_M)
+    robot = tvist.robots.Robot(tvist.robots.params(robot_name), payload)
     rng = np.random.default_rng(7)
     limits = tvist.robots.params(robot_name).joint_limits_rad
     with path.open("w") as fh:
@@ -58,7 +59,7 @@ def _campaign_records(
             record = {
                 "key": f"p{i}",
                 "q": [float(v) for v in q],
-                "payload_kg": PAYLOAD_KG,
+                "payload_kg": payload.mass_kg,
                 "payload_com_m": list(COM_M),
                 "inertia_kg_m2": [float(v) for v in inertia],
                 "modes": [
@@ -69,33 +70,43 @@ def _campaign_records(
             fh.write(json.dumps(record) + "\n")
 
 
-def _payload() -> tuple:
-    return (PAYLOAD_KG, COM_M)
-
-
 def _move(robot_name: str) -> np.ndarray:
     """A 0.8 s move of the first three joints from a mid-range pose, then 0.4 s of rest."""
     t = np.arange(0.0, 1.2, DT_S)
     s = np.clip(t / 0.8, 0.0, 1.0)
     blend = s**3 * (10 - 15 * s + 6 * s**2)
-    q0 = np.array([0.0, -1.6, 1.2, -1.2, 0.3, 0.0])
-    dq = np.array([0.9, 0.5, -0.6, 0.0, 0.0, 0.0])
+    p = tvist.robots.params(robot_name)
+    if p.placements is None:
+        q0 = np.array([0.0, -1.6, 1.2, -1.2, 0.3, 0.0])
+    else:  # mid-range, as a UR's q0 lies well within its limits
+        q0 = p.joint_limits_rad.mean(axis=1)
+    dq = np.zeros(p.n_dof)
+    dq[:3] = [0.9, 0.5, -0.6]
     return q0 + blend[:, None] * dq
 
 
+def _payload_kg(robot_name: str) -> float:
+    return min(PAYLOAD_KG, tvist.robots.params(robot_name).max_payload_kg)
+
+
 def _python_shaped(robot_name: str, map_path: Path, q: np.ndarray) -> np.ndarray:
-    robot = tvist.robots.Robot(tvist.robots.params(robot_name), tvist.robots.Payload(*_payload()))
+    payload = tvist.robots.Payload(_payload_kg(robot_name), COM_M)
+    robot = tvist.robots.Robot(tvist.robots.params(robot_name), payload)
     shaper = tvist.TvShaper(
-        tvist.MapDynamics(robot, tvist.load_map(map_path)), DT_S, 6, shaper="zv"
+        tvist.MapDynamics(robot, tvist.load_map(map_path)), DT_S, robot.n_dof, shaper="zv"
     )
     shaper.reset(q[0])
     return shaper.shape(q)
 
 
-def _cpp_shaped(program: Path, robot_name: str, map_path: Path, q: np.ndarray, tmp: Path):
+def _cpp_shaped(
+    program: Path, robot_name: str, map_path: Path, q: np.ndarray, tmp: Path, robot: str = ""
+):
+    """The C++ program's shaped samples; ``robot`` a robot file (default: the name)."""
     samples, shaped = tmp / f"{robot_name}_in.txt", tmp / f"{robot_name}_out.txt"
     np.savetxt(samples, q, fmt="%.17g")
-    args = [robot_name, str(PAYLOAD_KG), *map(str, COM_M), str(map_path), str(DT_S), "zv"]
+    payload = str(_payload_kg(robot_name))
+    args = [robot or robot_name, payload, *map(str, COM_M), str(map_path), str(DT_S), "zv"]
     subprocess.run([str(program), *args, str(samples), str(shaped)], check=True)
     return np.loadtxt(shaped)
 
@@ -157,6 +168,32 @@ def test_cpp_shapes_a_map_file_exactly_as_python(program, tmp_path, robot_name):
         # The test would pass trivially on an identity filter: the move must be shaped.
         assert np.max(np.abs(expected - q)) > 1e-3, source
         np.testing.assert_allclose(got, expected, rtol=0, atol=TOLERANCE_RAD, err_msg=source)
+
+
+def test_cpp_shapes_a_urdf_arm_from_its_robot_file_exactly_as_python(program, tmp_path):
+    """The 7-joint iiwa14: its robot file as ``tvist robot-file`` writes it and a modal map
+    of the form ``tvist fit-map --kind modal`` gives these arms (four flexible proximal
+    joints, the three lowest modes shaped as a set), shaped in C++ from the two files and in
+    Python from the shipped arm. (The FR3 with two flexible joints named by joint is
+    tests/test_urdf.py's case.)"""
+    from tvist.robots import shipped_urdf
+
+    path, base, tip = shipped_urdf("iiwa14")
+    robot_file = tmp_path / "iiwa14_robot.json"
+    args = ["robot-file", str(path), "--base-link", base, "--tip-link", tip, "--name", "iiwa14"]
+    assert main([*args, "--out", str(robot_file)]) == 0
+    # The twin's design laws (tvist.sim.flex.IIWA14_FLEX) as a map.
+    from tvist.modal_map import modal_map_from_flex
+    from tvist.sim import default_flex
+
+    laws = modal_map_from_flex(default_flex("iiwa14"), joints=(0, 1, 2, 3)).flex_joints
+    map_path = tmp_path / "iiwa14_modal.json"
+    tvist.ModalMap(laws, metadata={"robot": "iiwa14"}, shaped_modes=3).save(map_path)
+    q = _move("iiwa14")
+    expected = _python_shaped("iiwa14", map_path, q)
+    got = _cpp_shaped(program, "iiwa14", map_path, q, tmp_path, robot=str(robot_file))
+    assert np.max(np.abs(expected - q)) > 1e-3  # the move is shaped
+    np.testing.assert_allclose(got, expected, rtol=0, atol=TOLERANCE_RAD)
 
 
 @pytest.mark.parametrize("kind", ["paper10", "modal"])

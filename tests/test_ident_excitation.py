@@ -108,7 +108,8 @@ def test_urscript_export_runs_the_same_moves():
     ("kwargs", "message"),
     [
         ({"joint": 6}, "joint"),
-        ({"q0": np.zeros(5)}, "q0"),
+        ({"q0": np.zeros((2, 6))}, "q0"),  # one angle per joint (any number of joints)
+        ({"q0": [0.0, np.nan, 0.0, 0.0, 0.0, 0.0]}, "q0"),
         ({"dt_s": 0.0}, "dt_s"),
         ({"speed_range_rad_s": (2.0, 0.5)}, "speed_range_rad_s"),
         ({"wait_range_s": (-1.0, 1.0)}, "wait_range_s"),

@@ -227,7 +227,9 @@ def test_clean_log_reads_without_warnings(tmp_path):
 
 def test_record_validates_shapes():
     rec = make_record(n=5)
-    with pytest.raises(ValueError, match=r"target_q must have shape \(5, 6\)"):
+    # The joints are as many as target_q has columns (6 on a UR, 7 on an FR3): the other
+    # joint fields must match it.
+    with pytest.raises(ValueError, match=r"target_qd must have shape \(5, 5\)"):
         Record(
             t_s=rec.t_s,
             target_q=rec.target_q[:, :5],

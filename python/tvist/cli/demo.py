@@ -14,6 +14,8 @@ __all__ = ["add_demo_command", "add_zero_delay_command", "demo_row_method"]
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
+    if args.robot != "ur5e":
+        return _robot_demo(args)
     if args.experiment == "flexible-payload":
         from tvist.demo.flexible_payload import run_from_args
 
@@ -48,6 +50,33 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _robot_demo(args: argparse.Namespace) -> int:
+    """``tvist demo --robot NAME``: the campaign, identification, modal map and the three
+    moves on the arm's default twin (:func:`tvist.demo.generalization.run_variant`); the
+    table is printed and written to ``out/demo-NAME/table.md``."""
+    from pathlib import Path
+
+    from tvist.demo.generalization import TABLE_FILE, HarnessSettings, run_variant, table_markdown
+    from tvist.robots import params
+    from tvist.sim import default_flex
+
+    params(args.robot)  # an unknown robot: one line naming the known ones
+    try:
+        default_flex(args.robot)
+    except ValueError as exc:
+        raise ValueError(f"--robot {args.robot}: {exc}") from None
+    out = Path(args.out or f"out/demo-{args.robot}")
+    result = run_variant(None, out, HarnessSettings(robot=args.robot))
+    table = table_markdown([result])
+    (out / TABLE_FILE).write_text(table, encoding="utf-8")
+    print(table)
+    cpu = result.get("cpu_time_s") or {}
+    print("CPU time, s: " + ", ".join(f"{k} {v:.0f}" for k, v in cpu.items()))
+    if "error" in result:
+        raise ValueError(f"--robot {args.robot}: {result['error']}")
+    return 0
+
+
 def demo_row_method(key: str) -> str:
     """Which ``--method`` a demo row belongs to (``"unshaped"`` for the baseline)."""
     if key.startswith(("fd-tvist", "fixed-")):  # fixed shapers: FD-TVIST's baselines
@@ -60,6 +89,13 @@ def add_demo_command(sub: argparse._SubParsersAction) -> None:
         "demo", help="the paper's UR5e experiment on the simulated arm: table, figures, report"
     )
     p.add_argument("--out", default=None, help="output folder (default out/demo)")
+    p.add_argument(
+        "--robot",
+        default="ur5e",
+        help="ur5e: the paper's experiment (default); fr3, iiwa14 (or another arm with a "
+        "default twin): identify a modal map on its twin and shape its three test moves "
+        "(default out/demo-ROBOT; the other options do not apply)",
+    )
     p.add_argument("--quick", action="store_true", help="shortened run (used by the tests)")
     p.add_argument(
         "--map",

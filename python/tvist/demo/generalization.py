@@ -12,10 +12,11 @@ Per variant ``family:<robot>:<seed>``:
    of their own (:func:`evaluation_poses`: not the campaign's poses), with the demo's payload:
    each shaped mode of the map against the variant's true mode of the same name
    (:func:`matching_true_modes`), RMS and largest relative frequency error.
-4. **The demo's three moves** (:data:`tvist.demo.motions.MOTIONS`) on the variant's twin:
-   unshaped, shaped with the identified map (the demo's modal row), and the ceiling: ZV on
-   every true mode below :data:`TRUE_MODE_MAX_HZ` at the end pose; residual vibration
-   reduction of both, the shaped move's delay against ZV's analytic delay of the modes it
+4. **The demo's three moves** (:func:`tvist.demo.motions.demo_motions` of the robot) on the
+   variant's twin: unshaped, shaped with the identified map (the demo's modal row, time
+   varying), the identified map's modes at the end pose held over the move, and the ceiling:
+   ZV on every true mode below :data:`TRUE_MODE_MAX_HZ` at the end pose; residual vibration
+   reduction of each, the shaped move's delay against ZV's analytic delay of the modes it
    shapes.
 5. **Wrong and confident**: identifications not flagged low-confidence that lie more than
    :data:`WRONG_TOLERANCE` from every true mode of the pose (:func:`wrong_confident`).
@@ -24,6 +25,9 @@ Each variant's result is a JSON file (``<robot>-<seed>/result.json``; a rerun wi
 settings skips finished variants) and ``table.md`` lists them all::
 
     python -m tvist.demo.generalization --robot ur5e --seeds 0-4 --out out/generalization
+
+``--seeds nominal`` runs the robot's default twin instead (any robot with a default twin,
+e.g. ``--robot fr3``; ``tvist demo --robot fr3`` does this).
 
 At most :data:`MAX_WORKERS` variants run at once, one process each (the CLI steps of a
 variant run one after the other in its own process).
@@ -111,13 +115,17 @@ class HarnessSettings:
     plan_seed: int = 0
 
     def plan(self) -> list:
-        """The campaign poses."""
+        """The campaign poses (payloads above the robot's rated one are left out)."""
         from tvist.demo.motions import PAYLOAD_COM_M
         from tvist.ident.pose_plan import plan_poses
+        from tvist.robots import params
+
+        rated = params(self.robot).max_payload_kg
+        payloads = tuple(min(m, rated) for m in self.payloads_kg)
 
         return plan_poses(
             self.robot,
-            payloads_kg=self.payloads_kg,
+            payloads_kg=tuple(dict.fromkeys(payloads)),
             payload_com_m=PAYLOAD_COM_M,
             every=self.every,
             seed=self.plan_seed,
@@ -127,15 +135,20 @@ class HarnessSettings:
 # --------------------------------------------------------------------------- pieces
 
 
-def parse_seeds(text: str) -> list[int]:
-    """``"0-4"``, ``"3"``, ``"0-2,7,9-10"`` → the seeds, in order, each once.
+def parse_seeds(text: str) -> list[int | None]:
+    """``"0-4"``, ``"3"``, ``"0-2,7,9-10"`` → the seeds, in order, each once; ``"nominal"``
+    → ``[None]``, the robot's default twin (:func:`tvist.sim.family.nominal_variant`).
 
     Raises
     ------
     ValueError
         Not such a list of non-negative integers, or a range that runs backwards.
     """
-    seeds: list[int] = []
+    from tvist.sim.family import NOMINAL
+
+    if text.strip() == NOMINAL:
+        return [None]
+    seeds: list[int | None] = []
     for part in text.split(","):
         lo, sep, hi = part.strip().partition("-")
         if not lo.isdigit() or (sep and not hi.isdigit()):
@@ -147,13 +160,13 @@ def parse_seeds(text: str) -> list[int]:
     return seeds
 
 
-def evaluation_poses(robot: str, seed: int, n: int = EVALUATION_POSES) -> np.ndarray:
+def evaluation_poses(robot: str, seed: int | None, n: int = EVALUATION_POSES) -> np.ndarray:
     """``n`` workspace poses ``(n, 6)`` (rad) for variant ``seed``: the plan's workspace
     (:func:`~tvist.ident.pose_plan.workspace_poses`), drawn from :data:`EVALUATION_STREAM`,
     so none is a campaign pose."""
     from tvist.ident.pose_plan import workspace_poses
 
-    return workspace_poses(robot, n, seed=seed, stream=EVALUATION_STREAM)
+    return workspace_poses(robot, n, seed=seed or 0, stream=EVALUATION_STREAM)
 
 
 def shaped_mode_names(map_document: Mapping[str, Any]) -> list[tuple[str, int]]:
@@ -250,7 +263,7 @@ def table_markdown(results: Sequence[Mapping[str, Any]]) -> str:
     """The markdown table of variant results (:func:`run_variant`), one row per variant."""
     from tvist.demo.motions import MOTIONS
 
-    names = [m.name for m in MOTIONS]
+    names = [m.name for m in MOTIONS]  # every robot's demo moves have these names
     header = (
         "| variant | map frequency error RMS / max, %, per shaped mode | "
         + " | ".join(f"{n} reduction % (ceiling)" for n in names)
@@ -270,17 +283,23 @@ def table_markdown(results: Sequence[Mapping[str, Any]]) -> str:
         ]
         for name in names:
             move = r["moves"][name]
-            cells.append(
-                f"{_cell(move['identified']['reduction_percent'], 2)} "
-                f"({_cell(move['ceiling']['reduction_percent'], 2)})"
+            identified = move["identified"]
+            tv = "refused" if "error" in identified else _cell(identified["reduction_percent"], 2)
+            end_pose = move.get("end_pose_map")
+            fixed = (
+                ""
+                if end_pose is None
+                else f", end-pose map {_cell(end_pose['reduction_percent'], 2)}"
             )
+            cells.append(f"{tv} ({_cell(move['ceiling']['reduction_percent'], 2)}{fixed})")
         shaped = sorted({m["identified"]["modes_shaped"] for m in r["moves"].values()})
         cells.append("/".join(str(k) for k in shaped))
-        cells.append(
-            _cell(
-                max(abs(m["identified"]["delay_minus_zv_samples"]) for m in r["moves"].values()), 2
-            )
-        )
+        delays = [
+            abs(m["identified"]["delay_minus_zv_samples"])
+            for m in r["moves"].values()
+            if "delay_minus_zv_samples" in m["identified"]
+        ]
+        cells.append(_cell(max(delays), 2) if delays else "–")
         cells.append(str(r["wrong_confident"]["count"]))
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
@@ -382,11 +401,11 @@ def _identify_and_fit(settings: HarnessSettings, logs: Path, folder: Path) -> Pa
 def _map_vs_truth(variant, map_path: Path, robot, names, q_eval: np.ndarray) -> dict[str, Any]:
     """The map's shaped modes against the variant's true modes at ``q_eval``."""
     from tvist import load_map
-    from tvist.demo.motions import PAYLOAD_COM_M, PAYLOAD_KG
+    from tvist.demo.motions import PAYLOAD_COM_M, demo_payload_kg
     from tvist.sim.family import modes_of
 
     modal = load_map(map_path)
-    twin = variant.twin(PAYLOAD_KG, PAYLOAD_COM_M)
+    twin = variant.twin(demo_payload_kg(variant.robot), PAYLOAD_COM_M)
     predicted = np.asarray(modal.modes_many(robot, q_eval))[:, :, 0] / (2 * math.pi)
     if names and names[0][0] == "rank":
         # A shaped_modes map shapes the K lowest as a set, in slots by joint: compare the
@@ -432,43 +451,79 @@ def _ceiling_row():
     )
 
 
+def _end_pose_map_row(modal):
+    """ZV on the map's shaped modes at the end pose, held over the move: the identified map
+    without time variation (what the map gives where its time-varying path cannot run)."""
+    import tvist
+    from tvist.demo.methods import TVIST_SHAPER, Method, _run_tv_shaper
+
+    def build(ctx):
+        modes = [tuple(m) for m in modal.modes(ctx.robot, ctx.motion.q_end)]
+        constant = tvist.ConstantModes(modes)
+        shaper = tvist.TvShaper(
+            constant, ctx.trajectory.dt_s, ctx.trajectory.n_dof, shaper=TVIST_SHAPER
+        )
+        return _run_tv_shaper(shaper, ctx, "identified map's modes at the end pose")
+
+    return Method(
+        key="end-pose",
+        label="ZV on the identified map's modes at the end pose",
+        build=build,
+    )
+
+
 def _moves(variant, map_path: Path, robot) -> dict[str, Any]:
-    """The demo's three moves on the variant's twin: unshaped, identified map, ceiling."""
+    """The demo's three moves on the variant's twin: unshaped, identified map, ceiling; and
+    the identified map's end-pose modes held over the move (:func:`_end_pose_map_row`). A
+    row the twin refuses (a shaped reference over the joint speed limits) is reported with
+    its error instead of its reduction."""
     from tvist import load_map
     from tvist.demo.experiment import run_motion
     from tvist.demo.measure import zv_delay_s
     from tvist.demo.methods import default_methods
     from tvist.demo.modal_rows import fd_tvist_modal
-    from tvist.demo.motions import DT_S, MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
+    from tvist.demo.motions import DT_S, PAYLOAD_COM_M, demo_motions, demo_payload_kg
     from tvist.sim.family import modes_of
 
     modal = load_map(map_path)
     identified = fd_tvist_modal("identified", "identified modal map", modal)
     rows = [m for m in default_methods() if m.key == "unshaped"] + [identified, _ceiling_row()]
-    twin = variant.twin(PAYLOAD_KG, PAYLOAD_COM_M)
+    twin = variant.twin(demo_payload_kg(variant.robot), PAYLOAD_COM_M)
     out = {}
-    for motion in MOTIONS:
-        run = run_motion(motion, rows, twin, robot, with_slow_down=False)
-        shaped_modes = run.map_end_modes[identified.label]
-        shaped = run.run("identified")
-        analytic = zv_delay_s(shaped_modes)
-        out[motion.name] = {
-            "unshaped_residual_m_s2": run.run("unshaped").residual.amplitude,
-            "identified": {
+    for motion in demo_motions(variant.robot):
+        end_pose = _end_pose_map_row(modal)
+        fixed = run_motion(motion, [rows[0], end_pose, rows[2]], twin, robot, with_slow_down=False)
+        end_modes = [tuple(m) for m in modal.modes(robot, motion.q_end)]
+        entry: dict[str, Any] = {
+            "unshaped_residual_m_s2": fixed.run("unshaped").residual.amplitude,
+            "end_pose_map": {
+                "reduction_percent": fixed.run("end-pose").reduction_percent,
+                "modes_hz": [w / (2 * math.pi) for w, _ in end_modes],
+            },
+            "ceiling": {
+                "reduction_percent": fixed.run("ceiling").reduction_percent,
+                "true_modes_hz": [
+                    m.freq_hz for m in modes_of(twin, motion.q_end, max_freq_hz=TRUE_MODE_MAX_HZ)
+                ],
+            },
+        }
+        try:
+            run = run_motion(motion, rows[:2], twin, robot, with_slow_down=False)
+        except ValueError as exc:
+            entry["identified"] = {"error": str(exc), "modes_shaped": len(end_modes)}
+        else:
+            shaped_modes = run.map_end_modes[identified.label]
+            shaped = run.run("identified")
+            analytic = zv_delay_s(shaped_modes)
+            entry["identified"] = {
                 "reduction_percent": shaped.reduction_percent,
                 "modes_shaped": len(shaped_modes),
                 "end_pose_modes_hz": [w / (2 * math.pi) for w, _ in shaped_modes],
                 "delay_s": shaped.delay_s,
                 "zv_delay_s": analytic,
                 "delay_minus_zv_samples": (shaped.delay_s - analytic) / DT_S,
-            },
-            "ceiling": {
-                "reduction_percent": run.run("ceiling").reduction_percent,
-                "true_modes_hz": [
-                    m.freq_hz for m in modes_of(twin, motion.q_end, max_freq_hz=TRUE_MODE_MAX_HZ)
-                ],
-            },
-        }
+            }
+        out[motion.name] = entry
     return out
 
 
@@ -490,16 +545,20 @@ def _identification_truth(variant, records: Sequence[Mapping[str, Any]]) -> dict
     return truth
 
 
-def run_variant(seed: int, out: str | Path, settings: HarnessSettings) -> dict[str, Any]:
-    """Everything of variant ``family:<robot>:<seed>`` (see the module docstring), written to
+def run_variant(seed: int | None, out: str | Path, settings: HarnessSettings) -> dict[str, Any]:
+    """Everything of variant ``family:<robot>:<seed>`` (``seed`` ``None``: the robot's
+    default twin, ``family:<robot>:nominal``; see the module docstring), written to
     ``out/<robot>-<seed>/result.json`` and returned; a result already there with the same
     settings is returned as it is. A failure is a result with ``"error"``."""
-    from tvist.demo.motions import PAYLOAD_COM_M, PAYLOAD_KG
+    from tvist.demo.motions import PAYLOAD_COM_M, demo_payload_kg
     from tvist.robots import Payload, Robot, params
-    from tvist.sim.family import FAMILY_PREFIX, sample_variant
+    from tvist.sim.family import nominal_variant, sample_variant
 
-    name = f"{FAMILY_PREFIX}:{settings.robot}:{seed}"
-    folder = Path(out) / f"{settings.robot}-{seed}"
+    variant = (
+        nominal_variant(settings.robot) if seed is None else sample_variant(settings.robot, seed)
+    )
+    name = variant.name
+    folder = Path(out) / f"{settings.robot}-{name.rsplit(':', 1)[1]}"
     result_path = folder / RESULT_FILE
     wanted = json.loads(json.dumps(asdict(settings)))
     if result_path.exists():
@@ -507,8 +566,7 @@ def run_variant(seed: int, out: str | Path, settings: HarnessSettings) -> dict[s
         if cached.get("settings") == wanted and "error" not in cached:
             return cached
     folder.mkdir(parents=True, exist_ok=True)
-    variant = sample_variant(settings.robot, seed)
-    robot = Robot(params(settings.robot), Payload(PAYLOAD_KG, PAYLOAD_COM_M))
+    robot = Robot(params(settings.robot), Payload(demo_payload_kg(settings.robot), PAYLOAD_COM_M))
     clock = _Clock()
     result: dict[str, Any] = {"variant": name, "seed": seed, "settings": wanted}
     try:
@@ -575,7 +633,7 @@ class _Clock:
 # --------------------------------------------------------------------------- command
 
 
-def _run_one(args: tuple[int, str, HarnessSettings]) -> dict[str, Any]:
+def _run_one(args: tuple[int | None, str, HarnessSettings]) -> dict[str, Any]:
     seed, out, settings = args
     return run_variant(seed, out, settings)
 
@@ -588,8 +646,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         "the family (family:ROBOT:SEED); one JSON per variant and a markdown table.",
     )
     defaults = HarnessSettings()
-    p.add_argument("--robot", default=defaults.robot, help="ur5e or ur10e (default ur5e)")
-    p.add_argument("--seeds", required=True, help="variant seeds, e.g. 0-4 or 0,3,7-9")
+    p.add_argument(
+        "--robot",
+        default=defaults.robot,
+        help="ur5e or ur10e; with --seeds nominal also fr3 or iiwa14 (default ur5e)",
+    )
+    p.add_argument(
+        "--seeds",
+        required=True,
+        help="variant seeds, e.g. 0-4 or 0,3,7-9, or nominal (the robot's default twin)",
+    )
     p.add_argument("--out", default="out/generalization", help="output folder")
     p.add_argument(
         "--workers",
@@ -630,7 +696,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     jobs = [(seed, str(out), settings) for seed in seeds]
-    results: dict[int, dict[str, Any]] = {}
+    results: dict[int | None, dict[str, Any]] = {}
     start = time.perf_counter()
     if args.workers == 1 or len(jobs) == 1:
         for job in jobs:

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cache
+from types import MappingProxyType
 
 import numpy as np
 
@@ -95,3 +97,51 @@ def motion_by_name(name: str) -> Motion:
             return motion
     known = ", ".join(m.name for m in MOTIONS)
     raise ValueError(f"unknown motion {name!r}; expected one of {known}")
+
+
+def demo_payload_kg(robot_name: str) -> float:
+    """The test motions' payload on ``robot_name``: :data:`PAYLOAD_KG`, or the arm's rated
+    payload if that is smaller (a lighter arm carries what it is rated for)."""
+    from tvist.robots import params
+
+    return min(PAYLOAD_KG, params(robot_name).max_payload_kg)
+
+
+@cache
+def demo_poses(robot_name: str) -> Mapping[str, np.ndarray]:
+    """Poses ``Q1``, ``Q2``, ``Q3`` (rad) of the three test moves on ``robot_name``.
+
+    The paper's poses (:data:`PAPER_POSES`) for a DH arm (UR). For a URDF-placed arm the same
+    roles, from its own workspace (:func:`tvist.ident.pose_plan.workspace_extremes` with the
+    demo payload): ``Q1`` the pose of the largest shoulder inertia ``J_1`` (stretched out,
+    lowest modes), ``Q2`` the same pose with the base turned by a quarter turn (same inertias,
+    a long base move), ``Q3`` the pose of the smallest ``J_1`` (folded, highest modes) with
+    the base turned as in ``Q2``.
+    """
+    from tvist.ident.pose_plan import workspace_extremes
+    from tvist.robots import params
+
+    p = params(robot_name)
+    if p.placements is None:
+        return PAPER_POSES
+    extremes = workspace_extremes(
+        robot_name, demo_payload_kg(robot_name), PAYLOAD_COM_M, joints=[1]
+    )
+    folded, stretched = extremes  # smallest, then largest J_1
+    lower, upper = p.joint_limits_rad[0]
+    turn = np.pi / 2 if upper >= np.pi / 2 else -np.pi / 2
+    if not lower <= turn <= upper:
+        raise ValueError(f"{robot_name}: the base cannot turn a quarter turn within its limits")
+    q2, q3 = stretched.copy(), folded.copy()
+    q2[0] = q3[0] = turn
+    return MappingProxyType({"Q1": stretched, "Q2": q2, "Q3": q3})
+
+
+def demo_motions(robot_name: str) -> tuple[Motion, ...]:
+    """The three test moves of :data:`MOTIONS` between :func:`demo_poses` of ``robot_name``,
+    at the paper's double-S limits capped by the arm's slowest joint speed limit."""
+    from tvist.robots import params
+
+    poses = demo_poses(robot_name)
+    v_max = min(V_MAX_RAD_S, float(np.min(params(robot_name).max_velocity_rad_s)))
+    return tuple(Motion(m.start, m.end, poses, v_max_rad_s=v_max) for m in MOTIONS)

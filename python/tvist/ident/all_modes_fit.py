@@ -21,12 +21,13 @@ the damping projected on the undamped modes (linear in the coefficients); (3) bo
 Load terms below ``drop_t`` standard errors are dropped.
 
 **Which joints are flexible** is decided by the data: starting from every candidate joint
-(base to wrist 2), a joint other than base and shoulder is made rigid when the evidence for
-its flexibility is weak: the truncated χ² of the frequency fit (each residual in units of the
-full model's robust scatter, capped at :data:`GATE` like an unmatched mode) must fall by more
-than the ``1 − JOINT_P`` quantile of χ² with as many degrees of freedom as the joint's
-stiffness parameters when the joint is flexible (a likelihood-ratio test at level
-:data:`JOINT_P`); the weakest joint is removed first and the test repeated.
+(:func:`flexible_candidates`: base to wrist 2 on a UR), a joint other than base and shoulder
+is made rigid when the evidence for its flexibility is weak: the truncated χ² of the
+frequency fit (each residual in units of the full model's robust scatter, capped at
+:data:`GATE` like an unmatched mode) must fall by more than the ``1 − JOINT_P`` quantile of
+χ² with as many degrees of freedom as the joint's stiffness parameters when the joint is
+flexible (a likelihood-ratio test at level :data:`JOINT_P`); the weakest joint is removed
+first and the test repeated.
 
 **Bending links.** A link that bends (a bending mode of the upper arm or forearm, which a
 model of joints alone can only absorb into wrong joint stiffnesses) is a hinge pair at its
@@ -65,11 +66,30 @@ from tvist.ident.model_modes import ModelModes, joint_laws, model_modes, undampe
 from tvist.ident.observed_modes import HINGE_AT_FRACTION, ObservedModes, observed_modes
 from tvist.modal_map import ModalMap
 
-__all__ = ["CANDIDATE_JOINTS", "CANDIDATE_LINKS", "AllModesFit", "fit_all_modes", "match_modes"]
+__all__ = [
+    "CANDIDATE_JOINTS",
+    "CANDIDATE_LINKS",
+    "AllModesFit",
+    "fit_all_modes",
+    "flexible_candidates",
+    "match_modes",
+]
 
-#: Joints that may be flexible: base, shoulder, elbow, wrists 1-2 (wrist 3, the tool axis,
-#: hardly moves the flange in the arm's modes).
+#: Joints of a UR (DH) arm that may be flexible: base, shoulder, elbow, wrists 1-2 (wrist 3,
+#: the tool axis, hardly moves the flange in the arm's modes). An arm placed by its URDF:
+#: its proximal joints (:func:`flexible_candidates`).
 CANDIDATE_JOINTS = (0, 1, 2, 3, 4)
+
+
+def flexible_candidates(robot_name: str) -> tuple[int, ...]:
+    """The joints of ``robot_name`` that may be flexible: :data:`CANDIDATE_JOINTS` for a DH
+    arm, :data:`tvist.robots.urdf.PROXIMAL_JOINTS` for a URDF-placed arm."""
+    from tvist.robots import params
+    from tvist.robots.urdf import PROXIMAL_JOINTS
+
+    return CANDIDATE_JOINTS if params(robot_name).placements is None else PROXIMAL_JOINTS
+
+
 #: Always flexible: the joints whose excitation logs the campaign records.
 ALWAYS_FLEXIBLE = (0, 1)
 #: Links that may bend: the upper arm and the forearm (the long links of a UR-type arm).
@@ -524,19 +544,22 @@ def fit_all_modes(
     records: Sequence[Mapping[str, Any]] | ObservedModes,
     robot_name: str = "ur5e",
     *,
-    candidate_joints: Sequence[int] = CANDIDATE_JOINTS,
+    candidate_joints: Sequence[int] | None = None,
     drop_t: float = 3.0,
     include_low_confidence: bool = False,
     candidate_links: Sequence[int] = CANDIDATE_LINKS,
 ) -> AllModesFit:
     """Fit the flexible joints' laws, and of the bending links among ``candidate_links``
-    their hinges', to every identified mode (module docstring).
+    their hinges', to every identified mode (module docstring); ``candidate_joints``
+    ``None``: :func:`flexible_candidates` of the robot.
 
     Raises
     ------
     ValueError
         Unusable records, too few identified modes, or candidates without base and shoulder.
     """
+    if candidate_joints is None:
+        candidate_joints = flexible_candidates(robot_name)
     candidates = tuple(sorted(int(j) for j in candidate_joints))
     if not set(ALWAYS_FLEXIBLE) <= set(candidates):
         raise ValueError(f"candidate joints must include base and shoulder, got {candidates}")

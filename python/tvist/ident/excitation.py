@@ -148,9 +148,9 @@ def random_excitation(
     Parameters
     ----------
     q0
-        Start pose, rad, shape (6,).
+        Start pose, rad, shape ``(n_dof,)``.
     joint
-        Joint to excite, 0-5 (the paper uses 0 = base and 1 = shoulder).
+        Joint to excite, ``0 … n_dof − 1`` (the paper uses 0 = base and 1 = shoulder).
     seed
         Seed or ``numpy.random.Generator``; the same seed gives the same excitation.
     duration_s
@@ -170,10 +170,11 @@ def random_excitation(
     Excitation
     """
     q0 = np.asarray(q0, dtype=float)
-    if q0.shape != (6,) or not np.all(np.isfinite(q0)):
-        raise ValueError(f"q0 must be 6 finite joint angles, got {q0!r}")
-    if not 0 <= int(joint) < 6 or int(joint) != joint:
-        raise ValueError(f"joint must be an integer 0-5, got {joint!r}")
+    if q0.ndim != 1 or q0.size < 2 or not np.all(np.isfinite(q0)):
+        raise ValueError(f"q0 must be finite joint angles (one per joint), got {q0!r}")
+    n_dof = q0.size
+    if not 0 <= int(joint) < n_dof or int(joint) != joint:
+        raise ValueError(f"joint must be an integer 0-{n_dof - 1}, got {joint!r}")
     joint = int(joint)
     for name, value in (
         ("dt_s", dt_s),
@@ -248,8 +249,8 @@ def random_excitation(
     q_j = q0[joint] + np.concatenate([[0.0], np.cumsum(dq)])
 
     q = np.tile(q0, (n, 1))
-    qd = np.zeros((n, 6))
-    qdd = np.zeros((n, 6))
+    qd = np.zeros((n, n_dof))
+    qdd = np.zeros((n, n_dof))
     q[:, joint], qd[:, joint], qdd[:, joint] = q_j, qd_j, qdd_j
     return Excitation(
         joint=joint,
@@ -319,7 +320,7 @@ def to_urscript(
 
 def write_trajectory_csv(excitation: Excitation, path: str | Path) -> Path:
     """Write the excitation's sampled reference as a trajectory CSV: a header ``time_s,
-    q0..q5`` and one row per sample (s, rad; 9 decimals), the format ``tvist shape`` and
+    q0..q{n-1}`` and one row per sample (s, rad; 9 decimals), the format ``tvist shape`` and
     ``tvist run`` read (``tvist run --unshaped`` streams it with servoJ)."""
     path = Path(path)
     n_dof = excitation.q.shape[1]

@@ -66,16 +66,22 @@ __all__ = [
 
 LogFormat = Literal["ur_rtde", "ur_client"]
 
+#: Vector length of the joint fields (``JOINTS``): one entry per joint of the arm, 6 on a UR.
+JOINTS = -1
 #: Record field -> (RTDE field name, vector length). ``actual_TCP_pose`` is optional.
 _FIELDS: dict[str, tuple[str, int]] = {
-    "target_q": ("target_q", 6),
-    "target_qd": ("target_qd", 6),
-    "target_qdd": ("target_qdd", 6),
-    "actual_q": ("actual_q", 6),
+    "target_q": ("target_q", JOINTS),
+    "target_qd": ("target_qd", JOINTS),
+    "target_qdd": ("target_qdd", JOINTS),
+    "actual_q": ("actual_q", JOINTS),
     "actual_TCP_pose": ("actual_TCP_pose", 6),
     "tool_accel": ("actual_tool_accelerometer", 3),
 }
 _OPTIONAL = {"actual_TCP_pose"}
+#: A UR logs 6 joints; an arm with more writes the joint fields wider (``target_q_6`` …), up
+#: to this many joints.
+UR_JOINTS = 6
+MAX_JOINTS = 12
 
 #: A step longer than this many median sampling periods counts as skipped samples.
 GAP_FACTOR = 1.5
@@ -107,9 +113,9 @@ class Record:
         Timestamps, s, shape (n_samples,), strictly increasing.
     target_q, target_qd, target_qdd
         Reference joint position (rad), velocity (rad/s) and acceleration (rad/s²),
-        shape (n_samples, 6).
+        shape (n_samples, n_joints) (6 on a UR).
     actual_q
-        Measured joint positions, rad, shape (n_samples, 6).
+        Measured joint positions, rad, shape (n_samples, n_joints).
     tool_accel
         Raw tool-flange accelerometer reading, m/s², in the flange frame, shape (n_samples, 3).
         At rest it reads the reaction to gravity (+9.8 m/s² pointing up).
@@ -132,7 +138,9 @@ class Record:
             raise ValueError(f"t_s must be a non-empty 1-D array, got shape {t.shape}")
         object.__setattr__(self, "t_s", t)
         n = t.size
+        n_joints = np.shape(self.target_q)[1] if np.ndim(self.target_q) == 2 else UR_JOINTS
         for name, (_, width) in _FIELDS.items():
+            width = n_joints if width == JOINTS else width
             value = getattr(self, name)
             if value is None:
                 if name in _OPTIONAL:
@@ -154,6 +162,11 @@ class Record:
     @property
     def n_samples(self) -> int:
         return int(self.t_s.size)
+
+    @property
+    def n_joints(self) -> int:
+        """Number of joints logged."""
+        return int(self.target_q.shape[1])
 
     @property
     def dt_s(self) -> float:
@@ -189,11 +202,11 @@ class Record:
             raise ValueError(f"fmt must be 'ur_rtde' or 'ur_client', got {fmt!r}")
         header = ["timestamp"]
         blocks = [self.t_s[:, None]]
-        for name, (rtde_name, width) in _FIELDS.items():
+        for name, (rtde_name, _) in _FIELDS.items():
             value = getattr(self, name)
             if value is None:
                 continue
-            header += _columns(rtde_name, width)
+            header += _columns(rtde_name, value.shape[1])
             blocks.append(value)
         path = Path(path)
         np.savetxt(
@@ -327,11 +340,19 @@ def read_rtde_csv(
     """
     path = Path(path)
     required = ["timestamp"]
+    extra_joints = []  # joint columns beyond a UR's six, if the arm has more joints
     for name, (rtde_name, width) in _FIELDS.items():
-        if name not in _OPTIONAL:
+        if width == JOINTS:
+            required += _columns(rtde_name, UR_JOINTS)
+            extra_joints += [f"{rtde_name}_{i}" for i in range(UR_JOINTS, MAX_JOINTS)]
+        elif name not in _OPTIONAL:
             required += _columns(rtde_name, width)
     table = read_table(
-        path, required, _columns("actual_TCP_pose", 6), separator=_detect_separator, repair=repair
+        path,
+        required,
+        _columns("actual_TCP_pose", 6) + extra_joints,
+        separator=_detect_separator,
+        repair=repair,
     )
     if table.dropped:
         warnings.warn(
@@ -349,6 +370,7 @@ def read_rtde_csv(
             stacklevel=2,
         )
     data, index = table.data, table.columns
+    n_joints = _logged_joints(path, index)
 
     def take(columns: list[str]) -> np.ndarray:
         return data[:, [index[c] for c in columns]]
@@ -358,7 +380,7 @@ def read_rtde_csv(
     for name, (rtde_name, width) in _FIELDS.items():
         if name in _OPTIONAL and not has_pose:
             continue
-        used += _columns(rtde_name, width)
+        used += _columns(rtde_name, n_joints if width == JOINTS else width)
     bad = np.flatnonzero(~np.all(np.isfinite(take(used)), axis=1))
     if bad.size:
         if not drop_nan:
@@ -403,10 +425,10 @@ def read_rtde_csv(
     _check_time_and_grid(path, data[:, index["timestamp"]], take(used), used, rows, resample)
     record = Record(
         t_s=data[:, index["timestamp"]],
-        target_q=_take(data, index, "target_q", 6),
-        target_qd=_take(data, index, "target_qd", 6),
-        target_qdd=_take(data, index, "target_qdd", 6),
-        actual_q=_take(data, index, "actual_q", 6),
+        target_q=_take(data, index, "target_q", n_joints),
+        target_qd=_take(data, index, "target_qd", n_joints),
+        target_qdd=_take(data, index, "target_qdd", n_joints),
+        actual_q=_take(data, index, "actual_q", n_joints),
         tool_accel=_take(data, index, "actual_tool_accelerometer", 3),
         actual_TCP_pose=_take(data, index, "actual_TCP_pose", 6) if has_pose else None,
     )
@@ -491,6 +513,30 @@ def _in_si_units(path: Path, record: Record, rows: np.ndarray, units: Any, check
     except UnitError as exc:
         raise UnitError(f"{path}: {exc}") from None
     return Record(t_s=record.t_s, **{name: si.get(rtde) for name, (rtde, _) in _FIELDS.items()})
+
+
+def _logged_joints(path: Path, index: dict[str, int]) -> int:
+    """The number of joints the log's columns give: 6, or more where every joint field has
+    the columns ``_6`` … of the same further joints.
+
+    Raises
+    ------
+    LogFormatError
+        The joint fields are of different widths (naming the column that is missing).
+    """
+    fields = [rtde for rtde, width in _FIELDS.values() if width == JOINTS]
+    n = UR_JOINTS
+    while n < MAX_JOINTS and f"target_q_{n}" in index:
+        n += 1
+    for rtde in fields:
+        for i in range(UR_JOINTS, MAX_JOINTS):
+            if (f"{rtde}_{i}" in index) != (i < n):
+                missing = f"{rtde}_{i}" if i < n else f"target_q_{i}"
+                raise LogFormatError(
+                    f"{path}: column {missing} is missing: the joint fields must log the "
+                    f"same joints ({n} from target_q)"
+                )
+    return n
 
 
 def _take(data: np.ndarray, index: dict[str, int], rtde_name: str, width: int) -> np.ndarray:

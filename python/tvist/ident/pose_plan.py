@@ -14,6 +14,13 @@ the plan's range (:func:`covering_poses`; a map is identified only over the iner
 poses, :mod:`tvist.dynmap`), in the order that changes the payload least
 (:func:`campaign_order`); :func:`plan_shortfall` says why the map fit could not succeed on it,
 before anything moves. Each pose's excitations (:func:`pose_excitations`) follow from its seed.
+
+Algorithm 1's plane and its inverse kinematics are written for a DH arm whose elbow follows
+the shoulder (UR). An arm placed as its URDF places it (FR3, iiwa14, ...) has no such plane:
+its plan is drawn from its workspace (:func:`workspace_ranges`: every joint within its limits,
+flange above the mounting plane), ``ceil(52 / every)`` random poses per payload (keys
+``m{payload}kg-R{i}``, as many as Algorithm 1's every-``every``-th), plus the same coverage of
+the extreme inertias.
 """
 
 from __future__ import annotations
@@ -44,6 +51,7 @@ __all__ = [
     "solve_plane_ik",
     "workspace_extremes",
     "workspace_poses",
+    "workspace_ranges",
 ]
 
 #: Algorithm 1's angles of the flange seen from the shoulder, rad.
@@ -76,6 +84,8 @@ WORKSPACE_SAMPLES = 2000
 #: (``[seed, 1_000_000 + row]``).
 WORKSPACE_STREAM = 2_000_000
 _COVERING_STREAM = 3_000_000
+#: Stream of the random plan poses of a URDF-placed arm (the pose seeds: ``[seed, row]``).
+_RANDOM_PLAN_STREAM = 5_000_000
 #: A pose whose inertias lie less than this (relative) outside the plan's range counts as
 #: covered: angles written with 6 decimals move an inertia by ~1e-8, and a paper10 map's soft
 #: clamp bends the inertia it reads by up to 0.9 % near a bound anyway (:mod:`tvist.dynmap`).
@@ -93,12 +103,45 @@ def _plane_axes(robot: Robot, base_angle_rad: float) -> tuple[np.ndarray, np.nda
     return reach, np.array([0.0, 0.0, 1.0]), float(robot.params.d_m[0])
 
 
+def _shoulder_height_m(placed) -> float:
+    """Height (m) of the shoulder (joint 2's origin) above the base of a URDF-placed arm at
+    ``q = 0``: joint 1's origin, then joint 2's in link 1's frame."""
+    from tvist.sim.mjcf import _rpy_matrix
+
+    first = _rpy_matrix(placed.origin_rpy_rad[0])
+    return float((placed.origin_xyz_m[0] + first @ placed.origin_xyz_m[1])[2])
+
+
 def plane_coordinates(robot: Robot, q: np.ndarray) -> tuple[float, float]:
-    """``(V, R)``: angle (rad) and distance (m) of the flange centre from the shoulder axis."""
-    reach, up, height = _plane_axes(robot, float(q[0]))
+    """``(V, R)``: angle (rad) and distance (m) of the flange centre from the shoulder axis.
+
+    For a URDF-placed arm, the angle in the vertical plane through the base axis and the
+    flange, seen from the shoulder (joint 2's origin), outwards positive."""
     p = robot.flange_pose(q)[:3, 3]
+    placed = robot.params.placements
+    if placed is not None:
+        x, z = math.hypot(p[0], p[1]), float(p[2]) - _shoulder_height_m(placed)
+        return math.atan2(z, x), math.hypot(x, z)
+    reach, up, height = _plane_axes(robot, float(q[0]))
     x, z = float(p @ reach), float(p @ up - height)
     return math.atan2(z, x), math.hypot(x, z)
+
+
+def workspace_ranges(robot: Robot) -> np.ndarray:
+    """The joint ranges ``(n_dof, 2)`` (rad) of the campaign's workspace: for a DH arm (UR),
+    shoulder :data:`WORKSPACE_SHOULDER_RAD`, elbow :data:`WORKSPACE_ELBOW_RAD`, wrists
+    ``[-π, π]``; for a URDF-placed arm its joint limits (its maker's limits already keep the
+    links apart) narrowed by Algorithm 2's excursion :data:`~tvist.ident.excitation.MAX_DELTA_RAD`
+    at each end, so that an excitation stays within them. The base row is not drawn (it stays
+    at the plan's base angle)."""
+    if robot.params.placements is not None:
+        from tvist.ident.excitation import MAX_DELTA_RAD
+
+        margin = np.array([MAX_DELTA_RAD, -MAX_DELTA_RAD])
+        return np.array(robot.params.joint_limits_rad, dtype=float) + margin
+    ranges = np.tile([-math.pi, math.pi], (robot.n_dof, 1))
+    ranges[1], ranges[2] = WORKSPACE_SHOULDER_RAD, WORKSPACE_ELBOW_RAD
+    return ranges
 
 
 def solve_plane_ik(
@@ -191,6 +234,11 @@ def campaign_poses(
     if len(com) != 3:
         raise ValueError(f"payload_com_m must have 3 values, got {payload_com_m!r}")
     robot = Robot(params(robot_name))  # kinematics only: the payload does not matter here
+    if robot.params.placements is not None:
+        raise ValueError(
+            f"{robot_name}: Algorithm 1's plane poses need a DH arm; plan a URDF-placed arm "
+            "from its workspace (plan_poses)"
+        )
     poses = []
     index = 0
     for payload in payloads_kg:
@@ -314,8 +362,9 @@ def workspace_poses(
     if n < 0:
         raise ValueError(f"n must be >= 0, got {n}")
     robot = Robot(params(robot_name))
+    ranges = workspace_ranges(robot)
     rows = []
-    if corners:
+    if corners and robot.params.placements is None:
         for shoulder in (WORKSPACE_SHOULDER_RAD[0], -math.pi / 2, WORKSPACE_SHOULDER_RAD[1]):
             for elbow in WORKSPACE_ELBOW_RAD:
                 rows.append([base_angle_rad, shoulder, elbow, *NOMINAL_WRIST_RAD])
@@ -324,11 +373,8 @@ def workspace_poses(
     drawn = 0
     while drawn < n:
         batch = max(2 * (n - drawn), 16)
-        q = np.zeros((batch, robot.n_dof))
-        q[:, 0] = base_angle_rad
-        q[:, 1] = rng.uniform(*WORKSPACE_SHOULDER_RAD, size=batch)
-        q[:, 2] = rng.uniform(*WORKSPACE_ELBOW_RAD, size=batch)
-        q[:, 3:] = rng.uniform(-math.pi, math.pi, size=(batch, robot.n_dof - 3))
+        q = rng.uniform(ranges[1:, 0], ranges[1:, 1], size=(batch, robot.n_dof - 1))
+        q = np.hstack([np.full((batch, 1), base_angle_rad), q])
         above = robot.flange_pose_many(q)[:, 2, 3] > 0.0
         for row in q[above][: n - drawn]:
             rows.append(row)
@@ -353,9 +399,7 @@ def workspace_extremes(
     robot = Robot(params(robot_name), Payload(payload_kg, tuple(payload_com_m)))
     q = workspace_poses(robot_name, samples, seed=seed, corners=True)
     inertia = robot.joint_inertia_many(q)
-    bounds = [WORKSPACE_SHOULDER_RAD, WORKSPACE_ELBOW_RAD] + [(-math.pi, math.pi)] * (
-        robot.n_dof - 3
-    )
+    bounds = [tuple(row) for row in workspace_ranges(robot)[1:]]
     out = []
     for joint in joints:
         for sign in (1.0, -1.0):  # smallest, then largest
@@ -457,9 +501,14 @@ def plan_poses(
         raise ValueError(f"every must be >= 0, got {every}")
     poses: list[CampaignPose] = []
     if every > 0:
-        poses = campaign_poses(
-            robot_name, payloads_kg=payloads_kg, payload_com_m=payload_com_m, seed=seed
-        )[::every]
+        if params(robot_name).placements is None:
+            poses = campaign_poses(
+                robot_name, payloads_kg=payloads_kg, payload_com_m=payload_com_m, seed=seed
+            )[::every]
+        else:
+            per_payload = math.ceil(len(PAPER_ANGLES_RAD) * len(PAPER_RADII_M) / every)
+            drawn = workspace_poses(robot_name, per_payload, seed=seed, stream=_RANDOM_PLAN_STREAM)
+            poses = _given_poses(robot_name, drawn, payloads_kg, payload_com_m, seed, "R", 0)
         workspace = []
         for payload in payloads_kg if cover_workspace else ():
             extremes = workspace_extremes(

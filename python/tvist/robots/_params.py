@@ -265,7 +265,13 @@ def names() -> tuple[str, ...]:
 
 @cache
 def params(name: str) -> RobotParams:
-    """Parameters of robot ``name`` (one of :func:`names`)."""
+    """Parameters of robot ``name``: one of :func:`names` (the core's robot data) or an arm
+    shipped as URDF data (:data:`tvist.robots.SHIPPED_URDFS`, e.g. ``"fr3"``)."""
+    from tvist.robots.urdf import SHIPPED_URDFS, shipped_params
+
+    if name in SHIPPED_URDFS:
+        return shipped_params(name)
     if name not in names():
-        raise ValueError(f"unknown robot {name!r}; known: {', '.join(names())}")
+        known = ", ".join((*names(), *SHIPPED_URDFS))
+        raise ValueError(f"unknown robot {name!r}; known: {known}")
     return _from_core(_core.robot_params(name))

@@ -20,6 +20,7 @@ import json
 import math
 import warnings
 from collections.abc import Sequence
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -30,10 +31,12 @@ from tvist.robots._robot import Robot
 from tvist.robots.inertial import lump
 
 __all__ = [
+    "PROXIMAL_JOINTS",
     "SHIPPED_URDFS",
     "dh_urdf",
     "from_urdf",
     "robot_file_document",
+    "shipped_params",
     "shipped_urdf",
     "urdf_params",
     "write_robot_file",
@@ -358,12 +361,20 @@ def dh_urdf(params: RobotParams) -> str:
     return ET.tostring(robot, encoding="unicode") + "\n"
 
 
+#: The joints of a URDF-placed arm that may be flexible (a modal map's candidates, the
+#: joints a twin of it makes flexible): the proximal joints up to the elbow, which carry
+#: the big gears and most of the arm's inertia (joints 1-4 of a 7-joint arm). The wrist's
+#: small gears ring far above them; and the modal core solves at most 6 flexible joints.
+PROXIMAL_JOINTS: tuple[int, ...] = (0, 1, 2, 3)
+
 #: The arms shipped as URDF data (``urdf_data/``, provenance and license in each file):
-#: name → (file, base link, tip link).
-SHIPPED_URDFS: dict[str, tuple[str, str, str]] = {
-    "fr3": ("fr3.urdf", "fr3_link0", "fr3_link8"),
-    "iiwa14": ("iiwa14.urdf", "iiwa_link_0", "iiwa_link_ee"),
-    "gen3": ("gen3.urdf", "base_link", "end_effector_link"),
+#: name → (file, base link, tip link, rated payload in kg). URDF gives no rated payload; the
+#: makers' data sheets do: Franka Research 3 3 kg, KUKA LBR iiwa 14 R820 14 kg, Kinova Gen3
+#: (7 DOF) 4 kg at mid-range.
+SHIPPED_URDFS: dict[str, tuple[str, str, str, float]] = {
+    "fr3": ("fr3.urdf", "fr3_link0", "fr3_link8", 3.0),
+    "iiwa14": ("iiwa14.urdf", "iiwa_link_0", "iiwa_link_ee", 14.0),
+    "gen3": ("gen3.urdf", "base_link", "end_effector_link", 4.0),
 }
 
 
@@ -371,5 +382,16 @@ def shipped_urdf(name: str) -> tuple[Path, str, str]:
     """``(path, base_link, tip_link)`` of shipped arm ``name`` (one of :data:`SHIPPED_URDFS`)."""
     if name not in SHIPPED_URDFS:
         raise ValueError(f"unknown shipped arm {name!r}; known: {', '.join(SHIPPED_URDFS)}")
-    file, base, tip = SHIPPED_URDFS[name]
+    file, base, tip, _ = SHIPPED_URDFS[name]
     return Path(__file__).parent / "urdf_data" / file, base, tip
+
+
+@cache
+def shipped_params(name: str) -> RobotParams:
+    """Parameters of shipped arm ``name`` (its chain and rated payload), read once;
+    :func:`tvist.robots.params` serves them under the same names."""
+    path, base, tip = shipped_urdf(name)
+    with warnings.catch_warnings():
+        # Gen3's continuous joints get ±2π limits: stated in the module docstring.
+        warnings.simplefilter("ignore")
+        return urdf_params(path, base, tip, name=name, max_payload_kg=SHIPPED_URDFS[name][3])

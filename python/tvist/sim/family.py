@@ -53,7 +53,7 @@ from typing import NamedTuple
 import numpy as np
 
 from tvist.sim.beams import LinkBeams
-from tvist.sim.flex import FlexParams, default_flex
+from tvist.sim.flex import FlexParams, default_flex, stiffening_k3
 from tvist.sim.twin import Twin
 
 __all__ = [
@@ -67,6 +67,8 @@ __all__ = [
 
 #: Names of family variants are ``family:<robot>:<seed>``.
 FAMILY_PREFIX = "family"
+#: The seed part of the nominal variant's name (the robot's default twin).
+NOMINAL = "nominal"
 
 #: Robots the family is defined for: nominal tube diameter of the bending links (m).
 _TUBE_DIAMETER_M = {"ur5e": 0.080, "ur10e": 0.100}
@@ -117,21 +119,14 @@ class TrueMode(NamedTuple):
     link_share: float
 
 
-def _stiffening_k3(k1: float, rated_nm: float, growth: float) -> float:
-    """``k3`` (N m/rad³) such that ``k1 + 3 k3 δ²`` is ``growth`` x ``k1`` at the deflection
-    carrying ``rated_nm``: ``δ_r = 3 τ_r / ((growth + 2) k1)``, ``k3 = (growth − 1) k1 /
-    (3 δ_r²)``."""
-    delta_r = 3.0 * rated_nm / ((growth + 2.0) * k1)
-    return (growth - 1.0) * k1 / (3.0 * delta_r * delta_r)
-
-
 def rated_torque_nm(flex: FlexParams) -> np.ndarray:
     """Rated torque of each joint's gear (N m) implied by a nominal gear law: the torque at
     which its tangent stiffness has grown by :data:`NOMINAL_STIFFENING` (the inverse of
-    :func:`_stiffening_k3`)."""
+    :func:`~tvist.sim.flex.stiffening_k3`); infinite for a linear spring (``k3 = 0``)."""
     k1 = np.asarray(flex.k1_nm_per_rad, dtype=float)
     k3 = np.asarray(flex.k3_nm_per_rad3, dtype=float)
-    delta_r = np.sqrt((NOMINAL_STIFFENING - 1.0) * k1 / (3.0 * k3))
+    with np.errstate(divide="ignore"):
+        delta_r = np.sqrt((NOMINAL_STIFFENING - 1.0) * k1 / (3.0 * k3))
     return delta_r * (NOMINAL_STIFFENING + 2.0) * k1 / 3.0
 
 
@@ -171,7 +166,7 @@ class Variant:
     @property
     def name(self) -> str:
         """``family:<robot>:<seed>`` (``family:<robot>:nominal`` for the nominal variant)."""
-        tail = "nominal" if self.seed is None else str(self.seed)
+        tail = NOMINAL if self.seed is None else str(self.seed)
         return f"{FAMILY_PREFIX}:{self.robot}:{tail}"
 
     @property
@@ -181,7 +176,7 @@ class Variant:
         k1 = np.asarray(nominal.k1_nm_per_rad) * np.asarray(self.stiffness_factor)
         rated = rated_torque_nm(nominal)
         k3 = [
-            _stiffening_k3(float(k), float(t), float(g))
+            stiffening_k3(float(k), float(t), float(g))
             for k, t, g in zip(k1, rated, self.stiffening, strict=True)
         ]
         ratio = np.asarray(self.servo_ratio, dtype=float)
@@ -338,8 +333,14 @@ def sample_variant(robot: str, seed: int) -> Variant:
 
 def nominal_variant(robot: str) -> Variant:
     """The default twin of ``robot`` as a :class:`Variant`: every factor 1, nominal stiffening,
-    an ideal servo, rigid links."""
-    _check_robot(robot)
+    an ideal servo, rigid links. Defined for every robot with a
+    :func:`~tvist.sim.default_flex` (the family's draws only for :data:`_TUBE_DIAMETER_M`'s).
+
+    Raises
+    ------
+    ValueError
+        A robot without default flexibility.
+    """
     n = len(default_flex(robot).k1_nm_per_rad)
     return Variant(
         robot=robot,
@@ -364,9 +365,11 @@ def parse_family_name(name: str) -> Variant | None:
     parts = name.split(":")
     if parts[0] != FAMILY_PREFIX:
         return None
+    if len(parts) == 3 and parts[2] == NOMINAL:
+        return nominal_variant(parts[1])
     if len(parts) != 3 or not parts[2].isdigit():
         raise ValueError(
-            f"twin variant {name!r}: a family variant is named {FAMILY_PREFIX}:<robot>:<seed>, "
-            f"e.g. {FAMILY_PREFIX}:ur5e:17"
+            f"twin variant {name!r}: a family variant is named {FAMILY_PREFIX}:<robot>:<seed> "
+            f"or {FAMILY_PREFIX}:<robot>:{NOMINAL}, e.g. {FAMILY_PREFIX}:ur5e:17"
         )
     return sample_variant(parts[1], int(parts[2]))

@@ -283,7 +283,80 @@ UR10E_FLEX = FlexParams(
     c_load2_per_nm=(0.025, 0.0, 0.0, 0.0, 0.0, 0.0),
 )
 
-_DEFAULTS: dict[str, FlexParams] = {"ur5e": UR5E_FLEX, "ur10e": UR10E_FLEX}
+
+def stiffening_k3(k1_nm_per_rad: float, rated_nm: float, growth: float = 1.25) -> float:
+    """``k3`` (N m/rad³) such that the tangent stiffness ``k1 + 3 k3 δ²`` is ``growth`` x
+    ``k1`` at the deflection carrying ``rated_nm``: ``δ_r = 3 τ_r / ((growth + 2) k1)``,
+    ``k3 = (growth − 1) k1 / (3 δ_r²)`` (the UR defaults' 25 % at rated torque)."""
+    delta_r = 3.0 * rated_nm / ((growth + 2.0) * k1_nm_per_rad)
+    return (growth - 1.0) * k1_nm_per_rad / (3.0 * delta_r * delta_r)
+
+
+#: Franka Research 3, design values (Franka publishes no joint stiffness or damping). Joints
+#: 1-4 are flexible (:data:`tvist.robots.urdf.PROXIMAL_JOINTS`: base, shoulder, upper-arm
+#: roll, elbow, the joints a modal map of the arm models), joints 5-7 stiff.
+#:
+#: - ``k1`` of the flexible joints 1-4 (87 N m rated torque, Franka's data sheet): the UR5e's
+#:   base stiffness scaled by rated torque, ``22 000 x 87 / 150 = 12 800`` N m/rad (the
+#:   torsional stiffness of strain-wave gears of one series grows about in proportion to
+#:   their rated torque). With 3 kg 5 cm beyond the flange this puts the base and shoulder
+#:   modes at about 7-8 Hz stretched out and 25-35 Hz folded, the roll and elbow modes at
+#:   12-45 Hz: the band where a cobot of this size rings.
+#: - ``k3``: 25 % stiffening at rated torque, as the UR defaults (:func:`stiffening_k3`).
+#: - Joints 5-7 (12 N m) are stiff and linear (``k3 = 0``): each one's own mode lies at
+#:   100-250 Hz over the workspace, far above the four modeled modes (the stiffness that
+#:   takes the joint's largest axis inertia, 0.14 kg m² for joints 5-6 and 1e-4 kg m² for
+#:   the flange joint 7, to 100-150 Hz) and below what the 0.5 ms physics step integrates
+#:   stably (``ω dt < 2``, 640 Hz).
+#: - Damping: the UR5e's laws (base loaded by the shoulder's torque, growing with the
+#:   square of that load; the others doubling at 100 N m of their own) with ``c0`` set for
+#:   damping ratios of about 0.05-0.2 over the workspace, as the UR defaults have
+#:   (``c0 ≈ 2 ζ √(k J)`` at a mid-workspace inertia); joints 5-7 at about ζ = 0.1 of their
+#:   own mode.
+FR3_FLEX = FlexParams(
+    k1_nm_per_rad=(12800.0, 12800.0, 12800.0, 12800.0, 55000.0, 55000.0, 100.0),
+    k3_nm_per_rad3=(*(stiffening_k3(12800.0, 87.0) for _ in range(4)), 0.0, 0.0, 0.0),
+    c0_nms_per_rad=(3.0, 30.0, 10.0, 15.0, 13.0, 13.0, 0.02),
+    c_load_per_nm=(0.056, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01),
+    damper_load_joint=(1, 1, 2, 3, 4, 5, 6),
+    c_load2_per_nm=(0.056, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+)
+
+#: KUKA LBR iiwa 14 R820, design values (KUKA publishes no joint stiffness or damping).
+#:
+#: - ``k1`` of the flexible joints 1-4 (rated 320, 320, 176, 176 N m, KUKA's data sheet):
+#:   the UR5e's base stiffness scaled by rated torque (see :data:`FR3_FLEX`), 47 000 and
+#:   26 000 N m/rad; with 5 kg 5 cm beyond the flange the base and shoulder modes lie at
+#:   about 6-7 Hz stretched out and 20-30 Hz folded.
+#: - ``k3``: 25 % stiffening at rated torque.
+#: - Joints 5-7 (110, 40, 40 N m) stiff and linear, each one's own mode at 100-350 Hz over
+#:   the workspace (axis inertias up to 0.11, 0.10 and 0.014 kg m²; see :data:`FR3_FLEX`).
+#: - Damping: as :data:`FR3_FLEX`, the load factors scaled by the ratio of rated torques
+#:   (150/320 for base and shoulder, 150/176 for roll and elbow) so that the damping doubles
+#:   at the same fraction of the rated load, as :data:`UR10E_FLEX` does.
+IIWA14_FLEX = FlexParams(
+    k1_nm_per_rad=(47000.0, 47000.0, 26000.0, 26000.0, 45000.0, 40000.0, 5000.0),
+    k3_nm_per_rad3=(
+        stiffening_k3(47000.0, 320.0),
+        stiffening_k3(47000.0, 320.0),
+        stiffening_k3(26000.0, 176.0),
+        stiffening_k3(26000.0, 176.0),
+        0.0,
+        0.0,
+        0.0,
+    ),
+    c0_nms_per_rad=(10.0, 60.0, 15.0, 25.0, 10.0, 9.0, 1.2),
+    c_load_per_nm=(0.026, 0.0047, 0.0085, 0.0085, 0.01, 0.01, 0.01),
+    damper_load_joint=(1, 1, 2, 3, 4, 5, 6),
+    c_load2_per_nm=(0.026, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+)
+
+_DEFAULTS: dict[str, FlexParams] = {
+    "ur5e": UR5E_FLEX,
+    "ur10e": UR10E_FLEX,
+    "fr3": FR3_FLEX,
+    "iiwa14": IIWA14_FLEX,
+}
 
 
 def default_flex(robot_name: str) -> FlexParams:

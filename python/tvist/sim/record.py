@@ -7,24 +7,29 @@ from pathlib import Path
 
 import numpy as np
 
+#: Vector length of the joint fields in :data:`RTDE_FIELDS`: one entry per joint (6 on a UR).
+JOINTS = -1
+
 #: RTDE fields of a :class:`SimRecord` in CSV column order, with their vector length
-#: (0 = scalar). Vector fields are written as ``name_0 .. name_{n-1}``.
+#: (0 = scalar, :data:`JOINTS` = one per joint). Vector fields are written as
+#: ``name_0 .. name_{n-1}``.
 RTDE_FIELDS: tuple[tuple[str, int], ...] = (
     ("timestamp", 0),
-    ("target_q", 6),
-    ("target_qd", 6),
-    ("target_qdd", 6),
-    ("actual_q", 6),
-    ("actual_qd", 6),
+    ("target_q", JOINTS),
+    ("target_qd", JOINTS),
+    ("target_qdd", JOINTS),
+    ("actual_q", JOINTS),
+    ("actual_qd", JOINTS),
     ("actual_TCP_pose", 6),
     ("actual_tool_accelerometer", 3),
 )
 
 
-def csv_header() -> list[str]:
-    """Column names of :meth:`SimRecord.to_csv`, in order."""
+def csv_header(n_dof: int = 6) -> list[str]:
+    """Column names of :meth:`SimRecord.to_csv` of an arm of ``n_dof`` joints, in order."""
     columns: list[str] = []
     for name, width in RTDE_FIELDS:
+        width = n_dof if width == JOINTS else width
         columns.extend([name] if width == 0 else [f"{name}_{i}" for i in range(width)])
     return columns
 
@@ -71,7 +76,9 @@ class SimRecord:
     def as_table(self) -> np.ndarray:
         """All RTDE fields side by side in :func:`csv_header` order, ``(n_samples, n_cols)``."""
         parts = []
+        n_dof = int(np.shape(self.target_q)[1])
         for name, width in RTDE_FIELDS:
+            width = n_dof if width == JOINTS else width
             value = np.asarray(getattr(self, name), dtype=float)
             parts.append(value.reshape(-1, 1) if width == 0 else value.reshape(-1, width))
         return np.hstack(parts)
@@ -94,6 +101,11 @@ class SimRecord:
             raise ValueError("record contains NaN or infinite values; refusing to write it")
         out = Path(path)
         np.savetxt(
-            out, table, fmt="%.6f", delimiter=",", header=",".join(csv_header()), comments=""
+            out,
+            table,
+            fmt="%.6f",
+            delimiter=",",
+            header=",".join(csv_header(int(np.shape(self.target_q)[1]))),
+            comments="",
         )
         return out

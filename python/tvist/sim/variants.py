@@ -51,7 +51,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from tvist.sim.beams import LinkBeams
-from tvist.sim.flex import UR5E_FLEX, FlexParams
+from tvist.sim.flex import UR5E_FLEX, FlexParams, stiffening_k3
 
 __all__ = [
     "VARIANTS",
@@ -61,15 +61,6 @@ __all__ = [
     "variant_robot",
     "variant_twin_kwargs",
 ]
-
-
-def _stiffening(k1: float, rated_nm: float, growth: float) -> float:
-    """``k3`` (N m/rad³) such that the tangent stiffness ``k1 + 3 k3 δ²`` is ``growth`` times
-    ``k1`` at the deflection that carries ``rated_nm``: ``δ_r`` solves
-    ``k1 δ + k3 δ³ = τ_r``; with ``3 k3 δ_r² = (growth − 1) k1`` this is
-    ``δ_r = 3 τ_r / ((growth + 2) k1)``."""
-    delta_r = 3.0 * rated_nm / ((growth + 2.0) * k1)
-    return (growth - 1.0) * k1 / (3.0 * delta_r * delta_r)
 
 
 _SOFT_K1 = (16000.0, 13000.0, 40000.0, 5000.0, 5000.0, 2000.0)
@@ -83,7 +74,7 @@ VARIANTS: dict[str, tuple[str, FlexParams]] = {
             UR5E_FLEX,
             k1_nm_per_rad=_SOFT_K1,
             k3_nm_per_rad3=tuple(
-                _stiffening(k, t, 3.0) for k, t in zip(_SOFT_K1, _RATED_NM, strict=True)
+                stiffening_k3(k, t, 3.0) for k, t in zip(_SOFT_K1, _RATED_NM, strict=True)
             ),
         ),
     ),
