@@ -114,6 +114,7 @@ def test_runner_appends_per_pose_and_resumes(tmp_path):
     assert table.inertia_kg_m2.shape == (len(poses), 6)
 
 
+@pytest.mark.slow
 def test_twin_campaign_subset(tmp_path):
     """Identified modes against the twin's linearized modes on a spread of poses."""
     poses = {p.key: p for p in campaign_poses(payloads_kg=(0.0, 5.0))}

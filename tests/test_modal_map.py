@@ -288,6 +288,7 @@ def test_prior_from_the_twins_gear_laws_is_close_to_its_modes():
             assert wn == pytest.approx(true_wn, rel=0.04)
 
 
+@pytest.mark.slow
 def test_fit_map_cli_writes_a_modal_map_that_shapes_a_ur10e(tmp_path, capsys):
     from tvist.cli import main
 

@@ -258,6 +258,51 @@ class Subscriber:
         self._thread.join(timeout=10)
 
 
+def server_timestamp(host: str = HOST) -> float:
+    """The twin controller's clock now, s: the timestamp of the first data package of a fresh
+    RTDE connection."""
+    client = RawRtde(host)
+    try:
+        client.version()
+        assert client.setup_outputs(["timestamp"])[0] != 0
+        client.start()
+        return struct.unpack(">Bd", client.data())[1]
+    finally:
+        client.close()
+
+
+class CurrentReceive:
+    """An ``rtde_receive.RTDEReceiveInterface`` whose reads are never older than the call.
+
+    ur_rtde's receive thread takes the data stream in the background; on a busy machine (two
+    test workers on two cores) its latest package can lag a blocking ``moveL`` that has
+    already returned on the control connection, and a read right after it would see the arm
+    still on its way. Each ``get...``/``is...`` call first waits (polls 1 ms apart, a bounded
+    count) until the interface's stream has reached the server's clock at the call."""
+
+    def __init__(self, receive, host: str = HOST, max_wait_s: float = 30.0) -> None:
+        self._receive, self._host, self._max_wait_s = receive, host, max_wait_s
+
+    def catch_up(self) -> None:
+        now = server_timestamp(self._host)
+        for _ in range(int(self._max_wait_s / 0.001)):
+            if self._receive.getTimestamp() >= now:
+                return
+            time.sleep(0.001)
+        pytest.fail(f"ur_rtde's receive stream did not reach the server's time {now} s")
+
+    def __getattr__(self, name: str):
+        attr = getattr(self._receive, name)
+        if not name.startswith(("get", "is")) or name == "getTimestamp":
+            return attr
+
+        def current(*args):
+            self.catch_up()
+            return attr(*args)
+
+        return current
+
+
 def assert_serves_clients(host: str = HOST) -> None:
     """Release the arm as an operator would (dashboard ``stop``, ``unlock protective
     stop``); then a fresh ur_rtde client connects, reads advancing timestamps and moves the
