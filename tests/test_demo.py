@@ -221,6 +221,7 @@ def test_cli_keeps_the_linear_plant_demo(tmp_path):
     assert (tmp_path / "linear_demo_acceleration.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.slow
 def test_an_identified_map_becomes_a_row_and_a_failed_one_is_reported(tmp_path, monkeypatch):
     import tvist.ident.campaign as campaign
     import tvist.ident.map_fit as map_fit

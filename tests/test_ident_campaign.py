@@ -89,6 +89,7 @@ class ModeRobot:
         return list(self.modes)
 
 
+@pytest.mark.slow
 def test_runner_appends_per_pose_and_resumes(tmp_path):
     poses = campaign_poses(payloads_kg=(1.0,), radii_m=PAPER_RADII_M[::6])  # 4 x 3 poses
     results = tmp_path / "campaign.jsonl"

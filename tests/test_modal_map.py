@@ -256,6 +256,7 @@ def _twin_records(robot_name: str, payloads, every: int, seed: int, noise: float
     return records
 
 
+@pytest.mark.slow
 def test_fit_predicts_the_full_twins_modes_on_held_out_poses():
     records = _twin_records("ur5e", (0.0, 5.0), every=2, seed=3)
     cv = cross_validate(records, "ur5e", folds=4, seed=1)

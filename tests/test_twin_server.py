@@ -347,6 +347,7 @@ def test_run_interrupted_stops_the_arm(server, tmp_path) -> None:
         assert reader.readline().strip() == b"Program running: false"
 
 
+@pytest.mark.slow
 def test_record_keeps_every_sample_until_interrupted(server, tmp_path) -> None:
     """``tvist record`` writes every 2 ms sample, a moveJ included, and stops on Ctrl-C."""
     import signal
