@@ -6,7 +6,7 @@ export VIRTUAL_ENV := $(CURDIR)/$(VENV)
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml -o -name '*.json') Cargo.toml pyproject.toml
 
-.PHONY: demo test build lint fmt bench rust-test ffi-test c-cpp-examples c-example cpp-example cpp-containers examples docs pytest wheel clean mutants
+.PHONY: demo test test-fast build lint fmt bench rust-test ffi-test c-cpp-examples c-example cpp-example cpp-containers examples docs pytest wheel clean mutants
 
 demo: build
 	$(PY) -m tvist.cli demo
@@ -14,6 +14,13 @@ demo: build
 # Every example runs once: the C and C++ ones in ffi-test, the Python ones in pytest
 # (tests/test_examples.py, which also checks what they print).
 test: build rust-test ffi-test lint docs pytest
+
+# The edit-compile-test loop (a few minutes): ruff, tvist-core's tests and every pytest test
+# not marked slow (see docs/test-quality.md). `make test` still runs everything.
+test-fast: build lint
+	cargo test -p tvist-core -q
+	$(PY) -m pytest -q --durations=10 $(PYTEST_PARALLEL) -m "not slow and not realtime"
+	$(PY) -m pytest -q --durations=5 -m "realtime and not slow"
 
 $(PY):
 	python3 -m venv $(VENV)
@@ -97,8 +104,16 @@ lint: $(PY)
 	$(VENV)/bin/ruff check python tests benches examples docs/gen_pages.py
 	$(VENV)/bin/ruff format --check python tests benches examples docs/gen_pages.py
 
+# pytest in PYTEST_WORKERS processes (pytest-xdist; default: the cores, at most 2; 0: in this
+# process), worksteal: a worker that runs out of tests takes the other's last ones. Then the
+# realtime tests (the twin server keeps real time at 500 Hz: a CPU-bound test next to it
+# makes its moves late) in one process, alone.
+PYTEST_WORKERS ?= $(shell n=$$(nproc 2>/dev/null || echo 1); echo $$(( n < 2 ? n : 2 )))
+PYTEST_PARALLEL := -n $(PYTEST_WORKERS) --dist worksteal
+
 pytest: build
-	$(PY) -m pytest -q --durations=15
+	$(PY) -m pytest -q --durations=15 $(PYTEST_PARALLEL) -m "not realtime"
+	$(PY) -m pytest -q --durations=10 -m realtime
 
 fmt: $(PY)
 	cargo fmt --all

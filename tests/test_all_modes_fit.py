@@ -51,6 +51,7 @@ def soft_elbow_map(tmp_path_factory) -> tuple[ModalMap, str]:
     return ModalMap.load(out), str(tmp)
 
 
+@pytest.mark.slow
 def test_the_fit_finds_and_shapes_a_soft_elbow_from_every_ringing_mode(soft_elbow_map):
     modal, _ = soft_elbow_map
     # The elbow is flexible in the data (its own mode rings at folded poses): fitted flexible
@@ -78,6 +79,7 @@ def test_the_fit_finds_and_shapes_a_soft_elbow_from_every_ringing_mode(soft_elbo
         assert np.max(np.abs(e)) <= 0.08, f"joint {joint}: max {e}"
 
 
+@pytest.mark.slow
 def test_records_without_ringing_fall_back_to_the_labelled_modes(soft_elbow_map, tmp_path):
     from tvist.ident.all_modes_fit import fit_all_modes
 

@@ -84,6 +84,7 @@ def _timestamp_steps(log) -> np.ndarray:
     return np.diff(t)
 
 
+@pytest.mark.slow
 def test_plan_record_identify_fit_run_on_the_twin(tmp_path) -> None:
     plan, logs = tmp_path / "plan", tmp_path / "logs"
     logs.mkdir()

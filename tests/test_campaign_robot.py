@@ -79,6 +79,7 @@ def test_unfittable_plan_is_refused_before_the_robot_is_contacted(fake_robot, tm
     assert not (tmp_path / "logs").exists()
 
 
+@pytest.mark.slow
 def test_one_prompt_per_payload_change(fake_robot, tmp_path, monkeypatch):
     prompts = []
     monkeypatch.setattr("builtins.input", lambda text="": prompts.append(text) or "")
@@ -124,6 +125,7 @@ def test_no_terminal_is_one_line_naming_yes(fake_robot, tmp_path, monkeypatch, c
     assert not [c for c in fake_robot.last.calls if c[0] == "moveJ"]  # asked before moving
 
 
+@pytest.mark.slow
 def test_each_run_keeps_its_own_logs(fake_robot, tmp_path):
     out = tmp_path / "c.jsonl"
     args = ["campaign", "--robot-ip", "192.0.2.1", "--out", str(out), *PLAN, "--yes"]

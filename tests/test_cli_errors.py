@@ -28,6 +28,7 @@ def test_a_missing_file_is_one_line_with_exit_code_2(tmp_path):
     assert "Traceback" not in done.stderr
 
 
+@pytest.mark.slow
 def test_debug_shows_the_traceback_wherever_it_is_given(tmp_path):
     missing = str(tmp_path / "no_such_log.csv")
     for argv in (

@@ -68,6 +68,7 @@ def test_a_path_argument_that_cannot_be_used_names_itself(files, capsys, argv, f
     assert "Errno" not in err[0]
 
 
+@pytest.mark.slow
 def test_sensitivity_reads_a_modal_map_and_judges_it_at_the_campaign_poses(tmp_path, capsys):
     poses = []
     for p in campaign_poses("ur5e", payloads_kg=(0.0, 5.0))[::9]:

@@ -116,6 +116,7 @@ def test_shape_takes_the_payload_a_map_file_names(move_csv, tmp_path, capsys):
 # --------------------------------------------------------------------------- tvist identify
 
 
+@pytest.mark.slow
 def test_identify_a_log_without_payload_stops_naming_the_flag(logs):
     line = _one_error_line(_tvist("identify", str(logs["plain"]), "--joint", "1"), "identify")
     assert "no payload" in line and "--payload-kg" in line and "payload columns" in line

@@ -40,6 +40,7 @@ def markdown_cells(line: str) -> int:
     return len(re.split(r"(?<!\\)\|", line.strip())) - 2  # without the outer pipes
 
 
+@pytest.mark.slow
 def test_quick_demo_report_tables_keep_their_columns(quick_run):
     """A ``|`` inside a cell (the settle header's ``|ψ|``) must not split it: the header and
     every row of each table have as many cells as its separator line ``|---|...|``."""
@@ -56,6 +57,7 @@ def test_quick_demo_report_tables_keep_their_columns(quick_run):
         assert markdown_cells(lines[i - 1]) == width, lines[i - 1]
 
 
+@pytest.mark.slow
 def test_quick_demo_writes_results_report_and_figures(quick_run):
     out, results = quick_run
     for name in ("results.json", "report.md", "spectra.png"):
@@ -130,6 +132,7 @@ def test_quick_demo_writes_results_report_and_figures(quick_run):
     assert motion["analytic_zv_delay_s"] > 0.0
 
 
+@pytest.mark.slow
 def test_true_modes_remove_the_residual_vibration_with_the_analytic_zv_delay(quick_run):
     _, results = quick_run
     motion = results["motions"]["Q1->Q2"]
@@ -218,6 +221,7 @@ def test_cli_keeps_the_linear_plant_demo(tmp_path):
     assert (tmp_path / "linear_demo_acceleration.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.slow
 def test_an_identified_map_becomes_a_row_and_a_failed_one_is_reported(tmp_path, monkeypatch):
     import tvist.ident.campaign as campaign
     import tvist.ident.map_fit as map_fit
@@ -244,6 +248,7 @@ def test_an_identified_map_becomes_a_row_and_a_failed_one_is_reported(tmp_path, 
     assert "too few usable poses" in (tmp_path / "bad" / "report.md").read_text()
 
 
+@pytest.mark.slow
 def test_the_default_demo_identifies_a_map_and_uses_it(quick_run):
     out, results = quick_run
     info = results["identified_map"]
@@ -280,6 +285,7 @@ def test_the_default_demo_identifies_a_map_and_uses_it(quick_run):
     assert info["versus_true_modes"]["base"]["identified"]["f_n_rms_percent"] < 5.0
 
 
+@pytest.mark.slow
 def test_a_second_run_reuses_the_campaign_and_a_changed_one_does_not(quick_run, tmp_path):
     out, results = quick_run
     again = identify_map(out, plan=QUICK_PLAN)

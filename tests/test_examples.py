@@ -22,6 +22,8 @@ import tvist
 EXAMPLES_DIR = Path(__file__).resolve().parent.parent / "examples"
 EXAMPLES = sorted(EXAMPLES_DIR.glob("*.py"))
 TIMEOUT_S = 120
+#: examples/08 runs the twin server (conftest: realtime tests run alone).
+REALTIME = True
 
 
 def zv_delay_s(modes) -> float:

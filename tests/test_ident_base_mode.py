@@ -47,6 +47,7 @@ def base_fits():
         return list(pool.map(_identify, POSES))
 
 
+@pytest.mark.slow
 def test_base_mode_is_right_or_flagged_never_silently_wrong(base_fits):
     confident = 0
     for key, fit, truth in base_fits:

@@ -54,6 +54,7 @@ def campaign_logs(tmp_path_factory):
     return folder, truth
 
 
+@pytest.mark.slow
 def test_identify_pairs_logs_by_pose_and_writes_records(campaign_logs, tmp_path, capsys):
     folder, truth = campaign_logs
     out = tmp_path / "results.jsonl"

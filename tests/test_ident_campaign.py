@@ -89,6 +89,7 @@ class ModeRobot:
         return list(self.modes)
 
 
+@pytest.mark.slow
 def test_runner_appends_per_pose_and_resumes(tmp_path):
     poses = campaign_poses(payloads_kg=(1.0,), radii_m=PAPER_RADII_M[::6])  # 4 x 3 poses
     results = tmp_path / "campaign.jsonl"
@@ -114,6 +115,7 @@ def test_runner_appends_per_pose_and_resumes(tmp_path):
     assert table.inertia_kg_m2.shape == (len(poses), 6)
 
 
+@pytest.mark.slow
 def test_twin_campaign_subset(tmp_path):
     """Identified modes against the twin's linearized modes on a spread of poses."""
     poses = {p.key: p for p in campaign_poses(payloads_kg=(0.0, 5.0))}

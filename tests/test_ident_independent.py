@@ -54,6 +54,7 @@ def independent_fits(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_acceptance_on_40_independent_logs(independent_fits):
     """ω_n within 1 % and ζ within 5 % in at least 95 % of the cases (5-40 Hz, ζ 0.02-0.4,
     20 dB). Measured: 40/40, worst ω_n 0.53 %, worst ζ 2.8 %."""

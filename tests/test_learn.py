@@ -86,6 +86,7 @@ def _learned_on_twin_3():
     return robot, wrong, learner.map
 
 
+@pytest.mark.slow
 def test_learned_map_reaches_99_percent_on_the_demo_moves():
     robot, wrong, learned = _learned_on_twin_3()
     quiet_twin = Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M)
@@ -109,6 +110,7 @@ def test_learned_map_reaches_99_percent_on_the_demo_moves():
         assert learned_pct > wrong_pct
 
 
+@pytest.mark.slow
 def test_learned_map_shaped_with_the_modes_the_rule_picks():
     robot, _, learned = _learned_on_twin_3()
     quiet_twin = Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M)
@@ -124,6 +126,7 @@ def test_learned_map_shaped_with_the_modes_the_rule_picks():
         assert run.runs[1].reduction_percent >= 98.5, (motion.name, k)
 
 
+@pytest.mark.slow
 def test_learning_from_the_published_paper10_map_improves_the_demo_moves():
     """The paper's published map (91.0 % on Q1->Q3 on this twin) as the prior: converted into
     a modal map, then 20 ordinary moves between 10 random poses, each pose reached once

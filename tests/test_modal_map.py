@@ -248,6 +248,7 @@ def _twin_records(robot_name: str, payloads, every: int, seed: int, noise: float
     return records
 
 
+@pytest.mark.slow
 def test_fit_predicts_the_full_twins_modes_on_held_out_poses():
     records = _twin_records("ur5e", (0.0, 5.0), every=2, seed=3)
     cv = cross_validate(records, "ur5e", folds=4, seed=1)
@@ -280,6 +281,7 @@ def test_prior_from_the_twins_gear_laws_is_close_to_its_modes():
             assert wn == pytest.approx(true_wn, rel=0.04)
 
 
+@pytest.mark.slow
 def test_fit_map_cli_writes_a_modal_map_that_shapes_a_ur10e(tmp_path, capsys):
     from tvist.cli import main
 

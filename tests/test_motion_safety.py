@@ -190,6 +190,7 @@ def test_run_reports_a_protective_stop_and_how_to_recover(server, receive, tmp_p
     np.testing.assert_allclose(np.array(receive.getTargetQ()), q[-1], atol=1e-6)
 
 
+@pytest.mark.slow
 def test_dry_run_describes_the_move_without_a_robot(tmp_path):
     """No --robot-ip: the peak speed printed is the file's (computed here by differences),
     with the model's limit; a plot is written; a file in degrees is refused all the same."""
@@ -232,6 +233,7 @@ def test_shape_refuses_degrees_and_limits_and_writes_nothing(tmp_path):
         assert not out.exists()
 
 
+@pytest.mark.slow
 def test_shape_refuses_an_output_the_zero_delay_method_made_too_fast(tmp_path):
     """A move at 98 % of the base's speed limit: the input passes; ZTDIS compresses the
     motion in time (alpha < 1), which pushes the shaped speed over the limit."""

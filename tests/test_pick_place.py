@@ -34,6 +34,7 @@ def _sample_bounds(t, magnitude, t0, threshold):
     return t[last] - t0, t[last + 1] - t0
 
 
+@pytest.mark.slow
 def test_the_report_has_every_row_and_criterion(quick_cycle):
     result, out = quick_cycle
     doc = json.loads((out / "results.json").read_text())

@@ -14,6 +14,7 @@ from tvist.trajectory import PAPER_POSES
 from tvist.urserver.move_program import parse_move_program
 
 
+@pytest.mark.slow
 def test_plan_writes_programs_and_trajectories_payload_by_payload(tmp_path, capsys):
     out = tmp_path / "plan"
     cover = tmp_path / "mine.csv"
@@ -93,6 +94,7 @@ def test_unfittable_plan_is_refused_with_its_reason(flags, reason, tmp_path, cap
     assert not (tmp_path / "plan").exists()
 
 
+@pytest.mark.slow
 def test_cover_poses_in_degrees_are_refused(tmp_path, capsys):
     cover = tmp_path / "mine.csv"
     np.savetxt(cover, [PAPER_POSES["Q2"], np.degrees(PAPER_POSES["Q2"])], delimiter=",")

@@ -43,6 +43,7 @@ def _flange(q) -> np.ndarray:
     return np.concatenate([placement.translation, pin.log3(placement.rotation)])
 
 
+@pytest.mark.slow
 def test_move_list_runs_shaped_with_far_less_residual_vibration(server, tmp_path):
     start = _flange(HOME)
     end = start.copy()

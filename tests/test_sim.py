@@ -223,6 +223,7 @@ def test_base_damping_ratio_falls_when_the_arm_folds(twin: Twin) -> None:
     assert plain.modes(Q1)[0][1] < plain.modes(Q3)[0][1]
 
 
+@pytest.mark.slow
 def test_base_damping_ratio_stays_moderate_over_the_campaign() -> None:
     """Over the mapping campaign's poses (both payload extremes) the base mode stays a clearly
     underdamped mode (0.03 <= ζ <= 0.35), also where the arm is folded near the base axis."""

@@ -260,6 +260,7 @@ def _residual_rms(path) -> tuple[float, np.ndarray, np.ndarray]:
     return float(np.sqrt(np.mean(deviation**2))), target[-1], record.actual_q[-1]
 
 
+@pytest.mark.slow
 def test_run_shaped_move_cuts_residual_vibration(server, twin, tmp_path) -> None:
     """``tvist run`` Q1 -> Q2 through servoJ, unshaped and shaped with the twin's true modes.
 
@@ -346,6 +347,7 @@ def test_run_interrupted_stops_the_arm(server, tmp_path) -> None:
         assert reader.readline().strip() == b"Program running: false"
 
 
+@pytest.mark.slow
 def test_record_keeps_every_sample_until_interrupted(server, tmp_path) -> None:
     """``tvist record`` writes every 2 ms sample, a moveJ included, and stops on Ctrl-C."""
     import signal
@@ -383,6 +385,7 @@ def test_record_keeps_every_sample_until_interrupted(server, tmp_path) -> None:
     assert record.n_samples > 500
 
 
+@pytest.mark.slow
 def test_campaign_through_ur_rtde_finds_the_twins_modes(server, twin, tmp_path) -> None:
     """``tvist campaign --robot-ip`` on one pose (the server's 5 kg payload): base and
     shoulder frequencies within 3 % of the twin's modal analysis at the pose."""

@@ -109,6 +109,7 @@ def _example_path():
     return path, [pose for _, pose, _ in poses]
 
 
+@pytest.mark.slow
 def test_move_path_async_example(robot, reference):
     control, receive = robot
     path, poses = _example_path()

@@ -23,6 +23,7 @@ from tvist.robots import Payload
 from twin_server_fixture import (
     HOST,
     Commander,
+    CurrentReceive,
     RawRtde,
     Subscriber,
     dashboard,
@@ -82,7 +83,9 @@ def robot(server):
     try:
         assert control.setTcp([0.0] * 6)
         assert control.moveJ(HOME, 1.5, 4.0)
-        yield control, receive
+        # Reads never older than the call (a blocking move has returned on the control
+        # connection: the receive stream must show where it ended).
+        yield control, CurrentReceive(receive)
     finally:
         if control.isProgramRunning():
             control.stopScript()
@@ -451,6 +454,7 @@ def test_move_path_runs_its_waypoints(robot, reference):
     assert control.isProgramRunning()
 
 
+@pytest.mark.slow
 def test_every_control_method_works_or_is_refused(server):
     public = {
         name

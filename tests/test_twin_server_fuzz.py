@@ -200,6 +200,7 @@ def server():
         yield proc
 
 
+@pytest.mark.slow
 def test_fuzzed_clients_never_stop_the_server(server) -> None:
     """Every case is drawn from its own seed (the same cases whatever the timing); the
     server's log holds no traceback afterwards (nothing failed unexpectedly, even caught)."""

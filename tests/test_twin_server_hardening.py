@@ -175,6 +175,7 @@ def test_out_of_range_command_stops_the_program(
 # ----------------------------------------------------------------------------- 2. recipes
 
 
+@pytest.mark.slow
 def test_recipes_past_the_one_byte_id_are_refused_and_publishing_goes_on(
     server, subscriber
 ) -> None:

@@ -210,15 +210,10 @@ def test_robot_file_round_trips_through_the_core(tmp_path, capsys):
     np.testing.assert_array_equal(from_file.mass_matrix_many(poses), direct.mass_matrix_many(poses))
 
 
-ROOT = Path(__file__).resolve().parents[1]
-PROGRAM = ROOT / "target" / "cpp" / "shape_with_map"
-
-
-def test_cpp_shapes_from_a_robot_file_exactly_as_python(tmp_path):
+def test_cpp_shapes_from_a_robot_file_exactly_as_python(shape_with_map, tmp_path):
     """The 7-DOF FR3 from its robot file: tvist_shaper_new_map (C++ example over the C API)
     against Python on the same robot file and modal map (1e-12 rad: both run the same core
     code on the same parsed data; the C++ program writes 17 significant digits)."""
-    subprocess.run(["make", "-s", "cpp-example"], cwd=ROOT, check=True)
     path, base, tip = shipped_urdf("fr3")
     robot_path = tmp_path / "fr3.json"
     args = ["robot-file", str(path), "--base-link", base, "--tip-link", tip]
@@ -252,7 +247,7 @@ def test_cpp_shapes_from_a_robot_file_exactly_as_python(tmp_path):
     samples, shaped = tmp_path / "in.txt", tmp_path / "out.txt"
     np.savetxt(samples, q, fmt="%.17g")
     cpp_args = [str(robot_path), "1.0", *map(str, com), str(map_path), str(dt_s), "zv"]
-    subprocess.run([str(PROGRAM), *cpp_args, str(samples), str(shaped)], check=True)
+    subprocess.run([str(shape_with_map), *cpp_args, str(samples), str(shaped)], check=True)
     got = np.loadtxt(shaped)
     assert np.max(np.abs(expected - q)) > 1e-3  # the move is shaped
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)

@@ -1,10 +1,12 @@
 """Start ``tvist twin-server`` as a subprocess on UR's fixed ports, for tests; raw clients
 (RTDE, dashboard, script port) for what the unmodified ur_rtde client cannot send.
 
-The server listens on a loopback address of its own test session (``127.x.y.z`` from the
+The server listens on a loopback address of its own test process (``127.x.y.z`` from the
 process id; Linux routes the whole of ``127.0.0.0/8`` to this machine), so that test runs in
-parallel on one machine, or a twin server someone left running on ``127.0.0.1``, do not take
-each other's ports."""
+parallel on one machine, the pytest-xdist workers of one run, or a twin server someone left
+running on ``127.0.0.1``, do not take each other's ports. UR's ports cannot be moved (ur_rtde
+connects to them), the address can; a server that reaches inside the process
+(``local_server`` in ``test_twin_server_hardening.py``) takes ports the OS assigns."""
 
 from __future__ import annotations
 
@@ -22,9 +24,19 @@ from collections.abc import Iterator, Sequence
 import pytest
 
 UR_PORTS = (30004, 29999, 30001, 30002, 30003)
-_PID = os.getpid()
-#: This session's loopback address (never 127.0.0.1; the last byte never 0 or 255).
-HOST = f"127.{1 + (_PID >> 16) % 254}.{(_PID >> 8) & 255}.{1 + (_PID & 255) % 254}"
+
+
+def loopback_host(pid: int) -> str:
+    """The loopback address of process ``pid``: one per process id (Linux ids are below
+    2**22 = 254 * 256 * 64.5, so the second byte stays below 67); never 127.0.0.1, the last
+    byte never 0 or 255."""
+    rest, last = divmod(pid, 254)
+    high, middle = divmod(rest, 256)
+    return f"127.{1 + high}.{middle}.{1 + last}"
+
+
+#: This test process's loopback address.
+HOST = loopback_host(os.getpid())
 #: The twin the tests' server runs: the demo's 5 kg payload, 5 cm beyond the flange.
 PAYLOAD_KG = 5.0
 PAYLOAD_COM_M = (0.0, 0.0, 0.05)
@@ -244,6 +256,51 @@ class Subscriber:
     def close(self) -> None:
         self.client.close()
         self._thread.join(timeout=10)
+
+
+def server_timestamp(host: str = HOST) -> float:
+    """The twin controller's clock now, s: the timestamp of the first data package of a fresh
+    RTDE connection."""
+    client = RawRtde(host)
+    try:
+        client.version()
+        assert client.setup_outputs(["timestamp"])[0] != 0
+        client.start()
+        return struct.unpack(">Bd", client.data())[1]
+    finally:
+        client.close()
+
+
+class CurrentReceive:
+    """An ``rtde_receive.RTDEReceiveInterface`` whose reads are never older than the call.
+
+    ur_rtde's receive thread takes the data stream in the background; on a busy machine (two
+    test workers on two cores) its latest package can lag a blocking ``moveL`` that has
+    already returned on the control connection, and a read right after it would see the arm
+    still on its way. Each ``get...``/``is...`` call first waits (polls 1 ms apart, a bounded
+    count) until the interface's stream has reached the server's clock at the call."""
+
+    def __init__(self, receive, host: str = HOST, max_wait_s: float = 30.0) -> None:
+        self._receive, self._host, self._max_wait_s = receive, host, max_wait_s
+
+    def catch_up(self) -> None:
+        now = server_timestamp(self._host)
+        for _ in range(int(self._max_wait_s / 0.001)):
+            if self._receive.getTimestamp() >= now:
+                return
+            time.sleep(0.001)
+        pytest.fail(f"ur_rtde's receive stream did not reach the server's time {now} s")
+
+    def __getattr__(self, name: str):
+        attr = getattr(self._receive, name)
+        if not name.startswith(("get", "is")) or name == "getTimestamp":
+            return attr
+
+        def current(*args):
+            self.catch_up()
+            return attr(*args)
+
+        return current
 
 
 def assert_serves_clients(host: str = HOST) -> None:
