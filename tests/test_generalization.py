@@ -80,6 +80,33 @@ def test_a_maps_modes_are_matched_by_its_own_naming_rule():
     assert matching_true_modes([("rank", 3)], truth) == [None]
 
 
+def test_no_true_mode_stands_for_two_of_the_maps_modes():
+    # One 18.2 Hz true mode stores the largest share of both the base's strain (0.5 against
+    # 0.15 and 0.3) and the shoulder's (0.45 against 0.05 and 0.4). The map's slots never
+    # shape one eigenmode twice: the base takes it and the shoulder the next one in the
+    # shoulder, the 25 Hz mode. A map right about both modes (18.3 and 24.5 Hz) is then
+    # 0.5 % and 2 % off, not 35 % off in the shoulder against the base's mode.
+    truth = [
+        _mode(14.0, [0.15, 0.05, 0.8, 0, 0, 0]),
+        _mode(18.2, [0.5, 0.45, 0.05, 0, 0, 0]),
+        _mode(25.0, [0.3, 0.4, 0.3, 0, 0, 0]),
+    ]
+    names = shaped_mode_names({"mode_joints": [0, 1]})
+    matched = matching_true_modes(names, truth)
+    assert [m.freq_hz for m in matched] == [18.2, 25.0]
+    base, shoulder = frequency_errors(
+        np.array([[18.3, 24.5]]), np.array([[m.freq_hz for m in matched]])
+    )
+    assert base["max_percent"] == pytest.approx(100 * (18.3 / 18.2 - 1), rel=1e-9)
+    assert shoulder["max_percent"] == pytest.approx(2.0, rel=1e-9)
+    # Slots in the map's order: shoulder first takes the 18.2 Hz mode, the base the 25 Hz.
+    names = shaped_mode_names({"mode_joints": [1, 0]})
+    assert [m.freq_hz for m in matching_true_modes(names, truth)] == [18.2, 25.0]
+    # More slots than true modes: the last one has none left.
+    names = shaped_mode_names({"mode_joints": [0, 1, 2, 3]})
+    assert [m and m.freq_hz for m in matching_true_modes(names, truth)] == [18.2, 25.0, 14.0, None]
+
+
 def test_frequency_errors_per_mode():
     predicted = np.array([[10.3, 20.0], [9.8, 21.0], [10.0, np.nan]])
     true = np.array([[10.0, 20.0], [10.0, 20.0], [10.0, 20.0]])

@@ -12,7 +12,12 @@ Coriolis and centrifugal torques ``h = C(q, q_r') q_r'`` of the reference (a bas
 the upper arm outwards and so rings the shoulder, which the accelerations alone do not couple at
 every pose), ``K`` and ``C`` the map's laws at the pose's gravity torques. Gravity stiffness and the
 slow change of the static deflection under gravity along the move are neglected, as in the map.
-``h`` comes from the mass matrix alone (Christoffel form, :func:`velocity_torque_many`). Along the
+``h`` comes from the mass matrix alone (Christoffel form, :func:`velocity_torque_many`).
+With bending links (``link_hinges``) ``δ`` also holds the hinge angles (two per hinge, after
+the joints: :func:`flex_coordinates`), the matrices are the hinged arm's with straight hinges
+(:meth:`ModalMap.evaluated_arm`), ``M_f·`` its flexible rows on the robot's joints and ``h_f``
+its Coriolis and centrifugal torques on the flexible coordinates with the hinges at rest; each
+hinge is its map spring and damper on both axes. Along the
 move the matrices are taken at each sample of the reference and held over the sample period; the
 drive is interpolated linearly between samples (its acceleration part exactly so for the
 jerk-limited profiles of :func:`tvist.trajectory.double_s`). Each period is integrated exactly
@@ -50,6 +55,7 @@ import numpy as np
 import scipy.linalg
 
 from tvist.robots import Robot
+from tvist.robots._robot import HingedArm
 from tvist.trajectory import Trajectory, double_s
 
 if TYPE_CHECKING:
@@ -62,6 +68,7 @@ __all__ = [
     "ShapingChoice",
     "modes_to_shape",
     "set_modes_for_move",
+    "flex_coordinates",
     "velocity_torque_many",
 ]
 
@@ -88,7 +95,8 @@ class ModeResidual:
     fraction
         ``residual_m_s2`` over the unshaped total (the sum over modes).
     joint_shares
-        Share of the mode's gear strain energy per flexible joint (map order), summing to 1.
+        Share of the mode's strain energy per flexible coordinate (the map's joints in map
+        order, then two per link hinge: :func:`flex_coordinates`), summing to 1.
     """
 
     rank: int
@@ -136,22 +144,37 @@ class ShapingChoice:
         )
 
 
+def flex_coordinates(modal_map: ModalMap, arm: Robot | HingedArm) -> list[int]:
+    """Indices in ``arm`` (:meth:`ModalMap.evaluated_arm`) of the map's flexible coordinates,
+    in the core's order: the map's flexible joints, then two per link hinge in link order."""
+    joints = [int(f["joint"]) for f in modal_map.flex_joints]
+    if not isinstance(arm, HingedArm):
+        return joints
+    return [int(arm.joint_index[j]) for j in joints] + [int(i) for i in arm.hinge_index]
+
+
 def _flex_system(
     modal_map: ModalMap, robot: Robot, q: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Per pose of ``q`` ``(n, n_dof)``: ``M_ff``, ``M_f·``, ``K``, ``C`` (diagonals) and
-    the flange's translational Jacobian on the flexible joints."""
-    if modal_map.link_hinges:
-        raise ValueError(
-            "link_hinges: the residual vibration of a move is modelled for flexible joints "
-            "only; a map with bending links cannot choose its modes this way"
-        )
-    joints = [int(f["joint"]) for f in modal_map.flex_joints]
-    mass = robot.mass_matrix_many(q)
+    """Per pose of ``q`` ``(n, n_robot)``: ``M_ff``, ``M_f·`` (the flexible rows on the
+    robot's joints), ``K``, ``C`` (diagonals) and the flange's translational Jacobian on the
+    flexible coordinates (:func:`flex_coordinates`), of the arm the map evaluates."""
+    arm = modal_map.evaluated_arm(robot)
+    coords = flex_coordinates(modal_map, arm)
+    joints = arm.joint_index if isinstance(arm, HingedArm) else np.arange(robot.n_dof)
+    mass = arm.mass_matrix_many(q)
+    # The joint laws read the robot's gravity torques by joint (straight hinges leave them
+    # as the rigid arm's); each hinge carries its constant spring and damper on both axes.
     laws = modal_map.core.joint_laws_many(np.ascontiguousarray(robot.gravity_torque_many(q)))
-    jac = robot.jacobian_many(q)[:, :3, joints]
-    m_f = mass[:, joints, :]
-    return m_f[:, :, joints], m_f, laws[:, :, 0], laws[:, :, 1], jac
+    hinges = modal_map.link_hinges
+    k_h = np.repeat([float(h["stiffness_nm_per_rad"]) for h in hinges], 2)
+    c_h = np.repeat([float(h["damping_nms_per_rad"]) for h in hinges], 2)
+    n = q.shape[0]
+    stiffness = np.concatenate([laws[:, :, 0], np.broadcast_to(k_h, (n, k_h.size))], axis=1)
+    damping = np.concatenate([laws[:, :, 1], np.broadcast_to(c_h, (n, c_h.size))], axis=1)
+    jac = arm.jacobian_many(q)[:, :3, coords]
+    m_f = mass[:, coords, :]
+    return m_f[:, :, coords], m_f[:, :, joints], stiffness, damping, jac
 
 
 #: Step of the central differences of the mass matrix, rad. The truncation error is of order
@@ -160,26 +183,34 @@ _DIFF_STEP_RAD = 1e-6
 
 
 def velocity_torque_many(
-    robot: Robot, q: np.ndarray, qd: np.ndarray, rows: Sequence[int]
+    robot: Robot | HingedArm, q: np.ndarray, qd: np.ndarray, rows: Sequence[int]
 ) -> np.ndarray:
     """Coriolis and centrifugal torques ``h = M'(q) q' − ½ ∂(q'ᵀ M q')/∂q`` (N m) in joints
-    ``rows``, per pose of ``q``, ``qd`` ``(n, n_dof)``: ``(n, len(rows))``. Central differences
-    of the mass matrix: along ``q'`` for ``M' q'``, along each joint of ``rows`` for the
-    gradient (:data:`_DIFF_STEP_RAD`)."""
+    ``rows``, per pose of ``q``, ``qd`` ``(n, n_robot)``: ``(n, len(rows))``. Central
+    differences of the mass matrix: along ``q'`` for ``M' q'``, along each joint of ``rows``
+    for the gradient (:data:`_DIFF_STEP_RAD`). For a hinged arm
+    (:meth:`tvist.Robot.with_link_hinges`), ``rows`` index its coordinates (hinges included)
+    and the hinges are straight and at rest: the torques the robot's motion puts on the
+    hinges, which bend them."""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
+    if isinstance(robot, HingedArm):
+        q, qd = robot.coordinates(q), robot.coordinates(qd)
+        mass = robot.mass_matrix_bent_many
+    else:
+        mass = robot.mass_matrix_many
     h = _DIFF_STEP_RAD
     rows = list(rows)
 
-    def mass(at: np.ndarray) -> np.ndarray:
-        return robot.mass_matrix_many(np.ascontiguousarray(at))
+    def at(x: np.ndarray) -> np.ndarray:
+        return mass(np.ascontiguousarray(x))
 
-    m_dot = (mass(q + h * qd) - mass(q - h * qd)) / (2.0 * h)  # M' = Σ_k ∂M/∂q_k q'_k
+    m_dot = (at(q + h * qd) - at(q - h * qd)) / (2.0 * h)  # M' = Σ_k ∂M/∂q_k q'_k
     out = np.einsum("kij,kj->ki", m_dot[:, rows, :], qd)
     for col, i in enumerate(rows):
         step = np.zeros(q.shape[1])
         step[i] = h
-        d_mass = (mass(q + step) - mass(q - step)) / (2.0 * h)
+        d_mass = (at(q + step) - at(q - step)) / (2.0 * h)
         out[:, col] -= 0.5 * np.einsum("ki,kij,kj->k", qd, d_mass, qd)
     return out
 
@@ -225,9 +256,9 @@ def _state_after(traj: Trajectory, end: int, modal_map: ModalMap, robot: Robot) 
     big[:, n : 2 * n, 2 * n : 3 * n] = m_inv
     big[:, 2 * n : 3 * n, 3 * n :] = np.eye(n)
     phi = _expm_many(big * dt)
-    joints = [int(f["joint"]) for f in modal_map.flex_joints]
+    arm = modal_map.evaluated_arm(robot)
     drive = np.einsum("kij,kj->ki", m_f, traj.qdd[: end + 1])
-    drive += velocity_torque_many(robot, q, traj.qd[: end + 1], joints)
+    drive += velocity_torque_many(arm, q, traj.qd[: end + 1], flex_coordinates(modal_map, arm))
     f0, f1 = -drive[:end], -drive[1 : end + 1]
     # What each period adds from its drive, then the free propagation, in order.
     forced = np.einsum("kij,kj->ki", phi[:, : 2 * n, 2 * n : 3 * n], f0)
@@ -336,17 +367,12 @@ def set_modes_for_move(
     ``move``: the move's :class:`~tvist.trajectory.Trajectory`, or its reference samples
     ``(n_samples, n_dof)`` on the grid ``dt_s`` (velocity and acceleration by differences, the
     move ending at its last change). Returns the choice, or ``None`` (nothing changed) for any
-    other provider or map, and for a map with bending links (``link_hinges``), whose ``K``
-    lowest modes all stay shaped. ``K`` is at most the map's own ``shaped_modes``.
+    other provider or map. ``K`` is at most the map's own ``shaped_modes``.
     """
     from tvist.modal_map import ModalMap
 
     modal = getattr(provider, "dynmap", None)
     if not isinstance(modal, ModalMap) or modal.shaped_modes is None:
-        return None
-    if modal.link_hinges:
-        # The residual model (:func:`modes_to_shape`) covers flexible joints only: with bending
-        # links every one of the map's K lowest modes stays shaped.
         return None
     if not isinstance(move, Trajectory):
         if dt_s is None:

@@ -11,7 +11,12 @@ Per variant ``family:<robot>:<seed>``:
 3. **Map against the truth** at :data:`EVALUATION_POSES` workspace poses drawn from a stream
    of their own (:func:`evaluation_poses`: not the campaign's poses), with the demo's payload:
    each shaped mode of the map against the variant's true mode of the same name
-   (:func:`matching_true_modes`), RMS and largest relative frequency error.
+   (:func:`matching_true_modes`), RMS and largest relative frequency error. The naming is
+   the map's own rule applied to the true modes, and one to one (no true mode stands for two
+   of the map's modes): a ``shaped_modes: K`` map's ``k``-th lowest mode against the
+   ``k``-th lowest true mode; a ``mode_joints`` map's slots in order, each against the true
+   mode not taken by an earlier slot that stores the largest share of its strain energy in
+   the slot's joint.
 4. **The demo's three moves** (:func:`tvist.demo.motions.demo_motions` of the robot) on the
    variant's twin: unshaped, shaped with the identified map (the demo's modal row, time
    varying), the identified map's modes at the end pose held over the move, and the ceiling:
@@ -180,17 +185,24 @@ def shaped_mode_names(map_document: Mapping[str, Any]) -> list[tuple[str, int]]:
 
 def matching_true_modes(names: Sequence[tuple[str, int]], true_modes: Sequence) -> list:
     """For each shaped mode name (:func:`shaped_mode_names`) the true mode it stands for,
-    by the map's own rule: the true mode that stores the largest share of its strain energy
-    in joint ``j``, or the ``k``-th lowest true mode (``None`` if there are fewer). Each item
-    of ``true_modes`` (lowest first) has ``freq_hz`` and ``joint_shares``
-    (:class:`tvist.sim.family.TrueMode`)."""
+    by the map's own rule, one to one: slot by slot in the map's order, the true mode not
+    already taken by an earlier slot that stores the largest share of its strain energy in
+    joint ``j`` (where one true mode strains both base and shoulder most, the shoulder takes
+    the next one, as the map's slots do: ``modal_map.rs``), or the ``k``-th lowest true mode.
+    ``None`` where no true mode is left. Each item of ``true_modes`` (lowest first) has
+    ``freq_hz`` and ``joint_shares`` (:class:`tvist.sim.family.TrueMode`)."""
     out = []
+    taken: set[int] = set()
     for kind, index in names:
         if kind == "joint":
-            shares = [float(m.joint_shares[index]) for m in true_modes]
-            out.append(true_modes[int(np.argmax(shares))] if shares else None)
+            free = [i for i in range(len(true_modes)) if i not in taken]
+            shares = [float(true_modes[i].joint_shares[index]) for i in free]
+            pick = free[int(np.argmax(shares))] if free else None
         else:
-            out.append(true_modes[index] if index < len(true_modes) else None)
+            pick = index if index < len(true_modes) and index not in taken else None
+        if pick is not None:
+            taken.add(pick)
+        out.append(None if pick is None else true_modes[pick])
     return out
 
 

@@ -201,9 +201,19 @@ class HingedArm:
         full[:, self.joint_index] = q
         return full
 
+    def coordinates(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
+        """The robot's ``q`` (or joint velocities) ``(n_samples, n_robot)`` as the hinged
+        arm's coordinates ``(n_samples, n_dof)``: hinges straight (and at rest)."""
+        return self._q(q)
+
     def mass_matrix_many(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
         """``(n_samples, n_dof, n_dof)`` mass matrices with straight hinges."""
         return self._core.mass_matrix_many(self._q(q))
+
+    def mass_matrix_bent_many(self, q_full: np.ndarray) -> np.ndarray:
+        """``(n_samples, n_dof, n_dof)`` mass matrices at the hinged arm's own coordinates
+        ``(n_samples, n_dof)`` (rad), hinges bent as given."""
+        return self._core.mass_matrix_many(np.ascontiguousarray(q_full, dtype=float))
 
     def gravity_torque_many(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
         """``(n_samples, n_dof)`` gravity torques with straight hinges."""
