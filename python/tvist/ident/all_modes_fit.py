@@ -70,6 +70,7 @@ __all__ = [
     "CANDIDATE_JOINTS",
     "CANDIDATE_LINKS",
     "AllModesFit",
+    "bending_candidates",
     "fit_all_modes",
     "flexible_candidates",
     "match_modes",
@@ -90,9 +91,19 @@ def flexible_candidates(robot_name: str) -> tuple[int, ...]:
     return CANDIDATE_JOINTS if params(robot_name).placements is None else PROXIMAL_JOINTS
 
 
+def bending_candidates(robot_name: str) -> tuple[int, ...]:
+    """The links of ``robot_name`` that may bend: :data:`CANDIDATE_LINKS` for a DH arm (a
+    UR's upper arm and forearm); none for a URDF-placed arm, whose link numbering names no
+    long link (give ``candidate_links`` to :func:`fit_all_modes`)."""
+    from tvist.robots import params
+
+    return CANDIDATE_LINKS if params(robot_name).placements is None else ()
+
+
 #: Always flexible: the joints whose excitation logs the campaign records.
 ALWAYS_FLEXIBLE = (0, 1)
-#: Links that may bend: the upper arm and the forearm (the long links of a UR-type arm).
+#: Links of a UR (DH) arm that may bend: the upper arm and the forearm (its long links). An
+#: arm placed by its URDF: none unless given (:func:`bending_candidates`).
 CANDIDATE_LINKS = (1, 2)
 #: Start of a link hinge's stiffness: its own mode (hinge inertia alone) at this frequency.
 HINGE_START_HZ = 60.0
@@ -547,11 +558,12 @@ def fit_all_modes(
     candidate_joints: Sequence[int] | None = None,
     drop_t: float = 3.0,
     include_low_confidence: bool = False,
-    candidate_links: Sequence[int] = CANDIDATE_LINKS,
+    candidate_links: Sequence[int] | None = None,
 ) -> AllModesFit:
     """Fit the flexible joints' laws, and of the bending links among ``candidate_links``
     their hinges', to every identified mode (module docstring); ``candidate_joints``
-    ``None``: :func:`flexible_candidates` of the robot.
+    ``None``: :func:`flexible_candidates` of the robot, ``candidate_links`` ``None``:
+    :func:`bending_candidates`.
 
     Raises
     ------
@@ -563,6 +575,8 @@ def fit_all_modes(
     candidates = tuple(sorted(int(j) for j in candidate_joints))
     if not set(ALWAYS_FLEXIBLE) <= set(candidates):
         raise ValueError(f"candidate joints must include base and shoulder, got {candidates}")
+    if candidate_links is None:
+        candidate_links = bending_candidates(robot_name)
     links = tuple(sorted(int(link) for link in candidate_links))
     if isinstance(records, ObservedModes):
         obs = records
