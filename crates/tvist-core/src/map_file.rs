@@ -544,20 +544,24 @@ fn range(value: Option<&Value>, path: &str) -> Result<Option<InertiaRange>, Erro
     }
 }
 
-/// One `paper10` mode of a map document, checked for form (its fields, finite numbers, joint
-/// indices, exponents, ranges); `path` names it in errors (`modes[1]`). The physical rules
-/// are the map's ([`DynamicMap::new`]); a mode alone may break them (a trial point of a fit).
-pub fn mode_from(value: &Value, path: &str) -> Result<ModeMap, Error> {
-    let mode = value.as_object().ok_or_else(|| {
+/// `value` as a JSON object whose every key is one of `fields` or `optional` (`path` names it
+/// in errors; the message lists `fields`).
+fn object_with_fields<'a>(
+    value: &'a Value,
+    path: &str,
+    fields: &[&str],
+    optional: &[&str],
+) -> Result<&'a Map<String, Value>, Error> {
+    let object = value.as_object().ok_or_else(|| {
         Error::document(
             path,
-            format!("must be an object with fields {}", MODE_FIELDS.join(", ")),
+            format!("must be an object with fields {}", fields.join(", ")),
         )
     })?;
-    let unknown: Vec<&str> = mode
+    let unknown: Vec<&str> = object
         .keys()
         .map(String::as_str)
-        .filter(|k| !MODE_FIELDS.contains(k) && !RANGE_FIELDS.contains(k))
+        .filter(|k| !fields.contains(k) && !optional.contains(k))
         .collect();
     if !unknown.is_empty() {
         return Err(Error::document(
@@ -565,6 +569,14 @@ pub fn mode_from(value: &Value, path: &str) -> Result<ModeMap, Error> {
             format!("unknown field(s) {}", unknown.join(", ")),
         ));
     }
+    Ok(object)
+}
+
+/// One `paper10` mode of a map document, checked for form (its fields, finite numbers, joint
+/// indices, exponents, ranges); `path` names it in errors (`modes[1]`). The physical rules
+/// are the map's ([`DynamicMap::new`]); a mode alone may break them (a trial point of a fit).
+pub fn mode_from(value: &Value, path: &str) -> Result<ModeMap, Error> {
+    let mode = object_with_fields(value, path, &MODE_FIELDS, &RANGE_FIELDS)?;
     let f = |key: &str| number(mode.get(key), &format!("{path}.{key}"));
     let coefficients = MapCoefficients {
         k_0: f("k_0")?,
@@ -733,26 +745,7 @@ fn modal_from(doc: &Map<String, Value>) -> Result<ModalMap, Error> {
 }
 
 fn hinge_from(value: &Value, path: &str) -> Result<LinkHinge, Error> {
-    let entry = value.as_object().ok_or_else(|| {
-        Error::document(
-            path,
-            format!(
-                "must be an object with fields {}",
-                LINK_HINGE_FIELDS.join(", ")
-            ),
-        )
-    })?;
-    let unknown: Vec<&str> = entry
-        .keys()
-        .map(String::as_str)
-        .filter(|k| !LINK_HINGE_FIELDS.contains(k))
-        .collect();
-    if !unknown.is_empty() {
-        return Err(Error::document(
-            path,
-            format!("unknown field(s) {}", unknown.join(", ")),
-        ));
-    }
+    let entry = object_with_fields(value, path, &LINK_HINGE_FIELDS, &[])?;
     let field = |key: &str| format!("{path}.{key}");
     let value = |key: &str| number(entry.get(key), &field(key));
     Ok(LinkHinge {
@@ -774,26 +767,7 @@ pub fn hinge_to_value(h: &LinkHinge) -> Value {
 }
 
 fn flex_from(value: &Value, path: &str) -> Result<FlexJoint, Error> {
-    let entry = value.as_object().ok_or_else(|| {
-        Error::document(
-            path,
-            format!(
-                "must be an object with fields {}",
-                FLEX_JOINT_FIELDS.join(", ")
-            ),
-        )
-    })?;
-    let unknown: Vec<&str> = entry
-        .keys()
-        .map(String::as_str)
-        .filter(|k| !FLEX_JOINT_FIELDS.contains(k))
-        .collect();
-    if !unknown.is_empty() {
-        return Err(Error::document(
-            path,
-            format!("unknown field(s) {}", unknown.join(", ")),
-        ));
-    }
+    let entry = object_with_fields(value, path, &FLEX_JOINT_FIELDS, &[])?;
     let field = |key: &str| format!("{path}.{key}");
     Ok(FlexJoint {
         joint: joint_index(entry.get("joint"), &field("joint"))?,
