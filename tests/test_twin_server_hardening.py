@@ -555,6 +555,21 @@ def test_a_campaign_log_has_every_package_once(server, tmp_path) -> None:
     np.testing.assert_allclose(np.diff(t), DT_S, rtol=0, atol=1e-9)
 
 
+def test_a_recorder_waits_on_the_controllers_clock(server, tmp_path) -> None:
+    """``wait_controller_time(0.5)`` at 125 Hz returns once the stream's timestamp has
+    advanced by 0.5 s: at least that (the start is read before the call), and at most a few
+    packages more (0.1 s: the test thread may be scheduled late). A wall-clock sleep would
+    record less on a twin whose ticks run late; counting packages at the wrong rate (500 Hz
+    for a 125 Hz stream) would wait 2 s."""
+    from tvist.live import RtdeRecorder
+
+    with RtdeRecorder(HOST, tmp_path / "log.csv", ["timestamp"], 125.0) as recorder:
+        start = recorder.latest["timestamp"]
+        recorder.wait_controller_time(0.5)
+        elapsed = recorder.latest["timestamp"] - start
+    assert 0.5 - 1e-9 <= elapsed <= 0.6
+
+
 def test_a_recording_below_500_hz_is_evenly_spaced_from_its_first_package(server, tmp_path) -> None:
     """At 125 Hz every package is 4 ticks after the previous one, the first two included
     (the first interval was 3 ticks)."""

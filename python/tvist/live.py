@@ -16,6 +16,7 @@ stream itself (:class:`RtdeRecorder`). Both work against ``tvist twin-server``.
 from __future__ import annotations
 
 import logging
+import math
 import threading
 import time
 from collections.abc import Callable, Sequence
@@ -161,6 +162,7 @@ class RtdeRecorder:
                 f" at {frequency_hz:g} Hz"
             )
         self.fields = tuple(fields)
+        self._frequency_hz = float(frequency_hz)
         self._recipe = rtde.Recipe(reply[0], list(fields), types)
         self._columns = []
         for name, kind in zip(fields, types, strict=True):
@@ -214,6 +216,25 @@ class RtdeRecorder:
             if not self._new_sample.wait_for(lambda: self.n_samples > n_samples, timeout_s):
                 raise TimeoutError(f"no RTDE data package within {timeout_s:g} s")
             return self.n_samples
+
+    def wait_controller_time(self, seconds: float, timeout_s: float = 1.0) -> None:
+        """Block until the controller's clock has advanced by ``seconds``: that many seconds'
+        worth of data packages at the recording rate (rounded up to a whole package).
+
+        A wall-clock sleep is the same on a real controller, whose tick is never late; a twin
+        server whose ticks run late lets its simulated time slip behind the wall clock, and a
+        sleep there records less than ``seconds`` of the arm.
+
+        Raises
+        ------
+        TimeoutError
+            If no package arrives within ``timeout_s`` (the stream stopped).
+        """
+        with self._new_sample:
+            target = self.n_samples + math.ceil(seconds * self._frequency_hz - 1e-9)
+        count = self.n_samples
+        while count < target:
+            count = self.wait_newer(count, timeout_s)
 
     def _run(self) -> None:
         data_kind = self._rtde.DATA_PACKAGE
@@ -358,7 +379,7 @@ def run_shaped_move(
             robot_ip, path, LOG_FIELDS, 1.0 / dt_s, optional_fields=PAYLOAD_FIELDS
         ) as recorder:
             run = _stream(control, recorder, q_ref, shaper, dt_s, lookahead_s, gain, max_settle_s)
-            time.sleep(tail_s)
+            recorder.wait_controller_time(tail_s)
             final_q = np.array(recorder.latest["actual_q"])
     finally:
         safe_stop(control)

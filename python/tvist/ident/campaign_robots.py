@@ -7,7 +7,6 @@ knows the true modes.
 from __future__ import annotations
 
 import tempfile
-import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, Protocol
@@ -241,13 +240,15 @@ class URRobot:
         path = self._log_dir / f"excitation_{self._count:04d}_joint{excitation.joint}.csv"
         self._count += 1
         # The recording starts with the package after the move was reported done: at rest.
-        with RtdeRecorder(self._ip, path, RECORDED_FIELDS, self._frequency_hz):
-            time.sleep(excitation.standstill_s)
+        # Waits count the controller's packages, not the wall clock: a twin server whose
+        # ticks run late slips behind the wall clock, and a sleep would record less.
+        with RtdeRecorder(self._ip, path, RECORDED_FIELDS, self._frequency_hz) as recorder:
+            recorder.wait_controller_time(excitation.standstill_s)
             q = np.array(excitation.q0, dtype=float)
             for move in excitation.moves:
                 q[excitation.joint] = move.q_to_rad
                 c.moveJ(list(q), move.speed_rad_s, move.accel_rad_s2)
-                time.sleep(move.wait_s)
+                recorder.wait_controller_time(move.wait_s)
         return read_rtde_csv(path, resample=True)
 
     def close(self) -> None:
