@@ -300,3 +300,38 @@ def test_twin_of_a_urdf_arm_matches_the_model_and_rings(tmp_path):
     after_stop = accel[t > 0.45]
     ringing = np.ptp(after_stop - after_stop.mean(axis=0), axis=0).max()
     assert np.all(np.isfinite(accel)) and ringing > 1e-2, ringing
+
+
+def test_rpy_convention_round_trips_and_matches_the_elementary_rotations():
+    """URDF's ``Rz(yaw) Ry(pitch) Rx(roll)`` built here from the three elementary rotations:
+    the matrix and quaternion forms agree with it, and the angles come back from the matrix
+    (pitch inside ±π/2), at random angles and at the gimbal pose (pitch π/2, where only
+    roll - yaw is defined: the rotation must come back, not the angles). To 1e-12."""
+    from tvist.robots.rpy import rpy_angles, rpy_matrix, rpy_quat
+
+    def elementary(axis: int, a: float) -> np.ndarray:
+        c, s = np.cos(a), np.sin(a)
+        i, j = [k for k in range(3) if k != axis]
+        m = np.eye(3)
+        m[i, i], m[i, j], m[j, i], m[j, j] = c, -s, s, c
+        return m if axis != 1 else m.T  # Ry's sine signs are the other way round
+
+    rng = np.random.default_rng(7)
+    cases = [
+        rng.uniform([-np.pi, -np.pi / 2, -np.pi], [np.pi, np.pi / 2, np.pi]) for _ in range(50)
+    ]
+    for rpy in [*cases, np.array([0.3, np.pi / 2, -0.4])]:
+        expected = elementary(2, rpy[2]) @ elementary(1, rpy[1]) @ elementary(0, rpy[0])
+        np.testing.assert_allclose(rpy_matrix(rpy), expected, atol=1e-12)
+        w, x, y, z = rpy_quat(rpy)
+        from_quat = np.array(
+            [
+                [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+            ]
+        )
+        np.testing.assert_allclose(from_quat, expected, atol=1e-12)
+        np.testing.assert_allclose(rpy_matrix(rpy_angles(expected)), expected, atol=1e-12)
+    for rpy in cases:
+        np.testing.assert_allclose(rpy_angles(rpy_matrix(rpy)), rpy, atol=1e-12)

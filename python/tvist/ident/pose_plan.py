@@ -106,9 +106,9 @@ def _plane_axes(robot: Robot, base_angle_rad: float) -> tuple[np.ndarray, np.nda
 def _shoulder_height_m(placed) -> float:
     """Height (m) of the shoulder (joint 2's origin) above the base of a URDF-placed arm at
     ``q = 0``: joint 1's origin, then joint 2's in link 1's frame."""
-    from tvist.sim.mjcf import _rpy_matrix
+    from tvist.robots.rpy import rpy_matrix
 
-    first = _rpy_matrix(placed.origin_rpy_rad[0])
+    first = rpy_matrix(placed.origin_rpy_rad[0])
     return float((placed.origin_xyz_m[0] + first @ placed.origin_xyz_m[1])[2])
 
 

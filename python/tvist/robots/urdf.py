@@ -29,6 +29,7 @@ import numpy as np
 from tvist.robots._params import JointPlacements, Payload, RobotParams
 from tvist.robots._robot import Robot
 from tvist.robots.inertial import lump
+from tvist.robots.rpy import rpy_angles
 
 __all__ = [
     "PROXIMAL_JOINTS",
@@ -46,15 +47,6 @@ __all__ = [
 CONTINUOUS_LIMIT_RAD = 2.0 * math.pi
 
 _MOVING = ("revolute", "continuous")
-
-
-def _rpy(rot: np.ndarray) -> tuple[float, float, float]:
-    """Roll, pitch, yaw of ``rot = Rz(yaw) Ry(pitch) Rx(roll)`` (URDF's convention)."""
-    cos_pitch = math.hypot(rot[2, 1], rot[2, 2])
-    pitch = math.atan2(-rot[2, 0], cos_pitch)
-    if cos_pitch < 1e-12:  # pitch ±π/2: only roll ∓ yaw is defined; take roll = 0
-        return 0.0, pitch, math.atan2(-rot[0, 1], rot[1, 1])
-    return math.atan2(rot[2, 1], rot[2, 2]), pitch, math.atan2(rot[1, 0], rot[0, 0])
 
 
 def _body(link: Any, where: str) -> tuple[float, np.ndarray, np.ndarray] | None:
@@ -173,7 +165,7 @@ def urdf_params(
         if not body[0] > 0.0:
             raise ValueError(f"{where}: link '{child.name}' has mass {body[0]} kg (must be > 0)")
         origin_xyz.append(pose[:3, 3])
-        origin_rpy.append(_rpy(pose[:3, :3]))
+        origin_rpy.append(rpy_angles(pose[:3, :3]))
         axes.append(axis / np.linalg.norm(axis))
         bodies.append(body)
         limits.append(_limits(joint, where))
@@ -185,7 +177,7 @@ def urdf_params(
         origin_rpy_rad=np.array(origin_rpy),
         axis=np.array(axes),
         flange_xyz_m=to_current[:3, 3],
-        flange_rpy_rad=np.array(_rpy(to_current[:3, :3])),
+        flange_rpy_rad=np.array(rpy_angles(to_current[:3, :3])),
     )
     six = [[t[0, 0], t[1, 1], t[2, 2], t[0, 1], t[0, 2], t[1, 2]] for _, _, t in bodies]
     robot_name = name or urdf.robot.name or Path(path).stem

@@ -30,6 +30,7 @@ import numpy as np
 
 from tvist.robots import Payload, RobotParams, inertia_tensor
 from tvist.robots.inertial import NEGLIGIBLE, Inertial, lump
+from tvist.robots.rpy import rpy_matrix, rpy_quat
 from tvist.sim.beams import LinkBeams, split_link
 
 #: Gravity along -z of the base frame (m/s²); the same value as :class:`tvist.robots.Robot`.
@@ -226,31 +227,6 @@ def build_mjcf(
     return _finish(root, body, pos_in_parent, quat_in_parent)
 
 
-def _rpy_matrix(rpy: np.ndarray) -> np.ndarray:
-    """URDF's ``Rz(yaw) Ry(pitch) Rx(roll)``."""
-    (sr, cr), (sp, cp), (sy, cy) = ((math.sin(a), math.cos(a)) for a in rpy)
-    return np.array(
-        [
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ]
-    )
-
-
-def _rpy_quat(rpy: np.ndarray) -> np.ndarray:
-    """``(w, x, y, z)`` of URDF's ``Rz(yaw) Ry(pitch) Rx(roll)``."""
-    (sr, cr), (sp, cp), (sy, cy) = ((math.sin(a / 2), math.cos(a / 2)) for a in rpy)
-    return np.array(
-        [
-            cr * cp * cy + sr * sp * sy,
-            sr * cp * cy - cr * sp * sy,
-            cr * sp * cy + sr * cp * sy,
-            cr * cp * sy - sr * sp * cy,
-        ]
-    )
-
-
 def _placed_arm(parent: ET.Element, params: RobotParams, payload: Payload | None):
     """Bodies ``link1 .. link{n}`` of an arm placed as URDF places it: each body is its URDF
     link frame (placed by the joint's origin, hinge about the joint's axis), the link's inertial
@@ -259,7 +235,7 @@ def _placed_arm(parent: ET.Element, params: RobotParams, payload: Payload | None
     placed = params.placements
     inertias = params.inertia_tensors_kg_m2
     n = params.n_dof
-    flange_rot = _rpy_matrix(placed.flange_rpy_rad)
+    flange_rot = rpy_matrix(placed.flange_rpy_rad)
     body = parent
     for i in range(n):
         origin = placed.origin_xyz_m[i]
@@ -268,7 +244,7 @@ def _placed_arm(parent: ET.Element, params: RobotParams, payload: Payload | None
             "body",
             name=f"link{i + 1}",
             pos=_fmt(origin),
-            quat=_fmt(_rpy_quat(placed.origin_rpy_rad[i])),
+            quat=_fmt(rpy_quat(placed.origin_rpy_rad[i])),
         )
         ET.SubElement(body, "joint", name=f"joint{i + 1}", type="hinge", axis=_fmt(placed.axis[i]))
         inertial = (float(params.mass_kg[i]), np.asarray(params.com_m[i]), inertias[i])
@@ -288,7 +264,7 @@ def _placed_arm(parent: ET.Element, params: RobotParams, payload: Payload | None
                 body, "geom", type="capsule", size="0.03", fromto=_fmt([0, 0, 0, *next_origin])
             )
         parent = body
-    return body, placed.flange_xyz_m, _rpy_quat(placed.flange_rpy_rad)
+    return body, placed.flange_xyz_m, rpy_quat(placed.flange_rpy_rad)
 
 
 def _finish(root: ET.Element, body: ET.Element, flange_pos, flange_quat) -> str:
