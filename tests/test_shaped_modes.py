@@ -119,3 +119,23 @@ def test_half_of_the_poses_is_enough():
 def test_a_map_with_no_shaped_mode_is_refused():
     with pytest.raises(ValueError, match="nothing to shape"):
         shaping_field(_report({"A": "12", "B": "21"}, set()))
+
+
+def test_fit_map_prints_where_a_mode_is_not_where_its_shaping_wants_it():
+    """``tvist fit-map --kind modal``'s line per physical mode: a shaped mode left out at some
+    poses says at which share of the poses it is shaped and the participation left; an
+    unshaped mode taken in says where; a mode where its shaping wants it adds nothing."""
+    from tvist.cli.modal_fit import _coverage
+
+    report = with_coverage(
+        _report(
+            FR3_RANKS,
+            {"joint 0", "joint 1", "joint 3"},
+            {**{k: np.zeros(16) for k in FR3_RANKS}, "joint 0": FR3_BASE_PARTICIPATION},
+        ),
+        3,
+    )
+    lines = {m["name"]: _coverage(m) for m in report}
+    assert "at 75 % of the poses" in lines["joint 0"] and "up to 17 %" in lines["joint 0"]
+    assert "at 25 % of the poses" in lines["joint 2"] and "extrapolated" in lines["joint 2"]
+    assert lines["joint 1"] == lines["joint 3"] == ""
