@@ -76,15 +76,6 @@ MAP_RMS_PERCENT = 3.0
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "identified maps shape the K lowest modes with K the largest frequency rank of a shaped "
-        "physical mode: on the FR3 the shaped base mode reaches rank 4 at some poses, so K = 4 "
-        "and the 4th lowest includes the mode of the third joint (index 2), identified at 12.5 % "
-        "of the poses and not shaped: 11.6 % RMS against the twin (with K = 3: within 3 %)"
-    ),
-)
 def test_modal_fit_on_a_small_fr3_campaign_recovers_its_lowest_modes(tmp_path):
     """A small campaign on the FR3's twin (2 random workspace poses per payload, 0 and 3 kg,
     plus the workspace's extreme inertias; 4 s excitations of base and shoulder, noisy

@@ -32,6 +32,26 @@ def _se(se: float | None) -> str:
     return "?" if se is None else f"{se:.2g}"
 
 
+def _coverage(mode: Mapping[str, Any]) -> str:
+    """What shaping the map's ``K`` lowest does to a physical mode of the report
+    (:func:`tvist.ident.shaped_modes.with_coverage`): nothing to add when it is what the mode
+    asks (a shaped mode among the ``K`` lowest at every pose, an unshaped one at none)."""
+    among = mode.get("among_shaped_at_poses")
+    if among is None:
+        return ""
+    if mode["shaped"] and among < 1.0:
+        return (
+            f", among the shaped lowest at {100 * among:.0f} % of the poses (elsewhere left "
+            f"unshaped: participation up to {100 * mode['participation_outside']:.0f} %)"
+        )
+    if not mode["shaped"] and among > 0.0:
+        return (
+            f", among the shaped lowest at {100 * among:.0f} % of the poses (there shaped at "
+            "the model's extrapolated frequency when a move makes it ring)"
+        )
+    return ""
+
+
 def fit_modal_command(records: Sequence[Mapping[str, Any]], args: argparse.Namespace) -> int:
     """Fit, print, save (``args``: ``results``, ``out``, ``robot``, ``include_low_confidence``,
     ``select_folds``)."""
@@ -85,7 +105,7 @@ def fit_modal_command(records: Sequence[Mapping[str, Any]], args: argparse.Names
             f"participation median {100 * m['flange_participation'][0]:.0f} %, max "
             f"{100 * m['flange_participation'][1]:.0f} %, identified at "
             f"{100 * m['identified_at_poses']:.0f} % of the poses: "
-            f"{'shaped' if m['shaped'] else 'not shaped'}"
+            f"{'shaped' if m['shaped'] else 'not shaped'}{_coverage(m)}"
         )
     shaped = (
         f"mode_joints {modal.mode_joints}"

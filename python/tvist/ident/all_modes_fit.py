@@ -49,7 +49,10 @@ take it: the motor is held by the servo) the pair is exactly one spring
 is what the law ``k_0 + k_1 |L| + k_2 L²`` of that joint fits. The data cannot separate the two.
 
 **Which modes to shape** (:mod:`tvist.ident.shaped_modes`): each physical mode (the eigenmode
-dominated by one flexible joint) is reported with its flange participation over the poses.
+dominated by one flexible joint) is reported with its flange participation over the poses;
+the map shapes its ``K`` lowest eigenmodes, ``K`` chosen from how often each mode was
+identified and which frequency ranks the shaped ones hold, and the report says at which share
+of the poses each mode is among them.
 """
 
 from __future__ import annotations
@@ -698,15 +701,19 @@ def _map_fields(
 def fitted_map(fit: AllModesFit, metadata: Mapping[str, Any] | None = None) -> ModalMap:
     """The :class:`~tvist.ModalMap` of ``fit``, shaping the modes
     :func:`tvist.ident.shaped_modes.physical_modes` says matter."""
-    from tvist.ident.shaped_modes import physical_modes, shaping_field
+    from tvist.ident.shaped_modes import physical_modes, shaping_field, with_coverage
 
     report = physical_modes(fit)
+    shaping = shaping_field(report)
     meta = {"robot": fit.statistics["robot"], "source": "tvist.ident.fit_all_modes"}
     meta.update(metadata or {})
-    meta["fit_statistics"] = {**fit.statistics, "physical_modes": report}
+    meta["fit_statistics"] = {
+        **fit.statistics,
+        "physical_modes": with_coverage(report, shaping["shaped_modes"]),
+    }
     return ModalMap(
         fit.map_fields["flex_joints"],
         metadata=meta,
         link_hinges=fit.map_fields.get("link_hinges"),
-        **shaping_field(report),
+        **shaping,
     )

@@ -21,8 +21,41 @@ its mode suffice: on a 26-pose simulated campaign of ``family:ur5e:14`` whose re
 base and shoulder modes only, the elbow's stiffness came out with a 4 % standard error and
 its mode 12.6 % RMS off the arm's true elbow mode.
 
-:func:`shaping_field` turns the report into the map file's field naming the shaped modes: the
-``K`` lowest (frequency-ranked), ``K`` covering every shaped physical mode.
+**How many modes a map shapes.** A map shapes its ``K`` lowest eigenmodes (frequency-ranked,
+``"shaped_modes": K``): the streaming shaper follows each of the ``K`` lowest along a motion
+and per move shapes only the lowest ones that move makes ring
+(:func:`tvist.modal_residual.set_modes_for_move`). A physical mode does not keep its frequency
+rank over the poses (on a 16-pose FR3 campaign the base mode is the lowest at 5 poses and the
+fourth at 4, where it is a stiff 49-75 Hz mode with at most 17 % flange participation), so
+the ``K`` lowest are not exactly the shaped modes at every pose. :func:`shaping_field`
+chooses ``K`` by this rule:
+
+    ``K`` is the smallest number such that (a) every shaped physical mode is among the ``K``
+    lowest at :data:`MIN_RANK_SHARE` (half) of the campaign's poses or more, and (b) no
+    higher eigenmode (rank above ``K``) is a shaped physical mode at half of the poses or
+    more.
+
+Each of the ``K`` filters tracks one frequency rank, and its frequency is the map's fitted one
+where a shaped (identified) mode holds that rank and an extrapolation where an unshaped mode
+does. Covering every shaped mode at every pose (``K`` its largest rank) can add a rank held
+by an unshaped mode at most poses: on that FR3 campaign ``K`` would be 4, and the fourth
+lowest is at 12 of the 16 poses the mode of joint index 2, identified at 12.5 % of the poses
+and 11.6 % RMS off the twin's true mode (the rule: ``K = 3``). (b) keeps a rank that mostly
+holds a shaped mode; (a) keeps every shaped mode shaped at most poses, even one whose rank
+is spread over ranks mostly held by unshaped modes.
+
+**What the rule costs, and what the map says about it.** At a pose where a shaped mode is
+above the ``K`` lowest it is not shaped: a move ending there leaves its ringing (its share
+of the flange's vibration there, its flange participation) unshaped, and the per-move choice
+cannot add it (it shapes at most the ``K`` lowest). Where an unshaped mode is among the ``K``
+lowest, a move that makes it ring has it shaped at the model's extrapolated frequency. The
+map's report (:func:`with_coverage`, ``fit_statistics.physical_modes`` of the map) states
+both per physical mode: ``among_shaped_at_poses``, the share of the campaign's poses at which
+it is among the ``K`` lowest, and ``participation_outside``, its largest flange participation
+at the poses where it is not. A map's frequency accuracy is checked by frequency rank over
+its ``K`` lowest (:func:`tvist.sim.map_truth.ranked_mode_errors`, the generalization
+harness): it says nothing of a shaped mode where that mode is above them, and
+``among_shaped_at_poses`` says how often that is.
 """
 
 from __future__ import annotations
@@ -32,12 +65,15 @@ from typing import Any
 import numpy as np
 from scipy import optimize
 
-__all__ = ["physical_index", "physical_modes", "shaping_field"]
+__all__ = ["MIN_RANK_SHARE", "physical_index", "physical_modes", "shaping_field", "with_coverage"]
 
 #: Share of the poses at which a mode must be identified to be shaped.
 MIN_IDENTIFIED_SHARE = 0.2
 #: Flange participation counted as significant in the report: 5 % of the residual vibration.
 MIN_PARTICIPATION = 0.05
+#: Share of the poses at which a shaped mode must be among the ``K`` lowest, and at which a
+#: higher eigenmode must be a shaped mode to be shaped too: half (the module docstring).
+MIN_RANK_SHARE = 0.5
 
 
 def physical_index(shares: np.ndarray) -> np.ndarray:
@@ -54,12 +90,14 @@ def physical_modes(fit: Any) -> list[dict[str, Any]]:
     """Per flexible coordinate of ``fit`` (:class:`tvist.ident.all_modes_fit.AllModesFit`),
     its physical mode: ``name`` (``"joint 1"``, ``"link 2 bending (axis 0)"``), ``joint``
     (or ``link`` and ``axis`` for a bending link), ``freq_hz`` (min, median, max over the poses),
-    ``frequency_rank`` (max, 1-based), ``flange_participation`` (median, max),
-    ``identified_at_poses`` (share of poses), ``shaped``."""
+    ``frequency_rank`` (max, 1-based), ``rank_share`` (per frequency rank 1, 2, …: the share of
+    the poses at which the mode has that rank), ``participation_by_rank`` (per rank: its
+    largest flange participation at those poses, 0 at none), ``flange_participation``
+    (median, max), ``identified_at_poses`` (share of poses), ``shaped``."""
     modes = fit.model_modes()
     obs = fit.observed
     index = physical_index(modes.joint_shares)  # (n, m): eigenmode of each joint's mode
-    n = obs.n_poses
+    n, m = index.shape
     used = fit.assignment >= 0
     out = []
     for k, name in enumerate(fit.coordinate_names()):
@@ -69,6 +107,8 @@ def physical_modes(fit: Any) -> list[dict[str, Any]]:
         hit = used & (fit.assignment == rank[obs.pose].clip(min=0))
         identified = np.unique(obs.pose[hit]).size / n
         participates = float(np.mean(part >= MIN_PARTICIPATION))
+        by_rank = np.zeros(m)
+        np.maximum.at(by_rank, rank, part)
         words = name.split()
         if words[0] == "joint":
             label: dict[str, Any] = {"joint": int(words[1])}
@@ -80,6 +120,8 @@ def physical_modes(fit: Any) -> list[dict[str, Any]]:
                 **label,
                 "freq_hz": [float(freq.min()), float(np.median(freq)), float(freq.max())],
                 "frequency_rank": int(rank.max()) + 1,
+                "rank_share": [float(v) for v in np.bincount(rank, minlength=m) / n],
+                "participation_by_rank": [float(v) for v in by_rank],
                 "flange_participation": [float(np.median(part)), float(part.max())],
                 "participates_at_poses": participates,
                 "identified_at_poses": float(identified),
@@ -91,21 +133,48 @@ def physical_modes(fit: Any) -> list[dict[str, Any]]:
 
 def shaping_field(report: list[dict[str, Any]]) -> dict[str, Any]:
     """The map file's field naming the shaped modes of ``report`` (:func:`physical_modes`):
-    ``{"shaped_modes": K}``, the frequency-ranked form, with ``K`` the largest
-    ``frequency_rank`` of the shaped physical modes: the ``K`` lowest eigenmodes then include
-    every shaped physical mode at every pose of the campaign.
+    ``{"shaped_modes": K}``, the frequency-ranked form, ``K`` by the module docstring's rule
+    (:data:`MIN_RANK_SHARE`) from each mode's ``rank_share``.
 
     The one place that chooses the field. Frequency-ranked because the streaming shaper then
     follows each of the ``K`` lowest eigenmodes along a motion (two that cross or veer keep
     their filters) and shapes per move only the lowest ones that move makes ring
-    (:func:`tvist.modal_map.set_modes_for_move`, at most ``K``); a joint-named mode would
+    (:func:`tvist.modal_residual.set_modes_for_move`, at most ``K``); a joint-named mode would
     follow the one eigenmode that strains its joint most, which can be another far-apart one
     at the next pose. Raises ``ValueError`` if no mode was identified often enough.
     """
-    ranks = [m["frequency_rank"] for m in report if m["shaped"]]
-    if not ranks:
+    shaped = np.array([m["rank_share"] for m in report if m["shaped"]], dtype=float)
+    if shaped.size == 0:
         raise ValueError(
             f"no mode was identified at {MIN_IDENTIFIED_SHARE:.0%} of the poses or more: "
             "nothing to shape (excite more poses, or check the records' ringing modes)"
         )
-    return {"shaped_modes": int(max(ranks))}
+    # A small tolerance so that a share of exactly half, summed from 1/n terms, counts.
+    tol = 1e-9
+    among = np.cumsum(shaped, axis=1)  # (shaped mode, K - 1): share among the K lowest
+    covering = int(np.argmax(np.all(among >= MIN_RANK_SHARE - tol, axis=0))) + 1
+    held = shaped.sum(axis=0)  # per rank: share of the poses a shaped mode holds it
+    mostly_shaped = np.flatnonzero(held >= MIN_RANK_SHARE - tol)
+    k = max(covering, int(mostly_shaped[-1]) + 1 if mostly_shaped.size else 0)
+    return {"shaped_modes": k}
+
+
+def with_coverage(report: list[dict[str, Any]], k: int) -> list[dict[str, Any]]:
+    """``report`` (:func:`physical_modes`) with what shaping the ``k`` lowest eigenmodes does
+    to each physical mode over the campaign's poses: ``among_shaped_at_poses`` (the share of
+    the poses at which it is among the ``k`` lowest: a shaped mode is left unshaped at the
+    others, an unshaped mode is shaped at the model's extrapolated frequency at these when a
+    move makes it ring) and ``participation_outside`` (its largest flange participation at the
+    poses where it is above the ``k`` lowest, ``None`` if there are none)."""
+    out = []
+    for m in report:
+        above = zip(m["participation_by_rank"][k:], m["rank_share"][k:], strict=True)
+        left = [p for p, share in above if share > 0]
+        out.append(
+            {
+                **m,
+                "among_shaped_at_poses": float(sum(m["rank_share"][:k])),
+                "participation_outside": max(left) if left else None,
+            }
+        )
+    return out
