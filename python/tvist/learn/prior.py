@@ -14,6 +14,7 @@ conversion lost.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -88,22 +89,36 @@ def conversion_poses() -> np.ndarray:
     return np.concatenate([a + s * (b - a) for a, b in ends])
 
 
-def modal_prior_from_paper10(robot: Robot, paper: DynamicMap) -> ConvertedPrior:
+def modal_prior_from_paper10(
+    robot: Robot, paper: DynamicMap, joint_stiffness: Mapping[int, float] | None = None
+) -> ConvertedPrior:
     """The modal map whose joint laws best reproduce ``paper``'s modes on ``robot`` (declared
     payload) over :data:`CONVERSION_POSES` workspace poses.
 
     The paper10 map's modes read joint inertias only, so they say how stiff the base and
-    shoulder are but nothing about the elbow and wrists: those get the identification's start
-    guess (:data:`STIFF_JOINT_FACTOR` times the stiffer of base and shoulder, as
-    :func:`tvist.ident.modal_fit.fit_modal_map` starts them), left to the learner. Fitted: the
+    shoulder are but nothing about the elbow and wrists: those get ``joint_stiffness[j]``
+    (N m/rad, constant) where given, else the identification's start guess
+    (:data:`STIFF_JOINT_FACTOR` times the stiffer of base and shoulder, as
+    :func:`tvist.ident.modal_fit.fit_modal_map` starts them), left to the learner; the base
+    and shoulder laws are fitted with them in place. Fitted: the
     base and shoulder stiffness (constant laws: the published map has no load term) and their
     dampers (``c_0 + c_2 L²``), on log-frequency and log-damping errors.
 
     Raises
     ------
     ValueError
-        ``paper`` does not have the two modes (base, shoulder) of a modal map.
+        ``paper`` does not have the two modes (base, shoulder) of a modal map, or
+        ``joint_stiffness`` names a joint other than the elbow and wrists or a stiffness that
+        is not positive.
     """
+    given = dict(joint_stiffness or {})
+    guessed = [j for j in CONVERSION_FLEX_JOINTS if j not in (0, 1)]
+    for j, k in given.items():
+        if j not in guessed or not (math.isfinite(k) and k > 0.0):
+            raise ValueError(
+                f"joint_stiffness: joint {j}: {k!r}; give a positive stiffness (N m/rad) of "
+                f"joints {guessed}"
+            )
     if len(paper.mode_maps) != 2:
         raise ValueError(
             f"a paper10 map with {len(paper.mode_maps)} modes; the modal prior has two (base, "
@@ -130,7 +145,7 @@ def modal_prior_from_paper10(robot: Robot, paper: DynamicMap) -> ConvertedPrior:
         for j in CONVERSION_FLEX_JOINTS:
             entry = {
                 "joint": j,
-                "stiffness_nm_per_rad": [stiff, 0.0, 0.0],
+                "stiffness_nm_per_rad": [float(given.get(j, stiff)), 0.0, 0.0],
                 "damping_nms_per_rad": [0.0, 0.0, 0.0],
                 "damping_load_joint": load_joint.get(j, j),
             }

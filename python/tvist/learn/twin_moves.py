@@ -3,6 +3,9 @@ with the demo's limits (:mod:`tvist.demo.motions`), unshaped or shaped with a mo
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 import tvist
@@ -11,7 +14,11 @@ from tvist.modal_map import ModalMap
 from tvist.robots import Robot
 from tvist.trajectory import double_s
 
-__all__ = ["TAIL_S", "move", "random_poses"]
+if TYPE_CHECKING:
+    from tvist.learn.learner import MapLearner
+    from tvist.sim import SimRecord, Twin
+
+__all__ = ["TAIL_S", "move", "ordinary_moves", "random_poses"]
 
 #: Rest after a move, s: room for the shaper's delay (~0.13 s) and the decay fitted.
 TAIL_S = 1.3
@@ -70,3 +77,27 @@ def move(
     shaper = tvist.TvShaper(tvist.MapDynamics(robot, modal_map), DT_S, q.shape[1], shaper="zv")
     shaper.reset(np.ascontiguousarray(q[0]))
     return np.array(shaper.shape(q))
+
+
+def ordinary_moves(
+    twin: Twin,
+    robot: Robot,
+    learner: MapLearner,
+    poses: np.ndarray,
+    n: int,
+    first: int = 0,
+    *,
+    swap_each_round: bool = False,
+) -> Iterator[SimRecord]:
+    """The twin's runs of ``n`` moves around ``poses`` (move ``k`` from pose ``k`` to pose
+    ``k + 1``, cyclically, from ``k = first``), unshaped and shaped with the learner's current
+    map in turn (the map is read when each move starts, so observe each run before the next).
+
+    With an even number of poses the turns fall on the same poses every round, so half of
+    them are never reached unshaped; ``swap_each_round`` swaps the turns after each round, so
+    that every pose rings unshaped once in two rounds."""
+    for k in range(first, first + n):
+        a, b = poses[k % len(poses)], poses[(k + 1) % len(poses)]
+        turn = k + (k // len(poses) if swap_each_round else 0)
+        shaped = learner.map if turn % 2 else None
+        yield twin.run(move(a, b, robot, shaped))
