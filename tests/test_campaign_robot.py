@@ -14,7 +14,6 @@ import types
 
 import pytest
 
-import tvist.ident.campaign_robots as campaign_robots
 from tvist.cli import main
 
 #: The plan of the tests: one payload, every 8th pose: 7 poses at 7 radii.
@@ -48,6 +47,9 @@ class _Recorder:
     def __exit__(self, *exc) -> None:
         pass
 
+    def wait_controller_time(self, seconds: float) -> None:
+        """The campaign's waits (on the controller's clock) take no time here."""
+
 
 def _no_identification(*logs, key, **_):
     """The stand-in's logs hold no data: each pose is recorded without modes."""
@@ -62,7 +64,6 @@ def fake_robot(monkeypatch):
         sys.modules, "rtde_control", types.SimpleNamespace(RTDEControlInterface=_Control)
     )
     monkeypatch.setattr("tvist.live.RtdeRecorder", _Recorder)
-    monkeypatch.setattr(campaign_robots.time, "sleep", lambda _s: None)
     monkeypatch.setattr("tvist.ident.campaign.identify_pose", _no_identification)
     _Control.last = None
     return _Control
