@@ -95,6 +95,7 @@ def fit_json(path, *extra):
 # --------------------------------------------------------------------------- refusals
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("edit", "declare", "names"),
     [
@@ -260,6 +261,7 @@ def test_a_cell_near_the_float_limit_is_refused_without_numpy_warnings(
             read_rtde_csv(log)
 
 
+@pytest.mark.slow
 def test_identify_many_logs_converts_declared_units(radian_log, tmp_path):
     """Batch identification (worker processes) reads each log with the declared units: the
     pose record of a base and a shoulder log in degrees holds q in rad, equal to Q0."""
