@@ -231,7 +231,6 @@ def test_two_writers_are_refused(tmp_path):
         pass
 
 
-@pytest.mark.slow
 def test_ctrl_c_is_one_line_and_the_file_resumes(tmp_path, capsys, monkeypatch):
     from tvist.cli import main
     from tvist.ident import campaign

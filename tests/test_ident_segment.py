@@ -37,7 +37,6 @@ def _log_with_approach(
     return str(path), twin, len(approach.q), len(excitation.q) - 1
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("joint", [0, 1])
 def test_identify_finds_the_excitation_after_an_approach_move(joint, tmp_path, capsys):
     path, twin, n_approach, n_excitation = _log_with_approach(joint, 3 + joint, tmp_path)

@@ -327,8 +327,6 @@ def test_learn_command_writes_a_map_with_provenance(tmp_path):
     assert "--out" in same.stderr and "Traceback" not in same.stderr
 
 
-# Fast although at the slow criterion: the cheapest test of ``tvist learn``
-# (docs/test-quality.md).
 def test_learn_command_starts_from_a_paper10_map(tmp_path):
     import json
 

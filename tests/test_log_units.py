@@ -95,13 +95,16 @@ def fit_json(path, *extra):
 # --------------------------------------------------------------------------- refusals
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize(
     ("edit", "declare", "names"),
     [
         (in_degrees, "q=deg,qd=deg/s,qdd=deg/s2", ("target_q_0", "look like degrees")),
-        (in_g, "acc=g", ("actual_tool_accelerometer", "looks like g")),
-        (in_mg, "acc=mg", ("actual_tool_accelerometer", "looks like mg")),
+        pytest.param(
+            in_g, "acc=g", ("actual_tool_accelerometer", "looks like g"), marks=pytest.mark.slow
+        ),
+        pytest.param(
+            in_mg, "acc=mg", ("actual_tool_accelerometer", "looks like mg"), marks=pytest.mark.slow
+        ),
     ],
     ids=["degrees", "g", "mg"],
 )
