@@ -15,7 +15,7 @@ demo: build
 # (tests/test_examples.py, which also checks what they print).
 test: build rust-test ffi-test lint docs pytest
 
-# The edit-compile-test loop (a few minutes): ruff, tvist-core's tests and every pytest test
+# The edit-compile-test loop (2-3 minutes): ruff, tvist-core's tests and every pytest test
 # not marked slow (see docs/test-quality.md). `make test` still runs everything.
 test-fast: build lint
 	cargo test -p tvist-core -q

@@ -122,6 +122,7 @@ def test_identify_a_log_without_payload_stops_naming_the_flag(logs):
     assert "no payload" in line and "--payload-kg" in line and "payload columns" in line
 
 
+@pytest.mark.slow
 def test_identify_batch_of_logs_without_payload_stops_naming_the_flag(logs, tmp_path):
     done = _tvist("identify", str(logs["plain"]), "--out", str(tmp_path / "r.jsonl"))
     line = _one_error_line(done, "identify")
@@ -249,6 +250,7 @@ def test_record_writes_the_controller_payload_into_the_log(server, tmp_path):
     np.testing.assert_array_equal(found.com_m, PAYLOAD_COM_M)
 
 
+@pytest.mark.slow
 def test_run_with_a_map_uses_the_controller_payload_and_says_so(server, tmp_path):
     # A short move at the arm's current pose (the approach is then a no-op): tvist run
     # shapes with the map and the controller's payload, and prints which payload it used.

@@ -160,6 +160,7 @@ def test_true_modes_remove_the_residual_vibration_with_the_analytic_zv_delay(qui
         assert rows[key]["peak_jerk_rad_s3"] <= rows["unshaped"]["peak_jerk_rad_s3"] * 1.001
 
 
+@pytest.mark.slow
 def test_a_map_file_row_reproduces_the_built_in_map_row(tmp_path):
     path = tmp_path / "map.json"
     tvist.DynamicMap.paper_ur5e().save(path)

@@ -94,6 +94,7 @@ def quick_fixed():
     return run_experiment(quick=True, methods=[*rows, fixed_start_row(), fixed_robust_row()])
 
 
+@pytest.mark.slow
 def test_fixed_start_reference_is_the_two_mode_zv_of_the_start_pose(quick_fixed):
     import tvist
 
@@ -115,6 +116,7 @@ def test_fixed_start_reference_is_the_two_mode_zv_of_the_start_pose(quick_fixed)
     assert abs(fixed.delay_s - imp.duration_s) <= DT_S
 
 
+@pytest.mark.slow
 def test_fixed_rows_on_a_motion_with_constant_modes(quick_fixed):
     motion = quick_fixed.motions[0]
     start, robust = motion.run("fixed-start"), motion.run("fixed-robust")
@@ -147,6 +149,7 @@ def test_reductions_never_round_to_100(percent, text):
     assert format_reduction(percent) == text
 
 
+@pytest.mark.slow
 def test_recommendation_takes_the_row_that_settles_first(quick_fixed):
     motion = quick_fixed.motions[0]
     key = CRITERIA[0].key
@@ -168,6 +171,7 @@ def _with_settle(run, first_s, second_s):
     return dataclasses.replace(run, settle=dataclasses.replace(run.settle, times_s=times))
 
 
+@pytest.mark.slow
 def test_recommendation_breaks_a_one_sample_tie_at_the_stricter_band(quick_fixed):
     # Two runnable rows one sample apart at 0.05 m/s²: a tie, so the faster to 0.01 m/s²
     # wins; three samples apart, the faster at 0.05 m/s² wins.
@@ -183,6 +187,7 @@ def test_recommendation_breaks_a_one_sample_tie_at_the_stricter_band(quick_fixed
         assert f"**{winner.method.label}**" in line, (gap_samples, line)
 
 
+@pytest.mark.slow
 def test_recommendation_never_picks_an_oracle_row(quick_fixed):
     # An oracle row that settles well before every other is shown, marked, and never picked.
     motion = quick_fixed.motions[0]

@@ -24,6 +24,9 @@ EXAMPLES = sorted(EXAMPLES_DIR.glob("*.py"))
 TIMEOUT_S = 120
 #: examples/08 runs the twin server (conftest: realtime tests run alone).
 REALTIME = True
+#: Every test here reads the module fixture that runs all the examples (18 s): slow
+#: (docs/test-quality.md), ``make test`` runs them.
+pytestmark = pytest.mark.slow
 
 
 def zv_delay_s(modes) -> float:

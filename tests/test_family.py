@@ -122,6 +122,7 @@ def matrix_pencil_modes(y: np.ndarray, dt_s: float, order: int, window: int) -> 
     return poles[poles.imag > 0.0]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("robot", "seed"), [("ur5e", 0), ("ur10e", 1)])
 def test_true_modes_agree_with_a_free_decay_of_the_variants_twin(robot: str, seed: int) -> None:
     """Kicked at rest (0.002 rad/s on every joint, signs mixed: about 2e-5 rad, the linear
@@ -204,6 +205,7 @@ def test_servo_in_series_softens_the_joint_as_two_springs_do() -> None:
     )
 
 
+@pytest.mark.slow
 def test_family_variant_from_the_cli(tmp_path, capsys) -> None:
     """``tvist campaign --sim --variant family:ur5e:3``: the records' true modes are that
     variant's; a malformed family name or another robot is one line naming the flag."""

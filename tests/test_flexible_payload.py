@@ -85,6 +85,7 @@ def experiment(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict]:
     return out, json.loads((out / "results.json").read_text())
 
 
+@pytest.mark.slow
 def test_experiment_writes_the_four_rows_and_the_figures(experiment):
     out, results = experiment
     assert list(results["methods"]) == ["unshaped", "conventional", "ztdis", "modified"]
@@ -96,6 +97,7 @@ def test_experiment_writes_the_four_rows_and_the_figures(experiment):
     assert "Against the paper" in (out / "report.md").read_text()
 
 
+@pytest.mark.slow
 def test_experiment_reproduces_the_papers_qualitative_result(experiment):
     _, results = experiment
     rows = results["methods"]
@@ -124,6 +126,7 @@ def test_experiment_reproduces_the_papers_qualitative_result(experiment):
     assert deviation["joint_space_zvd_max"] > 1e-5
 
 
+@pytest.mark.slow
 def test_figures_leave_the_global_matplotlib_backend_alone(tmp_path):
     # Plotting must not select a backend or import pyplot (that breaks inline plots in
     # Jupyter): run the figure code in a fresh interpreter and inspect it afterwards.

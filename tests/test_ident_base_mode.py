@@ -62,6 +62,7 @@ def test_base_mode_is_right_or_flagged_never_silently_wrong(base_fits):
     assert confident >= 14, confident
 
 
+@pytest.mark.slow
 def test_the_paper_single_mode_fit_is_what_goes_wrong(base_fits):
     """Control: the single-mode fit of the same logs returns the shoulder mode (or a blend)
     at some poses without a flag - what the default avoids (measured: 7 of 21)."""

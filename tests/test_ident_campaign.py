@@ -25,6 +25,7 @@ from tvist.robots import params, ur5e
 G_UP = np.array([0.0, 0.0, 9.81])
 
 
+@pytest.mark.slow
 def test_poses_follow_algorithm_1():
     poses = campaign_poses(payloads_kg=(0.0, 5.0), seed=3)
     assert len(poses) == 2 * 4 * 13
@@ -154,6 +155,7 @@ def test_twin_campaign_subset(tmp_path):
     assert base_ok == 6
 
 
+@pytest.mark.slow
 def test_twin_pose_record_does_not_depend_on_what_ran_before():
     """The twin's sensor noise is seeded per excitation, so a pose's record is the same
     whichever poses a (worker's) robot ran before it: parallel campaigns are reproducible."""
@@ -181,6 +183,7 @@ def test_load_results_rejects_corruption_inside_the_file(tmp_path):
         load_results(path)
 
 
+@pytest.mark.slow
 def test_a_file_made_with_other_settings_is_refused_not_reused(tmp_path):
     poses = campaign_poses(payloads_kg=(1.0,), radii_m=PAPER_RADII_M[:1])[:2]
     results = tmp_path / "c.jsonl"
@@ -196,6 +199,7 @@ def test_a_file_made_with_other_settings_is_refused_not_reused(tmp_path):
     assert robot.calls == 8 and len(again) == 2
 
 
+@pytest.mark.slow
 def test_invalid_lines_are_quarantined_and_their_poses_rerun(tmp_path):
     poses = campaign_poses(payloads_kg=(1.0,), radii_m=PAPER_RADII_M[:1])[:3]
     results = tmp_path / "c.jsonl"
@@ -253,6 +257,7 @@ def test_ctrl_c_is_one_line_and_the_file_resumes(tmp_path, capsys, monkeypatch):
     assert len(load_results(out)) == 1
 
 
+@pytest.mark.slow
 def test_a_twin_variant_campaign_records_the_variants_modes_in_its_own_file(tmp_path, capsys):
     """``tvist campaign --sim --variant NAME``: the records' true modes are those of the
     variant's twin built directly (bending links: a few % below the standard twin's), the

@@ -70,6 +70,7 @@ def test_a_huge_cell_gives_the_one_line_error_and_no_numpy_warning(
     assert code == 2 and err.startswith("tvist identify: error: ") and err.count("\n") == 1
 
 
+@pytest.mark.slow
 def test_campaign_on_the_twin(tmp_path, capsys):
     out = tmp_path / "c.jsonl"
     args = ["campaign", "--sim", "--out", str(out), "--payloads", "0", "--every", "26"]
@@ -102,6 +103,7 @@ def write_synthetic_results(path, n=40, law="paper"):
     return path
 
 
+@pytest.mark.slow
 def test_fit_map_and_sensitivity(tmp_path, capsys):
     results = write_synthetic_results(tmp_path / "r.jsonl")
     map_path = tmp_path / "map.json"

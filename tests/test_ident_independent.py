@@ -67,6 +67,7 @@ def test_acceptance_on_40_independent_logs(independent_fits):
     assert confident >= math.ceil(0.95 * N_CASES), f"only {confident}/{N_CASES} confident"
 
 
+@pytest.mark.slow
 def test_standard_errors_cover_the_true_errors(independent_fits):
     """Honest uncertainty: the true error exceeds 3 standard errors in few cases (a Gaussian
     would allow 0.3 %; the model mismatch of these logs - deflected sensor orientation,

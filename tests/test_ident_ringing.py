@@ -65,6 +65,7 @@ THREE_MODES = [
 ]
 
 
+@pytest.mark.slow
 def test_every_ringing_mode_is_reported_with_its_direction(tmp_path):
     record = _identify(tmp_path, {0: THREE_MODES})
     found = [m for m in record.ringing if m.log_joint == 0]
@@ -115,6 +116,7 @@ NEIGHBOURS = [
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 2])
 def test_merged_neighbours_are_never_confident_and_wrong(tmp_path, seed):
     record = _identify(tmp_path, {0: NEIGHBOURS}, seed=seed)
@@ -134,6 +136,7 @@ def test_merged_neighbours_are_never_confident_and_wrong(tmp_path, seed):
         assert float(np.min(np.abs(base.fn_hz / true_hz - 1.0))) <= 0.03
 
 
+@pytest.mark.slow
 def test_a_mode_that_disagrees_between_the_logs_is_flagged(tmp_path):
     # The arm's mode at 11 Hz in the base log and 11.8 Hz (7 %) in the shoulder log.
     record = _identify(
@@ -154,6 +157,7 @@ def test_a_mode_that_disagrees_between_the_logs_is_flagged(tmp_path):
         assert any("disagrees with the" in r for r in mode.reasons), mode.reasons
 
 
+@pytest.mark.slow
 def test_the_same_mode_in_both_logs_agrees(tmp_path):
     mode = TrueRinging(11.0, 0.08, (0.0, 0.6, 0.8), 0.4)
     record = _identify(tmp_path, {0: [mode], 1: [mode]})
@@ -191,6 +195,7 @@ def test_a_mode_that_jumps_against_its_neighbouring_poses_is_flagged():
     assert again == flagged
 
 
+@pytest.mark.slow
 def test_batch_identification_writes_ringing(tmp_path):
     paths = [
         generate_ringing_log(

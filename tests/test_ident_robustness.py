@@ -160,6 +160,8 @@ def test_prv_verdicts_equal_the_closed_forms(error, law):
         assert n_within == 6
 
 
+# Fast although above the slow criterion: the only test of tvist.ident.plots
+# (docs/test-quality.md).
 def test_plots_are_written(tmp_path, monkeypatch):
     """Every figure is written, and what it draws is the reference map and the data."""
     from tvist.ident import plots

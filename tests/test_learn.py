@@ -178,6 +178,7 @@ def _corrupted(record: Record, kind: str) -> Record:
     return replace(record, tool_accel=acc)
 
 
+@pytest.mark.slow
 def test_corrupted_logs_are_rejected_and_never_make_the_map_worse():
     twin, robot = _twin(5), _robot()
     wrong = _wrong_map(twin)
@@ -227,6 +228,7 @@ def _family_twin(name: str, seed: int, payload_kg: float = PAYLOAD_KG) -> Twin:
 # series, its own gear-law map 15 % soft): its first move's mode is 4 % below the map,
 # which the map's prior uncertainty (~10 % in frequency) covers; it was reported as a
 # payload change (5.8 or 3.5 kg) while the payload check ignored the map's uncertainty.
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("seed", "light_seed", "variant"),
     [(7, 8, None), (0, 500, None), (5, 505, "family:ur5e:5")],
@@ -285,6 +287,7 @@ def _run_cli(*argv: str):
     )
 
 
+@pytest.mark.slow
 def test_learn_command_writes_a_map_with_provenance(tmp_path):
     import json
 

@@ -253,6 +253,7 @@ def _spectrum_errors(fields: dict, variant, poses) -> np.ndarray:
     return np.array(errors)
 
 
+@pytest.mark.slow
 def test_the_fit_finds_bending_links_in_ringing_records() -> None:
     from test_all_modes_fit import _fit_poses
     from tvist.ident.all_modes_fit import fit_all_modes, fitted_map

@@ -99,8 +99,12 @@ def fit_json(path, *extra):
     ("edit", "declare", "names"),
     [
         (in_degrees, "q=deg,qd=deg/s,qdd=deg/s2", ("target_q_0", "look like degrees")),
-        (in_g, "acc=g", ("actual_tool_accelerometer", "looks like g")),
-        (in_mg, "acc=mg", ("actual_tool_accelerometer", "looks like mg")),
+        pytest.param(
+            in_g, "acc=g", ("actual_tool_accelerometer", "looks like g"), marks=pytest.mark.slow
+        ),
+        pytest.param(
+            in_mg, "acc=mg", ("actual_tool_accelerometer", "looks like mg"), marks=pytest.mark.slow
+        ),
     ],
     ids=["degrees", "g", "mg"],
 )
@@ -260,6 +264,7 @@ def test_a_cell_near_the_float_limit_is_refused_without_numpy_warnings(
             read_rtde_csv(log)
 
 
+@pytest.mark.slow
 def test_identify_many_logs_converts_declared_units(radian_log, tmp_path):
     """Batch identification (worker processes) reads each log with the declared units: the
     pose record of a base and a shoulder log in degrees holds q in rad, equal to Q0."""

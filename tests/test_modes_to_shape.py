@@ -173,6 +173,7 @@ def _integrated_residuals(
     return amp, np.abs(osc)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("poses", "expected_k"), [(("Q1", "Q3"), 3), (("Q3", "Q2"), 2)])
 def test_modes_to_shape_predicts_the_residuals_of_a_direct_simulation(poses, expected_k):
     # The rule holds the pose over each 2 ms sample and splits the end state into modes; the
@@ -359,6 +360,7 @@ def _hinged_reference_residuals(modal, traj, end: int) -> tuple[np.ndarray, np.n
     )
 
 
+@pytest.mark.slow
 def test_modes_to_shape_with_bending_links_predicts_a_direct_simulation():
     from test_link_hinges import HINGES, _known_maps
     from tvist.modal_map import set_modes_for_move

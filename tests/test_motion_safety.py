@@ -96,6 +96,7 @@ def assert_refused_and_still(server, log_from, code, out, err, *texts) -> None:
 # --------------------------------------------------------------------------- tvist run
 
 
+@pytest.mark.slow
 def test_run_refuses_a_csv_in_degrees_and_nothing_moves(server, receive, tmp_path):
     log_from, before = len(server.log_lines), np.array(receive.getTargetQ())
     move = write(tmp_path / "deg.csv", np.degrees(base_move(before, 0.3, 1.0)))
@@ -145,6 +146,7 @@ def test_run_refuses_a_move_faster_than_the_speed_limit_and_nothing_moves(
     np.testing.assert_array_equal(np.array(receive.getTargetQ()), before)
 
 
+@pytest.mark.slow
 def test_run_reports_a_protective_stop_and_how_to_recover(server, receive, tmp_path):
     """A protective stop (a moveJ beyond the elbow's limit, sent by ur_rtde itself): the run
     refuses to start with the controller's own account and the dashboard commands that

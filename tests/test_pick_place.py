@@ -54,6 +54,7 @@ def test_the_report_has_every_row_and_criterion(quick_cycle):
         assert best is not None and best.oracle is None
 
 
+@pytest.mark.slow
 def test_cycle_totals_are_sums_of_the_simulated_settle_times(quick_cycle):
     result, _ = quick_cycle
     accel = CRITERIA[0]
@@ -85,6 +86,8 @@ def test_cycle_totals_are_sums_of_the_simulated_settle_times(quick_cycle):
     assert result.row("slow-down").total_s(accel.key) <= result.row("unshaped").total_s(accel.key)
 
 
+# Fast although above the slow criterion: the cheapest test of tvist.demo.pick_place
+# (docs/test-quality.md).
 def test_cli_runs_the_experiment_without_a_map(tmp_path):
     assert (
         main(

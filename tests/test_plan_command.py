@@ -80,9 +80,10 @@ def test_plan_busy_time_adds_excitations_and_approaches(tmp_path):
     ("flags", "reason"),
     [
         (["--every", "13", "--payloads", "5", "--no-workspace-cover"], "4 reachable poses"),
-        (
+        pytest.param(
             ["--every", "200", "--payloads", "0", "1", "3", "5", "--no-workspace-cover"],
             "2 reachable",
+            marks=pytest.mark.slow,
         ),
     ],
 )

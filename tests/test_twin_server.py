@@ -189,6 +189,7 @@ while True:
 """
 
 
+@pytest.mark.slow
 def test_client_disconnect_mid_stream_holds(server) -> None:
     """The servo client dies: the arm settles at the last servoJ target and holds it."""
     proc = subprocess.Popen(
@@ -309,6 +310,7 @@ def test_run_shaped_move_cuts_residual_vibration(server, twin, tmp_path) -> None
     assert move_s < shaped_s < unshaped_s, (unshaped_output, output)
 
 
+@pytest.mark.slow
 def test_run_interrupted_stops_the_arm(server, tmp_path) -> None:
     """Ctrl-C during ``tvist run``: servoStop then stopScript; the program ends, the arm
     comes to rest and the command reports the interruption."""

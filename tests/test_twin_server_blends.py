@@ -73,6 +73,7 @@ def _run(control, call) -> list:
         subscriber.close()
 
 
+@pytest.mark.slow
 def test_movel_path_with_blend_example(robot, reference):
     """ur_rtde's movel_path_with_blend example: three poses, a 2 cm blend at the second."""
     control, receive = robot
@@ -136,6 +137,8 @@ def test_move_path_async_example(robot, reference):
     assert control.isProgramRunning()
 
 
+# Fast although above the slow criterion: the cheapest test of the server's blended paths
+# (tvist.urserver.move_path, path_motion; docs/test-quality.md).
 def test_overlapping_blends_are_shrunk_to_half_a_segment(robot, reference):
     """Blends of 5 cm on 6 cm segments would overlap: each is reduced to half its shorter
     neighbouring segment (3 cm), so the path still passes both via points without stopping
@@ -167,6 +170,7 @@ def test_overlapping_blends_are_shrunk_to_half_a_segment(robot, reference):
     assert max(off_path(x) for x in outside) < 1e-6
 
 
+@pytest.mark.slow
 def test_stopl_stops_a_blended_path_on_its_way(robot, reference):
     """stopL during an asynchronous blended path: the arm decelerates along the path and
     rests short of the end; the program keeps running and takes the next command."""
@@ -190,6 +194,7 @@ def test_stopl_stops_a_blended_path_on_its_way(robot, reference):
     assert control.moveJ(HOME, 1.5, 4.0)
 
 
+@pytest.mark.slow
 def test_movej_path_with_blend(robot, reference):
     """moveJ with a list of joint targets (ur_rtde sends it as a path of movej): the middle
     one blended with r = 5 cm, in joint space."""

@@ -109,6 +109,7 @@ def last_error() -> str:
 # ----------------------------------------------------------------------------- motion
 
 
+@pytest.mark.slow
 def test_movel_ends_at_the_commanded_pose(robot, reference):
     control, receive = robot
     start = fk(reference, receive.getTargetQ())
@@ -165,6 +166,7 @@ def test_speedl_moves_the_tcp_in_the_commanded_direction(robot, reference):
     assert control.isProgramRunning()
 
 
+@pytest.mark.slow
 def test_servol_tracks_the_pose(robot, reference):
     control, receive = robot
     target = np.array(receive.getTargetTCPPose())
@@ -418,6 +420,7 @@ def _path(blend: float = 0.0, poses=None, q_end=HOME):
     return path
 
 
+@pytest.mark.slow
 def test_move_path_runs_its_waypoints(robot, reference):
     control, receive = robot
     start = fk(reference, HOME)

@@ -88,6 +88,7 @@ def _current_target(subscriber: Subscriber) -> np.ndarray:
 # ----------------------------------------------------------------------------- 1. NaN commands
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("call", ["servoJ time", "speedStop"])
 def test_nan_through_ur_rtde_protective_stops_and_the_server_goes_on(
     server, subscriber, call
@@ -111,6 +112,7 @@ def test_nan_through_ur_rtde_protective_stops_and_the_server_goes_on(
     assert_serves_clients()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "what, cmd, args",
     [
@@ -143,6 +145,7 @@ def test_nan_in_a_command_register_protective_stops(
     assert_serves_clients()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "what, cmd, args",
     [
@@ -295,6 +298,7 @@ def test_listen_backlog_queues_64_connections(server) -> None:
     assert backlog == {port: 64 for port in (29999, 30001, 30002, 30003, 30004)}
 
 
+@pytest.mark.slow
 def test_a_client_that_reads_no_replies_does_not_stop_the_clock(server, subscriber) -> None:
     """A streaming client stops reading and keeps asking for long replies (setups of 1,000
     unknown names at 0 Hz: 10 kB each, no recipe made): the server's send of a reply blocks
@@ -328,6 +332,7 @@ def test_a_client_that_reads_no_replies_does_not_stop_the_clock(server, subscrib
 # ----------------------------------------------------------------------------- 4. programs
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "offsets, name",
     [
@@ -392,6 +397,7 @@ def test_movej_speed_and_acceleration_are_clipped_to_the_joint_limits(
     np.testing.assert_array_equal(subscriber.samples[-1][1], q0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "mass, cog, safety, error",
     [
@@ -532,6 +538,7 @@ def test_subscribers_that_do_not_read_cost_the_tick_no_packing(local_server, mon
 # ----------------------------------------------------------------------------- 7. timestamps
 
 
+@pytest.mark.slow
 def test_a_campaign_log_has_every_package_once(server, tmp_path) -> None:
     """A campaign's excitation recorded from the twin server (~5 s): the log's timestamp
     advances by exactly one 2 ms period per row, none repeated or skipped (ur_rtde's file

@@ -302,6 +302,7 @@ def test_velocity_peak_count():
     assert count_velocity_peaks(np.zeros(5)) == 0
 
 
+@pytest.mark.slow
 def test_benchmark_cli_writes_the_plot(tmp_path):
     out = tmp_path / "zero_delay.png"
     proc = subprocess.run(
@@ -324,6 +325,7 @@ def test_benchmark_cli_writes_the_plot(tmp_path):
     assert out.stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_example_runs(tmp_path):
     out = tmp_path / "example.png"
     proc = subprocess.run(
