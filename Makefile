@@ -20,7 +20,7 @@ test: build rust-test ffi-test lint docs pytest
 test-fast: build lint
 	cargo test -p tvist-core -q
 	$(PY) -m pytest -q --durations=10 $(PYTEST_PARALLEL) -m "not slow and not realtime"
-	$(PY) -m pytest -q --durations=5 -m "realtime and not slow"
+	$(PY) -m pytest -q --durations=5 $(PYTEST_PARALLEL) -m "realtime and not slow"
 
 $(PY):
 	python3 -m venv $(VENV)
