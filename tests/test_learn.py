@@ -163,6 +163,41 @@ def test_learning_from_the_published_paper10_map_improves_the_demo_moves():
     assert all(results[name][1] >= results[name][0] + 2.0 for name in ("Q1->Q3", "Q3->Q1"))
 
 
+def test_modes_the_prior_names_the_other_way_round_are_learned_not_taken_for_a_payload():
+    """The first 7 moves of the published-map sequence on seed 4: at the end poses of moves 3
+    and 7 the converted prior names the base and shoulder modes the other way round from the
+    twin (its base mode the lower one, the twin's the higher; the two modes veer as the
+    stiffnesses change). The mode ringing there was paired with the published map's mode
+    nearest in frequency while the gate and the update compare with the estimate, whose first
+    step had crossed the veering: the learned mode kept a misfit no later update removed (over
+    all 20 moves 8 logs accepted, no update published), and move 7's shoulder mode, gated
+    against the estimate's base mode, was reported as a payload change (7.6 kg at the declared
+    and true 5 kg). No tolerance: an update is published or not, a report made or not, and the
+    learned map's modes at those poses (in order of frequency) are closer to the twin's than
+    the prior's (measured RMS log error 0.022 against 0.086; before: no update, 0.086)."""
+    import tvist
+
+    twin, robot = _twin(4), _robot()
+    learner = MapLearner(robot, tvist.DynamicMap.paper_ur5e())
+    poses = random_poses(robot, 10, np.random.default_rng(4))
+    moves = ordinary_moves(twin, robot, learner, poses, 7, swap_each_round=True)
+    history = [learner.observe(record) for record in moves]
+    ends = [poses[3], poses[7]]  # moves 3 and 7, unshaped, both ringing
+    truth = np.array([[wn for wn, _ in twin.modes(q)] for q in ends])
+    prior = np.array([[wn for wn, _ in learner.prior.modes(robot, q)] for q in ends])
+    # The mechanism is exercised: the prior names the modes the other way round there.
+    assert np.all(prior[:, 0] < prior[:, 1]) and np.all(truth[:, 0] > truth[:, 1]), (prior, truth)
+    assert all(o.payload is None for o in history), [o.reason for o in history]
+    assert history[2].accepted and history[6].accepted, (history[2].reason, history[6].reason)
+    assert any(o.map_updated for o in history)
+    learned = np.array([[wn for wn, _ in learner.map.modes(robot, q)] for q in ends])
+
+    def rms_log_error(modes: np.ndarray) -> float:
+        return float(np.sqrt(np.mean(np.log(np.sort(modes, axis=1) / np.sort(truth, axis=1)) ** 2)))
+
+    assert rms_log_error(learned) < rms_log_error(prior), (learned, prior, truth)
+
+
 def _corrupted(record: Record, kind: str) -> Record:
     if kind == "g-units":
         return replace(record, tool_accel=record.tool_accel / 9.80665)

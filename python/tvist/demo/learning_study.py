@@ -64,10 +64,15 @@ PEAK_BAND = 0.15
 @dataclass(frozen=True)
 class LearningResult:
     """Residual vibration reduction (%) of the demo's moves, by motion name: ``paper``,
-    ``prior`` and ``learned`` maps; the learned scale factors and load gains by name."""
+    ``prior`` and ``learned`` maps; the learned scale factors and load gains by name; how
+    many logs were accepted and how many updated the map; the payload reports (messages;
+    the payload is the declared one throughout, so every one is a false alarm)."""
 
     reduction: dict[str, dict[str, float]]
     scales: dict[str, float]
+    accepted: int = 0
+    updates: int = 0
+    payload_reports: tuple[str, ...] = ()
 
 
 def _robot() -> Robot:
@@ -115,7 +120,14 @@ def learn_from_paper_map(seed: int, wrist_stiffness: float | None = None) -> Lea
             name: float(r.reduction_percent)
             for name, r in zip(("paper", "prior", "learned"), run.runs[1:], strict=True)
         }
-    return LearningResult(reduction, learner.scales)
+    history = learner.history
+    return LearningResult(
+        reduction,
+        learner.scales,
+        sum(o.accepted for o in history),
+        sum(o.map_updated for o in history),
+        tuple(o.payload.message for o in history if o.payload is not None),
+    )
 
 
 def third_mode_visibility(seed: int) -> list[tuple[str, float, float]]:
@@ -185,6 +197,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     for name, r in result.reduction.items():
         print(f"  {name}: {r['paper']:.2f} / {r['prior']:.2f} / {r['learned']:.2f}")
     print("  learned: " + ", ".join(f"{k} {v:.3f}" for k, v in result.scales.items()))
+    print(
+        f"  {N_MOVES} logs: {result.accepted} accepted, {result.updates} updated the map, "
+        f"{len(result.payload_reports)} payload alarms (the declared payload is the true one)"
+    )
+    for message in result.payload_reports:
+        print(f"    {message}")
     if args.visibility:
         print("third mode after unshaped moves (noise-free peak over the noise level):")
         for name, hz, ratio in third_mode_visibility(args.seed):

@@ -229,13 +229,28 @@ def _log_record(log: Any) -> tuple[Record, str]:
     return record, "<record>"
 
 
+@dataclass(frozen=True)
+class _SeenMode:
+    """An observed mode of an accepted move: the mode joint whose direction it was fitted in,
+    ``ω_n`` (rad/s), ``ζ`` and their measurement standard deviations (model error
+    included)."""
+
+    joint: int
+    wn: float
+    zeta: float
+    s_wn: float
+    s_zeta: float
+
+
 @dataclass
 class _Seen:
-    """An accepted move: its end pose and its observed modes ``(mode index, ω_n, ζ, σ_ω,
-    σ_ζ)`` (σ: the measurement's standard deviations, model error included)."""
+    """An accepted move: its end pose and its observed modes. Which map mode each one is, is
+    decided again at every parameter vector it is compared with (:meth:`MapLearner._pair`):
+    a joint's mode is the one that strains it most, and near a veering of two modes a step
+    of the estimate can hand that name from one branch to the other."""
 
     q_end: np.ndarray
-    modes: list[tuple[int, float, float, float, float]] = field(default_factory=list)
+    modes: list[_SeenMode] = field(default_factory=list)
 
 
 class MapLearner:
@@ -361,9 +376,10 @@ class MapLearner:
             if not seen.modes:
                 continue
             modes = self._modes(theta, seen.q_end)
-            for i, wn, zeta, _, _ in seen.modes:
+            for m in seen.modes:
+                i = self._pair(modes[:, 0], m.joint, m.wn)
                 design = tvist.shaper("zv", float(modes[i, 0]), float(min(modes[i, 1], 0.99)))
-                values.append(tvist.prv(design, wn, zeta))
+                values.append(tvist.prv(design, m.wn, m.zeta))
         return float(np.mean(values)) if values else math.nan
 
     # -- one log -----------------------------------------------------------------------------
@@ -422,8 +438,10 @@ class MapLearner:
             seen = _Seen(
                 np.asarray(decay.q_end, dtype=float),
                 [
-                    (i, m.wn_rad_s, m.zeta, float(sigma[2 * k]), float(sigma[2 * k + 1]))
-                    for k, (i, m) in enumerate(modes)
+                    _SeenMode(
+                        m.joint, m.wn_rad_s, m.zeta, float(sigma[2 * k]), float(sigma[2 * k + 1])
+                    )
+                    for k, (_, m) in enumerate(modes)
                 ],
             )
         jac = self._jacobian(h_of, h)
@@ -479,25 +497,34 @@ class MapLearner:
         self.history.append(obs)
         return obs
 
-    def _assign(self, decay: Decay) -> list[tuple[int, ModeObservation]]:
-        """The observed modes with the index of the map mode each one is, one per map mode.
+    def _pair(self, predicted_wn: np.ndarray, joint: int, wn: float) -> int:
+        """Index of the map mode (of ``predicted_wn``, rad/s, by mode joint) that a mode of
+        ``wn`` rad/s fitted in ``joint``'s direction is.
 
         A fit in the tangential direction of one mode joint may show another joint's mode (a
         shoulder mode leaks into the base direction at most poses), so a fit is the map mode
         nearest in frequency; where the map's modes are closer than
-        :data:`CLOSE_MODES_RATIO`, frequency cannot tell and the direction decides. Two fits
-        of one mode: the one with the higher ringing SNR.
+        :data:`CLOSE_MODES_RATIO`, frequency cannot tell and the direction decides.
+        """
+        if float(np.max(predicted_wn) / np.min(predicted_wn)) < CLOSE_MODES_RATIO:
+            return self.mode_joints.index(joint)
+        return int(np.argmin(np.abs(np.log(wn / predicted_wn))))
+
+    def _assign(self, decay: Decay) -> list[tuple[int, ModeObservation]]:
+        """The observed modes with the index of the map mode each one is (:meth:`_pair`), one
+        per map mode (two fits of one mode: the one with the higher ringing SNR).
+
+        Paired with the modes of the estimate, the map the gate and the update compare them
+        with: the published map can name the modes the other way round at this pose (base
+        and shoulder modes veer, and the estimate may have moved across), and a mode paired
+        with the wrong one fails the gate or, once learned, is a misfit no update removes.
         """
         if not decay.modes:
             return []
-        predicted = self._modes(self._published, np.asarray(decay.q_end, dtype=float))[:, 0]
-        ratio = float(np.max(predicted) / np.min(predicted))
+        predicted = self._modes(self.theta, np.asarray(decay.q_end, dtype=float))[:, 0]
         chosen: dict[int, ModeObservation] = {}
         for m in decay.modes:
-            if ratio < CLOSE_MODES_RATIO:
-                i = self.mode_joints.index(m.joint)
-            else:
-                i = int(np.argmin(np.abs(np.log(m.wn_rad_s / predicted))))
+            i = self._pair(predicted, m.joint, m.wn_rad_s)
             if i not in chosen or m.ringing_snr_db > chosen[i].ringing_snr_db:
                 chosen[i] = m
         return sorted(chosen.items())
@@ -518,11 +545,14 @@ class MapLearner:
         return z, h_of(self.theta), np.array(r), h_of
 
     def _quiet_measurement(self, q_end: np.ndarray):
+        # The published map's shapers left no ringing: its frequencies are right here, in
+        # order of frequency (the shaper cascade does not depend on which joint names which
+        # mode, and near a veering the estimate may name them the other way round).
         q = np.asarray(q_end, dtype=float)
-        published = self._modes(self._published, q)[:, 0]
+        published = np.sort(self._modes(self._published, q)[:, 0])
 
         def h_of(theta: np.ndarray) -> np.ndarray:
-            return self._modes(theta, q)[:, 0]
+            return np.sort(self._modes(theta, q)[:, 0])
 
         r = (QUIET_WN_REL_SIGMA * published) ** 2
         return published, h_of(self.theta), r, h_of
@@ -536,13 +566,16 @@ class MapLearner:
         return jac
 
     def misfit(self, theta: np.ndarray) -> float:
-        """Chi-square of the modes observed so far against the map at ``theta``."""
+        """Chi-square of the modes observed so far against the map at ``theta`` (each paired
+        with the map mode it is at ``theta``, :meth:`_pair`)."""
         total = 0.0
         for seen in self._seen:
             if seen.modes:
                 modes = self._modes(theta, seen.q_end)
-                for i, wn, zeta, s_wn, s_zeta in seen.modes:
-                    total += ((wn - modes[i, 0]) / s_wn) ** 2 + ((zeta - modes[i, 1]) / s_zeta) ** 2
+                for m in seen.modes:
+                    i = self._pair(modes[:, 0], m.joint, m.wn)
+                    total += ((m.wn - modes[i, 0]) / m.s_wn) ** 2
+                    total += ((m.zeta - modes[i, 1]) / m.s_zeta) ** 2
         return total
 
     def _maybe_publish(self) -> bool:
