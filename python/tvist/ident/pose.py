@@ -25,7 +25,10 @@ is the base log's mode that moves the flange along the base joint's tangent, sep
 the shoulder mode (:mod:`tvist.ident.base_mode`); the shoulder mode likewise from the
 shoulder log. ``ringing_index`` names the ``ringing`` entry of the same log that is that mode
 (the one closest in frequency, within :data:`SAME_MODE_RATIO`); ``None`` if none is (the
-entry is then flagged: the mode is not among those that ring).
+entry is then flagged: the mode is not among those that ring). A ``modes`` entry is never
+more confident than that ringing entry's frequency: it inherits its doubts about the frequency
+(merged neighbours, uncertain frequency, disagreement between the logs; jumps against
+neighbouring poses in :mod:`tvist.ident.pose_checks`), see :func:`inherited_doubt`.
 
 Checks across the two logs (:func:`cross_check_logs`): a mode found in both the base and
 the shoulder log must agree, within :data:`AGREEMENT_SE` combined standard errors and at
@@ -40,6 +43,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -51,7 +55,15 @@ from tvist.ident.logs import Record, is_uniform, resample_uniform
 from tvist.ident.preprocess import quiet_samples
 from tvist.ident.ringing import RingingMode, ringing_from_log
 
-__all__ = ["IDENTIFIED_JOINTS", "PoseRecord", "cross_check_logs", "identify_pose", "pose_of"]
+__all__ = [
+    "FREQUENCY_DOUBTS",
+    "IDENTIFIED_JOINTS",
+    "PoseRecord",
+    "cross_check_logs",
+    "identify_pose",
+    "inherited_doubt",
+    "pose_of",
+]
 
 #: Joints identified at every pose (base, shoulder).
 IDENTIFIED_JOINTS = (0, 1)
@@ -362,19 +374,35 @@ def identify_pose(
     )
 
 
-#: Reasons of a ringing entry that doubt the mode itself (not only its precision): a
-#: ``modes`` entry that is that mode inherits them where the entry's frequency is also
-#: uncertain (:func:`_unresolved_merge`).
-_WRONG_MODE = ("merged neighbours",)
+#: Reasons (prefixes) of a ringing entry that doubt its frequency, not only its damping or
+#: its strength: the multi-mode fit of the log cannot resolve the modes there ("merged
+#: neighbours", "next to an unresolved mode"), cannot pin the frequency ("uncertain
+#: frequency"), or the other log of the pose finds the same mode elsewhere ("disagrees with
+#: the"). A ``modes`` entry that is that ringing entry's mode inherits them
+#: (:func:`inherited_doubt`); :mod:`tvist.ident.pose_checks` adds its jumps the same way.
+FREQUENCY_DOUBTS = (
+    "merged neighbours",
+    "next to an unresolved mode",
+    "uncertain frequency",
+    "disagrees with the",
+)
 
 
-def _unresolved_merge(mode: RingingMode) -> bool:
-    """Whether the multi-mode fit cannot resolve the modes at this entry's frequency: flagged
-    as merged neighbours and with an uncertain frequency."""
-    reasons = mode.reasons
-    return any(r.startswith(_WRONG_MODE) for r in reasons) and any(
-        r.startswith("uncertain frequency") for r in reasons
-    )
+def inherited_doubt(reasons: Sequence[str], fn_hz: float) -> str | None:
+    """The reason a ``modes`` entry inherits from the ringing entry of its log that is its
+    mode (``reasons`` and frequency ``fn_hz`` of that entry), or ``None``.
+
+    Both entries estimate the same mode from the same log; the multi-mode fit models more of
+    it (three channels, the other modes that ring, feedthrough, centripetal and gravity
+    terms). Where that fit doubts the frequency (:data:`FREQUENCY_DOUBTS`), the ``modes``
+    entry's own smaller standard error only holds in its simpler model, which the log
+    contradicts: a resonance smeared by a neighbour or by a gear stiffness that changes with
+    the excitation's torque is fitted as one sharp mode between the true ones.
+    """
+    doubts = [r for r in reasons if r.startswith(FREQUENCY_DOUBTS)]
+    if not doubts:
+        return None
+    return f"the multi-mode fit of the same log doubts it ({fn_hz:.2f} Hz: {'; '.join(doubts)})"
 
 
 #: A ``modes`` entry agrees with its log's multi-mode fit within ``AGREEMENT_SE`` combined
@@ -388,8 +416,8 @@ def _linked(
     modes: dict[int, LocalFit | str], ringing: list[RingingMode]
 ) -> dict[int, LocalFit | str]:
     """``modes`` with a confident entry flagged where its log's multi-mode fit does not
-    confirm it: no ringing mode near its frequency, the nearest one is an unresolved merge
-    (:func:`_unresolved_merge`), or it differs by more than the standard errors allow (as between
+    confirm it: no ringing mode near its frequency, the nearest one's frequency is doubted
+    (:func:`inherited_doubt`), or it differs by more than the standard errors allow (as between
     two logs, :func:`cross_check_logs`); a single-mode or two-mode fit that merged two
     neighbours is caught so."""
     if not ringing:
@@ -408,10 +436,8 @@ def _linked(
                 f"not among the modes that ring in the log ({fit.fn_hz:.2f} Hz; the multi-mode "
                 f"fit finds {found} Hz)"
             )
-        elif _unresolved_merge(ringing[index]):
-            mode = ringing[index]
-            why = next(r for r in mode.reasons if r.startswith(_WRONG_MODE))
-            reason = f"the multi-mode fit of the same log doubts it ({mode.fn_hz:.2f} Hz: {why})"
+        elif (doubt := inherited_doubt(ringing[index].reasons, ringing[index].fn_hz)) is not None:
+            reason = doubt
         else:
             mode = ringing[index]
             distance = abs(math.log(mode.wn_rad_s / fit.wn_rad_s))
