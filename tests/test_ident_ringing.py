@@ -134,6 +134,40 @@ def test_merged_neighbours_are_never_confident_and_wrong(tmp_path, seed):
         assert float(np.min(np.abs(base.fn_hz / true_hz - 1.0))) <= 0.03
 
 
+#: Two heavily damped neighbours 7.8 % apart that move the flange nearly the same way (a base
+#: log where base and shoulder modes coincide): the multi-mode fit keeps one mode between
+#: them, and the base log's single-mode and two-mode fits do too, with a standard error under
+#: 0.1 %: a sharp mode 3.5 % from both true ones.
+CLOSE_PAIR = [
+    TrueRinging(9.0, 0.30, T0, 0.42),
+    TrueRinging(9.7, 0.30, _tilted(15.0), 0.40),
+]
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_a_base_entry_between_two_merged_neighbours_is_flagged(tmp_path, seed):
+    """The base log's entry of ``modes`` is the mode the multi-mode fit flags as merged
+    (it moves 1.8-3.7 % with one mode more): it must carry that doubt, not pass as confident.
+
+    Checked: the situation arises (the entry is more than 3 %, the acceptance tolerance of an
+    identification, from both true modes), the entry is flagged with the merged-neighbours
+    reason, and no confident entry (``modes`` or ``ringing``) is more than 3 % from every true
+    mode."""
+    record = _identify(tmp_path, {0: CLOSE_PAIR}, seed=seed)
+    true_hz = np.array([m.freq_hz for m in CLOSE_PAIR])
+
+    def off(f_hz: float) -> float:
+        return float(np.min(np.abs(f_hz / true_hz - 1.0)))
+
+    base = record.modes[0]
+    assert not isinstance(base, str)
+    assert off(base.fn_hz) > 0.03, (base.fn_hz, [m.fn_hz for m in record.ringing])
+    assert base.low_confidence
+    assert any("merged neighbours" in r for r in base.reasons), base.reasons
+    for mode in record.ringing:
+        assert mode.low_confidence or off(mode.fn_hz) <= 0.03, (mode.fn_hz, mode.reasons)
+
+
 def test_a_mode_that_disagrees_between_the_logs_is_flagged(tmp_path):
     # The arm's mode at 11 Hz in the base log and 11.8 Hz (7 %) in the shoulder log.
     record = _identify(
@@ -189,6 +223,32 @@ def test_a_mode_that_jumps_against_its_neighbouring_poses_is_flagged():
     # Idempotent: checking again flags the same, once.
     again = flag_jumps(flagged)
     assert again == flagged
+
+
+def test_the_base_entry_of_a_jumping_mode_is_flagged_with_it():
+    # The base log's entry of ``modes`` is the ringing entry it names (``ringing_index``):
+    # where that one jumps, the entry is the same mode of the same log and jumps too; the
+    # entries of the other poses stay confident, and a second check flags the same, once.
+    records = [_record(f"p{i}", -1.5 + 0.1 * i, [10.0 * 1.02**i]) for i in range(7)]
+    records[3]["ringing"][0]["wn_rad_s"] *= 1.2
+    for r in records:
+        r["modes"] = [
+            {
+                "joint": 0,
+                "wn_rad_s": r["ringing"][0]["wn_rad_s"] * 1.005,
+                "zeta": 0.1,
+                "low_confidence": False,
+                "reasons": [],
+                "ringing_index": 0,
+            },
+            {"joint": 1, "error": "no log"},
+        ]
+    flagged = flag_jumps(records)
+    doubted = [r["key"] for r in flagged if r["modes"][0]["low_confidence"]]
+    assert doubted == ["p3"]
+    assert flagged[3]["modes"][0]["reasons"][0].startswith(JUMP_REASON)
+    assert flagged[3]["modes"][1] == {"joint": 1, "error": "no log"}
+    assert flag_jumps(flagged) == flagged
 
 
 def test_batch_identification_writes_ringing(tmp_path):
