@@ -136,7 +136,7 @@ def test_merged_neighbours_are_never_confident_and_wrong(tmp_path, seed):
 
 #: Two heavily damped neighbours 7.8 % apart that move the flange nearly the same way (a base
 #: log where base and shoulder modes coincide): the multi-mode fit keeps one mode between
-#: them, and the base log's single-mode and two-mode fits do too, with a standard error under
+#: them, and so does the base log's entry of ``modes``, with a standard error under
 #: 0.1 %: a sharp mode 3.5 % from both true ones.
 CLOSE_PAIR = [
     TrueRinging(9.0, 0.30, T0, 0.42),
