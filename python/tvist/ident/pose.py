@@ -376,33 +376,71 @@ def identify_pose(
 
 #: Reasons (prefixes) of a ringing entry that doubt its frequency, not only its damping or
 #: its strength: the multi-mode fit of the log cannot resolve the modes there ("merged
-#: neighbours", "next to an unresolved mode"), cannot pin the frequency ("uncertain
-#: frequency"), or the other log of the pose finds the same mode elsewhere ("disagrees with
-#: the"). A ``modes`` entry that is that ringing entry's mode inherits them
-#: (:func:`inherited_doubt`); :mod:`tvist.ident.pose_checks` adds its jumps the same way.
+#: neighbours"), cannot pin the frequency ("uncertain frequency"), or the other log of the
+#: pose finds the same mode elsewhere ("disagrees with the", :data:`DISAGREES`). A ``modes``
+#: entry that is that ringing entry's mode inherits them (:func:`inherited_doubt`);
+#: :mod:`tvist.ident.pose_checks` adds its jumps the same way. Not "next to an unresolved
+#: mode": that doubts how the multi-mode fit shares the response between this mode and an
+#: unresolved one it fits jointly; the ``modes`` entry does not fit that neighbour, and it
+#: must still agree with this resolved entry (:data:`LINK_FLOOR`).
 FREQUENCY_DOUBTS = (
     "merged neighbours",
-    "next to an unresolved mode",
     "uncertain frequency",
     "disagrees with the",
 )
+#: Prefix of the reason :func:`cross_check_logs` gives.
+DISAGREES = "disagrees with the"
+#: Two entries of the two logs whose flange directions are further apart than this (degrees)
+#: are two modes, not one seen twice: a mode's shape is the arm's, not the excitation's, and
+#: its direction comes out within 10-16 degrees in both logs, while the base mode (across the
+#: arm's plane) and the modes in the plane stand 55-90 degrees apart.
+SAME_SHAPE_DEG = 30.0
 
 
-def inherited_doubt(reasons: Sequence[str], fn_hz: float) -> str | None:
-    """The reason a ``modes`` entry inherits from the ringing entry of its log that is its
-    mode (``reasons`` and frequency ``fn_hz`` of that entry), or ``None``.
+def _partner(mode: RingingMode, ringing: Sequence[RingingMode]) -> RingingMode | None:
+    """The entry of the other log that :func:`cross_check_logs` found ``mode`` to disagree
+    with: the closest in frequency (within :data:`SAME_MODE_RATIO`) flagged the same way."""
+    others = [
+        m
+        for m in ringing
+        if m.log_joint != mode.log_joint
+        and any(r.startswith(DISAGREES) for r in m.reasons)
+        and abs(math.log(m.wn_rad_s / mode.wn_rad_s)) < math.log(SAME_MODE_RATIO)
+    ]
+    return min(others, key=lambda m: abs(math.log(m.wn_rad_s / mode.wn_rad_s)), default=None)
+
+
+def _other_shape(a: RingingMode, b: RingingMode | None) -> bool:
+    """Whether ``a`` and ``b`` move the flange in directions more than
+    :data:`SAME_SHAPE_DEG` apart (``False`` where a direction is unknown: then they may be
+    one mode)."""
+    if b is None or a.flange_direction is None or b.flange_direction is None:
+        return False
+    cosine = abs(float(np.dot(a.flange_direction, b.flange_direction)))
+    return cosine < math.cos(math.radians(SAME_SHAPE_DEG))
+
+
+def inherited_doubt(mode: RingingMode, ringing: Sequence[RingingMode]) -> str | None:
+    """The reason a ``modes`` entry inherits from ``mode``, the ringing entry of its log that is
+    its mode (``ringing``: every entry of the pose), or ``None``.
 
     Both entries estimate the same mode from the same log; the multi-mode fit models more of
     it (three channels, the other modes that ring, feedthrough, centripetal and gravity
     terms). Where that fit doubts the frequency (:data:`FREQUENCY_DOUBTS`), the ``modes``
     entry's own smaller standard error only holds in its simpler model, which the log
     contradicts: a resonance smeared by a neighbour or by a gear stiffness that changes with
-    the excitation's torque is fitted as one sharp mode between the true ones.
+    the excitation's torque is fitted as one sharp mode between the true ones. A disagreement
+    with the other log is inherited only where the two entries can be one mode by their flange
+    directions (:func:`_other_shape`): the base mode and the shoulder mode may lie closer than
+    :data:`SAME_MODE_RATIO`, each ringing in its own log.
     """
-    doubts = [r for r in reasons if r.startswith(FREQUENCY_DOUBTS)]
+    doubts = [r for r in mode.reasons if r.startswith(FREQUENCY_DOUBTS)]
+    if _other_shape(mode, _partner(mode, ringing)):
+        doubts = [r for r in doubts if not r.startswith(DISAGREES)]
     if not doubts:
         return None
-    return f"the multi-mode fit of the same log doubts it ({fn_hz:.2f} Hz: {'; '.join(doubts)})"
+    why = "; ".join(doubts)
+    return f"the multi-mode fit of the same log doubts it ({mode.fn_hz:.2f} Hz: {why})"
 
 
 #: A ``modes`` entry agrees with its log's multi-mode fit within ``AGREEMENT_SE`` combined
@@ -436,7 +474,7 @@ def _linked(
                 f"not among the modes that ring in the log ({fit.fn_hz:.2f} Hz; the multi-mode "
                 f"fit finds {found} Hz)"
             )
-        elif (doubt := inherited_doubt(ringing[index].reasons, ringing[index].fn_hz)) is not None:
+        elif (doubt := inherited_doubt(ringing[index], ringing)) is not None:
             reason = doubt
         else:
             mode = ringing[index]
