@@ -27,8 +27,9 @@ shoulder log. ``ringing_index`` names the ``ringing`` entry of the same log that
 (the one closest in frequency, within :data:`SAME_MODE_RATIO`); ``None`` if none is (the
 entry is then flagged: the mode is not among those that ring). A ``modes`` entry is never
 more confident than that ringing entry's frequency: it inherits its doubts about the frequency
-(merged neighbours, uncertain frequency, disagreement between the logs; jumps against
-neighbouring poses in :mod:`tvist.ident.pose_checks`), see :func:`inherited_doubt`.
+(merged neighbours, uncertain frequency, disagreement with the other log where the two
+entries move the flange alike; jumps against neighbouring poses in
+:mod:`tvist.ident.pose_checks`), see :func:`inherited_doubt`.
 
 Checks across the two logs (:func:`cross_check_logs`): a mode found in both the base and
 the shoulder log must agree, within :data:`AGREEMENT_SE` combined standard errors and at
