@@ -136,40 +136,6 @@ def test_merged_neighbours_are_never_confident_and_wrong(tmp_path, seed):
         assert float(np.min(np.abs(base.fn_hz / true_hz - 1.0))) <= 0.03
 
 
-#: Two heavily damped neighbours 7.8 % apart that move the flange nearly the same way (a base
-#: log where base and shoulder modes coincide): the multi-mode fit keeps one mode between
-#: them, and so does the base log's entry of ``modes``, with a standard error under
-#: 0.1 %: a sharp mode 3.5 % from both true ones.
-CLOSE_PAIR = [
-    TrueRinging(9.0, 0.30, T0, 0.42),
-    TrueRinging(9.7, 0.30, _tilted(15.0), 0.40),
-]
-
-
-@pytest.mark.parametrize("seed", [1, 2])
-def test_a_base_entry_between_two_merged_neighbours_is_flagged(tmp_path, seed):
-    """The base log's entry of ``modes`` is the mode the multi-mode fit flags as merged
-    (it moves 1.8-3.7 % with one mode more): it must carry that doubt, not pass as confident.
-
-    Checked: the situation arises (the entry is more than 3 %, the acceptance tolerance of an
-    identification, from both true modes), the entry is flagged with the merged-neighbours
-    reason, and no confident entry (``modes`` or ``ringing``) is more than 3 % from every true
-    mode."""
-    record = _identify(tmp_path, {0: CLOSE_PAIR}, seed=seed)
-    true_hz = np.array([m.freq_hz for m in CLOSE_PAIR])
-
-    def off(f_hz: float) -> float:
-        return float(np.min(np.abs(f_hz / true_hz - 1.0)))
-
-    base = record.modes[0]
-    assert not isinstance(base, str)
-    assert off(base.fn_hz) > 0.03, (base.fn_hz, [m.fn_hz for m in record.ringing])
-    assert base.low_confidence
-    assert any("merged neighbours" in r for r in base.reasons), base.reasons
-    for mode in record.ringing:
-        assert mode.low_confidence or off(mode.fn_hz) <= 0.03, (mode.fn_hz, mode.reasons)
-
-
 @pytest.mark.slow
 def test_a_mode_that_disagrees_between_the_logs_is_flagged(tmp_path):
     # The arm's mode at 11 Hz in the base log and 11.8 Hz (7 %) in the shoulder log.
@@ -189,33 +155,6 @@ def test_a_mode_that_disagrees_between_the_logs_is_flagged(tmp_path):
     ):
         assert mode.low_confidence
         assert any("disagrees with the" in r for r in mode.reasons), mode.reasons
-
-
-def test_the_entries_of_a_mode_the_logs_disagree_on_are_flagged(tmp_path):
-    """One mode (the same flange direction in both logs) that the base log finds at 11 Hz and
-    the shoulder log at 11.5 Hz (4.5 %, as a gear that stiffens under the shoulder's larger
-    torque shows it): the ``modes`` entries of both logs are flagged, whichever of them is
-    right. (Two modes that move the flange differently are not one mode seen twice:
-    ``test_ident_batch`` keeps such entries confident.)"""
-    # Along both joints' tangents, so that each log's single-mode fit sees it.
-    t1 = ROBOT.jacobian(Q_STRETCHED)[:3, 1]
-    both = np.array(T0) + t1 / np.linalg.norm(t1)
-    direction = tuple(both / np.linalg.norm(both))
-    record = _identify(
-        tmp_path,
-        {
-            0: [TrueRinging(11.0, 0.08, direction, 1.0)],
-            1: [TrueRinging(11.5, 0.08, direction, 1.0)],
-        },
-    )
-    # The shoulder entry (the log's single-mode fit, confident on its own) carries the
-    # disagreement; the base entry is flagged either way (here the base-mode separation
-    # doubts it first).
-    shoulder = record.modes[1]
-    assert not isinstance(shoulder, str)
-    assert shoulder.low_confidence
-    assert any("disagrees with the" in r for r in shoulder.reasons), shoulder.reasons
-    assert not isinstance(record.modes[0], str) and record.modes[0].low_confidence
 
 
 @pytest.mark.slow
@@ -254,32 +193,6 @@ def test_a_mode_that_jumps_against_its_neighbouring_poses_is_flagged():
     # Idempotent: checking again flags the same, once.
     again = flag_jumps(flagged)
     assert again == flagged
-
-
-def test_the_base_entry_of_a_jumping_mode_is_flagged_with_it():
-    # The base log's entry of ``modes`` is the ringing entry it names (``ringing_index``):
-    # where that one jumps, the entry is the same mode of the same log and jumps too; the
-    # entries of the other poses stay confident, and a second check flags the same, once.
-    records = [_record(f"p{i}", -1.5 + 0.1 * i, [10.0 * 1.02**i]) for i in range(7)]
-    records[3]["ringing"][0]["wn_rad_s"] *= 1.2
-    for r in records:
-        r["modes"] = [
-            {
-                "joint": 0,
-                "wn_rad_s": r["ringing"][0]["wn_rad_s"] * 1.005,
-                "zeta": 0.1,
-                "low_confidence": False,
-                "reasons": [],
-                "ringing_index": 0,
-            },
-            {"joint": 1, "error": "no log"},
-        ]
-    flagged = flag_jumps(records)
-    doubted = [r["key"] for r in flagged if r["modes"][0]["low_confidence"]]
-    assert doubted == ["p3"]
-    assert flagged[3]["modes"][0]["reasons"][0].startswith(JUMP_REASON)
-    assert flagged[3]["modes"][1] == {"joint": 1, "error": "no log"}
-    assert flag_jumps(flagged) == flagged
 
 
 @pytest.mark.slow

@@ -445,7 +445,6 @@ input: JSON lines, one pose per line, as written by 'tvist identify --out' and
     wn_rad_s, zeta   natural frequency (rad/s) and damping ratio
     wn_se_rad_s, zeta_se  standard errors
     low_confidence   true: not used unless --include-low-confidence; reasons: why
-                     (also every doubt of its ringing entry's frequency)
     method           single-mode or two-mode (base separated from the shoulder mode)
     ringing_index    the ringing entry that is this mode (the base mode: the base log's
                      mode along the base joint's tangent); null if none

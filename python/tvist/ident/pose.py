@@ -25,11 +25,7 @@ is the base log's mode that moves the flange along the base joint's tangent, sep
 the shoulder mode (:mod:`tvist.ident.base_mode`); the shoulder mode likewise from the
 shoulder log. ``ringing_index`` names the ``ringing`` entry of the same log that is that mode
 (the one closest in frequency, within :data:`SAME_MODE_RATIO`); ``None`` if none is (the
-entry is then flagged: the mode is not among those that ring). A ``modes`` entry is never
-more confident than that ringing entry's frequency: it inherits its doubts about the frequency
-(merged neighbours, uncertain frequency, disagreement with the other log where the two
-entries move the flange alike; jumps against neighbouring poses in
-:mod:`tvist.ident.pose_checks`), see :func:`inherited_doubt`.
+entry is then flagged: the mode is not among those that ring).
 
 Checks across the two logs (:func:`cross_check_logs`): a mode found in both the base and
 the shoulder log must agree, within :data:`AGREEMENT_SE` combined standard errors and at
@@ -44,7 +40,6 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -56,15 +51,7 @@ from tvist.ident.logs import Record, is_uniform, resample_uniform
 from tvist.ident.preprocess import quiet_samples
 from tvist.ident.ringing import RingingMode, ringing_from_log
 
-__all__ = [
-    "FREQUENCY_DOUBTS",
-    "IDENTIFIED_JOINTS",
-    "PoseRecord",
-    "cross_check_logs",
-    "identify_pose",
-    "inherited_doubt",
-    "pose_of",
-]
+__all__ = ["IDENTIFIED_JOINTS", "PoseRecord", "cross_check_logs", "identify_pose", "pose_of"]
 
 #: Joints identified at every pose (base, shoulder).
 IDENTIFIED_JOINTS = (0, 1)
@@ -375,73 +362,19 @@ def identify_pose(
     )
 
 
-#: Reasons (prefixes) of a ringing entry that doubt its frequency, not only its damping or
-#: its strength: the multi-mode fit of the log cannot resolve the modes there ("merged
-#: neighbours"), cannot pin the frequency ("uncertain frequency"), or the other log of the
-#: pose finds the same mode elsewhere ("disagrees with the", :data:`DISAGREES`). A ``modes``
-#: entry that is that ringing entry's mode inherits them (:func:`inherited_doubt`);
-#: :mod:`tvist.ident.pose_checks` adds its jumps the same way. Not "next to an unresolved
-#: mode": that doubts how the multi-mode fit shares the response between this mode and an
-#: unresolved one it fits jointly; the ``modes`` entry does not fit that neighbour, and it
-#: must still agree with this resolved entry (:data:`LINK_FLOOR`).
-FREQUENCY_DOUBTS = (
-    "merged neighbours",
-    "uncertain frequency",
-    "disagrees with the",
-)
-#: Prefix of the reason :func:`cross_check_logs` gives.
-DISAGREES = "disagrees with the"
-#: Two entries of the two logs whose flange directions are further apart than this (degrees)
-#: are two modes, not one seen twice: a mode's shape is the arm's, not the excitation's, and
-#: its direction comes out within 10-16 degrees in both logs, while the base mode (across the
-#: arm's plane) and the modes in the plane stand 55-90 degrees apart.
-SAME_SHAPE_DEG = 30.0
+#: Reasons of a ringing entry that doubt the mode itself (not only its precision): a
+#: ``modes`` entry that is that mode inherits them where the entry's frequency is also
+#: uncertain (:func:`_unresolved_merge`).
+_WRONG_MODE = ("merged neighbours",)
 
 
-def _partner(mode: RingingMode, ringing: Sequence[RingingMode]) -> RingingMode | None:
-    """The entry of the other log that :func:`cross_check_logs` found ``mode`` to disagree
-    with: the closest in frequency (within :data:`SAME_MODE_RATIO`) flagged the same way."""
-    others = [
-        m
-        for m in ringing
-        if m.log_joint != mode.log_joint
-        and any(r.startswith(DISAGREES) for r in m.reasons)
-        and abs(math.log(m.wn_rad_s / mode.wn_rad_s)) < math.log(SAME_MODE_RATIO)
-    ]
-    return min(others, key=lambda m: abs(math.log(m.wn_rad_s / mode.wn_rad_s)), default=None)
-
-
-def _other_shape(a: RingingMode, b: RingingMode | None) -> bool:
-    """Whether ``a`` and ``b`` move the flange in directions more than
-    :data:`SAME_SHAPE_DEG` apart (``False`` where a direction is unknown: then they may be
-    one mode)."""
-    if b is None or a.flange_direction is None or b.flange_direction is None:
-        return False
-    cosine = abs(float(np.dot(a.flange_direction, b.flange_direction)))
-    return cosine < math.cos(math.radians(SAME_SHAPE_DEG))
-
-
-def inherited_doubt(mode: RingingMode, ringing: Sequence[RingingMode]) -> str | None:
-    """The reason a ``modes`` entry inherits from ``mode``, the ringing entry of its log that is
-    its mode (``ringing``: every entry of the pose), or ``None``.
-
-    Both entries estimate the same mode from the same log; the multi-mode fit models more of
-    it (three channels, the other modes that ring, feedthrough, centripetal and gravity
-    terms). Where that fit doubts the frequency (:data:`FREQUENCY_DOUBTS`), the ``modes``
-    entry's own smaller standard error only holds in its simpler model, which the log
-    contradicts: a resonance smeared by a neighbour or by a gear stiffness that changes with
-    the excitation's torque is fitted as one sharp mode between the true ones. A disagreement
-    with the other log is inherited only where the two entries can be one mode by their flange
-    directions (:func:`_other_shape`): the base mode and the shoulder mode may lie closer than
-    :data:`SAME_MODE_RATIO`, each ringing in its own log.
-    """
-    doubts = [r for r in mode.reasons if r.startswith(FREQUENCY_DOUBTS)]
-    if _other_shape(mode, _partner(mode, ringing)):
-        doubts = [r for r in doubts if not r.startswith(DISAGREES)]
-    if not doubts:
-        return None
-    why = "; ".join(doubts)
-    return f"the multi-mode fit of the same log doubts it ({mode.fn_hz:.2f} Hz: {why})"
+def _unresolved_merge(mode: RingingMode) -> bool:
+    """Whether the multi-mode fit cannot resolve the modes at this entry's frequency: flagged
+    as merged neighbours and with an uncertain frequency."""
+    reasons = mode.reasons
+    return any(r.startswith(_WRONG_MODE) for r in reasons) and any(
+        r.startswith("uncertain frequency") for r in reasons
+    )
 
 
 #: A ``modes`` entry agrees with its log's multi-mode fit within ``AGREEMENT_SE`` combined
@@ -455,8 +388,8 @@ def _linked(
     modes: dict[int, LocalFit | str], ringing: list[RingingMode]
 ) -> dict[int, LocalFit | str]:
     """``modes`` with a confident entry flagged where its log's multi-mode fit does not
-    confirm it: no ringing mode near its frequency, the nearest one's frequency is doubted
-    (:func:`inherited_doubt`), or it differs by more than the standard errors allow (as between
+    confirm it: no ringing mode near its frequency, the nearest one is an unresolved merge
+    (:func:`_unresolved_merge`), or it differs by more than the standard errors allow (as between
     two logs, :func:`cross_check_logs`); a single-mode or two-mode fit that merged two
     neighbours is caught so."""
     if not ringing:
@@ -475,8 +408,10 @@ def _linked(
                 f"not among the modes that ring in the log ({fit.fn_hz:.2f} Hz; the multi-mode "
                 f"fit finds {found} Hz)"
             )
-        elif (doubt := inherited_doubt(ringing[index], ringing)) is not None:
-            reason = doubt
+        elif _unresolved_merge(ringing[index]):
+            mode = ringing[index]
+            why = next(r for r in mode.reasons if r.startswith(_WRONG_MODE))
+            reason = f"the multi-mode fit of the same log doubts it ({mode.fn_hz:.2f} Hz: {why})"
         else:
             mode = ringing[index]
             distance = abs(math.log(mode.wn_rad_s / fit.wn_rad_s))

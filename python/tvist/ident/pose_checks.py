@@ -10,9 +10,7 @@ Neighbours are the :data:`N_NEIGHBOURS` nearest poses with the same payload, by 
 difference of the base, shoulder and elbow angles (the wrist is drawn at random per pose and
 moves the modes little), within :data:`MAX_NEIGHBOUR_RAD`. The check needs at least two
 neighbours with confident modes; a mode jumps if, at every one of them, the closest confident
-mode (from either log) differs by more than :data:`JUMP_RATIO`. A ``modes`` entry that is a
-jumping ringing entry's mode (its ``ringing_index``) is flagged with it: the two estimate the
-same mode from the same log.
+mode (from either log) differs by more than :data:`JUMP_RATIO`.
 
 :func:`flag_jumps` works on the records' dict form and is idempotent (it drops its own
 earlier flags first), so it can run again when poses are added.
@@ -47,53 +45,19 @@ def _confident(record: dict[str, Any]) -> list[float]:
     ]
 
 
-def _without_jumps(entries: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """``entries`` without the reasons :func:`flag_jumps` added (confident again where that
-    was their only doubt)."""
-    cleaned = []
-    for m in entries:
-        reasons = [x for x in m.get("reasons", ()) if not x.startswith(JUMP_REASON)]
-        if len(reasons) == len(m.get("reasons", ())):
-            cleaned.append(m)
-        else:
-            cleaned.append({**m, "reasons": reasons, "low_confidence": bool(reasons)})
-    return cleaned
-
-
-def _flag_linked_modes(record: dict[str, Any]) -> None:
-    """Flag (in place) every confident ``modes`` entry whose ringing entry (``ringing_index``)
-    jumps."""
-    ringing = record.get("ringing") or []
-    modes = []
-    for m in record.get("modes") or []:
-        index = m.get("ringing_index")
-        linked = index is not None and 0 <= int(index) < len(ringing)
-        if "wn_rad_s" in m and not m.get("low_confidence", False) and linked:
-            jump = [x for x in ringing[int(index)].get("reasons", ()) if x.startswith(JUMP_REASON)]
-            if jump:
-                fn_hz = float(ringing[int(index)]["wn_rad_s"]) / (2 * math.pi)
-                m = {
-                    **m,
-                    "low_confidence": True,
-                    "reasons": [
-                        *m.get("reasons", ()),
-                        f"{jump[0]}: the ringing entry at {fn_hz:.2f} Hz that is this mode",
-                    ],
-                }
-        modes.append(m)
-    record["modes"] = modes
-
-
 def flag_jumps(records: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Copies of ``records`` with every confident ``ringing`` entry that jumps against its
-    neighbouring poses flagged, and the ``modes`` entry that is its mode (see the module
-    docstring); records without ``ringing`` or ``q`` are returned unchanged."""
+    neighbouring poses flagged (see the module docstring); records without ``ringing`` or
+    ``q`` are returned unchanged."""
     out = []
     for r in records:
         r = dict(r)
         if r.get("ringing"):
-            r["ringing"] = _without_jumps(r["ringing"])
-            r["modes"] = _without_jumps(r.get("modes") or [])
+            cleaned = []
+            for m in r["ringing"]:
+                reasons = [x for x in m.get("reasons", ()) if not x.startswith(JUMP_REASON)]
+                cleaned.append({**m, "reasons": reasons, "low_confidence": bool(reasons)})
+            r["ringing"] = cleaned
         out.append(r)
     usable = [i for i, r in enumerate(out) if r.get("q") is not None and r.get("ringing")]
     if len(usable) < N_NEIGHBOURS + 1:
@@ -126,5 +90,4 @@ def flag_jumps(records: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
                         f"{JUMP_REASON} (their closest modes are {text} away)",
                     ],
                 }
-        _flag_linked_modes(out[i])
     return out
