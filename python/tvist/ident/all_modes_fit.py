@@ -22,14 +22,15 @@ Load terms below ``drop_t`` standard errors are dropped.
 
 **Every candidate joint stays flexible** (:func:`flexible_candidates`: base to wrist 2 on a
 UR). A joint's gear is a spring whether or not its own mode was identified, and a joint made
-rigid forces its compliance into the others' laws: on the development variants of
-:mod:`tvist.sim.family` whose wrists are 3-4 times softer than nominal, a likelihood-ratio
-test that made such unexcited joints rigid left the base and shoulder laws biased (variant 3:
-base 2.8 % RMS / 9.3 % max and shoulder 8.6 / 26 % off the true modes at 20 poses outside the
-campaign; every joint flexible: 0.4 / 0.8 % and 4.0 / 10.8 %; variant 1's shoulder 3.1 / 11.3 %
--> 1.2 / 4.5 %). A joint whose mode the campaign never identified keeps a stiffness the data
-bound only loosely (within a factor :data:`STIFFNESS_SPAN` of its start); its mode is not
-shaped unless identified (:mod:`tvist.ident.shaped_modes`).
+rigid forces its compliance into the others' laws: on development variant 1 of
+:mod:`tvist.sim.family` (elbow and wrists never identified), a likelihood-ratio test that made
+its wrists rigid left the shoulder law 3.1 % RMS / 11.3 % max off the true modes at 20 poses
+outside the campaign; with every joint flexible 1.3 / 4.7 % (variants 0, 2 and 4 about
+unchanged; variant 3's wrist 1, 3.5 times softer than nominal, is not determined by base and
+shoulder excitations either way: its base and shoulder laws stay 2.7 / 8.9 % and 8.7 / 28 %
+off). A joint whose mode the campaign never identified keeps a stiffness the data bound only
+loosely (within a factor :data:`STIFFNESS_SPAN` of its start); its mode is not shaped unless
+identified (:mod:`tvist.ident.shaped_modes`).
 
 **Which links bend** is decided by the data: a candidate link's hinge is made stiff (removed)
 when the evidence for its bending is weak: the truncated χ² of the frequency fit (each
