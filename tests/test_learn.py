@@ -117,31 +117,18 @@ def test_learned_map_shaped_with_the_modes_the_rule_picks():
 def test_learning_from_the_published_paper10_map_improves_the_demo_moves():
     """The paper's published map (91.0 % on Q1->Q3 on this twin) as the prior: converted into
     a modal map, then 20 ordinary moves between 10 random poses, each pose reached once
-    unshaped."""
-    import tvist
+    unshaped (the sequence of :func:`tvist.demo.learning_study.learn_from_paper_map`)."""
+    from tvist.demo.learning_study import learn_from_paper_map
 
-    twin, robot = _twin(3), _robot()
-    paper = tvist.DynamicMap.paper_ur5e()
-    learner = MapLearner(robot, paper)
-    assert learner.converted is not None
-    poses = random_poses(robot, 10, np.random.default_rng(3))
-    for record in ordinary_moves(twin, robot, learner, poses, 20, swap_each_round=True):
-        obs = learner.observe(record)
-        # The payload is the declared one throughout. The unshaped move to the 4th pose
-        # (shoulder gravity torque 101 N m; the shoulder mode was seen at 39-48 N m before)
-        # shows the gear stiffening with load, which the converted prior lacks: it was taken
-        # for a payload change while the filter's negative stiffening gain, clipped to 0 in
-        # the map, hid that gain's uncertainty from the gate.
-        assert obs.payload is None, obs.reason
-    assert any(o.map_updated for o in learner.history)
-    rows = [m for m in default_methods() if m.key in ("unshaped", "fd-tvist-paper-map")]
-    rows.append(fd_tvist_modal("learned", "learned", learner.map))
-    quiet_twin = Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M)
-    results = {}
-    for motion in MOTIONS:
-        run = run_motion(motion, rows, quiet_twin, robot, with_slow_down=False)
-        paper_pct, learned_pct = (r.reduction_percent for r in run.runs[1:])
-        results[motion.name] = (paper_pct, learned_pct)
+    result = learn_from_paper_map(3)
+    # The payload is the declared one throughout. The unshaped move to the 4th pose
+    # (shoulder gravity torque 101 N m; the shoulder mode was seen at 39-48 N m before)
+    # shows the gear stiffening with load, which the converted prior lacks: it was taken
+    # for a payload change while the filter's negative stiffening gain, clipped to 0 in
+    # the map, hid that gain's uncertainty from the gate.
+    assert result.payload_reports == ()
+    assert result.updates > 0
+    results = {name: (r["paper"], r["learned"]) for name, r in result.reduction.items()}
     # Measured (seed 3): the paper map 99.20 / 91.03 / 96.21 %, learned 99.78 / 98.19 /
     # 99.35 % (before the gains were kept >= 0: 99.39 / 99.38 / 98.20 %, the move to the
     # 4th pose rejected as a payload change; with the turns not swapped, so that only

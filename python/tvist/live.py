@@ -231,8 +231,8 @@ class RtdeRecorder:
             If no package arrives within ``timeout_s`` (the stream stopped).
         """
         with self._new_sample:
-            target = self.n_samples + math.ceil(seconds * self._frequency_hz - 1e-9)
-        count = self.n_samples
+            count = self.n_samples
+        target = count + math.ceil(seconds * self._frequency_hz - 1e-9)
         while count < target:
             count = self.wait_newer(count, timeout_s)
 

@@ -126,7 +126,8 @@ D_TOL = 0.35
 #: Largest matching cost of a pair (3 "standard deviations"), and the cap of one residual's
 #: squared size in the joint test.
 GATE = 9.0
-#: Level of the test that keeps a link's bending hinge.
+#: Level of the likelihood-ratio test that keeps a link's bending hinge (the fit statistics'
+#: ``joint_test_level``).
 JOINT_P = 1e-3
 #: Starts of the joints other than base and shoulder, as multiples of the shoulder's
 #: stiffness (elbow) and as the frequency (Hz) of their own mode (wrists).
@@ -410,7 +411,7 @@ def _drop_weak_load_terms(
         dropped.append(f"stiffness term {t} of joint {_name(obs, j)['joint']}")
 
 
-def _select_joints(
+def _select_links(
     obs: ObservedModes, candidates: Sequence[int], drop_t: float
 ) -> tuple[_Model, _FreqFit, dict[int, float], list[dict[str, Any]], list[str]]:
     """The model of every candidate joint, bending links kept by backward elimination with the
@@ -419,13 +420,12 @@ def _select_joints(
     model = _candidate(obs, candidates)
     fit, start = _drop_weak_load_terms(obs, model, drop_t, dropped)
     tests: list[dict[str, Any]] = []
-    always = {obs.column(j) for j in ALWAYS_FLEXIBLE}
     while True:
         scale = _robust_scale(fit.residual)
         chi2_full = _truncated_chi2(fit, scale)
         trials = []
         for j in model.flex:
-            if j in always or j not in model.hinges:  # joints stay flexible (module doc)
+            if j not in model.hinges:  # joints stay flexible (module doc)
                 continue
             rigid = _candidate(obs, [i for i in model.flex if i != j])
             for i in rigid.flex:
@@ -607,7 +607,7 @@ def fit_all_modes(
             f"{2 * len(candidates) + 2} to fit {len(candidates)} flexible joints"
         )
     columns = [obs.column(j) for j in candidates] + list(_hinge_keys(obs))
-    model, fit, start, joint_tests, dropped = _select_joints(obs, sorted(columns), drop_t)
+    model, fit, start, joint_tests, dropped = _select_links(obs, sorted(columns), drop_t)
 
     # Dampers: base and shoulder, and any joint or hinge dominating identified modes.
     modes = model_modes(_entries(model, fit.x), obs.mass_kg_m2, obs.gravity_torque_nm, obs.jacobian)
