@@ -28,7 +28,9 @@ the map is right at its end pose to within what a ZV shaper tolerates
 
 - an observation whose innovation is implausible (normalised innovation squared above the
   :data:`GATE_PROBABILITY` quantile) is not used; if a payload other than the declared one
-  explains it better than the map's own uncertainty at that pose does, the payload change is
+  explains it better than the estimate's own uncertainty at that pose does (the estimate's
+  modes, paired one to one, and its covariance, as in the gate; a fit of a mode the decay
+  cannot tell from its neighbour weighed with their separation), the payload change is
   reported (:class:`PayloadReport`); fits that ring but are too uncertain to learn from are
   checked the same way (a report, never learned from);
 - every step is bounded to :data:`MAX_STEP_SIGMAS` prior standard deviations per parameter
