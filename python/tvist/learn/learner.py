@@ -28,7 +28,9 @@ the map is right at its end pose to within what a ZV shaper tolerates
 
 - an observation whose innovation is implausible (normalised innovation squared above the
   :data:`GATE_PROBABILITY` quantile) is not used; if a payload other than the declared one
-  explains it better than the map's own uncertainty at that pose does, the payload change is
+  explains it better than the estimate's own uncertainty at that pose does (the estimate's
+  modes, paired one to one, and its covariance, as in the gate; a fit of a mode the decay
+  cannot tell from its neighbour weighed with their separation), the payload change is
   reported (:class:`PayloadReport`); fits that ring but are too uncertain to learn from are
   checked the same way (a report, never learned from);
 - every step is bounded to :data:`MAX_STEP_SIGMAS` prior standard deviations per parameter
@@ -242,6 +244,18 @@ class _SeenMode:
     s_zeta: float
 
 
+def _seen_mode(m: ModeObservation) -> _SeenMode:
+    """``m`` with its measurement standard deviations: the fit's standard errors and the map
+    form's error (:data:`MODEL_WN_REL_SIGMA`, :data:`MODEL_ZETA_REL_SIGMA`)."""
+    return _SeenMode(
+        m.joint,
+        m.wn_rad_s,
+        m.zeta,
+        math.hypot(m.wn_se_rad_s, MODEL_WN_REL_SIGMA * m.wn_rad_s),
+        math.hypot(m.zeta_se, MODEL_ZETA_REL_SIGMA * m.zeta),
+    )
+
+
 @dataclass
 class _Seen:
     """An accepted move: its end pose and its observed modes. Which map mode each one is, is
@@ -376,8 +390,7 @@ class MapLearner:
             if not seen.modes:
                 continue
             modes = self._modes(theta, seen.q_end)
-            for m in seen.modes:
-                i = self._pair(modes[:, 0], m.joint, m.wn)
+            for i, m in zip(self._pairs(modes[:, 0], seen.modes), seen.modes, strict=True):
                 design = tvist.shaper("zv", float(modes[i, 0]), float(min(modes[i, 1], 0.99)))
                 values.append(tvist.prv(design, m.wn, m.zeta))
         return float(np.mean(values)) if values else math.nan
@@ -429,27 +442,20 @@ class MapLearner:
             )
             seen = _Seen(np.asarray(decay.q_end, dtype=float))
         else:
-            z, h, r_diag, h_of = self._mode_measurement(decay.q_end, modes)
+            seen = _Seen(np.asarray(decay.q_end, dtype=float), [_seen_mode(m) for _, m in modes])
+            z, h, r_diag, h_of = self._mode_measurement(
+                seen.q_end, [i for i, _ in modes], seen.modes
+            )
             what = "modes " + ", ".join(
                 f"joint {self.mode_joints[i]}: {m.wn_rad_s / (2 * math.pi):.2f} Hz, ζ {m.zeta:.3f}"
                 for i, m in modes
-            )
-            sigma = np.sqrt(r_diag)
-            seen = _Seen(
-                np.asarray(decay.q_end, dtype=float),
-                [
-                    _SeenMode(
-                        m.joint, m.wn_rad_s, m.zeta, float(sigma[2 * k]), float(sigma[2 * k + 1])
-                    )
-                    for k, (_, m) in enumerate(modes)
-                ],
             )
         jac = self._jacobian(h_of, h)
         s = jac @ self.cov @ jac.T + np.diag(r_diag)
         nu = z - h
         nis = float(nu @ np.linalg.solve(s, nu))
         if nis > stats.chi2.ppf(GATE_PROBABILITY, len(z)):
-            payload = self._payload_check(decay) if modes else None
+            payload = self._payload_check(seen.q_end, seen.modes) if modes else None
             reason = (
                 payload.message
                 if payload is not None
@@ -498,17 +504,59 @@ class MapLearner:
         return obs
 
     def _pair(self, predicted_wn: np.ndarray, joint: int, wn: float) -> int:
-        """Index of the map mode (of ``predicted_wn``, rad/s, by mode joint) that a mode of
-        ``wn`` rad/s fitted in ``joint``'s direction is.
+        """Index of the map mode (of ``predicted_wn``, rad/s: the modes by mode joint, then
+        optionally the map's other eigenmodes) that a mode of ``wn`` rad/s fitted in
+        ``joint``'s direction is.
 
         A fit in the tangential direction of one mode joint may show another joint's mode (a
         shoulder mode leaks into the base direction at most poses), so a fit is the map mode
-        nearest in frequency; where the map's modes are closer than
+        nearest in frequency; where the modes of the mode joints are closer than
         :data:`CLOSE_MODES_RATIO`, frequency cannot tell and the direction decides.
         """
-        if float(np.max(predicted_wn) / np.min(predicted_wn)) < CLOSE_MODES_RATIO:
+        named = predicted_wn[: len(self.mode_joints)]
+        if float(np.max(named) / np.min(named)) < CLOSE_MODES_RATIO:
             return self.mode_joints.index(joint)
         return int(np.argmin(np.abs(np.log(wn / predicted_wn))))
+
+    def _pairs(self, predicted_wn: np.ndarray, modes: Sequence[_SeenMode]) -> list[int]:
+        """The map mode each of ``modes`` is (:meth:`_pair`), one to one: where two name the
+        same map mode, the one nearer in frequency keeps it and the other is the nearest map
+        mode left. ``modes`` are one fit per map mode at the parameter vector they were
+        assigned at (:meth:`_assign`), but another parameter vector or payload can move two
+        map modes across one fit's frequency."""
+        wanted = [self._pair(predicted_wn, m.joint, m.wn) for m in modes]
+        distance = [
+            abs(math.log(m.wn / predicted_wn[i])) for m, i in zip(modes, wanted, strict=True)
+        ]
+        out = list(wanted)
+        taken: set[int] = set()
+        for k in sorted(range(len(modes)), key=distance.__getitem__):
+            if out[k] in taken:
+                free = [i for i in range(predicted_wn.size) if i not in taken]
+                out[k] = min(
+                    free, key=lambda i, wn=modes[k].wn: abs(math.log(wn / predicted_wn[i]))
+                )
+            taken.add(out[k])
+        return out
+
+    def _unresolved(self, q: np.ndarray) -> np.ndarray:
+        """By map mode (mode joint): the largest relative separation of a neighbour that a
+        free decay cannot tell it from, else 0.
+
+        Two modes are resolved when their separation exceeds the sum of their half-power
+        half-widths (``|ln(ω_i/ω_j)| > ζ_i + ζ_j``, the estimate's modes at ``q``). Closer,
+        each direction rings with both and a fit in it is a blend of the two, its frequency
+        off from either by up to their separation whatever its standard error says (on the
+        twin, fits 3-10 standard errors off where the base and shoulder modes lie 6-13 %
+        apart with ζ 0.14-0.24)."""
+        wn, zeta = self._modes(self.theta, q).T
+        out = np.zeros(wn.size)
+        for i in range(wn.size):
+            for j in range(wn.size):
+                sep = abs(math.log(wn[i] / wn[j]))
+                if j != i and sep < zeta[i] + zeta[j]:
+                    out[i] = max(out[i], sep)
+        return out
 
     def _assign(self, decay: Decay) -> list[tuple[int, ModeObservation]]:
         """The observed modes with the index of the map mode each one is (:meth:`_pair`), one
@@ -529,20 +577,18 @@ class MapLearner:
                 chosen[i] = m
         return sorted(chosen.items())
 
-    def _mode_measurement(self, q_end: np.ndarray, modes: Sequence[tuple[int, ModeObservation]]):
-        idx = [i for i, _ in modes]
-        z = np.array([v for _, m in modes for v in (m.wn_rad_s, m.zeta)])
-        r = []
-        for _, m in modes:
-            r.append(m.wn_se_rad_s**2 + (MODEL_WN_REL_SIGMA * m.wn_rad_s) ** 2)
-            r.append(m.zeta_se**2 + (MODEL_ZETA_REL_SIGMA * m.zeta) ** 2)
+    def _mode_measurement(self, q_end: np.ndarray, idx: Sequence[int], modes: Sequence[_SeenMode]):
+        """The observed ``modes`` (``ω_n``, ``ζ`` of each) as a measurement of the map modes
+        ``idx``, their variances the modes' measurement standard deviations squared."""
+        z = np.array([v for m in modes for v in (m.wn, m.zeta)])
+        r = np.array([v for m in modes for v in (m.s_wn**2, m.s_zeta**2)])
         q = np.asarray(q_end, dtype=float)
 
         def h_of(theta: np.ndarray) -> np.ndarray:
             modes_at = self._modes(theta, q)
             return np.array([v for i in idx for v in (modes_at[i, 0], modes_at[i, 1])])
 
-        return z, h_of(self.theta), np.array(r), h_of
+        return z, h_of(self.theta), r, h_of
 
     def _quiet_measurement(self, q_end: np.ndarray):
         # The published map's shapers left no ringing: its frequencies are right here, in
@@ -572,8 +618,7 @@ class MapLearner:
         for seen in self._seen:
             if seen.modes:
                 modes = self._modes(theta, seen.q_end)
-                for m in seen.modes:
-                    i = self._pair(modes[:, 0], m.joint, m.wn)
+                for i, m in zip(self._pairs(modes[:, 0], seen.modes), seen.modes, strict=True):
                     total += ((m.wn - modes[i, 0]) / m.s_wn) ** 2
                     total += ((m.zeta - modes[i, 1]) / m.s_zeta) ** 2
         return total
@@ -599,9 +644,9 @@ class MapLearner:
         """A payload change shown by fits too uncertain to learn from: modes that ring
         (flagged only for the standard errors of their frequency or damping, not for weak
         ringing or a poor fit, the frequency's below :data:`FLAGGED_MAX_WN_REL_SE`), whose
-        frequencies fail the gate of :meth:`observe` (each the nearest predicted mode, their
-        standard errors and the map form's error, the estimate's uncertainty). A report only:
-        such fits never touch the estimate."""
+        frequencies fail the gate of :meth:`observe` (paired one to one with the estimate's
+        modes, :meth:`_pairs`; their standard errors and the map form's error, the
+        estimate's uncertainty). A report only: such fits never touch the estimate."""
         ringing = [
             m
             for m in decay.flagged
@@ -612,84 +657,81 @@ class MapLearner:
             return None
         q = np.asarray(decay.q_end, dtype=float)
         predicted = self._modes(self.theta, q)[:, 0]
-        # Fits of one mode (within CLOSE_MODES_RATIO): the one with the smaller error. As
-        # many distinct modes as the map has: they are its modes in order of frequency (a
-        # payload change moves all of them, so the nearest predicted mode can be another's);
-        # fewer: each is the nearest predicted mode.
+        # Fits of one mode (within CLOSE_MODES_RATIO): the one with the smaller error; at
+        # most one fit per map mode.
         distinct: list[ModeObservation] = []
         for m in sorted(ringing, key=lambda m: m.wn_se_rad_s / m.wn_rad_s):
-            if all(
+            if len(distinct) < predicted.size and all(
                 abs(math.log(m.wn_rad_s / d.wn_rad_s)) > math.log(CLOSE_MODES_RATIO)
                 for d in distinct
             ):
                 distinct.append(m)
-        chosen: dict[int, ModeObservation] = {}
-        if len(distinct) == predicted.size:
-            order = np.argsort(predicted)
-            for k, m in enumerate(sorted(distinct, key=lambda m: m.wn_rad_s)):
-                chosen[int(order[k])] = m
-        else:
-            for m in distinct:
-                i = int(np.argmin(np.abs(np.log(m.wn_rad_s / predicted))))
-                chosen.setdefault(i, m)
-        idx = sorted(chosen)
+        modes = [_seen_mode(m) for m in distinct]
+        idx = self._pairs(predicted, modes)
 
         def h_of(theta: np.ndarray) -> np.ndarray:
             return self._modes(theta, q)[idx, 0]
 
-        h = predicted[idx]
-        jac = self._jacobian(h_of, h)
-        z = np.array([chosen[i].wn_rad_s for i in idx])
-        r = np.array([chosen[i].wn_se_rad_s ** 2 for i in idx]) + (MODEL_WN_REL_SIGMA * z) ** 2
-        nu = z - h
+        jac = self._jacobian(h_of, predicted[idx])
+        nu = np.array([m.wn for m in modes]) - predicted[idx]
+        r = np.array([m.s_wn**2 for m in modes])
         nis = float(nu @ np.linalg.solve(jac @ self.cov @ jac.T + np.diag(r), nu))
         if nis <= stats.chi2.ppf(GATE_PROBABILITY, len(idx)):
             return None
-        return self._payload_check(decay, [chosen[i] for i in idx])
+        return self._payload_check(q, modes)
 
-    def _payload_check(
-        self, decay: Decay, modes: Sequence[ModeObservation] | None = None
-    ) -> PayloadReport | None:
-        """The payload that makes the learned map predict the observed modes, if it differs
-        from the declared one by more than :data:`MIN_PAYLOAD_CHANGE_KG` and the declared
-        one explains them worse by more than the :data:`SIGNIFICANCE_PROBABILITY`
-        chi-square quantile (one degree of freedom).
+    def _eigenmodes(self, theta: np.ndarray, q: np.ndarray, robot: Robot) -> np.ndarray:
+        """Natural frequencies (rad/s) of the map at ``theta``: its modes by mode joint
+        (:meth:`_modes`), then its other eigenmodes in order of frequency."""
+        named = self._modes(theta, q, robot)[:, 0]
+        others = list(self._all_modes(theta, q, robot))
+        for wn in named:
+            others.pop(int(np.argmin(np.abs(np.log(np.asarray(others) / wn)))))
+        return np.concatenate([named, np.sort(others)])
 
-        Which map mode an observed mode is depends on the payload (all of them move), so at
-        every candidate payload each observed mode is compared with the nearest of all the
-        map's eigenmodes (log-frequency), weighted by the fit's standard error, the map
-        form's error and the map's own uncertainty at this pose (the estimate's covariance
-        through the modes' Jacobian); a grid over the payload (:data:`PAYLOAD_GRID_KG` steps
-        up to twice the rated payload), refined around its local minima.
+    def _payload_check(self, q_end: np.ndarray, modes: Sequence[_SeenMode]) -> PayloadReport | None:
+        """The payload that makes the estimate predict the observed ``modes`` (as the gate of
+        :meth:`observe` weighed them: one fit per map mode, its standard error and the map
+        form's error), if it differs from the declared one by more than
+        :data:`MIN_PAYLOAD_CHANGE_KG` and the declared one explains them worse by more than
+        the :data:`SIGNIFICANCE_PROBABILITY` chi-square quantile (one degree of freedom).
+
+        The estimate, what the gate compared the modes with, predicts them at every candidate
+        payload, weighted by the estimate's own uncertainty at this pose (its covariance
+        through the modes' Jacobian; the published map is the estimate of fewer logs, and its
+        modes with the estimate's covariance would be a map that nobody estimated). Which map
+        mode an observed mode is depends on the payload (all of them move), so at every
+        candidate the modes are paired again, one to one (:meth:`_pairs`), with the map's
+        modes by mode joint and its other eigenmodes (a mode of a joint the map does not
+        shape, a soft elbow at a folded pose, is no payload change). A grid over the payload
+        (:data:`PAYLOAD_GRID_KG` steps up to twice the rated payload), refined around its
+        local minima.
         """
         declared = self.robot.payload
-        q = np.asarray(decay.q_end, dtype=float)
-        modes = decay.modes if modes is None else modes
-        wn = np.array([m.wn_rad_s for m in modes])
-        measured = np.hypot([m.wn_se_rad_s / m.wn_rad_s for m in modes], MODEL_WN_REL_SIGMA)
-        # The map's own uncertainty at this pose, what it has not learned yet: the relative
-        # standard deviation of each of its modes' frequencies under the estimate's
-        # covariance. Without it, a map a few per cent off an arm it was not identified on is
-        # explained better by another payload than by its own error.
-        log_wn = np.log(self._all_modes(self.theta, q))
-        jac = self._jacobian(lambda theta: np.log(self._all_modes(theta, q)), log_wn)
-        map_rel = np.sqrt(np.einsum("ij,jk,ik->i", jac, self.cov, jac))
+        q = np.asarray(q_end, dtype=float)
+        wn = np.array([m.wn for m in modes])
+        # The fits' relative standard deviations, widened where the estimate's modes at the
+        # declared payload lie too close to be told apart (:meth:`_unresolved`): such a fit
+        # is a blend of the two, and a blend off the map by its separation is no payload.
+        unresolved = self._unresolved(q)[self._pairs(self._modes(self.theta, q)[:, 0], modes)]
+        measured = np.diag([(m.s_wn / m.wn) ** 2 for m in modes] + unresolved**2)
+        # The estimate's own uncertainty at this pose, what it has not learned yet: the
+        # covariance of its modes' log frequencies. Without it, a map a few per cent off an
+        # arm it was not identified on is explained better by another payload than by its
+        # own error.
+        log_wn = np.log(self._eigenmodes(self.theta, q, self.robot))
+        jac = self._jacobian(lambda t: np.log(self._eigenmodes(t, q, self.robot)), log_wn)
+        map_cov = jac @ self.cov @ jac.T
 
-        def assigned(mass: float) -> tuple[np.ndarray, np.ndarray]:
-            # Every eigenmode of the map, not only the shaped ones: a mode of a joint the map
-            # does not shape (a soft elbow at a folded pose) is no payload change.
+        def assigned(mass: float) -> tuple[np.ndarray, list[int]]:
             payload = Payload(mass, tuple(declared.com_m), declared.inertia_kg_m2)
-            pred = self._all_modes(self._published, q, Robot(self.robot.params, payload))
-            errors = np.log(wn[:, None] / pred[None, :])
-            nearest = np.argmin(np.abs(errors), axis=1)
-            return errors[np.arange(wn.size), nearest], nearest
-
-        def log_errors(mass: float) -> np.ndarray:
-            return assigned(mass)[0]
+            pred = self._eigenmodes(self.theta, q, Robot(self.robot.params, payload))
+            idx = self._pairs(pred, modes)
+            return np.log(wn / pred[idx]), idx
 
         def misfit(mass: float) -> float:
-            errors, nearest = assigned(mass)
-            return float(np.sum(errors**2 / (measured**2 + map_rel[nearest] ** 2)))
+            errors, idx = assigned(mass)
+            return float(errors @ np.linalg.solve(map_cov[np.ix_(idx, idx)] + measured, errors))
 
         upper = 2.0 * max(float(self.robot.params.max_payload_kg), declared.mass_kg)
         grid = np.arange(0.0, upper + PAYLOAD_GRID_KG / 2, PAYLOAD_GRID_KG)
@@ -711,7 +753,7 @@ class MapLearner:
         masses = [m for f, m in found if f <= limit]
         if any(abs(m - declared.mass_kg) < MIN_PAYLOAD_CHANGE_KG for m in masses):
             return None
-        shift = 100.0 * float(np.mean(np.expm1(log_errors(declared.mass_kg))))
+        shift = 100.0 * float(np.mean(np.expm1(assigned(declared.mass_kg)[0])))
         return PayloadReport(float(declared.mass_kg), masses[0], shift, tuple(masses[1:]))
 
     # -- provenance ------------------------------------------------------------------------
