@@ -52,6 +52,22 @@ def test_a_mode_of_the_elbow_log_is_checked_against_the_shoulder_log():
     assert "disagrees with the base log" in base_shoulder[1].reasons[0]
 
 
+def test_a_third_log_settles_a_disagreement():
+    """Base and shoulder agree on 12.57 Hz (both confident); the elbow log, which rings that
+    mode only weakly, puts it 1.8 % higher: only the elbow's entry is flagged. Without the
+    confirming third log both would be (as between base and shoulder alone)."""
+    doubtful = _mode(2, 12.8).flagged("merged neighbours: with one mode more it moves 2.1 %")
+    out = cross_check_logs([_mode(0, 12.57), _mode(1, 12.57), doubtful])
+    assert not out[0].low_confidence and not out[1].low_confidence
+    assert any(r.startswith("disagrees with the base log (1.8 %") for r in out[2].reasons)
+    alone = cross_check_logs([_mode(0, 12.57), _mode(2, 12.8)])
+    assert alone[0].low_confidence and alone[1].low_confidence
+    # A confirmation by a doubtful mode settles nothing: both of the disagreeing pair flagged.
+    weak_partner = _mode(1, 12.57).flagged("uncertain damping")
+    out = cross_check_logs([_mode(0, 12.57), weak_partner, _mode(2, 12.8)])
+    assert out[0].low_confidence and out[2].low_confidence
+
+
 def _log(name: str, joint: int, q: list[float]) -> LoadedLog:
     return LoadedLog(path=Path(name), record=None, joint=joint, pose=np.array(q))  # type: ignore[arg-type]
 

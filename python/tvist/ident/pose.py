@@ -32,7 +32,8 @@ entry is then flagged: the mode is not among those that ring).
 
 Checks across the logs (:func:`cross_check_logs`): a mode found in any two logs of the pose
 must agree, within :data:`AGREEMENT_SE` combined standard errors and at
-least :data:`AGREEMENT_FLOOR`; otherwise both entries are flagged. Checks across poses are
+least :data:`AGREEMENT_FLOOR`; otherwise both entries are flagged (only the one a third log
+does not confirm, where one is confirmed). Checks across poses are
 in :mod:`tvist.ident.pose_checks`.
 
 plus whatever the producer adds (the campaign: ``angle_rad``, ``radius_m``, ``wrist_joint``,
@@ -229,26 +230,48 @@ def cross_check_logs(ringing: list[RingingMode]) -> list[RingingMode]:
 
     For every two logs (e.g. base and shoulder, shoulder and elbow), their modes closer than
     :data:`SAME_MODE_RATIO`, at least one of them confident and neither weak (a weak mode may
-    be no mode), are paired, closest first; a pair whose frequencies differ by more than
-    ``max(AGREEMENT_SE · sqrt(se_a² + se_b²), AGREEMENT_FLOOR)`` (relative) is flagged in
-    both logs, naming the difference and the other log (a doubtful partner widens the
-    tolerance by its larger standard error, but still counts). A mode is paired at most once
-    per other log.
+    be no mode), are paired, closest first (a mode at most once per other log). A pair whose
+    frequencies differ by more than ``max(AGREEMENT_SE · sqrt(se_a² + se_b²),
+    AGREEMENT_FLOOR)`` (relative) disagrees (a doubtful partner widens the tolerance by its
+    larger standard error, but still counts); both are flagged, naming the difference and the
+    other log -- except where a third log settles it: a mode that agrees with a confident
+    mode of a third log is confirmed, and of a disagreeing pair only the unconfirmed mode is
+    flagged (with two logs nothing is confirmed).
     """
     out = list(ringing)
     joints = sorted({m.log_joint for m in out})
+    pairs = []
     for n, first in enumerate(joints):
         for second in joints[n + 1 :]:
-            out = _cross_check_two(out, first, second)
+            pairs += _paired(out, first, second)
+    confirmed = {
+        i
+        for a, b, distance, tolerance in pairs
+        if distance <= tolerance
+        for i, partner in ((a, b), (b, a))
+        if not ringing[partner].low_confidence
+    }
+    for a, b, distance, tolerance in pairs:
+        if distance <= tolerance:
+            continue
+        diff = 100.0 * (math.exp(distance) - 1.0)
+        allowed = f"more than the {100 * tolerance:.1f} % the standard errors allow"
+        settled = (a in confirmed) != (b in confirmed)
+        for i, other in ((a, b), (b, a)):
+            if settled and i in confirmed:
+                continue
+            log = _log_name(out[other].log_joint)
+            out[i] = out[i].flagged(f"disagrees with the {log} log ({diff:.1f} %, {allowed})")
     return out
 
 
-def _cross_check_two(out: list[RingingMode], first: int, second: int) -> list[RingingMode]:
-    """:func:`cross_check_logs` for the logs of joints ``first`` and ``second``."""
-    out = list(out)
+def _paired(out: list[RingingMode], first: int, second: int) -> list[tuple[int, int, float, float]]:
+    """The pairs ``(a, b, distance, tolerance)`` of :func:`cross_check_logs` between the logs
+    of joints ``first`` and ``second``: indices into ``out``, ``|log(ω_a / ω_b)|`` and its
+    tolerance."""
     one = [i for i, m in enumerate(out) if m.log_joint == first]
     two = [i for i, m in enumerate(out) if m.log_joint == second]
-    pairs = sorted(
+    candidates = sorted(
         (abs(math.log(out[a].wn_rad_s / out[b].wn_rad_s)), a, b)
         for a in one
         for b in two
@@ -259,22 +282,14 @@ def _cross_check_two(out: list[RingingMode], first: int, second: int) -> list[Ri
         and math.isfinite(_relative_se(out[a]) + _relative_se(out[b]))
     )
     used: set[int] = set()
-    for distance, a, b in pairs:
+    pairs = []
+    for distance, a, b in candidates:
         if a in used or b in used:
             continue
         used |= {a, b}
         combined = math.hypot(_relative_se(out[a]), _relative_se(out[b]))
-        tolerance = max(AGREEMENT_SE * combined, AGREEMENT_FLOOR)
-        if distance > tolerance:
-            diff = 100.0 * (math.exp(distance) - 1.0)
-            allowed = f"more than the {100 * tolerance:.1f} % the standard errors allow"
-            out[a] = out[a].flagged(
-                f"disagrees with the {_log_name(second)} log ({diff:.1f} %, {allowed})"
-            )
-            out[b] = out[b].flagged(
-                f"disagrees with the {_log_name(first)} log ({diff:.1f} %, {allowed})"
-            )
-    return out
+        pairs.append((a, b, distance, max(AGREEMENT_SE * combined, AGREEMENT_FLOOR)))
+    return pairs
 
 
 def pose_of(record: Record) -> np.ndarray:
