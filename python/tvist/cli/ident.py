@@ -171,7 +171,7 @@ def add_campaign_command(sub: argparse._SubParsersAction) -> None:
     """``tvist campaign (--sim | --robot-ip IP)``: Algorithm 1 over the workspace."""
     p = sub.add_parser(
         "campaign",
-        help="identify base and shoulder modes over the workspace (paper Algorithm 1)",
+        help="identify the arm's modes over the workspace (paper Algorithm 1)",
         description="Move through the campaign poses payload by payload (on a robot: one "
         "prompt per payload change, or none with --yes; each run's RTDE logs in a new "
         "logs/run-NNN next to --out), excite the --excite joints (base, shoulder, elbow) in "
