@@ -121,6 +121,14 @@ def test_bad_excite_values_are_one_line(value, tmp_path, capsys):
     assert "0,1,2" in err[0] and not out.exists()
 
 
+def test_campaign_refuses_a_bad_excite_on_one_line(tmp_path, capsys):
+    out = tmp_path / "c.jsonl"
+    assert main(["campaign", "--sim", "--excite", "0,2", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("tvist campaign: error: --excite 0,2: the base")
+    assert not out.exists()
+
+
 @pytest.mark.slow
 def test_every_excitation_of_the_default_plan_stays_within_limits_and_above_the_table():
     """Algorithm 2's ±10° of the elbow and of wrist 1 (the same random excitation as the
