@@ -5,6 +5,10 @@ entries, the ones the paper's map reads (:data:`tvist.ident.pose.IDENTIFIED_JOIN
 elbow is excited too by default: its log rings the elbow-dominated mode (the lowest at folded
 poses, the third that rings after a long move) that a base or shoulder excitation barely
 moves, as ``ringing`` entries for the modal fit. Wrist 1 may be added.
+
+Joints are indices from the base (0). The names are a UR's (2 elbow, 3 wrist 1); on an arm
+placed as its URDF places it (FR3, iiwa14) index 2 turns the upper arm about its own axis
+and its elbow is index 3.
 """
 
 from __future__ import annotations
