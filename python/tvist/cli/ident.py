@@ -385,8 +385,7 @@ def add_identify_command(sub: argparse._SubParsersAction) -> None:
         "(files, globs or directories) with --out: find each log's excited joint, group the "
         "logs of each pose (base, shoulder, elbow, wrist 1) by their starting actual_q, "
         "identify every pose (the modes of base and shoulder, every mode that rings in each "
-        "log) "
-        "in parallel and write one pose record per line, the input of 'tvist fit-map'.",
+        "log) in parallel and write one pose record per line, the input of 'tvist fit-map'.",
     )
     p.add_argument("logs", nargs="+", metavar="LOG", help="RTDE CSV files, globs or directories")
     p.add_argument(

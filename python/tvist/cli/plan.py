@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from tvist.cli.args import DEFAULT_PAYLOAD_COM_M, existing_file
-from tvist.ident.excited import EXCITED_JOINTS
+from tvist.ident.excited import EXCITED_JOINTS, excited_joints
 
 __all__ = [
     "add_plan_command",
@@ -86,8 +86,6 @@ def excited_from_args(args: argparse.Namespace) -> tuple[int, ...]:
         Not comma-separated joint numbers, or joints a campaign cannot excite; one line
         naming the value.
     """
-    from tvist.ident.excited import excited_joints
-
     cells = [c.strip() for c in str(args.excite).split(",")]
     try:
         return excited_joints([int(c) for c in cells])

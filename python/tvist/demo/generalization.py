@@ -54,7 +54,8 @@ from typing import Any
 
 import numpy as np
 
-from tvist.ident.excited import EXCITED_JOINTS, excited_joints
+from tvist.cli.plan import excited_from_args
+from tvist.ident.excited import EXCITED_JOINTS
 
 __all__ = [
     "EVALUATION_POSES",
@@ -711,9 +712,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ValueError as exc:
         p.exit(2, f"{p.prog}: error: {exc}\n")
     try:
-        joints = excited_joints([int(j) for j in args.excite.split(",")])
+        joints = excited_from_args(args)
     except ValueError as exc:
-        p.exit(2, f"{p.prog}: error: --excite {args.excite}: {exc}\n")
+        p.exit(2, f"{p.prog}: error: {exc}\n")
     if not 1 <= args.workers <= MAX_WORKERS:
         p.exit(2, f"{p.prog}: error: --workers {args.workers}: give 1 to {MAX_WORKERS}\n")
     settings = HarnessSettings(
