@@ -104,7 +104,7 @@ def test_plan_record_identify_fit_run_on_the_twin(tmp_path) -> None:
         *("--approach-speed", "1.5", "--approach-accel", "3.0"),
     )
     programs = sorted(plan.glob("*.script"))
-    assert len(programs) == 16  # 7 + 1 poses, base and shoulder
+    assert len(programs) == 24  # 7 + 1 poses, base, shoulder and elbow (the default --excite)
     with twin_server():
         for program in programs:
             _run_while_recording(program.read_text(), logs / f"{program.stem}.csv")

@@ -133,14 +133,14 @@ def test_each_run_keeps_its_own_logs(fake_robot, tmp_path):
     assert main(args) == 0
     first = sorted((tmp_path / "logs").rglob("*.csv"))
     contents = {p: p.read_text() for p in first}
-    assert len(first) == 14  # 7 poses, base and shoulder
+    assert len(first) == 21  # 7 poses, base, shoulder and elbow (the default --excite)
     assert main([*args, "--overwrite"]) == 0
     every = sorted((tmp_path / "logs").rglob("*.csv"))
-    assert len(every) == 28
+    assert len(every) == 42
     assert {p: p.read_text() for p in first} == contents  # the first run's logs untouched
     assert len({p.parent for p in every}) == 2
     # Run again without --overwrite: every pose is done, the campaign resumes with nothing
     # to move.
     assert main(args) == 0
     assert not [c for c in fake_robot.last.calls if c[0] == "moveJ"]
-    assert len(sorted((tmp_path / "logs").rglob("*.csv"))) == 28
+    assert len(sorted((tmp_path / "logs").rglob("*.csv"))) == 42

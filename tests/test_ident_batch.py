@@ -18,7 +18,7 @@ import pytest
 import tvist
 from ident_reference import generate_log
 from tvist.cli import main
-from tvist.ident.batch import excited_joint, pair_logs
+from tvist.ident.batch import excited_joint, group_logs
 from tvist.ident.campaign import campaign_poses
 from tvist.ident.pose import PoseRecord
 from tvist.robots import ur5e
@@ -111,7 +111,7 @@ def test_pairing_and_joint_detection(campaign_logs):
     logs = [load_log(folder / name) for name in sorted(truth)[:6]]
     for log in logs:
         assert excited_joint(log.record) == truth[log.path.name][1]
-    pairs, others = pair_logs(logs)
+    pairs, others = group_logs(logs)
     assert not others
     for pair in pairs:
         if pair.base is not None and pair.shoulder is not None:

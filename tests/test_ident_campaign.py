@@ -50,8 +50,13 @@ def test_poses_follow_algorithm_1():
     )
 
 
+#: The stand-in robot's mode in the elbow excitation's log, (rad/s, 1).
+ELBOW_MODE = (2 * math.pi * 21.0, 0.06)
+
+
 class ModeRobot:
-    """A cheap stand-in robot: rigid kinematics plus one known mode per excited joint."""
+    """A cheap stand-in robot: rigid kinematics plus one known mode per excited joint (base
+    and shoulder: ``modes``; the elbow: :data:`ELBOW_MODE`)."""
 
     robot_name = "ur5e"
 
@@ -66,7 +71,7 @@ class ModeRobot:
     def record_excitation(self, excitation):
         self.calls += 1
         j = excitation.joint
-        wn, zeta = self.modes[j]
+        wn, zeta = (*self.modes, ELBOW_MODE)[j]
         tangent = self._robot.jacobian(excitation.q0)[:3, j]
         r = np.linalg.norm(tangent)
         # exact integration by the independent generator, not the estimator's held model
@@ -96,13 +101,13 @@ def test_runner_appends_per_pose_and_resumes(tmp_path):
     results = tmp_path / "campaign.jsonl"
     robot = ModeRobot()
     first = run_campaign(poses[:5], results, robot=robot, progress=False, duration_s=3.0)
-    assert len(first) == 5 and robot.calls == 10  # base and shoulder per pose
+    assert len(first) == 5 and robot.calls == 15  # base, shoulder and elbow per pose
     # An interrupted write leaves a torn last line; that pose is simply run again.
     with results.open("a") as fh:
         fh.write('{"key": "' + poses[5].key + '", "modes": [')
     with pytest.warns(UserWarning, match="1 line.*quarantine"):
         all_results = run_campaign(poses, results, robot=robot, progress=False, duration_s=3.0)
-    assert robot.calls == 10 + 2 * (len(poses) - 5)  # finished poses were skipped
+    assert robot.calls == 15 + 3 * (len(poses) - 5)  # finished poses were skipped
     assert sorted(r["key"] for r in all_results) == sorted(p.key for p in poses)
     for line in results.read_text().splitlines():
         json.loads(line)  # every line is a complete record
@@ -111,6 +116,10 @@ def test_runner_appends_per_pose_and_resumes(tmp_path):
         for fit, (wn, zeta) in zip(record["modes"], robot.modes, strict=True):
             assert fit["wn_rad_s"] == pytest.approx(wn, rel=0.01)
             assert fit["zeta"] == pytest.approx(zeta, rel=0.05)
+        # The elbow log's mode is a ringing entry of its own log (the local fit's 1 %; its
+        # confidence is the multi-mode fit's matter, tests/test_ident_ringing.py).
+        elbow = [m for m in record["ringing"] if m["log_joint"] == 2]
+        assert any(m["wn_rad_s"] == pytest.approx(ELBOW_MODE[0], rel=0.01) for m in elbow)
     table = pose_table(all_results, joint=1)  # the records feed the map fit directly
     assert table.n_poses == len(poses)
     assert table.inertia_kg_m2.shape == (len(poses), 6)
@@ -188,15 +197,19 @@ def test_a_file_made_with_other_settings_is_refused_not_reused(tmp_path):
     poses = campaign_poses(payloads_kg=(1.0,), radii_m=PAPER_RADII_M[:1])[:2]
     results = tmp_path / "c.jsonl"
     robot = ModeRobot()
-    run_campaign(poses, results, robot=robot, progress=False, duration_s=2.0)
+    run_campaign(poses, results, robot=robot, progress=False, duration_s=2.0, joints=(0, 1))
     assert robot.calls == 4
     with pytest.raises(ValueError, match="other settings.*choose another results file"):
-        run_campaign(poses, results, robot=robot, progress=False, duration_s=2.5)
+        run_campaign(poses, results, robot=robot, progress=False, duration_s=2.5, joints=(0, 1))
+    # Other excited joints are other settings too: base and shoulder records are not mixed
+    # with records that have elbow entries.
+    with pytest.raises(ValueError, match="other settings"):
+        run_campaign(poses, results, robot=robot, progress=False, duration_s=2.0)
     assert robot.calls == 4 and len(load_results(results)) == 2  # nothing reused or added
     again = run_campaign(
         poses, results, robot=robot, progress=False, duration_s=2.5, overwrite=True
     )
-    assert robot.calls == 8 and len(again) == 2
+    assert robot.calls == 10 and len(again) == 2
 
 
 @pytest.mark.slow
@@ -204,12 +217,14 @@ def test_invalid_lines_are_quarantined_and_their_poses_rerun(tmp_path):
     poses = campaign_poses(payloads_kg=(1.0,), radii_m=PAPER_RADII_M[:1])[:3]
     results = tmp_path / "c.jsonl"
     robot = ModeRobot()
-    run_campaign(poses[:2], results, robot=robot, progress=False, duration_s=2.0)
+    run_campaign(poses[:2], results, robot=robot, progress=False, duration_s=2.0, joints=(0, 1))
     lines = results.read_text().splitlines()
     torn = lines[1][: len(lines[1]) // 2]
     results.write_text(f"{lines[0]}\n{torn}\nnull\n" + '{"no_key": 1}\n')
     with pytest.warns(UserWarning, match="3 line"):
-        records = run_campaign(poses, results, robot=robot, progress=False, duration_s=2.0)
+        records = run_campaign(
+            poses, results, robot=robot, progress=False, duration_s=2.0, joints=(0, 1)
+        )
     assert sorted(r["key"] for r in records) == sorted(p.key for p in poses)
     assert robot.calls == 4 + 4  # the torn pose and the new one
     quarantine = (tmp_path / "c.jsonl.quarantine").read_text().splitlines()

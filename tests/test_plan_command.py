@@ -9,8 +9,16 @@ import pytest
 
 from tvist.cli import main
 from tvist.cli.shape import read_trajectory_csv
-from tvist.ident.pose_plan import campaign_poses, cover_poses, plan_shortfall, pose_excitations
+from tvist.ident.pose_plan import (
+    campaign_poses,
+    cover_poses,
+    plan_poses,
+    plan_shortfall,
+    pose_excitations,
+)
+from tvist.robots import Robot, params
 from tvist.trajectory import PAPER_POSES
+from tvist.units import check_trajectory
 from tvist.urserver.move_program import parse_move_program
 
 
@@ -51,7 +59,9 @@ def test_plan_writes_programs_and_trajectories_payload_by_payload(tmp_path, caps
         np.testing.assert_allclose(trajectory.Q, excitation.q, atol=5e-10)  # 9 decimals
         np.testing.assert_allclose(trajectory.times_s, excitation.t_s, atol=5e-10)
     n_excitations = sum(len(p["excitations"]) for p in plan["poses"])
-    assert n_excitations == 2 * len(keys)
+    # Base, shoulder and elbow at every pose (the default --excite).
+    assert plan["excited_joints"] == [0, 1, 2]
+    assert n_excitations == 3 * len(keys)
     assert len(list(out.glob("*.script"))) == n_excitations
 
 
@@ -74,6 +84,67 @@ def test_plan_busy_time_adds_excitations_and_approaches(tmp_path):
         v = min(0.5, np.sqrt(distance * a))
         total += distance / v + v / a if distance > 0 else 0.0
     assert plan["busy_s"] == pytest.approx(total, rel=1e-12)
+
+
+def test_excite_chooses_the_joints_keeping_the_base_and_shoulder_excitations(tmp_path):
+    """``--excite 0,1,3``: base, shoulder and wrist 1 at every pose; the base and shoulder
+    excitations are those of a plan of theirs alone (same seeds, same samples)."""
+    args = ["plan", "--payloads", "5", "--every", "8", "--duration", "1", "--no-workspace-cover"]
+    plans = {}
+    for excite in ("0,1", "0,1,3"):
+        out = tmp_path / excite
+        assert main([*args, "--excite", excite, "--out", str(out)]) == 0
+        plans[excite] = json.loads((out / "plan.json").read_text())
+    assert plans["0,1,3"]["excited_joints"] == [0, 1, 3]
+    for two, three in zip(plans["0,1"]["poses"], plans["0,1,3"]["poses"], strict=True):
+        assert [e["joint"] for e in three["excitations"]] == [0, 1, 3]
+        for a, b in zip(two["excitations"], three["excitations"], strict=False):
+            assert (a["joint"], a["seed"], a["duration_s"]) == (
+                b["joint"],
+                b["seed"],
+                b["duration_s"],
+            )
+            csv_a, csv_b = (tmp_path / e / x["trajectory"] for e, x in (("0,1", a), ("0,1,3", b)))
+            assert csv_a.read_text() == csv_b.read_text()
+    pose = campaign_poses("ur5e", payloads_kg=[5.0])[0]
+    wrist = pose_excitations(pose, 1.0, (0, 1, 3))[2]
+    elbow = pose_excitations(pose, 1.0, (0, 1, 2))[2]
+    assert wrist.joint == 3 and elbow.joint == 2 and wrist.seed != elbow.seed
+
+
+@pytest.mark.parametrize("value", ["7", "x", "1,2", "0,1,4", "0,,1"])
+def test_bad_excite_values_are_one_line(value, tmp_path, capsys):
+    out = tmp_path / "plan"
+    assert main(["plan", "--excite", value, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"tvist plan: error: --excite {value}: "), err
+    assert "0,1,2" in err[0] and not out.exists()
+
+
+def test_campaign_refuses_a_bad_excite_on_one_line(tmp_path, capsys):
+    out = tmp_path / "c.jsonl"
+    assert main(["campaign", "--sim", "--excite", "0,2", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("tvist campaign: error: --excite 0,2: the base")
+    assert not out.exists()
+
+
+@pytest.mark.slow
+def test_every_excitation_of_the_default_plan_stays_within_limits_and_above_the_table():
+    """Algorithm 2's ±10° of the elbow and of wrist 1 (the same random excitation as the
+    base's and shoulder's) at every pose of the default UR5e plan: inside the joint limits
+    (the elbow's ±180°: the plan's elbow reaches 150°) and the flange centre above the
+    mounting plane throughout (the shoulder's own excitation, excited since the paper, dips
+    2 cm below it at one workspace pose, m3kg-W4; the elbow and wrist 1 stay above)."""
+    robot_params = params("ur5e")
+    robot = Robot(robot_params)
+    for pose in plan_poses("ur5e"):
+        if pose.q is None:
+            continue
+        for excitation in pose_excitations(pose, 8.0, (0, 1, 2, 3))[2:]:
+            check_trajectory(excitation.q, excitation.dt_s, robot_params, what=pose.key)
+            z = robot.flange_pose_many(np.ascontiguousarray(excitation.q))[:, 2, 3]
+            assert z.min() > 0.0, (pose.key, excitation.joint, z.min())
 
 
 @pytest.mark.parametrize(

@@ -78,7 +78,7 @@ MAP_RMS_PERCENT = 3.0
 @pytest.mark.slow
 def test_modal_fit_on_a_small_fr3_campaign_recovers_its_lowest_modes(tmp_path):
     """A small campaign on the FR3's twin (2 random workspace poses per payload, 0 and 3 kg,
-    plus the workspace's extreme inertias; 4 s excitations of base and shoulder, noisy
+    plus the workspace's extreme inertias; 4 s excitations of the harness's joints, noisy
     accelerometer), identified and fitted with every identified mode: the fit keeps the arm's
     four proximal joints as candidates, and the shaped modes of its map are the twin's true
     modes at workspace poses none of the campaign's (the harness's evaluation poses): by
@@ -104,6 +104,7 @@ def test_modal_fit_on_a_small_fr3_campaign_recovers_its_lowest_modes(tmp_path):
         robot_name="fr3",
         duration_s=settings.duration_s,
         progress=False,
+        joints=settings.excited_joints,
     )
     fit = fit_all_modes(records, "fr3")
     assert set(fit.statistics["flexible_joints"]) <= {0, 1, 2, 3}

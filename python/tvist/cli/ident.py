@@ -54,7 +54,7 @@ def _add_payload_args(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_campaign(args: argparse.Namespace) -> int:
-    from tvist.cli.plan import checked_plan
+    from tvist.cli.plan import checked_plan, excited_from_args
     from tvist.ident.campaign import URRobot, run_campaign
     from tvist.ident.campaign_robots import new_run_folder
     from tvist.ident.results_store import SettingsMismatch
@@ -72,6 +72,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
             return _error(
                 "campaign", f"--variant {args.variant} is a {robot_of}: add --robot {robot_of}"
             )
+    joints = excited_from_args(args)
     output_file(args.out, "--out")
     if args.map:
         output_file(args.map, "--map")
@@ -102,6 +103,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
             separate_modes=not args.single_mode,
             overwrite=args.overwrite,
             variant=args.variant,
+            joints=joints,
         )
     except KeyboardInterrupt:
         from tvist.ident.results_store import load_results
@@ -169,10 +171,11 @@ def add_campaign_command(sub: argparse._SubParsersAction) -> None:
     """``tvist campaign (--sim | --robot-ip IP)``: Algorithm 1 over the workspace."""
     p = sub.add_parser(
         "campaign",
-        help="identify base and shoulder modes over the workspace (paper Algorithm 1)",
+        help="identify the arm's modes over the workspace (paper Algorithm 1)",
         description="Move through the campaign poses payload by payload (on a robot: one "
         "prompt per payload change, or none with --yes; each run's RTDE logs in a new "
-        "logs/run-NNN next to --out), excite base and shoulder, identify their modes and "
+        "logs/run-NNN next to --out), excite the --excite joints (base, shoulder, elbow) in "
+        "turn, identify the base and shoulder modes and every mode that rings in each log, and "
         "append one JSON line per pose to --out (reruns resume). A plan the map fit cannot "
         "succeed on is refused before the robot moves.",
     )
@@ -277,7 +280,7 @@ def _identify_batch(args: argparse.Namespace, paths: list[Path]) -> int:
         progress=sys.stderr.isatty(),
     )
     if not records:
-        return _error("identify", "no base or shoulder log could be read")
+        return _error("identify", "no log of an identified joint (0-3) could be read")
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     with out.open("w", encoding="utf-8") as fh:
@@ -379,9 +382,10 @@ def add_identify_command(sub: argparse._SubParsersAction) -> None:
         help="identify modes from RTDE logs of excitations (one log, or many into --out)",
         description="Read UR RTDE logs (ur_rtde or UR's record.py), compute the tangential "
         "acceleration (eqs. 12-13) and fit G(s) (eq. 17). One log: print the fit. Many logs "
-        "(files, globs or directories) with --out: find each log's excited joint, pair the "
-        "base and shoulder logs of each pose by their starting actual_q, identify every pose "
-        "in parallel and write one pose record per line, the input of 'tvist fit-map'.",
+        "(files, globs or directories) with --out: find each log's excited joint, group the "
+        "logs of each pose (base, shoulder, elbow, wrist 1) by their starting actual_q, "
+        "identify every pose (the modes of base and shoulder, every mode that rings in each "
+        "log) in parallel and write one pose record per line, the input of 'tvist fit-map'.",
     )
     p.add_argument("logs", nargs="+", metavar="LOG", help="RTDE CSV files, globs or directories")
     p.add_argument(
@@ -450,13 +454,13 @@ input: JSON lines, one pose per line, as written by 'tvist identify --out' and
                      mode along the base joint's tangent); null if none
     error            instead of the above if the joint could not be identified
   ringing            list        every mode that rings in each log (1-3 per log):
-    log_joint        0 base log, 1 shoulder log
+    log_joint        the log's excited joint: 0 base, 1 shoulder, 2 elbow, 3 wrist 1
     wn_rad_s, zeta   natural frequency (rad/s) and damping ratio; wn_se_rad_s, zeta_se
     amplitude_m_s2   largest flange acceleration of the mode's ringing in the log
     flange_direction [3] unit vector, base frame, largest component positive (null: no
                      3-axis accelerometer)
     low_confidence   true with reasons: below noise, weak, uncertain, merged neighbours,
-                     disagrees with the other log, jumps against neighbouring poses
+                     disagrees with another log, jumps against neighbouring poses
   true_modes         (twin only) every true mode below 60 Hz: freq_hz, zeta,
                      joint_shares [6], flange_direction [3], link_share, wn_rad_s, and
                      joint 0 / 1 for the twin's base / shoulder mode (else null)

@@ -9,13 +9,21 @@ import math
 import numpy as np
 
 from tvist.cli.args import DEFAULT_PAYLOAD_COM_M, existing_file
+from tvist.ident.excited import EXCITED_JOINTS, excited_joints
 
-__all__ = ["add_plan_command", "add_plan_options", "checked_plan", "coverage_text"]
+__all__ = [
+    "add_plan_command",
+    "add_plan_options",
+    "checked_plan",
+    "coverage_text",
+    "excited_from_args",
+]
 
 
 def add_plan_options(p: argparse.ArgumentParser) -> None:
     """``--robot``, ``--payloads``, ``--payload-com``, ``--every``, ``--seed``, ``--cover``,
-    ``--no-workspace-cover``, ``--duration``: which poses and excitations a campaign runs."""
+    ``--no-workspace-cover``, ``--duration``, ``--excite``: which poses and excitations a
+    campaign runs."""
     p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
     p.add_argument(
         "--payloads",
@@ -59,6 +67,39 @@ def add_plan_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--duration", type=float, default=8.0, help="excitation length per joint, s (default 8)"
     )
+    p.add_argument(
+        "--excite",
+        default=",".join(str(j) for j in EXCITED_JOINTS),
+        metavar="JOINTS",
+        help="joints excited at every pose, comma-separated: 0 base and 1 shoulder (always), "
+        "2 elbow, 3 wrist 1 (default 0,1,2: the elbow log rings the elbow-dominated mode for "
+        "the modal fit)",
+    )
+
+
+def excited_from_args(args: argparse.Namespace) -> tuple[int, ...]:
+    """The joints of ``--excite`` (:func:`tvist.ident.excited.excited_joints`).
+
+    Raises
+    ------
+    ValueError
+        Not comma-separated joint numbers, or joints a campaign cannot excite; one line
+        naming the value.
+    """
+    cells = [c.strip() for c in str(args.excite).split(",")]
+    try:
+        return excited_joints([int(c) for c in cells])
+    except ValueError as exc:
+        detail = str(exc) if all(_is_int(c) for c in cells) else "not joint numbers"
+        raise ValueError(f"--excite {args.excite}: {detail} (e.g. --excite 0,1,2)") from None
+
+
+def _is_int(text: str) -> bool:
+    try:
+        int(text)
+    except ValueError:
+        return False
+    return True
 
 
 def checked_plan(args: argparse.Namespace, require_fittable: bool = True) -> list:
@@ -163,12 +204,14 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     ):
         if not (math.isfinite(value) and value > 0):
             raise ValueError(f"{flag} {value}: give a value > 0")
+    joints = excited_from_args(args)
     poses = checked_plan(args)
     summary = write_plan(
         poses,
         args.out,
         robot_name=args.robot,
         duration_s=args.duration,
+        joints=joints,
         approach_speed_rad_s=args.approach_speed,
         approach_accel_rad_s2=args.approach_accel,
     )
@@ -203,7 +246,7 @@ def add_plan_command(sub: argparse._SubParsersAction) -> None:
         help="write a campaign plan: poses, excitation programs (URScript, CSV), time",
         description="Choose the campaign poses (paper Algorithm 1, every --every-th, plus "
         "--cover poses) payload by payload, check that the map fit can succeed on them, and "
-        "write each base and shoulder excitation (Algorithm 2) as a URScript program and as "
+        "write each excitation (of the --excite joints) (Algorithm 2) as a URScript program and as "
         "a trajectory CSV, with plan.json listing them in order.",
     )
     add_plan_options(p)

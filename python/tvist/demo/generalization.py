@@ -4,8 +4,9 @@ family (:mod:`tvist.sim.family`) after another, each measured as a user would me
 Per variant ``family:<robot>:<seed>``:
 
 1. **Campaign logs**: the plan (:func:`tvist.ident.pose_plan.plan_poses`, which covers the
-   workspace's inertias) run on the variant's twin, each excitation written as a ur_rtde CSV
-   log (one folder per payload; a rerun keeps the logs already written).
+   workspace's inertias) run on the variant's twin, the base, shoulder and elbow excitation of
+   each pose (:data:`~tvist.ident.excited.EXCITED_JOINTS`) written as ur_rtde CSV logs
+   (``<pose>_joint<j>.csv``, one folder per payload; a rerun keeps the logs already written).
 2. **Through the CLI** (subprocesses, as a user types them): ``tvist identify`` of each
    payload's logs, then ``tvist fit-map --kind modal``.
 3. **Map against the truth** at :data:`EVALUATION_POSES` workspace poses drawn from a stream
@@ -52,6 +53,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from tvist.cli.plan import excited_from_args
+from tvist.ident.excited import EXCITED_JOINTS
 
 __all__ = [
     "EVALUATION_POSES",
@@ -105,19 +109,24 @@ class HarnessSettings:
         The twin's accelerometer noise during the campaign.
     plan_seed
         Seed of the plan (wrists, excitations, noise).
+    excited_joints
+        Joints excited at every pose (:func:`~tvist.ident.excited.excited_joints`). The logs
+        folder is shared by reruns: give another ``--out`` for other joints.
     """
 
     robot: str = "ur5e"
-    # Cost: 20 variants must run in about 40 minutes on 2 cores. Half of the variants bend
-    # their links and need the 0.125 ms physics step (about 1.2 s of CPU per simulated
-    # second); every 8th pose of Algorithm 1 with the workspace's extreme poses, two payloads
-    # (the modal fit needs two to tell load from inertia) and 4 s excitations are ~23 poses,
-    # ~230 simulated seconds per variant.
+    # Cost: 20 variants ran in about 40 minutes on 2 cores with base and shoulder excited.
+    # Half of the variants bend their links and need the 0.125 ms physics step (about 1.2 s
+    # of CPU per simulated second); every 8th pose of Algorithm 1 with the workspace's
+    # extreme poses, two payloads (the modal fit needs two to tell load from inertia) and 4 s
+    # excitations are ~23 poses, ~230 simulated seconds per variant with two joints, half
+    # again with the elbow (the default, for the modal fit's elbow-dominated modes).
     payloads_kg: tuple[float, ...] = (0.0, 5.0)
     every: int = 8
     duration_s: float = 4.0
     accel_noise_std_m_s2: float = 0.05
     plan_seed: int = 0
+    excited_joints: tuple[int, ...] = EXCITED_JOINTS
 
     def plan(self) -> list:
         """The campaign poses (payloads above the robot's rated one are left out)."""
@@ -353,7 +362,7 @@ def _write_logs(variant: str, settings: HarnessSettings, poses: Sequence, folder
     for pose in campaign_order([p for p in poses if p.q is not None]):
         target = folder / f"payload-{pose.payload_kg:g}kg"
         target.mkdir(parents=True, exist_ok=True)
-        for excitation in pose_excitations(pose, settings.duration_s):
+        for excitation in pose_excitations(pose, settings.duration_s, settings.excited_joints):
             path = target / f"{pose.key}_joint{excitation.joint}.csv"
             if path.exists():
                 continue
@@ -692,9 +701,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument(
         "--duration", type=float, default=defaults.duration_s, help="excitation length, s"
     )
+    p.add_argument(
+        "--excite",
+        default=",".join(str(j) for j in defaults.excited_joints),
+        help="joints excited at every pose (default 0,1,2: base, shoulder, elbow)",
+    )
     args = p.parse_args(argv)
     try:
         seeds = parse_seeds(args.seeds)
+    except ValueError as exc:
+        p.exit(2, f"{p.prog}: error: {exc}\n")
+    try:
+        joints = excited_from_args(args)
     except ValueError as exc:
         p.exit(2, f"{p.prog}: error: {exc}\n")
     if not 1 <= args.workers <= MAX_WORKERS:
@@ -704,6 +722,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         payloads_kg=tuple(args.payloads),
         every=args.every,
         duration_s=args.duration,
+        excited_joints=joints,
     )
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -5,10 +5,12 @@
    (:func:`~tvist.ident.segment.excitation_segment`: approach moves and rests around the
    excitation are left out), and its pose taken from ``actual_q``
    (:func:`~tvist.ident.pose.pose_of`).
-2. Base and shoulder logs of the same pose are paired (:func:`pair_logs`): their starting
-   poses (the measured joint angles before the first move) agree.
-3. Each pair (or a lone log) is identified (:func:`~tvist.ident.pose.identify_pose`) into the
-   record :func:`~tvist.ident.map_fit.fit_map` reads.
+2. The logs of the same pose (base, shoulder, elbow, wrist 1: one of each at most) are
+   grouped (:func:`group_logs`): their starting poses (the measured joint angles before the
+   first move) agree.
+3. Each group (or a lone log) is identified (:func:`~tvist.ident.pose.identify_pose`) into the
+   record :func:`~tvist.ident.map_fit.fit_map` reads: the base and shoulder logs give the
+   ``modes`` entries, every log its ``ringing`` entries.
 4. Modes that jump against their neighbouring poses are flagged
    (:func:`~tvist.ident.pose_checks.flag_jumps`).
 
@@ -19,7 +21,6 @@ from __future__ import annotations
 
 import errno
 import glob
-import math
 import os
 import warnings
 from collections.abc import Callable, Iterable, Sequence
@@ -30,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from tvist.ident.excited import EXCITABLE_JOINTS
 from tvist.ident.local_fit import FitOptions
 from tvist.ident.logs import Record, read_rtde_csv
 from tvist.ident.pose import IDENTIFIED_JOINTS, PoseRecord, identify_pose, pose_of
@@ -38,15 +40,15 @@ from tvist.ident.segment import excitation_segment
 
 __all__ = [
     "LoadedLog",
-    "PosePair",
+    "PoseLogs",
     "expand_logs",
     "excited_joint",
+    "group_logs",
     "identify_logs",
     "load_log",
-    "pair_logs",
 ]
 
-#: The starting poses of a base and a shoulder log of one pose agree to this, rad.
+#: The starting poses of two logs of one pose agree to this, rad.
 PAIR_TOL_RAD = 0.02
 
 
@@ -111,52 +113,73 @@ def load_log(
 
 
 @dataclass(frozen=True)
-class PosePair:
-    """Logs of one pose: base and/or shoulder (``None`` if missing)."""
+class PoseLogs:
+    """Logs of one pose, by excited joint (base and/or shoulder, and further joints' logs);
+    a joint without a log is missing."""
 
-    base: LoadedLog | None
-    shoulder: LoadedLog | None
+    logs: dict[int, LoadedLog]
+
+    @property
+    def base(self) -> LoadedLog | None:
+        return self.logs.get(0)
+
+    @property
+    def shoulder(self) -> LoadedLog | None:
+        return self.logs.get(1)
+
+    @property
+    def others(self) -> dict[int, LoadedLog]:
+        """The logs of joints other than base and shoulder (elbow, wrist 1), by joint."""
+        return {j: log for j, log in self.logs.items() if j not in IDENTIFIED_JOINTS}
 
     @property
     def key(self) -> str:
-        names = [log.path.stem for log in (self.base, self.shoulder) if log is not None]
-        return "+".join(names)
+        return "+".join(self.logs[j].path.stem for j in sorted(self.logs))
 
 
-def _same_pose(base: LoadedLog, shoulder: LoadedLog) -> float:
-    """Largest difference of the two logs' starting poses (rad); ``inf`` beyond
-    :data:`PAIR_TOL_RAD`."""
-    worst = float(np.max(np.abs(base.pose - shoulder.pose)))
-    return worst if worst <= PAIR_TOL_RAD else math.inf
+def _distance(a: LoadedLog, b: LoadedLog) -> float:
+    """Largest difference of the two logs' starting poses (rad)."""
+    return float(np.max(np.abs(a.pose - b.pose)))
 
 
-def pair_logs(logs: Sequence[LoadedLog]) -> tuple[list[PosePair], list[LoadedLog]]:
-    """Pair base and shoulder logs of the same pose (closest poses first).
+def group_logs(logs: Sequence[LoadedLog]) -> tuple[list[PoseLogs], list[LoadedLog]]:
+    """Group the logs of the same pose: at most one log per joint, every two of a group's
+    starting poses within :data:`PAIR_TOL_RAD` (closest pairs joined first).
 
-    Returns the pairs (including lone base or shoulder logs as half pairs) and the logs that
-    excite neither the base nor the shoulder.
+    Returns the groups (including lone logs), in the order of their first log in ``logs``,
+    and the logs that excite a joint that is not identified (outside
+    :data:`~tvist.ident.excited.EXCITABLE_JOINTS`).
     """
-    bases = [log for log in logs if log.joint == 0]
-    shoulders = [log for log in logs if log.joint == 1]
-    others = [log for log in logs if log.joint not in IDENTIFIED_JOINTS]
+    usable = [log for log in logs if log.joint in EXCITABLE_JOINTS]
+    others = [log for log in logs if log.joint not in EXCITABLE_JOINTS]
+    group_of = list(range(len(usable)))
+    members: dict[int, list[int]] = {i: [i] for i in range(len(usable))}
     candidates = sorted(
-        (_same_pose(b, s), i, k)
-        for i, b in enumerate(bases)
-        for k, s in enumerate(shoulders)
-        if math.isfinite(_same_pose(b, s))
+        (d, i, k)
+        for i in range(len(usable))
+        for k in range(i + 1, len(usable))
+        if usable[i].joint != usable[k].joint
+        and (d := _distance(usable[i], usable[k])) <= PAIR_TOL_RAD
     )
-    used_b: set[int] = set()
-    used_s: set[int] = set()
-    pairs = []
     for _, i, k in candidates:
-        if i in used_b or k in used_s:
+        a, b = group_of[i], group_of[k]
+        if a == b:
             continue
-        used_b.add(i)
-        used_s.add(k)
-        pairs.append(PosePair(bases[i], shoulders[k]))
-    pairs += [PosePair(b, None) for i, b in enumerate(bases) if i not in used_b]
-    pairs += [PosePair(None, s) for k, s in enumerate(shoulders) if k not in used_s]
-    return pairs, others
+        joints_a = {usable[n].joint for n in members[a]}
+        if joints_a & {usable[n].joint for n in members[b]}:
+            continue
+        if any(
+            _distance(usable[m], usable[n]) > PAIR_TOL_RAD for m in members[a] for n in members[b]
+        ):
+            continue
+        for n in members[b]:
+            group_of[n] = a
+        members[a] += members.pop(b)
+    groups = [
+        PoseLogs({usable[n].joint: usable[n] for n in sorted(members[g])})
+        for g in sorted(members, key=lambda g: min(members[g]))
+    ]
+    return groups, others
 
 
 @dataclass(frozen=True)
@@ -169,14 +192,14 @@ class _Job:
     separate_modes: bool
 
 
-def _pair_payload(pair: PosePair, job: _Job):
+def _pose_payload(group: PoseLogs, job: _Job):
     """The pose's payload: the job's, or the one its logs name (they must agree)."""
     from tvist.ident.logs import log_payload
     from tvist.robots import Payload
 
     if job.payload_kg is not None:
         return Payload(job.payload_kg, job.payload_com_m)
-    logs = [log for log in (pair.base, pair.shoulder) if log is not None]
+    logs = [group.logs[j] for j in sorted(group.logs)]
     payloads = [log_payload(log.path) for log in logs]
     for log, payload in zip(logs, payloads, strict=True):
         if payload is None:
@@ -191,29 +214,28 @@ def _pair_payload(pair: PosePair, job: _Job):
     return first
 
 
-def _identify_pair(pair: PosePair, job: _Job) -> dict[str, Any]:
+def _identify_pose(group: PoseLogs, job: _Job) -> dict[str, Any]:
     from tvist.robots import Robot, params
 
     try:
-        payload = _pair_payload(pair, job)
+        payload = _pose_payload(group, job)
     except ValueError as exc:
-        return {"key": pair.key, "error": str(exc)}
+        return {"key": group.key, "error": str(exc)}
     robot = Robot(params(job.robot_name), payload)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # reported when the logs were read
         result: PoseRecord = identify_pose(
-            None if pair.base is None else pair.base.record,
-            None if pair.shoulder is None else pair.shoulder.record,
+            None if group.base is None else group.base.record,
+            None if group.shoulder is None else group.shoulder.record,
             robot,
-            key=pair.key,
+            key=group.key,
             options=job.options,
             separate_modes=job.separate_modes,
             accel_frame=job.accel_frame,
+            other_records={j: log.record for j, log in group.others.items()},
         )
     record = result.to_dict()
-    record["logs"] = {
-        str(j): str(log.path) for j, log in ((0, pair.base), (1, pair.shoulder)) if log is not None
-    }
+    record["logs"] = {str(j): str(group.logs[j].path) for j in sorted(group.logs)}
     return record
 
 
@@ -280,14 +302,13 @@ def identify_logs(
                 for text in item.warnings:
                     on_message(text)
                 loaded.append(item)
-            pairs, others = pair_logs(loaded)
+            groups, others = group_logs(loaded)
+            names = ", ".join(str(j) for j in EXCITABLE_JOINTS)
             for log in others:
-                on_message(
-                    f"skipped {log.path}: it excites joint {log.joint}, not the base or shoulder"
-                )
-            bar.restart(len(pairs))
+                on_message(f"skipped {log.path}: it excites joint {log.joint}, not one of {names}")
+            bar.restart(len(groups))
             results = []
-            for future in [pool.submit(_identify_pair, pair, job) for pair in pairs]:
+            for future in [pool.submit(_identify_pose, group, job) for group in groups]:
                 results.append(future.result())
                 bar.advance("identified")
     finally:

@@ -1,6 +1,7 @@
 """Mapping campaign runner (paper Algorithm 1): every pose excited, identified and stored.
 
-In every pose of the plan (:mod:`tvist.ident.pose_plan`) the base and the shoulder are
+In every pose of the plan (:mod:`tvist.ident.pose_plan`) the base, the shoulder and the
+elbow (the excited joints, :data:`~tvist.ident.excited.EXCITED_JOINTS` by default) are
 excited in turn (Algorithm 2, :func:`~tvist.ident.excitation.random_excitation`) on a
 campaign robot (:mod:`tvist.ident.campaign_robots`: the MuJoCo twin or a real UR) and
 identified (:func:`~tvist.ident.pose.identify_pose`). Each pose record is appended to a
@@ -22,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from tvist.ident.campaign_robots import RECORDED_FIELDS, CampaignRobot, TwinRobot, URRobot
+from tvist.ident.excited import EXCITED_JOINTS, excited_joints
 from tvist.ident.local_fit import FitOptions
 from tvist.ident.logs import Record
 from tvist.ident.pose import IDENTIFIED_JOINTS, identify_pose
@@ -69,10 +71,12 @@ class _Settings:
     options: FitOptions = field(default_factory=FitOptions)
     separate_modes: bool = True
     variant: str | None = None
+    joints: tuple[int, ...] = EXCITED_JOINTS
 
 
 def run_pose(robot: CampaignRobot, pose: CampaignPose, settings: _Settings) -> dict:
-    """Excite and identify base and shoulder at one pose; the JSON-lines record of it."""
+    """Excite and identify the excited joints (``settings.joints``) at one pose; the
+    JSON-lines record of it."""
     plan = {
         "angle_rad": pose.angle_rad,
         "radius_m": pose.radius_m,
@@ -92,7 +96,7 @@ def run_pose(robot: CampaignRobot, pose: CampaignPose, settings: _Settings) -> d
     robot.set_payload(pose.payload_kg, pose.payload_com_m)
     logs: dict[int, Record | None] = {}
     failed: dict[int, str] = {}
-    for excitation in pose_excitations(pose, settings.duration_s):
+    for excitation in pose_excitations(pose, settings.duration_s, settings.joints):
         joint = excitation.joint
         try:
             logs[joint] = robot.record_excitation(excitation)
@@ -107,6 +111,7 @@ def run_pose(robot: CampaignRobot, pose: CampaignPose, settings: _Settings) -> d
         q=pose.q,
         options=settings.options,
         separate_modes=settings.separate_modes,
+        other_records={j: log for j, log in logs.items() if j not in IDENTIFIED_JOINTS},
     )
     record = result.to_dict()
     for entry in record["modes"]:
@@ -181,6 +186,7 @@ def run_campaign(
     progress: bool = True,
     overwrite: bool = False,
     variant: str | None = None,
+    joints: tuple[int, ...] = EXCITED_JOINTS,
 ) -> list[dict]:
     """Run (or resume) a campaign and return every pose record in ``results_path``.
 
@@ -217,6 +223,10 @@ def run_campaign(
         Run a twin variant (:data:`tvist.sim.variants.VARIANTS`) instead of the standard
         twin (for a given ``robot``: that robot's ``variant``, if it has one); its records
         are not mixed with the standard twin's in one file.
+    joints
+        The joints excited at every pose (:func:`~tvist.ident.excited.excited_joints`:
+        base and shoulder, and any of elbow and wrist 1); records of other joints are not
+        mixed in one file.
 
     Raises
     ------
@@ -231,6 +241,7 @@ def run_campaign(
         options=options or FitOptions(),
         separate_modes=separate_modes,
         variant=getattr(robot, "variant", None) if robot is not None else variant,
+        joints=excited_joints(joints),
     )
     poses = list(poses)
     coms = sorted({tuple(p.payload_com_m) for p in poses})
@@ -246,6 +257,9 @@ def run_campaign(
             "separate_modes": separate_modes,
             # Only when set, so files of the standard twin keep their fingerprint.
             **({"variant": settings.variant} if settings.variant else {}),
+            # Only when not base and shoulder alone, so files of the campaigns that excited
+            # those only keep their fingerprint.
+            **({"excited_joints": settings.joints} if settings.joints != (0, 1) else {}),
         }
     )
     with ResultsStore(results_path, key, overwrite=overwrite) as store:

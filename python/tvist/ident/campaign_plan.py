@@ -1,10 +1,11 @@
 """A campaign plan written out for one's own robot: what ``tvist plan`` writes.
 
 For each pose of the plan (:func:`~tvist.ident.pose_plan.plan_poses`, payload by payload) and
-each excited joint (base, then shoulder) the folder gets the excitation as a URScript program
-(``NNN_KEY_jointJ.script``, :func:`~tvist.ident.excitation.to_urscript`: approach, standstill,
-moves) and as a trajectory CSV (``NNN_KEY_jointJ.csv``), and ``plan.json`` lists them in
-order with the poses and the time the robot will be busy.
+each excited joint (base, shoulder, elbow by default,
+:data:`~tvist.ident.excited.EXCITED_JOINTS`; lowest first) the folder gets the excitation as
+a URScript program (``NNN_KEY_jointJ.script``, :func:`~tvist.ident.excitation.to_urscript`:
+approach, standstill, moves) and as a trajectory CSV (``NNN_KEY_jointJ.csv``), and
+``plan.json`` lists them in order with the poses and the time the robot will be busy.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from tvist.ident.excitation import to_urscript, write_trajectory_csv
+from tvist.ident.excited import EXCITED_JOINTS, excited_joints
 from tvist.ident.pose_plan import CampaignPose, pose_excitations
 from tvist.robots import params
 from tvist.units import check_trajectory
@@ -69,9 +71,13 @@ def write_plan(
     duration_s: float = 8.0,
     approach_speed_rad_s: float = APPROACH_SPEED_RAD_S,
     approach_accel_rad_s2: float = APPROACH_ACCEL_RAD_S2,
+    joints: Sequence[int] = EXCITED_JOINTS,
 ) -> PlanSummary:
     """Write the programs, trajectories and ``plan.json`` of ``poses`` (in their order) into
-    ``folder`` (created; files of an earlier plan with the same names are replaced)."""
+    ``folder`` (created; files of an earlier plan with the same names are replaced), an
+    excitation of each of ``joints`` per pose (:func:`~tvist.ident.excited.excited_joints`),
+    each ``duration_s`` (s) long."""
+    joints = excited_joints(joints)
     robot_params = params(robot_name)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -83,7 +89,7 @@ def write_plan(
         if pose.q is None:
             continue
         excitations = []
-        for excitation in pose_excitations(pose, duration_s):
+        for excitation in pose_excitations(pose, duration_s, joints):
             number += 1
             stem = f"{number:03d}_{pose.key}_joint{excitation.joint}"
             # As every trajectory written for a robot: inside its joint and speed limits.
@@ -137,6 +143,7 @@ def write_plan(
     plan = {
         "robot": robot_name,
         "duration_s": duration_s,
+        "excited_joints": list(joints),
         "approach_speed_rad_s": approach_speed_rad_s,
         "approach_accel_rad_s2": approach_accel_rad_s2,
         "payloads_kg": list(payloads),

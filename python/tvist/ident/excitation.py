@@ -80,7 +80,7 @@ class Excitation:
     Attributes
     ----------
     joint
-        Index of the excited joint (0 = base, 1 = shoulder).
+        Index of the excited joint (0 = base, 1 = shoulder, 2 = elbow, ...).
     q0
         Pose the excitation starts from and returns around, rad, shape (6,).
     dt_s

@@ -628,7 +628,7 @@ def identify_local(
     record
         Log of one excitation (standstill first), e.g. from :func:`read_rtde_csv`.
     joint
-        Excited joint (0 = base, 1 = shoulder).
+        Excited joint (0 = base, 1 = shoulder, 2 = elbow, ...).
     robot
         Kinematic model, e.g. ``tvist.robots.ur5e(payload_kg, payload_com_m)``.
     options

@@ -39,7 +39,8 @@ class ObservedModes:
     keys
         Pose keys.
     pose, log_joint
-        ``(k,)`` pose index and excitation log (0 base, 1 shoulder) of each mode.
+        ``(k,)`` pose index and excitation log (0 base, 1 shoulder, 2 elbow, 3 wrist 1) of
+        each mode.
     wn_rad_s, zeta, wn_se_rad_s, zeta_se
         ``(k,)``; standard errors NaN where the record states none.
     direction

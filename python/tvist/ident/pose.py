@@ -1,8 +1,8 @@
-"""One pose of a mapping campaign: base and shoulder logs → the per-pose record.
+"""One pose of a mapping campaign: its excitation logs → the per-pose record.
 
-:func:`identify_pose` turns the base and the shoulder excitation logged at one pose into the
-record the campaign writes and :func:`~tvist.ident.map_fit.fit_map` reads
-(:class:`PoseRecord`, one JSON line per pose)::
+:func:`identify_pose` turns the base and the shoulder excitation logged at one pose (and those
+of further excited joints, e.g. the elbow) into the record the campaign writes and
+:func:`~tvist.ident.map_fit.fit_map` reads (:class:`PoseRecord`, one JSON line per pose)::
 
     {"key": "...",                      # name of the pose
      "q": [q_0, ..., q_5],              # pose, rad
@@ -19,17 +19,21 @@ record the campaign writes and :func:`~tvist.ident.map_fit.fit_map` reads
      "error": null}
 
 ``ringing`` lists every mode that rings in each log (1-3 per log,
-:mod:`tvist.ident.ringing`), with its direction at the flange in the base frame. ``modes``
-keeps one mode per excited joint for the paper's map: **the base mode** (``modes`` joint 0)
+:mod:`tvist.ident.ringing`), with its direction at the flange in the base frame; a log of a
+further excited joint (``log_joint`` 2 for the elbow, 3 for wrist 1) adds ``ringing`` entries
+only: it rings the modes a base or shoulder excitation barely moves (an elbow-dominated mode
+at folded poses). ``modes`` keeps one mode per identified joint
+(:data:`IDENTIFIED_JOINTS`) for the paper's map: **the base mode** (``modes`` joint 0)
 is the base log's mode that moves the flange along the base joint's tangent, separated from
 the shoulder mode (:mod:`tvist.ident.base_mode`); the shoulder mode likewise from the
 shoulder log. ``ringing_index`` names the ``ringing`` entry of the same log that is that mode
 (the one closest in frequency, within :data:`SAME_MODE_RATIO`); ``None`` if none is (the
 entry is then flagged: the mode is not among those that ring).
 
-Checks across the two logs (:func:`cross_check_logs`): a mode found in both the base and
-the shoulder log must agree, within :data:`AGREEMENT_SE` combined standard errors and at
-least :data:`AGREEMENT_FLOOR`; otherwise both entries are flagged. Checks across poses are
+Checks across the logs (:func:`cross_check_logs`): a mode found in any two logs of the pose
+must agree, within :data:`AGREEMENT_SE` combined standard errors and at
+least :data:`AGREEMENT_FLOOR`; otherwise both entries are flagged (only the one a third log
+does not confirm, where one is confirmed). Checks across poses are
 in :mod:`tvist.ident.pose_checks`.
 
 plus whatever the producer adds (the campaign: ``angle_rad``, ``radius_m``, ``wrist_joint``,
@@ -40,6 +44,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -51,13 +56,23 @@ from tvist.ident.logs import Record, is_uniform, resample_uniform
 from tvist.ident.preprocess import quiet_samples
 from tvist.ident.ringing import RingingMode, ringing_from_log
 
-__all__ = ["IDENTIFIED_JOINTS", "PoseRecord", "cross_check_logs", "identify_pose", "pose_of"]
+__all__ = [
+    "IDENTIFIED_JOINTS",
+    "LOG_NAMES",
+    "PoseRecord",
+    "cross_check_logs",
+    "identify_pose",
+    "pose_of",
+]
 
-#: Joints identified at every pose (base, shoulder).
+#: Joints whose single-mode ``modes`` entries are identified at every pose (base, shoulder):
+#: the paper's map reads these. Which joints a campaign excites is
+#: :data:`tvist.ident.excited.EXCITED_JOINTS`; the logs of the others add ``ringing``
+#: entries only.
 IDENTIFIED_JOINTS = (0, 1)
 #: Two logs are of the same pose if their starting poses agree to this, rad.
 SAME_POSE_TOL_RAD = 0.02
-#: Modes of the two logs closer than this frequency ratio are taken for the same mode; a
+#: Modes of two logs closer than this frequency ratio are taken for the same mode; a
 #: ``modes`` entry is the ``ringing`` entry within this ratio.
 SAME_MODE_RATIO = 1.15
 #: The same mode in two logs agrees if the frequencies differ by at most this many combined
@@ -101,7 +116,7 @@ class PoseRecord:
         Why the pose has no result at all (e.g. ``"unreachable"``).
     ringing
         Every mode that rings in each log (:class:`~tvist.ident.ringing.RingingMode`),
-        base log first, each log's lowest frequency first.
+        by excited joint (base log first), each log's lowest frequency first.
     extra
         Further fields kept as they are (the campaign's plan coordinates, a twin's true
         modes).
@@ -202,23 +217,64 @@ def _rings(mode: RingingMode) -> bool:
     return not any(r.startswith(("weak ringing", "below noise")) for r in mode.reasons)
 
 
-def cross_check_logs(ringing: list[RingingMode]) -> list[RingingMode]:
-    """``ringing`` with the modes found in both logs checked against each other.
+#: Names of the excited joints' logs, for reasons and messages.
+LOG_NAMES = {0: "base", 1: "shoulder", 2: "elbow", 3: "wrist 1", 4: "wrist 2", 5: "wrist 3"}
 
-    Modes of the base and the shoulder log closer than :data:`SAME_MODE_RATIO`, at least one
-    of them confident and neither weak (a weak mode may be no mode), are paired, closest
-    first; a pair whose frequencies differ by more than
-    ``max(AGREEMENT_SE · sqrt(se_a² + se_b²), AGREEMENT_FLOOR)`` (relative) is flagged in
-    both logs, naming the difference (a doubtful partner widens the tolerance by its larger
-    standard error, but still counts).
+
+def _log_name(joint: int) -> str:
+    return LOG_NAMES.get(joint, f"joint {joint}")
+
+
+def cross_check_logs(ringing: list[RingingMode]) -> list[RingingMode]:
+    """``ringing`` with the modes found in two logs of the pose checked against each other.
+
+    For every two logs (e.g. base and shoulder, shoulder and elbow), their modes closer than
+    :data:`SAME_MODE_RATIO`, at least one of them confident and neither weak (a weak mode may
+    be no mode), are paired, closest first (a mode at most once per other log). A pair whose
+    frequencies differ by more than ``max(AGREEMENT_SE · sqrt(se_a² + se_b²),
+    AGREEMENT_FLOOR)`` (relative) disagrees (a doubtful partner widens the tolerance by its
+    larger standard error, but still counts); both are flagged, naming the difference and the
+    other log -- except where a third log settles it: a mode that agrees with a confident
+    mode of a third log is confirmed, and of a disagreeing pair only the unconfirmed mode is
+    flagged (with two logs nothing is confirmed).
     """
     out = list(ringing)
-    base = [i for i, m in enumerate(out) if m.log_joint == 0]
-    shoulder = [i for i, m in enumerate(out) if m.log_joint == 1]
-    pairs = sorted(
+    joints = sorted({m.log_joint for m in out})
+    pairs = []
+    for n, first in enumerate(joints):
+        for second in joints[n + 1 :]:
+            pairs += _paired(out, first, second)
+    confirmed = {
+        i
+        for a, b, distance, tolerance in pairs
+        if distance <= tolerance
+        for i, partner in ((a, b), (b, a))
+        if not ringing[partner].low_confidence
+    }
+    for a, b, distance, tolerance in pairs:
+        if distance <= tolerance:
+            continue
+        diff = 100.0 * (math.exp(distance) - 1.0)
+        allowed = f"more than the {100 * tolerance:.1f} % the standard errors allow"
+        settled = (a in confirmed) != (b in confirmed)
+        for i, other in ((a, b), (b, a)):
+            if settled and i in confirmed:
+                continue
+            log = _log_name(out[other].log_joint)
+            out[i] = out[i].flagged(f"disagrees with the {log} log ({diff:.1f} %, {allowed})")
+    return out
+
+
+def _paired(out: list[RingingMode], first: int, second: int) -> list[tuple[int, int, float, float]]:
+    """The pairs ``(a, b, distance, tolerance)`` of :func:`cross_check_logs` between the logs
+    of joints ``first`` and ``second``: indices into ``out``, ``|log(ω_a / ω_b)|`` and its
+    tolerance."""
+    one = [i for i, m in enumerate(out) if m.log_joint == first]
+    two = [i for i, m in enumerate(out) if m.log_joint == second]
+    candidates = sorted(
         (abs(math.log(out[a].wn_rad_s / out[b].wn_rad_s)), a, b)
-        for a in base
-        for b in shoulder
+        for a in one
+        for b in two
         if abs(math.log(out[a].wn_rad_s / out[b].wn_rad_s)) < math.log(SAME_MODE_RATIO)
         and not (out[a].low_confidence and out[b].low_confidence)
         and _rings(out[a])
@@ -226,18 +282,14 @@ def cross_check_logs(ringing: list[RingingMode]) -> list[RingingMode]:
         and math.isfinite(_relative_se(out[a]) + _relative_se(out[b]))
     )
     used: set[int] = set()
-    for distance, a, b in pairs:
+    pairs = []
+    for distance, a, b in candidates:
         if a in used or b in used:
             continue
         used |= {a, b}
         combined = math.hypot(_relative_se(out[a]), _relative_se(out[b]))
-        tolerance = max(AGREEMENT_SE * combined, AGREEMENT_FLOOR)
-        if distance > tolerance:
-            diff = 100.0 * (math.exp(distance) - 1.0)
-            allowed = f"more than the {100 * tolerance:.1f} % the standard errors allow"
-            out[a] = out[a].flagged(f"disagrees with the shoulder log ({diff:.1f} %, {allowed})")
-            out[b] = out[b].flagged(f"disagrees with the base log ({diff:.1f} %, {allowed})")
-    return out
+        pairs.append((a, b, distance, max(AGREEMENT_SE * combined, AGREEMENT_FLOOR)))
+    return pairs
 
 
 def pose_of(record: Record) -> np.ndarray:
@@ -251,14 +303,18 @@ def pose_of(record: Record) -> np.ndarray:
     return np.median(record.actual_q[start:stop], axis=0)
 
 
-def _check_same_pose(base_q: np.ndarray, shoulder_q: np.ndarray) -> None:
-    # Each log moves its own joint by up to ±10°; the others must agree.
-    worst = float(np.max(np.abs(base_q - shoulder_q)))
-    if worst > SAME_POSE_TOL_RAD:
-        raise ValueError(
-            f"the base and shoulder logs are not of the same pose: their starting poses "
-            f"differ by up to {worst:.3f} rad"
-        )
+def _check_same_pose(poses: Mapping[int, np.ndarray]) -> None:
+    """Raise if the logs' starting poses (by excited joint, rad) differ by more than
+    :data:`SAME_POSE_TOL_RAD` (each log moves its own joint by up to ±10°, after its start)."""
+    joints = sorted(poses)
+    for n, first in enumerate(joints):
+        for second in joints[n + 1 :]:
+            worst = float(np.max(np.abs(poses[first] - poses[second])))
+            if worst > SAME_POSE_TOL_RAD:
+                raise ValueError(
+                    f"the {_log_name(first)} and {_log_name(second)} logs are not of the same "
+                    f"pose: their starting poses differ by up to {worst:.3f} rad"
+                )
 
 
 def identify_pose(
@@ -271,8 +327,10 @@ def identify_pose(
     options: FitOptions | None = None,
     separate_modes: bool = True,
     accel_frame: str = "flange",
+    other_records: Mapping[int, Record | None] | None = None,
 ) -> PoseRecord:
-    """Identify the base and shoulder modes of one pose from its two excitation logs.
+    """Identify the base and shoulder modes of one pose from its two excitation logs, and
+    every mode that rings in them and in the logs of further excited joints.
 
     Parameters
     ----------
@@ -285,8 +343,8 @@ def identify_pose(
     key
         Name of the pose (default from the pose's joint angles).
     q
-        The pose, rad (default: the median measured joint angles of the base log's quiet
-        samples, :func:`pose_of`).
+        The pose, rad (default: the median measured joint angles of the first log's quiet
+        samples, :func:`pose_of`, base log first).
     options
         Local-fit settings.
     separate_modes
@@ -297,29 +355,43 @@ def identify_pose(
         single-mode fits.
     accel_frame
         Frame of the accelerometer columns (``"flange"`` or ``"base"``).
+    other_records
+        Logs of further excited joints at the same pose, by joint (e.g. ``{2: elbow_log}``;
+        ``None`` entries are missing logs): each adds the modes that ring in it as
+        ``ringing`` entries (``log_joint`` its joint), after a single-mode local fit of it
+        for the input timing (:func:`~tvist.ident.local_fit.identify_local`). A log whose
+        fits fail adds none (with a warning).
 
     Raises
     ------
     ValueError
-        Both logs missing, or logs of different poses.
+        Every log missing, logs of different poses, or an ``other_records`` joint that is
+        the base or the shoulder.
     """
     opts = options or FitOptions()
-    logs = {0: base_record, 1: shoulder_record}
-    if base_record is None and shoulder_record is None:
-        raise ValueError("identify_pose needs at least one of the base and shoulder logs")
-    poses = {j: pose_of(r) for j, r in logs.items() if r is not None}
-    if len(poses) == 2:
-        _check_same_pose(poses[0], poses[1])
+    others = {int(j): r for j, r in (other_records or {}).items()}
+    if set(others) & set(IDENTIFIED_JOINTS):
+        raise ValueError(
+            "other_records holds further joints' logs; pass the base and shoulder logs as "
+            "base_record and shoulder_record"
+        )
+    logs = {0: base_record, 1: shoulder_record, **others}
+    present = {j: r for j, r in sorted(logs.items()) if r is not None}
+    if not present:
+        raise ValueError("identify_pose needs at least one excitation log")
+    poses = {j: pose_of(r) for j, r in present.items()}
+    _check_same_pose(poses)
     if q is None:
-        q = poses.get(0, poses.get(1))
+        q = next(iter(poses.values()))
     q = np.asarray(q, dtype=float)
     payload = getattr(robot, "payload", None)
     fits: dict[int, LocalFit] = {}
     modes: dict[int, LocalFit | str] = {}
-    for joint in IDENTIFIED_JOINTS:
+    for joint in (*IDENTIFIED_JOINTS, *sorted(others)):
         log = logs[joint]
         if log is None:
-            modes[joint] = "no log"
+            if joint in IDENTIFIED_JOINTS:
+                modes[joint] = "no log"
             continue
         try:
             fits[joint] = identify_local(
@@ -331,9 +403,14 @@ def identify_pose(
                 two_modes=separate_modes and joint == 0,
                 base_mode=False,
             )
-            modes[joint] = fits[joint]
         except (ValueError, RuntimeError) as exc:
-            modes[joint] = str(exc)
+            if joint in IDENTIFIED_JOINTS:
+                modes[joint] = str(exc)
+            else:
+                warnings.warn(f"{_log_name(joint)} log: no local fit ({exc})", stacklevel=2)
+            continue
+        if joint in IDENTIFIED_JOINTS:
+            modes[joint] = fits[joint]
     ringing: list[RingingMode] = []
     for joint, fit in fits.items():
         try:

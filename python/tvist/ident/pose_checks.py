@@ -10,7 +10,7 @@ Neighbours are the :data:`N_NEIGHBOURS` nearest poses with the same payload, by 
 difference of the base, shoulder and elbow angles (the wrist is drawn at random per pose and
 moves the modes little), within :data:`MAX_NEIGHBOUR_RAD`. The check needs at least two
 neighbours with confident modes; a mode jumps if, at every one of them, the closest confident
-mode (from either log) differs by more than :data:`JUMP_RATIO`.
+mode (from any log) differs by more than :data:`JUMP_RATIO`.
 
 :func:`flag_jumps` works on the records' dict form and is idempotent (it drops its own
 earlier flags first), so it can run again when poses are added.

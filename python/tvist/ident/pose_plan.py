@@ -13,7 +13,9 @@ the poses the user gives (:func:`cover_poses`), added until every one of those l
 the plan's range (:func:`covering_poses`; a map is identified only over the inertias of its
 poses, :mod:`tvist.dynmap`), in the order that changes the payload least
 (:func:`campaign_order`); :func:`plan_shortfall` says why the map fit could not succeed on it,
-before anything moves. Each pose's excitations (:func:`pose_excitations`) follow from its seed.
+before anything moves. Each pose's excitations (:func:`pose_excitations`, of the base, the
+shoulder and the elbow by default, :data:`~tvist.ident.excited.EXCITED_JOINTS`) follow from
+its seed.
 
 Algorithm 1's plane and its inverse kinematics are written for a DH arm whose elbow follows
 the shoulder (UR). An arm placed as its URDF places it (FR3, iiwa14, ...) has no such plane:
@@ -33,6 +35,7 @@ import numpy as np
 from scipy import optimize
 
 from tvist.ident.excitation import Excitation, random_excitation
+from tvist.ident.excited import EXCITED_JOINTS, excited_joints
 from tvist.robots import Payload, Robot, params
 
 __all__ = [
@@ -556,16 +559,26 @@ def plan_shortfall(poses: Sequence[CampaignPose]) -> str | None:
     return None
 
 
-def pose_excitations(pose: CampaignPose, duration_s: float = 8.0) -> list[Excitation]:
-    """The excitations of the base and the shoulder at ``pose`` (Algorithm 2), in that
-    order; each with an integer seed drawn from the pose's seed (which also seeds a twin's
-    sensor noise)."""
-    from tvist.ident.pose import IDENTIFIED_JOINTS
+#: Draws from a pose's seed: one excitation seed per joint 0, 1, ..., so a joint's excitation
+#: does not depend on which other joints are excited (joints 0 and 1 keep the seeds of the
+#: campaigns that excited only them).
+_SEED_DRAWS = 6
 
+
+def pose_excitations(
+    pose: CampaignPose, duration_s: float = 8.0, joints: Sequence[int] = EXCITED_JOINTS
+) -> list[Excitation]:
+    """The excitations of ``joints`` (default :data:`~tvist.ident.excited.EXCITED_JOINTS`;
+    checked with :func:`~tvist.ident.excited.excited_joints`) at ``pose`` (Algorithm 2),
+    lowest joint first, each ``duration_s`` (s) long; each with an integer seed drawn from
+    the pose's seed (which also seeds a twin's sensor noise): joint ``j`` takes the ``j``-th
+    draw, whichever joints are excited."""
+    joints = excited_joints(joints)
     if pose.q is None:
         raise ValueError(f"pose {pose.key} is unreachable")
     rng = np.random.default_rng(pose.seed)
+    seeds = [int(rng.integers(2**63)) for _ in range(_SEED_DRAWS)]
     return [
-        random_excitation(pose.q, joint, seed=int(rng.integers(2**63)), duration_s=duration_s)
-        for joint in IDENTIFIED_JOINTS
+        random_excitation(pose.q, joint, seed=seeds[joint], duration_s=duration_s)
+        for joint in joints
     ]

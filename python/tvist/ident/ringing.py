@@ -95,7 +95,7 @@ class RingingMode:
     Attributes
     ----------
     log_joint
-        The excitation log it came from (0 base, 1 shoulder).
+        The excitation log it came from (0 base, 1 shoulder, 2 elbow, 3 wrist 1).
     wn_rad_s, zeta, wn_se_rad_s, zeta_se
         Natural frequency (rad/s), damping ratio and their standard errors.
     amplitude_m_s2
@@ -473,7 +473,7 @@ def ringing_from_log(
     record
         The log (uniformly sampled; as :func:`~tvist.ident.local_fit.identify_local` takes).
     joint
-        Excited joint (0 base, 1 shoulder).
+        Excited joint (0 base, 1 shoulder, 2 elbow, 3 wrist 1).
     robot
         Kinematic model (Jacobian with rows ``[linear; angular]``).
     single
