@@ -658,6 +658,8 @@ def fit_all_modes(
         )
     used = assignment >= 0
     rel = modes.wn_rad_s[obs.pose[used], assignment[used]] / obs.wn_rad_s[used] - 1.0
+    rel_zeta = modes.zeta[obs.pose[used], assignment[used]] / obs.zeta[used] - 1.0
+    rel_zeta = rel_zeta[np.isfinite(rel_zeta)]
     statistics = {
         "robot": robot_name,
         "n_poses": obs.n_poses,
@@ -675,6 +677,10 @@ def fit_all_modes(
         "frequency_error_matched": {
             "rms": float(np.sqrt(np.mean(rel**2))) if rel.size else None,
             "max": float(np.max(np.abs(rel))) if rel.size else None,
+        },
+        "damping_error_matched": {
+            "rms": float(np.sqrt(np.mean(rel_zeta**2))) if rel_zeta.size else None,
+            "max": float(np.max(np.abs(rel_zeta))) if rel_zeta.size else None,
         },
     }
     return AllModesFit(entries, _map_fields(obs, model, entries), obs, assignment, statistics)
