@@ -446,9 +446,10 @@ def _select_links(
         weakest["made_rigid"] = True
         what = f"link {weakest['link']}" if "link" in weakest else f"joint {weakest['joint']}"
         dropped.append(f"{what} made rigid (p = {weakest['p_value']:.2g})")
-        kept = {i: model.load_terms[i] for i in model.flex if i != weakest["_key"]}
-        model = _candidate(obs, list(kept))
-        model.load_terms = kept
+        # The remaining columns start again from every load term: a term dropped while the
+        # link could bend (its hinge taking up what the term would fit) may matter without it.
+        model = _candidate(obs, [i for i in model.flex if i != weakest["_key"]])
+        dropped = [d for d in dropped if not d.startswith("stiffness term")]
         fit, start = _drop_weak_load_terms(obs, model, drop_t, dropped)
 
 
