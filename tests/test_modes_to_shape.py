@@ -203,7 +203,8 @@ def test_modes_to_shape_predicts_the_residuals_of_a_direct_simulation(poses, exp
     above = ref_wn[ref_fraction > 0.01]
     near = np.abs(ref_wn[:, None] / above[None, :] - 1.0).min(axis=1) <= NEAR_RATIO
     ref_k = int(np.flatnonzero(near).max()) + 1
-    assert choice.n_modes == ref_k == expected_k
+    assert choice.n_significant == ref_k == expected_k
+    assert choice.n_modes >= choice.n_significant
     assert [m.rank for m in choice.significant] == list(range(expected_k))
     # The same move given by its end poses: the default profile is this one.
     same = modes_to_shape(
@@ -246,6 +247,84 @@ def test_velocity_torques_equal_pinocchio_recursive_newton_euler():
     )
     assert np.abs(want).max() > 1.0  # not trivially zero
     np.testing.assert_allclose(got, want, atol=1e-7)
+
+
+def _zv_residual(design_wn, design_zeta, wn, zeta):
+    """Percentage residual vibration of a ZV filter designed for ``(design_wn, design_zeta)``
+    on a mode ``(wn, zeta)``, from the two impulses in closed form (Singhose's ZV: amplitudes
+    1/(1+K) and K/(1+K) at 0 and half the damped period); independent of ``tvist.prv``."""
+    k = math.exp(-design_zeta * math.pi / math.sqrt(1.0 - design_zeta**2))
+    t = math.pi / (design_wn * math.sqrt(1.0 - design_zeta**2))
+    pole = complex(-zeta * wn, wn * math.sqrt(1.0 - zeta**2))
+    return abs(np.exp(pole * t) / (1.0 + k) + k / (1.0 + k))
+
+
+def test_the_expected_residual_takes_the_maps_uncertainty_and_a_neighbours_filter():
+    # A heavily damped mode carrying all the ringing, a neighbour 11 % above carrying none, a
+    # far mode (the seed-1 arm of the family at Q2: 5.74 Hz ζ 0.379, 6.39 Hz ζ 0.351, 62 Hz).
+    # E(K) is the fraction-weighted worst corner of ±1 standard error of the closed-form ZV
+    # residuals, products over the K filters: it must equal that to rounding (1e-9).
+    from tvist.modal_residual import ModeResidual, _robust_n_modes
+
+    def mode(rank, hz, zeta, fraction):
+        wn = 2 * math.pi * hz
+        return ModeResidual(rank, wn, zeta, fraction, fraction / wn**2, fraction, (1.0,))
+
+    modes = (mode(0, 5.74, 0.379, 1.0), mode(1, 6.39, 0.351, 0.0), mode(2, 62.0, 0.16, 0.0))
+    sigma = (0.005, 0.09)
+    k, got = _robust_n_modes(modes, sigma, 0.01)
+    want = []
+    for n in range(1, 4):
+        worst = max(
+            math.prod(
+                _zv_residual(f.wn_rad_s, f.zeta, modes[0].wn_rad_s * (1 + a), 0.379 * (1 + b))
+                for f in modes[:n]
+            )
+            for a in (-sigma[0], sigma[0])
+            for b in (-sigma[1], sigma[1])
+        )
+        want.append(worst)
+    np.testing.assert_allclose(got, want, rtol=1e-9)
+    # The damping's 9 % leaves 2-3 % with the mode's own filter; the neighbour's filter
+    # brings it below 1 % (K = 2), the far mode's moves it by less than a tenth of itself.
+    assert got[0] > 0.02 and got[1] < 0.01 and got[2] == pytest.approx(got[1], rel=0.1)
+    assert k == 2
+    # A map a hundred times surer of itself needs the mode's own filter only.
+    assert _robust_n_modes(modes, (5e-5, 9e-4), 0.01)[0] == 1
+    # Where no K reaches the threshold (10 % and 90 % errors), the smallest within threshold
+    # of the best.
+    k, e = _robust_n_modes(modes, (0.1, 0.9), 0.01)
+    assert min(e) > 0.01 and k == next(n for n, v in enumerate(e, 1) if v <= min(e) + 0.01)
+
+
+def test_a_map_states_its_uncertainty_and_the_choice_follows_it():
+    # The same map and move with the fit statistics of an accurate map (0.01 % / 0.1 %) and
+    # of a poor one (3 % / 30 %): the poor one expects more residual for every K, and each
+    # shapes at least the significant modes and what its own E(K) asks for.
+    from tvist.modal_residual import _robust_n_modes
+
+    traj = tvist.trajectory.double_s(PAPER_POSES["Q3"], PAPER_POSES["Q2"], DT_S)
+    expected = {}
+    for label, f, z in (("accurate", 1e-4, 1e-3), ("poor", 0.03, 0.3)):
+        modal = ModalMap(
+            ENTRIES,
+            metadata={
+                "robot": "ur5e",
+                "fit_statistics": {
+                    "frequency_error_matched": {"rms": f},
+                    "damping_error_matched": {"rms": z},
+                },
+            },
+            shaped_modes=3,
+        )
+        choice = modes_to_shape(modal, ROBOT, traj)
+        assert choice.uncertainty == (f, z)
+        robust, _ = _robust_n_modes(choice.modes, (f, z), choice.threshold)
+        assert choice.n_modes == max(choice.n_significant, robust)
+        expected[label] = np.array(choice.expected)
+    assert np.all(expected["poor"] > expected["accurate"])
+    # Without statistics the map gets the local fits' confidence limits.
+    assert modes_to_shape(_map(shaped_modes=3), ROBOT, traj).uncertainty == (0.01, 0.1)
 
 
 def test_a_mode_close_to_a_significant_one_is_shaped_too():
@@ -390,7 +469,7 @@ def test_modes_to_shape_with_bending_links_predicts_a_direct_simulation():
     assert all(sum(m.joint_shares[5:]) > 0.05 for m in choice.modes[:2])
     ref_fraction = ref_acc / ref_acc.sum()
     assert np.all(np.abs(ref_fraction - choice.threshold) > 1e-3)
-    assert choice.n_modes == 2 == int(np.flatnonzero(ref_fraction > 0.01).max()) + 1
+    assert choice.n_significant == 2 == int(np.flatnonzero(ref_fraction > 0.01).max()) + 1
     # The shaper of a frequency-ranked hinged map now shapes the modes the move needs.
     # Its five lowest: the hinge modes above are overdamped at some poses of the space.
     lowest = ModalMap(hinged.flex_joints, shaped_modes=5, link_hinges=hinged.link_hinges)

@@ -41,12 +41,29 @@ splits a move's ringing between two such close modes turns on coupling a map a f
 not hold (on the twin a learned map put a base move's ringing wholly into its 7.8 Hz base mode and
 none into the 8.2 Hz shoulder mode; shaping the lowest alone left 95.5 %, both 99.4 %), and a second
 filter that close widens the first one's notch. ``K`` is the smallest number of lowest-frequency
-modes that contains every significant mode (at least 1): the ``shaped_modes`` of a frequency-ranked
-map or ``TvShaper.set_shaped_modes(K)`` for that move.
+modes that contains every significant mode (at least 1), raised where the map's own uncertainty
+asks for more (below): the ``shaped_modes`` of a frequency-ranked map or
+``TvShaper.set_shaped_modes(K)`` for that move.
+
+**Robustness.** A mode is shaped at the map's frequency and damping, which are off by about the
+map's fit error: the ZV filter then leaves part of the mode's ringing, and for a heavily damped
+mode the part is large (a damping ratio 0.35 off by 9 % leaves 2.7 % of it). The filter of a
+neighbouring mode widens the notch around it (two ZV filters 11 % apart leave 0.3 %). So with
+``K`` lowest modes shaped the *expected residual* is ``E(K) = Σ_i fraction_i · V_K(i)``, where
+``V_K(i)`` is the percentage residual vibration (:func:`tvist.prv`) of the convolved ZV filters of
+the ``K`` lowest modes on mode ``i`` with its frequency and damping ratio moved by one standard
+error of the map, the worst of the four corners; the standard errors are the map fit's relative
+RMS errors (``fit_statistics`` ``frequency_error_matched`` and ``damping_error_matched`` of
+:func:`tvist.ident.fit_all_modes`), or :data:`DEFAULT_UNCERTAINTY` for a map without them.
+``K`` is at least the smallest with ``E(K) <= threshold``; where no ``K`` reaches it, the smallest
+within ``threshold`` of the lowest ``E`` (a further mode must lower it by more than that to be
+worth its delay).
 """
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -63,12 +80,14 @@ if TYPE_CHECKING:
 
 __all__ = [
     "DEFAULT_THRESHOLD",
+    "DEFAULT_UNCERTAINTY",
     "NEAR_RATIO",
     "ModeResidual",
     "ShapingChoice",
     "modes_to_shape",
     "set_modes_for_move",
     "flex_coordinates",
+    "map_uncertainty",
     "velocity_torque_many",
 ]
 
@@ -76,6 +95,12 @@ __all__ = [
 DEFAULT_THRESHOLD = 0.01
 #: A mode within this relative frequency distance of a significant mode is significant too.
 NEAR_RATIO = 0.10
+#: Relative standard errors (natural frequency, damping ratio) of a map that does not state its
+#: own: the largest a confident local identification has (``max_wn_rel_se`` and
+#: ``max_zeta_rel_se`` of :class:`tvist.ident.local_fit.FitOptions`).
+DEFAULT_UNCERTAINTY = (0.01, 0.10)
+#: The shaper the robustness rule assumes for every mode (the time-varying shaper's default).
+ROBUST_SHAPER = "zv"
 
 
 @dataclass(frozen=True)
@@ -127,12 +152,19 @@ class ShapingChoice:
         Unshaped total: the sum of the modes' residual acceleration amplitudes, m/s².
     threshold
         The significance threshold used (fraction of ``total_m``).
+    expected
+        ``E(K)`` for ``K = 1 … len(modes)``: the expected residual with the ``K`` lowest modes
+        shaped, a fraction of the unshaped total (module docs, robustness).
+    uncertainty
+        The map's relative standard errors (frequency, damping ratio) ``expected`` assumes.
     """
 
     n_modes: int
     modes: tuple[ModeResidual, ...]
     total_m_s2: float
     threshold: float
+    expected: tuple[float, ...] = ()
+    uncertainty: tuple[float, float] = DEFAULT_UNCERTAINTY
 
     @property
     def significant(self) -> tuple[ModeResidual, ...]:
@@ -142,6 +174,12 @@ class ShapingChoice:
         return tuple(
             m for m in self.modes if any(abs(m.wn_rad_s / w - 1.0) <= NEAR_RATIO for w in above)
         )
+
+    @property
+    def n_significant(self) -> int:
+        """The smallest number of lowest modes that holds every significant mode (at least
+        1): ``K`` before the robustness rule raises it (module docs)."""
+        return max((m.rank for m in self.significant), default=0) + 1
 
 
 def flex_coordinates(modal_map: ModalMap, arm: Robot | HingedArm) -> list[int]:
@@ -350,9 +388,64 @@ def modes_to_shape(
         )
         for rank, wn, zeta, d, shares in residuals
     )
-    choice = ShapingChoice(1, modes, total, threshold)
-    n_modes = max((m.rank for m in choice.significant), default=0) + 1
-    return ShapingChoice(n_modes, modes, total, threshold)
+    uncertainty = map_uncertainty(modal_map)
+    robust, expected = _robust_n_modes(modes, uncertainty, threshold)
+    n_modes = max(ShapingChoice(1, modes, total, threshold).n_significant, robust)
+    return ShapingChoice(n_modes, modes, total, threshold, tuple(expected), uncertainty)
+
+
+def map_uncertainty(modal_map: ModalMap) -> tuple[float, float]:
+    """Relative standard errors (natural frequency, damping ratio) of ``modal_map``'s modes:
+    the RMS errors its fit states (``metadata["fit_statistics"]``), or
+    :data:`DEFAULT_UNCERTAINTY` where it states none."""
+    stats = (modal_map.metadata or {}).get("fit_statistics") or {}
+    out = []
+    for key, default in zip(
+        ("frequency_error_matched", "damping_error_matched"), DEFAULT_UNCERTAINTY, strict=True
+    ):
+        rms = (stats.get(key) or {}).get("rms")
+        out.append(float(rms) if rms is not None and math.isfinite(rms) else default)
+    return out[0], out[1]
+
+
+def _robust_n_modes(
+    modes: Sequence[ModeResidual], uncertainty: tuple[float, float], threshold: float
+) -> tuple[int, list[float]]:
+    """The ``K`` the robustness rule asks for (module docs; 1 without modes) and ``E(K)`` for
+    ``K = 1 … len(modes)``."""
+    expected = _expected_residuals(modes, uncertainty)
+    if not expected:
+        return 1, expected
+    reached = [k for k, e in enumerate(expected, 1) if e <= threshold]
+    if reached:
+        return reached[0], expected
+    best = min(expected)
+    return next(k for k, e in enumerate(expected, 1) if e <= best + threshold), expected
+
+
+def _expected_residuals(
+    modes: Sequence[ModeResidual], uncertainty: tuple[float, float]
+) -> list[float]:
+    """``E(K)`` for ``K = 1 … len(modes)`` (module docs, robustness): fractions of the
+    unshaped total."""
+    import tvist
+
+    if not modes:
+        return []
+    sigma_wn, sigma_zeta = uncertainty
+    corners = np.array([(a, b) for a in (-1.0, 1.0) for b in (-1.0, 1.0)])
+    out = []
+    filters: list = []
+    for k in range(len(modes)):
+        filters.append(tvist.shaper(ROBUST_SHAPER, modes[k].wn_rad_s, min(modes[k].zeta, 0.99)))
+        combined = tvist.convolve(*filters)
+        total = 0.0
+        for m in modes:
+            wn = m.wn_rad_s * (1.0 + sigma_wn * corners[:, 0])
+            zeta = np.clip(m.zeta * (1.0 + sigma_zeta * corners[:, 1]), 0.0, 0.99)
+            total += m.fraction * float(np.nanmax(tvist.prv(combined, wn, zeta)))
+        out.append(total)
+    return out
 
 
 def set_modes_for_move(
@@ -381,7 +474,7 @@ def set_modes_for_move(
     choice = modes_to_shape(modal, provider.robot, move)
     k = min(choice.n_modes, modal.shaped_modes)
     shaper.set_shaped_modes(k)
-    return ShapingChoice(k, choice.modes, choice.total_m_s2, choice.threshold)
+    return dataclasses.replace(choice, n_modes=k)
 
 
 def _trajectory_of_samples(q: np.ndarray, dt_s: float) -> Trajectory:

@@ -76,7 +76,8 @@ def fit_modal_command(records: Sequence[Mapping[str, Any]], args: argparse.Names
     print(
         f"modal map of {args.robot}: {stats['n_poses']} poses, {stats['identified_modes']} "
         f"identified modes, {stats['matched_modes']} matched to the model's eigenmodes "
-        f"(frequency error {100 * stats['frequency_error_matched']['rms']:.2f} % RMS)"
+        f"(frequency error {100 * stats['frequency_error_matched']['rms']:.2f} % RMS, damping "
+        f"ratio {100 * stats['damping_error_matched']['rms']:.1f} % RMS)"
     )
     level = stats["joint_test_level"]
     print(

@@ -63,6 +63,7 @@ __all__ = [
     "evaluation_poses",
     "frequency_errors",
     "main",
+    "map_vs_truth",
     "matching_true_modes",
     "parse_seeds",
     "run_variant",
@@ -419,13 +420,17 @@ def _identify_and_fit(settings: HarnessSettings, logs: Path, folder: Path) -> Pa
     return map_path
 
 
-def _map_vs_truth(variant, map_path: Path, robot, names, q_eval: np.ndarray) -> dict[str, Any]:
-    """The map's shaped modes against the variant's true modes at ``q_eval``."""
-    from tvist import load_map
+def map_vs_truth(variant, modal, robot, q_eval: np.ndarray) -> dict[str, Any]:
+    """The shaped modes of the modal map ``modal`` (named by :func:`shaped_mode_names`)
+    against the variant's true modes at ``q_eval``, with the demo's payload (``robot``)."""
     from tvist.demo.motions import PAYLOAD_COM_M, demo_payload_kg
     from tvist.sim.family import modes_of
 
-    modal = load_map(map_path)
+    names = shaped_mode_names(
+        {"shaped_modes": modal.shaped_modes}
+        if modal.shaped_modes is not None
+        else {"mode_joints": modal.mode_joints}
+    )
     twin = variant.twin(demo_payload_kg(variant.robot), PAYLOAD_COM_M)
     predicted = np.asarray(modal.modes_many(robot, q_eval))[:, :, 0] / (2 * math.pi)
     if names and names[0][0] == "rank":
@@ -599,10 +604,11 @@ def run_variant(seed: int | None, out: str | Path, settings: HarnessSettings) ->
         map_path = _identify_and_fit(settings, folder / "logs", folder)
         clock.lap("identify_and_fit")
 
+        from tvist import load_map
+
         document = json.loads(map_path.read_text(encoding="utf-8"))
-        names = shaped_mode_names(document)
         q_eval = evaluation_poses(settings.robot, seed)
-        result["map_vs_truth"] = _map_vs_truth(variant, map_path, robot, names, q_eval)
+        result["map_vs_truth"] = map_vs_truth(variant, load_map(map_path), robot, q_eval)
         result["map"] = {
             "file": str(map_path.relative_to(folder)),
             "flex_joints": [f["joint"] for f in document.get("flex_joints", [])],

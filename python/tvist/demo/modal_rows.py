@@ -8,8 +8,6 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 import tvist
 from tvist.demo.methods import TVIST_SHAPER, Method, MotionContext, Reference, _run_tv_shaper
 from tvist.modal_map import ModalMap
@@ -17,13 +15,6 @@ from tvist.modal_map import ModalMap
 KEY = "fd-tvist-identified-modal-map"
 LABEL = "FD-TVIST ZV, identified modal map"
 MAP_FILE = "identified_modal_map.json"
-#: Flexible joints of the demo's modal map: base, shoulder, elbow and wrists 1-2 (the fit's
-#: default). From the demo campaign the fit keeps wrist 2 (10 200 N m/rad; the twin's gears
-#: 15 000) and makes wrist 1 rigid. Checked on poses other than the test motions', the full
-#: 208-pose campaign's (true modes): base frequency within 0.24 % RMS (1.4 % max), against
-#: 1.05 % (9.6 %) with base, shoulder and elbow only, whose map cannot express the wrists'
-#: part in the base mode at folded poses.
-DEMO_FLEX_JOINTS = (0, 1, 2, 3, 4)
 
 
 def fd_tvist_modal(key: str, label: str, modal: ModalMap) -> Method:
@@ -45,19 +36,18 @@ def fd_tvist_modal(key: str, label: str, modal: ModalMap) -> Method:
 def identify_modal_map(
     records: Sequence[dict], out_dir: str | Path, log: Any = None
 ) -> tuple[Method | None, dict[str, Any]]:
-    """Fit the modal map to the demo campaign's ``records``, save it next to them, and return
-    its row with a summary (errors against the twin's true modes at the campaign poses), or
-    ``(None, {"error": ...})`` if the fit fails."""
-    from tvist.ident.modal_fit import fit_modal_map, modal_poses, relative_errors
+    """Fit the modal map to every mode the demo campaign's ``records`` identified (the fit
+    ``tvist fit-map --kind modal`` makes, :func:`tvist.ident.all_modes_fit.fit_all_modes`),
+    save it next to them, and return its row with a summary (the shaped modes' frequency
+    errors against the twin's true modes at workspace poses unlike the campaign's,
+    :func:`tvist.demo.generalization.map_vs_truth`),
+    or ``(None, {"error": ...})`` if the fit fails."""
+    from tvist.ident.all_modes_fit import fit_all_modes, fitted_map
 
     try:
-        poses = modal_poses(records, "ur5e")
-        modal = fit_modal_map(
-            poses,
-            "ur5e",
-            flex_joints=DEMO_FLEX_JOINTS,
-            metadata={"source": f"reduced campaign on the twin ({poses.n_poses} poses)"},
-        )
+        fit = fit_all_modes(records, "ur5e")
+        n_poses = fit.statistics["n_poses"]
+        modal = fitted_map(fit, {"source": f"reduced campaign on the twin ({n_poses} poses)"})
         modal.save(Path(out_dir) / MAP_FILE)
         # The real-time provider rejects a map with an overdamped mode at a sampled pose.
         from tvist.demo.motions import PAYLOAD_COM_M, PAYLOAD_KG
@@ -69,19 +59,28 @@ def identify_modal_map(
         if log is not None:
             log(f"identified modal map skipped: {exc}")
         return None, {"error": str(exc)}
-    pred = modal.modes_from_mass_matrix_many(
-        poses.mass_kg_m2, poses.gravity_torque_nm if modal.uses_gravity else None
-    )
-    usable = np.isfinite(poses.wn_rad_s)
-    truth_wn = np.where(usable, poses.true_wn_rad_s, np.nan)
-    truth_zeta = np.where(usable, poses.true_zeta, np.nan)
     summary = {
         "map_file": MAP_FILE,
         "flex_joints": modal.flex_joints,
+        "shaped_modes": modal.shaped_modes,
+        "mode_joints": modal.mode_joints,
         "fit_statistics": modal.metadata["fit_statistics"],
-        "versus_true_modes": relative_errors(pred, truth_wn, truth_zeta),
+        "versus_true_modes": _versus_true_modes(modal),
     }
     return fd_tvist_modal(KEY, LABEL, modal), summary
+
+
+def _versus_true_modes(modal: ModalMap) -> list[dict[str, Any]]:
+    """Per shaped mode of ``modal``: RMS and largest frequency error (%) against the default
+    twin's true modes at the generalization harness's evaluation poses."""
+    from tvist.demo.generalization import evaluation_poses, map_vs_truth
+    from tvist.demo.motions import PAYLOAD_COM_M, PAYLOAD_KG
+    from tvist.sim.family import nominal_variant
+
+    robot = tvist.robots.ur5e(payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M)
+    return map_vs_truth(nominal_variant("ur5e"), modal, robot, evaluation_poses("ur5e", None))[
+        "modes"
+    ]
 
 
 def compare_on_variant(variant: str, records_path: str | Path) -> list[tuple[str, str, float]]:

@@ -446,9 +446,10 @@ def _select_links(
         weakest["made_rigid"] = True
         what = f"link {weakest['link']}" if "link" in weakest else f"joint {weakest['joint']}"
         dropped.append(f"{what} made rigid (p = {weakest['p_value']:.2g})")
-        kept = {i: model.load_terms[i] for i in model.flex if i != weakest["_key"]}
-        model = _candidate(obs, list(kept))
-        model.load_terms = kept
+        # The remaining columns start again from every load term: a term dropped while the
+        # link could bend (its hinge taking up what the term would fit) may matter without it.
+        model = _candidate(obs, [i for i in model.flex if i != weakest["_key"]])
+        dropped = [d for d in dropped if not d.startswith("stiffness term")]
         fit, start = _drop_weak_load_terms(obs, model, drop_t, dropped)
 
 
@@ -658,6 +659,8 @@ def fit_all_modes(
         )
     used = assignment >= 0
     rel = modes.wn_rad_s[obs.pose[used], assignment[used]] / obs.wn_rad_s[used] - 1.0
+    rel_zeta = modes.zeta[obs.pose[used], assignment[used]] / obs.zeta[used] - 1.0
+    rel_zeta = rel_zeta[np.isfinite(rel_zeta)]
     statistics = {
         "robot": robot_name,
         "n_poses": obs.n_poses,
@@ -675,6 +678,10 @@ def fit_all_modes(
         "frequency_error_matched": {
             "rms": float(np.sqrt(np.mean(rel**2))) if rel.size else None,
             "max": float(np.max(np.abs(rel))) if rel.size else None,
+        },
+        "damping_error_matched": {
+            "rms": float(np.sqrt(np.mean(rel_zeta**2))) if rel_zeta.size else None,
+            "max": float(np.max(np.abs(rel_zeta))) if rel_zeta.size else None,
         },
     }
     return AllModesFit(entries, _map_fields(obs, model, entries), obs, assignment, statistics)
