@@ -439,16 +439,16 @@ def identify_pose(
     )
 
 
-#: Reasons of a ``ringing`` entry that leave its frequency unresolved (prefixes): a ``modes``
-#: entry that is that mode is flagged (:func:`_linked`), and a mode so flagged cannot show
-#: another log's entry wrong (:func:`_seen_resolved_elsewhere`).
+#: Reasons of a ``ringing`` entry that leave its frequency unresolved (prefixes): an entry so
+#: flagged cannot show another log's entry wrong (:func:`_seen_resolved_elsewhere`).
 _UNRESOLVED_FREQUENCY = ("uncertain frequency", "merged neighbours", "next to an unresolved")
 #: Two ``ringing`` entries of different logs are the same mode only if they also move the
 #: flange in about the same direction: ``|cos|`` of the angle between their flange
 #: directions at least this (45°). The same mode seen in two logs keeps its direction to a
 #: few degrees (``|cos|`` >= 0.9 on the family variants' campaigns), two distinct modes of a
 #: pose are close to perpendicular (``|cos|`` <= 0.06 where a base log's mode and a shoulder
-#: log's other mode came within :data:`SAME_MODE_RATIO`).
+#: log's other mode came within :data:`SAME_MODE_RATIO`); any threshold from 0.1 to 0.95
+#: flagged the same entries there.
 SAME_DIRECTION_COS = math.cos(math.radians(45.0))
 
 
