@@ -45,7 +45,7 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -439,19 +439,63 @@ def identify_pose(
     )
 
 
-#: Reasons of a ringing entry that doubt the mode itself (not only its precision): a
-#: ``modes`` entry that is that mode inherits them where the entry's frequency is also
-#: uncertain (:func:`_unresolved_merge`).
-_WRONG_MODE = ("merged neighbours",)
+#: Reasons of a ``ringing`` entry that leave its frequency unresolved (prefixes): an entry so
+#: flagged cannot show another log's entry wrong (:func:`_seen_resolved_elsewhere`).
+_UNRESOLVED_FREQUENCY = ("uncertain frequency", "merged neighbours", "next to an unresolved")
+#: Two ``ringing`` entries of different logs are the same mode only if they also move the
+#: flange in about the same direction: ``|cos|`` of the angle between their flange
+#: directions at least this (45°). The same mode seen in two logs keeps its direction to a
+#: few degrees (``|cos|`` >= 0.9 on the family variants' campaigns), two distinct modes of a
+#: pose are close to perpendicular (``|cos|`` <= 0.06 where a base log's mode and a shoulder
+#: log's other mode came within :data:`SAME_MODE_RATIO`); any threshold from 0.1 to 0.95
+#: flagged the same entries there.
+SAME_DIRECTION_COS = math.cos(math.radians(45.0))
 
 
-def _unresolved_merge(mode: RingingMode) -> bool:
-    """Whether the multi-mode fit cannot resolve the modes at this entry's frequency: flagged
-    as merged neighbours and with an uncertain frequency."""
-    reasons = mode.reasons
-    return any(r.startswith(_WRONG_MODE) for r in reasons) and any(
-        r.startswith("uncertain frequency") for r in reasons
-    )
+def _frequency_unresolved(mode: RingingMode) -> bool:
+    return any(r.startswith(_UNRESOLVED_FREQUENCY) for r in mode.reasons)
+
+
+def _same_direction(a: RingingMode, b: RingingMode) -> bool:
+    if a.flange_direction is None or b.flange_direction is None:
+        return False
+    cos = float(np.dot(a.flange_direction, b.flange_direction))
+    norms = float(np.linalg.norm(a.flange_direction) * np.linalg.norm(b.flange_direction))
+    return norms > 0.0 and abs(cos) >= SAME_DIRECTION_COS * norms
+
+
+def _seen_resolved_elsewhere(
+    fit: LocalFit, joint: int, mode: RingingMode, ringing: list[RingingMode]
+) -> tuple[RingingMode, float] | None:
+    """Where ``fit`` (``joint``'s ``modes`` entry, whose multi-mode fit ``mode`` flags merged
+    neighbours) is contradicted by the same mode resolved in another log: the closest
+    ``ringing`` entry of another log within :data:`SAME_MODE_RATIO` that moves the flange in
+    the same direction (:data:`SAME_DIRECTION_COS`), rings clearly and has a resolved
+    frequency (no uncertain frequency, merge or unresolved neighbour), if it differs from
+    ``fit`` by more than the standard errors allow (as between two logs,
+    :func:`cross_check_logs`); that entry and ``|log(ω / ω_fit)|``, else ``None``.
+
+    The merged fit of the one log is then the one to doubt: the neighbour it could not
+    separate pulls it, the other log's clean fit of the same mode is not pulled."""
+    if not any(r.startswith("merged neighbours") for r in mode.reasons):
+        return None
+    same = [
+        (abs(math.log(other.wn_rad_s / fit.wn_rad_s)), other)
+        for other in ringing
+        if other.log_joint != joint
+        and _rings(other)
+        and not _frequency_unresolved(other)
+        and _same_direction(mode, other)
+        and math.isfinite(_relative_se(other))
+    ]
+    same = [(d, other) for d, other in same if d < math.log(SAME_MODE_RATIO)]
+    if not same:
+        return None
+    distance, other = min(same, key=lambda pair: pair[0])
+    combined = math.hypot(_relative_se(other), fit.wn_se_rad_s / fit.wn_rad_s)
+    if distance <= max(AGREEMENT_SE * combined, AGREEMENT_FLOOR):
+        return None
+    return other, distance
 
 
 #: A ``modes`` entry agrees with its log's multi-mode fit within ``AGREEMENT_SE`` combined
@@ -465,10 +509,22 @@ def _linked(
     modes: dict[int, LocalFit | str], ringing: list[RingingMode]
 ) -> dict[int, LocalFit | str]:
     """``modes`` with a confident entry flagged where its log's multi-mode fit does not
-    confirm it: no ringing mode near its frequency, the nearest one is an unresolved merge
-    (:func:`_unresolved_merge`), or it differs by more than the standard errors allow (as between
-    two logs, :func:`cross_check_logs`); a single-mode or two-mode fit that merged two
-    neighbours is caught so."""
+    confirm it:
+
+    - no ringing mode near its frequency;
+    - the nearest one's frequency is uncertain (its standard error above the limit): the
+      entry's own small standard error only holds for its one- or two-mode model, on the
+      family's variants such entries were 8-13 % off (a base mode pulled by a close
+      shoulder mode);
+    - the nearest one is flagged merged neighbours and another log resolves the same mode
+      (same direction at the flange) at a frequency the standard errors do not allow
+      (:func:`_seen_resolved_elsewhere`);
+    - it differs from the nearest one by more than the standard errors allow (as between two
+      logs, :func:`cross_check_logs`).
+
+    The other doubts of the ``ringing`` entry (merged neighbours alone, a disagreement
+    between two logs without a resolved same-direction partner, jumps across poses) are
+    not inherited: on the twin's campaigns they flag mostly correct entries."""
     if not ringing:
         return modes
     out = dict(modes)
@@ -485,24 +541,28 @@ def _linked(
                 f"not among the modes that ring in the log ({fit.fn_hz:.2f} Hz; the multi-mode "
                 f"fit finds {found} Hz)"
             )
-        elif _unresolved_merge(ringing[index]):
-            mode = ringing[index]
-            why = next(r for r in mode.reasons if r.startswith(_WRONG_MODE))
+            out[joint] = replace(fit, low_confidence=True, reasons=(*fit.reasons, reason))
+            continue
+        mode = ringing[index]
+        elsewhere = _seen_resolved_elsewhere(fit, joint, mode, ringing)
+        distance = abs(math.log(mode.wn_rad_s / fit.wn_rad_s))
+        combined = math.hypot(_relative_se(mode), fit.wn_se_rad_s / fit.wn_rad_s)
+        if any(r.startswith("uncertain frequency") for r in mode.reasons):
+            why = next(r for r in mode.reasons if r.startswith("uncertain frequency"))
             reason = f"the multi-mode fit of the same log doubts it ({mode.fn_hz:.2f} Hz: {why})"
-        else:
-            mode = ringing[index]
-            distance = abs(math.log(mode.wn_rad_s / fit.wn_rad_s))
-            combined = math.hypot(_relative_se(mode), fit.wn_se_rad_s / fit.wn_rad_s)
-            tolerance = max(AGREEMENT_SE * combined, LINK_FLOOR)
-            if distance > tolerance:
-                reason = (
-                    f"disagrees with the multi-mode fit of the same log "
-                    f"({100 * (math.exp(distance) - 1):.1f} %: {fit.fn_hz:.2f} Hz against "
-                    f"{found} Hz)"
-                )
+        elif elsewhere is not None:
+            other, apart = elsewhere
+            reason = (
+                f"merged in its log: the {_log_name(other.log_joint)} log resolves the same "
+                f"mode at {other.fn_hz:.2f} Hz ({100 * (math.exp(apart) - 1):.1f} % away)"
+            )
+        elif distance > max(AGREEMENT_SE * combined, LINK_FLOOR):
+            reason = (
+                f"disagrees with the multi-mode fit of the same log "
+                f"({100 * (math.exp(distance) - 1):.1f} %: {fit.fn_hz:.2f} Hz against "
+                f"{found} Hz)"
+            )
         if reason is not None:
-            from dataclasses import replace
-
             out[joint] = replace(fit, low_confidence=True, reasons=(*fit.reasons, reason))
     return out
 
