@@ -67,7 +67,7 @@ __all__ = [
 
 #: Joints whose single-mode ``modes`` entries are identified at every pose (base, shoulder):
 #: the paper's map reads these. Which joints a campaign excites is
-#: :data:`tvist.ident.excited.EXCITED_JOINTS`; the logs of the others add ``ringing``
+#: :func:`tvist.ident.excited.default_excited_joints`; the logs of the others add ``ringing``
 #: entries only.
 IDENTIFIED_JOINTS = (0, 1)
 #: Two logs are of the same pose if their starting poses agree to this, rad.
