@@ -88,17 +88,19 @@ def excited_from_args(args: argparse.Namespace) -> tuple[int, ...]:
         Not comma-separated joint numbers, or joints a campaign cannot excite; one line
         naming the value (an unknown ``--robot``: naming that).
     """
+    try:
+        default = excited_joints(None, args.robot)
+    except ValueError as exc:
+        raise ValueError(f"--robot {args.robot}: {exc}") from None
     if args.excite is None:
-        try:
-            return excited_joints(None, args.robot)
-        except ValueError as exc:
-            raise ValueError(f"--robot {args.robot}: {exc}") from None
+        return default
     cells = [c.strip() for c in str(args.excite).split(",")]
     try:
         return excited_joints([int(c) for c in cells])
     except ValueError as exc:
         detail = str(exc) if all(_is_int(c) for c in cells) else "not joint numbers"
-        raise ValueError(f"--excite {args.excite}: {detail} (e.g. --excite 0,1,2)") from None
+        example = ",".join(str(j) for j in default)
+        raise ValueError(f"--excite {args.excite}: {detail} (e.g. --excite {example})") from None
 
 
 def _is_int(text: str) -> bool:
