@@ -149,3 +149,20 @@ def test_jump_neighbours_compare_the_angles_up_to_the_robots_elbow():
     assert ur[2]["reasons"][0].startswith(JUMP_REASON)
     fr3 = [r["ringing"][0] for r in flag_jumps(records, "fr3")]
     assert not any(m["low_confidence"] for m in fr3)
+
+
+def test_logs_are_named_by_the_robots_elbow():
+    """A mode of the joint-3 log 5 % off the shoulder log's (standard errors 0.2 %): the
+    shoulder's entry names the other log the elbow's on an FR3 (elbow 3), wrist 1's on a UR."""
+    from tvist.ident.pose import cross_check_logs
+    from tvist.ident.ringing import RingingMode
+
+    def mode(log_joint, hz):
+        wn = 2 * math.pi * hz
+        return RingingMode(log_joint, wn, 0.05, 0.002 * wn, 0.005, 1.0, (1.0, 0.0, 0.0))
+
+    ringing = [mode(1, 10.0), mode(3, 10.5)]
+    fr3 = cross_check_logs(ringing, params("fr3").elbow_joint)[0]
+    ur = cross_check_logs(ringing)[0]
+    assert fr3.reasons[0].startswith("disagrees with the elbow log"), fr3.reasons
+    assert ur.reasons[0].startswith("disagrees with the wrist 1 log"), ur.reasons
