@@ -11,11 +11,13 @@ import numpy as np
 import pytest
 
 from tvist.cli import main
-from tvist.ident.pose_plan import COVERED_JOINTS, plan_poses
+from tvist.ident.pose_plan import covered_joints, plan_poses
 from tvist.robots import Payload, Robot, params
 from tvist.trajectory import PAPER_POSES
 
 COM_M = (0.0, 0.0, 0.05)
+#: The joints whose inertias a UR5e's plan covers: base, shoulder, elbow.
+COVERED = covered_joints("ur5e")
 #: Stretched straight up: the smallest base inertia of a stretched arm.
 UPRIGHT = np.array([0.0, -math.pi / 2, 0.0, -math.pi / 2, 0.0, 0.0])
 #: Folded further than the workspace's 150° (Q3) elbow: a smaller shoulder inertia than any
@@ -26,7 +28,7 @@ FOLDED_160 = np.array([math.pi / 2, -math.pi / 2, 2.9, -math.pi / 2, 0.0, 0.0])
 def _range(poses, payload_kg):
     robot = Robot(params("ur5e"), Payload(payload_kg, COM_M))
     q = np.array([p.q for p in poses if p.q is not None and p.payload_kg == payload_kg])
-    inertia = robot.joint_inertia_many(q)[:, COVERED_JOINTS]
+    inertia = robot.joint_inertia_many(q)[:, COVERED]
     return robot, inertia.min(axis=0), inertia.max(axis=0)
 
 
@@ -51,11 +53,11 @@ def test_a_reduced_default_plan_covers_the_workspace_inertias(payload_kg):
     poses = plan_poses("ur5e", payloads_kg=(0.0, 5.0), every=8)
     robot, lo, hi = _range(poses, payload_kg)
     q = np.vstack([*PAPER_POSES.values(), UPRIGHT, _workspace_sample(robot, 3000, seed=7)])
-    inertia = robot.joint_inertia_many(q)[:, COVERED_JOINTS]
+    inertia = robot.joint_inertia_many(q)[:, COVERED]
     assert np.all(inertia >= lo) and np.all(inertia <= hi), (lo, hi, inertia.min(0), inertia.max(0))
     # The additions are the workspace poses ("-W"), at most the two extremes per joint.
     added = [p for p in poses if p.payload_kg == payload_kg and "-W" in p.key]
-    assert 1 <= len(added) <= 2 * len(COVERED_JOINTS)
+    assert 1 <= len(added) <= 2 * len(COVERED)
 
 
 def test_cover_poses_are_added_only_where_they_extend_the_range():
@@ -80,7 +82,7 @@ def test_cover_poses_are_added_only_where_they_extend_the_range():
     np.testing.assert_array_equal(given[0].q, FOLDED_160)
     _, lo, hi = _range(poses, 5.0)
     inertia = robot.joint_inertia_many(np.array([PAPER_POSES["Q3"], FOLDED_160]))
-    assert np.all(inertia[:, COVERED_JOINTS] >= lo) and np.all(inertia[:, COVERED_JOINTS] <= hi)
+    assert np.all(inertia[:, COVERED] >= lo) and np.all(inertia[:, COVERED] <= hi)
 
 
 def test_plan_command_covers_a_poses_file_with_a_header(tmp_path, capsys):

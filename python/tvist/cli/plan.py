@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from tvist.cli.args import DEFAULT_PAYLOAD_COM_M, existing_file
-from tvist.ident.excited import EXCITED_JOINTS, excited_joints
+from tvist.ident.excited import excited_joints
 
 __all__ = [
     "add_plan_command",
@@ -69,29 +69,38 @@ def add_plan_options(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--excite",
-        default=",".join(str(j) for j in EXCITED_JOINTS),
+        default=None,
         metavar="JOINTS",
         help="joints excited at every pose, comma-separated: 0 base and 1 shoulder (always), "
-        "2 elbow, 3 wrist 1 (default 0,1,2: the elbow log rings the elbow-dominated mode for "
+        "on a UR 2 elbow, 3 wrist 1 (default: base, shoulder and the robot's elbow, 0,1,2 on "
+        "a UR, 0,1,3 on an FR3 or iiwa14: the elbow log rings the elbow-dominated mode for "
         "the modal fit)",
     )
 
 
 def excited_from_args(args: argparse.Namespace) -> tuple[int, ...]:
-    """The joints of ``--excite`` (:func:`tvist.ident.excited.excited_joints`).
+    """The joints of ``--excite`` (:func:`tvist.ident.excited.excited_joints`); without it,
+    the default of ``--robot`` (:func:`tvist.ident.excited.default_excited_joints`).
 
     Raises
     ------
     ValueError
         Not comma-separated joint numbers, or joints a campaign cannot excite; one line
-        naming the value.
+        naming the value (an unknown ``--robot``: naming that).
     """
+    try:
+        default = excited_joints(None, args.robot)
+    except ValueError as exc:
+        raise ValueError(f"--robot {args.robot}: {exc}") from None
+    if args.excite is None:
+        return default
     cells = [c.strip() for c in str(args.excite).split(",")]
     try:
         return excited_joints([int(c) for c in cells])
     except ValueError as exc:
         detail = str(exc) if all(_is_int(c) for c in cells) else "not joint numbers"
-        raise ValueError(f"--excite {args.excite}: {detail} (e.g. --excite 0,1,2)") from None
+        example = ",".join(str(j) for j in default)
+        raise ValueError(f"--excite {args.excite}: {detail} (e.g. --excite {example})") from None
 
 
 def _is_int(text: str) -> bool:
@@ -143,9 +152,9 @@ def checked_plan(args: argparse.Namespace, require_fittable: bool = True) -> lis
 
 def coverage_text(poses: list, args: argparse.Namespace) -> str:
     """What the plan added to cover inertias: workspace poses and ``--cover`` poses."""
-    from tvist.ident.pose_plan import COVERED_JOINTS
+    from tvist.ident.pose_plan import covered_joints
 
-    joints = ", ".join(f"J_{j}" for j in COVERED_JOINTS)
+    joints = ", ".join(f"J_{j}" for j in covered_joints(args.robot))
     if args.no_workspace_cover or args.every == 0:
         text = f"the workspace's {joints} not covered (--no-workspace-cover or --every 0)"
     else:

@@ -5,7 +5,7 @@ Per variant ``family:<robot>:<seed>``:
 
 1. **Campaign logs**: the plan (:func:`tvist.ident.pose_plan.plan_poses`, which covers the
    workspace's inertias) run on the variant's twin, the base, shoulder and elbow excitation of
-   each pose (:data:`~tvist.ident.excited.EXCITED_JOINTS`) written as ur_rtde CSV logs
+   each pose (:func:`~tvist.ident.excited.default_excited_joints`) written as ur_rtde CSV logs
    (``<pose>_joint<j>.csv``, one folder per payload; a rerun keeps the logs already written).
 2. **Through the CLI** (subprocesses, as a user types them): ``tvist identify`` of each
    payload's logs, then ``tvist fit-map --kind modal``.
@@ -55,7 +55,7 @@ from typing import Any
 import numpy as np
 
 from tvist.cli.plan import excited_from_args
-from tvist.ident.excited import EXCITED_JOINTS
+from tvist.ident.excited import excited_joints as checked_joints
 
 __all__ = [
     "EVALUATION_POSES",
@@ -111,7 +111,9 @@ class HarnessSettings:
     plan_seed
         Seed of the plan (wrists, excitations, noise).
     excited_joints
-        Joints excited at every pose (:func:`~tvist.ident.excited.excited_joints`). The logs
+        Joints excited at every pose (:func:`~tvist.ident.excited.excited_joints`; ``None``:
+        the robot's base, shoulder and elbow,
+        :func:`~tvist.ident.excited.default_excited_joints`). The logs
         folder is shared by reruns: give another ``--out`` for other joints.
     """
 
@@ -127,7 +129,10 @@ class HarnessSettings:
     duration_s: float = 4.0
     accel_noise_std_m_s2: float = 0.05
     plan_seed: int = 0
-    excited_joints: tuple[int, ...] = EXCITED_JOINTS
+    excited_joints: tuple[int, ...] | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "excited_joints", checked_joints(self.excited_joints, self.robot))
 
     def plan(self) -> list:
         """The campaign poses (payloads above the robot's rated one are left out)."""
@@ -363,7 +368,9 @@ def _write_logs(variant: str, settings: HarnessSettings, poses: Sequence, folder
     for pose in campaign_order([p for p in poses if p.q is not None]):
         target = folder / f"payload-{pose.payload_kg:g}kg"
         target.mkdir(parents=True, exist_ok=True)
-        for excitation in pose_excitations(pose, settings.duration_s, settings.excited_joints):
+        for excitation in pose_excitations(
+            pose, settings.duration_s, settings.excited_joints, robot_name=settings.robot
+        ):
             path = target / f"{pose.key}_joint{excitation.joint}.csv"
             if path.exists():
                 continue
@@ -709,8 +716,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     p.add_argument(
         "--excite",
-        default=",".join(str(j) for j in defaults.excited_joints),
-        help="joints excited at every pose (default 0,1,2: base, shoulder, elbow)",
+        default=None,
+        help="joints excited at every pose (default: base, shoulder and the robot's elbow, "
+        "0,1,2 on a UR, 0,1,3 on an FR3 or iiwa14)",
     )
     args = p.parse_args(argv)
     try:

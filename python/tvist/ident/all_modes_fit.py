@@ -291,10 +291,16 @@ def _robust_scale(r: np.ndarray) -> float:
     return max(1.4826 * float(np.median(np.abs(r))), 1e-6) if r.size else 1.0
 
 
+def _elbow_column(obs: ObservedModes) -> int | None:
+    """Column of the robot's elbow (:attr:`ObservedModes.elbow_joint`), ``None`` if none."""
+    return None if obs.elbow_joint is None else obs.column(obs.elbow_joint)
+
+
 def _start(obs: ObservedModes, model: _Model, elbow_factor: float) -> dict[int, float]:
     """Start stiffnesses (by column): base and shoulder ``ω² M_jj`` of the lowest mode of
-    their own log, the elbow ``elbow_factor`` times the shoulder's, the wrists' own mode at
-    :data:`WRIST_START_HZ`, a link hinge's at :data:`HINGE_START_HZ`."""
+    their own log, the robot's elbow ``elbow_factor`` times the shoulder's, the other joints'
+    (wrists, an upper-arm rotation) own mode at :data:`WRIST_START_HZ`, a link hinge's at
+    :data:`HINGE_START_HZ`."""
     start: dict[int, float] = {}
     for j in ALWAYS_FLEXIBLE:
         c = obs.column(j)
@@ -305,7 +311,7 @@ def _start(obs: ObservedModes, model: _Model, elbow_factor: float) -> dict[int, 
                 vals.append(obs.wn_rad_s[sel].min() ** 2 * obs.mass_kg_m2[p, c, c])
         start[c] = float(np.median(vals)) if vals else 2.0e4
     for j in model.flex:
-        if j == obs.column(2) and j not in model.hinges:
+        if j == _elbow_column(obs) and j not in model.hinges:
             start[j] = elbow_factor * start[obs.column(1)]
         elif j not in start:
             hz = HINGE_START_HZ if j in model.hinges else WRIST_START_HZ
@@ -333,7 +339,8 @@ def _best_frequency_fit(
     """The stiffness fit of ``model`` from every start (:data:`ELBOW_STARTS`), least cost;
     with ``warm`` (parameter values by name, e.g. of a larger model's fit) from that alone."""
     best, best_start = None, {}
-    factors = ELBOW_STARTS if obs.column(2) in model.flex and warm is None else (1.0,)
+    elbow = _elbow_column(obs)
+    factors = ELBOW_STARTS if elbow is not None and elbow in model.flex and warm is None else (1.0,)
     for factor in factors:
         start = _start(obs, model, factor)
         names = model.stiffness_names()

@@ -313,7 +313,7 @@ def identify_logs(
                 bar.advance("identified")
     finally:
         bar.close()
-    return flag_jumps(results)
+    return flag_jumps(results, robot_name)
 
 
 class _Bar:

@@ -1,7 +1,8 @@
 """Mapping campaign runner (paper Algorithm 1): every pose excited, identified and stored.
 
 In every pose of the plan (:mod:`tvist.ident.pose_plan`) the base, the shoulder and the
-elbow (the excited joints, :data:`~tvist.ident.excited.EXCITED_JOINTS` by default) are
+robot's elbow (the excited joints, :func:`~tvist.ident.excited.default_excited_joints` by
+default) are
 excited in turn (Algorithm 2, :func:`~tvist.ident.excitation.random_excitation`) on a
 campaign robot (:mod:`tvist.ident.campaign_robots`: the MuJoCo twin or a real UR) and
 identified (:func:`~tvist.ident.pose.identify_pose`). Each pose record is appended to a
@@ -23,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from tvist.ident.campaign_robots import RECORDED_FIELDS, CampaignRobot, TwinRobot, URRobot
-from tvist.ident.excited import EXCITED_JOINTS, excited_joints
+from tvist.ident.excited import excited_joints
 from tvist.ident.local_fit import FitOptions
 from tvist.ident.logs import Record
 from tvist.ident.pose import IDENTIFIED_JOINTS, identify_pose
@@ -71,7 +72,10 @@ class _Settings:
     options: FitOptions = field(default_factory=FitOptions)
     separate_modes: bool = True
     variant: str | None = None
-    joints: tuple[int, ...] = EXCITED_JOINTS
+    joints: tuple[int, ...] | None = None  # None: the robot's default
+
+    def __post_init__(self) -> None:
+        self.joints = excited_joints(self.joints, self.robot_name)
 
 
 def run_pose(robot: CampaignRobot, pose: CampaignPose, settings: _Settings) -> dict:
@@ -96,7 +100,9 @@ def run_pose(robot: CampaignRobot, pose: CampaignPose, settings: _Settings) -> d
     robot.set_payload(pose.payload_kg, pose.payload_com_m)
     logs: dict[int, Record | None] = {}
     failed: dict[int, str] = {}
-    for excitation in pose_excitations(pose, settings.duration_s, settings.joints):
+    for excitation in pose_excitations(
+        pose, settings.duration_s, settings.joints, robot_name=settings.robot_name
+    ):
         joint = excitation.joint
         try:
             logs[joint] = robot.record_excitation(excitation)
@@ -186,7 +192,7 @@ def run_campaign(
     progress: bool = True,
     overwrite: bool = False,
     variant: str | None = None,
-    joints: tuple[int, ...] = EXCITED_JOINTS,
+    joints: tuple[int, ...] | None = None,
 ) -> list[dict]:
     """Run (or resume) a campaign and return every pose record in ``results_path``.
 
@@ -225,7 +231,8 @@ def run_campaign(
         are not mixed with the standard twin's in one file.
     joints
         The joints excited at every pose (:func:`~tvist.ident.excited.excited_joints`:
-        base and shoulder, and any of elbow and wrist 1); records of other joints are not
+        base and shoulder, and any of elbow and wrist 1); ``None``: the robot's
+        (:func:`~tvist.ident.excited.default_excited_joints`). Records of other joints are not
         mixed in one file.
 
     Raises
@@ -241,7 +248,7 @@ def run_campaign(
         options=options or FitOptions(),
         separate_modes=separate_modes,
         variant=getattr(robot, "variant", None) if robot is not None else variant,
-        joints=excited_joints(joints),
+        joints=excited_joints(joints, robot_name if robot is None else robot.robot_name),
     )
     poses = list(poses)
     coms = sorted({tuple(p.payload_com_m) for p in poses})
@@ -293,7 +300,7 @@ def run_campaign(
         finally:
             if bar is not None:
                 bar.close()
-        store.replace_all(flag_jumps(store.records))
+        store.replace_all(flag_jumps(store.records, settings.robot_name))
         return list(store.records)
 
 

@@ -1,8 +1,8 @@
 """A campaign plan written out for one's own robot: what ``tvist plan`` writes.
 
 For each pose of the plan (:func:`~tvist.ident.pose_plan.plan_poses`, payload by payload) and
-each excited joint (base, shoulder, elbow by default,
-:data:`~tvist.ident.excited.EXCITED_JOINTS`; lowest first) the folder gets the excitation as
+each excited joint (base, shoulder and the robot's elbow by default,
+:func:`~tvist.ident.excited.default_excited_joints`; lowest first) the folder gets the excitation as
 a URScript program (``NNN_KEY_jointJ.script``, :func:`~tvist.ident.excitation.to_urscript`:
 approach, standstill, moves) and as a trajectory CSV (``NNN_KEY_jointJ.csv``), and
 ``plan.json`` lists them in order with the poses and the time the robot will be busy.
@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from tvist.ident.excitation import to_urscript, write_trajectory_csv
-from tvist.ident.excited import EXCITED_JOINTS, excited_joints
+from tvist.ident.excited import excited_joints
 from tvist.ident.pose_plan import CampaignPose, pose_excitations
 from tvist.robots import params
 from tvist.units import check_trajectory
@@ -71,13 +71,13 @@ def write_plan(
     duration_s: float = 8.0,
     approach_speed_rad_s: float = APPROACH_SPEED_RAD_S,
     approach_accel_rad_s2: float = APPROACH_ACCEL_RAD_S2,
-    joints: Sequence[int] = EXCITED_JOINTS,
+    joints: Sequence[int] | None = None,
 ) -> PlanSummary:
     """Write the programs, trajectories and ``plan.json`` of ``poses`` (in their order) into
     ``folder`` (created; files of an earlier plan with the same names are replaced), an
-    excitation of each of ``joints`` per pose (:func:`~tvist.ident.excited.excited_joints`),
-    each ``duration_s`` (s) long."""
-    joints = excited_joints(joints)
+    excitation of each of ``joints`` per pose (:func:`~tvist.ident.excited.excited_joints`;
+    ``None``: the robot's default), each ``duration_s`` (s) long."""
+    joints = excited_joints(joints, robot_name)
     robot_params = params(robot_name)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -89,7 +89,7 @@ def write_plan(
         if pose.q is None:
             continue
         excitations = []
-        for excitation in pose_excitations(pose, duration_s, joints):
+        for excitation in pose_excitations(pose, duration_s, joints, robot_name=robot_name):
             number += 1
             stem = f"{number:03d}_{pose.key}_joint{excitation.joint}"
             # As every trajectory written for a robot: inside its joint and speed limits.

@@ -50,6 +50,9 @@ class ObservedModes:
     hinged_links
         Links with a hinge pair at :data:`HINGE_AT_FRACTION` of their length (none: the
         robot's own model).
+    elbow_joint
+        The robot's elbow (:attr:`tvist.robots.RobotParams.elbow_joint`; a UR's 2), ``None``
+        for an arm without one.
     """
 
     q: np.ndarray
@@ -66,6 +69,7 @@ class ObservedModes:
     direction: np.ndarray
     true_modes: tuple[Any, ...]
     hinged_links: tuple[int, ...] = ()
+    elbow_joint: int | None = 2
 
     def column(self, joint: int) -> int:
         """Index of the robot's joint ``joint`` in the model arrays."""
@@ -101,6 +105,7 @@ class ObservedModes:
             self.direction[keep],
             tuple(self.true_modes[i] for i in index),
             self.hinged_links,
+            self.elbow_joint,
         )
 
 
@@ -213,4 +218,5 @@ def observed_modes(
         np.array(direction).reshape(-1, 3),
         tuple(truth),
         hinged_links,
+        robot_params.elbow_joint,
     )

@@ -67,7 +67,7 @@ __all__ = [
 
 #: Joints whose single-mode ``modes`` entries are identified at every pose (base, shoulder):
 #: the paper's map reads these. Which joints a campaign excites is
-#: :data:`tvist.ident.excited.EXCITED_JOINTS`; the logs of the others add ``ringing``
+#: :func:`tvist.ident.excited.default_excited_joints`; the logs of the others add ``ringing``
 #: entries only.
 IDENTIFIED_JOINTS = (0, 1)
 #: Two logs are of the same pose if their starting poses agree to this, rad.
@@ -217,16 +217,23 @@ def _rings(mode: RingingMode) -> bool:
     return not any(r.startswith(("weak ringing", "below noise")) for r in mode.reasons)
 
 
-#: Names of the excited joints' logs, for reasons and messages.
+#: Names of the excited joints' logs on a UR (elbow 2), for reasons and messages.
 LOG_NAMES = {0: "base", 1: "shoulder", 2: "elbow", 3: "wrist 1", 4: "wrist 2", 5: "wrist 3"}
 
 
-def _log_name(joint: int) -> str:
-    return LOG_NAMES.get(joint, f"joint {joint}")
+def _log_name(joint: int, elbow: int | None = 2) -> str:
+    """A UR's names (:data:`LOG_NAMES`); on an arm whose elbow is not joint 2, base,
+    shoulder, elbow and ``joint j``."""
+    if joint == elbow:
+        return "elbow"
+    if elbow == 2 or joint in (0, 1):
+        return LOG_NAMES.get(joint, f"joint {joint}")
+    return f"joint {joint}"
 
 
-def cross_check_logs(ringing: list[RingingMode]) -> list[RingingMode]:
-    """``ringing`` with the modes found in two logs of the pose checked against each other.
+def cross_check_logs(ringing: list[RingingMode], elbow_joint: int | None = 2) -> list[RingingMode]:
+    """``ringing`` with the modes found in two logs of the pose checked against each other
+    (logs named as on an arm whose elbow is ``elbow_joint``).
 
     For every two logs (e.g. base and shoulder, shoulder and elbow), their modes closer than
     :data:`SAME_MODE_RATIO`, at least one of them confident and neither weak (a weak mode may
@@ -260,7 +267,7 @@ def cross_check_logs(ringing: list[RingingMode]) -> list[RingingMode]:
         for i, other in ((a, b), (b, a)):
             if settled and i in confirmed:
                 continue
-            log = _log_name(out[other].log_joint)
+            log = _log_name(out[other].log_joint, elbow_joint)
             out[i] = out[i].flagged(f"disagrees with the {log} log ({diff:.1f} %, {allowed})")
     return out
 
@@ -303,7 +310,7 @@ def pose_of(record: Record) -> np.ndarray:
     return np.median(record.actual_q[start:stop], axis=0)
 
 
-def _check_same_pose(poses: Mapping[int, np.ndarray]) -> None:
+def _check_same_pose(poses: Mapping[int, np.ndarray], elbow: int | None = 2) -> None:
     """Raise if the logs' starting poses (by excited joint, rad) differ by more than
     :data:`SAME_POSE_TOL_RAD` (each log moves its own joint by up to ±10°, after its start)."""
     joints = sorted(poses)
@@ -312,8 +319,8 @@ def _check_same_pose(poses: Mapping[int, np.ndarray]) -> None:
             worst = float(np.max(np.abs(poses[first] - poses[second])))
             if worst > SAME_POSE_TOL_RAD:
                 raise ValueError(
-                    f"the {_log_name(first)} and {_log_name(second)} logs are not of the same "
-                    f"pose: their starting poses differ by up to {worst:.3f} rad"
+                    f"the {_log_name(first, elbow)} and {_log_name(second, elbow)} logs are not "
+                    f"of the same pose: their starting poses differ by up to {worst:.3f} rad"
                 )
 
 
@@ -380,7 +387,9 @@ def identify_pose(
     if not present:
         raise ValueError("identify_pose needs at least one excitation log")
     poses = {j: pose_of(r) for j, r in present.items()}
-    _check_same_pose(poses)
+    params = getattr(robot, "params", None)
+    elbow = getattr(params, "elbow_joint", 2) if params is not None else 2
+    _check_same_pose(poses, elbow)
     if q is None:
         q = next(iter(poses.values()))
     q = np.asarray(q, dtype=float)
@@ -407,7 +416,8 @@ def identify_pose(
             if joint in IDENTIFIED_JOINTS:
                 modes[joint] = str(exc)
             else:
-                warnings.warn(f"{_log_name(joint)} log: no local fit ({exc})", stacklevel=2)
+                name = _log_name(joint, elbow)
+                warnings.warn(f"{name} log: no local fit ({exc})", stacklevel=2)
             continue
         if joint in IDENTIFIED_JOINTS:
             modes[joint] = fits[joint]
@@ -419,7 +429,7 @@ def identify_pose(
             )
         except (ValueError, RuntimeError, np.linalg.LinAlgError) as exc:
             warnings.warn(f"joint {joint}: no multi-mode fit ({exc})", stacklevel=2)
-    ringing = cross_check_logs(ringing)
+    ringing = cross_check_logs(ringing, elbow)
     if separate_modes and 0 in fits:
         base = fits[0]
         shoulder = fits.get(1)

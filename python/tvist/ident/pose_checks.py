@@ -7,8 +7,10 @@ low-confidence, "jumps against neighbouring poses", naming how far the neighbour
 modes are.
 
 Neighbours are the :data:`N_NEIGHBOURS` nearest poses with the same payload, by the largest
-difference of the base, shoulder and elbow angles (the wrist is drawn at random per pose and
-moves the modes little), within :data:`MAX_NEIGHBOUR_RAD`. The check needs at least two
+difference of the angles of the joints from the base to the robot's elbow
+(:attr:`tvist.robots.RobotParams.elbow_joint`; a UR's base, shoulder and elbow, an FR3's also
+its upper-arm rotation; the wrist is drawn at random per pose and moves the modes little),
+within :data:`MAX_NEIGHBOUR_RAD`. The check needs at least two
 neighbours with confident modes; a mode jumps if, at every one of them, the closest confident
 mode (from any log) differs by more than :data:`JUMP_RATIO`.
 
@@ -28,7 +30,7 @@ __all__ = ["JUMP_REASON", "flag_jumps"]
 
 #: Nearest poses compared.
 N_NEIGHBOURS = 2
-#: Poses farther apart than this (largest of the base, shoulder, elbow angle differences, rad)
+#: Poses farther apart than this (largest of the angle differences up to the elbow, rad)
 #: are not neighbours.
 MAX_NEIGHBOUR_RAD = 0.6
 #: A mode farther than this frequency ratio from every mode of every neighbour jumps.
@@ -45,10 +47,13 @@ def _confident(record: dict[str, Any]) -> list[float]:
     ]
 
 
-def flag_jumps(records: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Copies of ``records`` with every confident ``ringing`` entry that jumps against its
-    neighbouring poses flagged (see the module docstring); records without ``ringing`` or
-    ``q`` are returned unchanged."""
+def flag_jumps(records: Sequence[dict[str, Any]], robot_name: str = "ur5e") -> list[dict[str, Any]]:
+    """Copies of ``records`` (of a campaign on ``robot_name``) with every confident
+    ``ringing`` entry that jumps against its neighbouring poses flagged (see the module
+    docstring); records without ``ringing`` or ``q`` are returned unchanged."""
+    from tvist.robots import params
+
+    elbow = params(robot_name).elbow_joint
     out = []
     for r in records:
         r = dict(r)
@@ -62,7 +67,8 @@ def flag_jumps(records: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     usable = [i for i, r in enumerate(out) if r.get("q") is not None and r.get("ringing")]
     if len(usable) < N_NEIGHBOURS + 1:
         return out
-    q = np.array([np.asarray(out[i]["q"], dtype=float)[:3] for i in usable])
+    last = 2 if elbow is None else elbow
+    q = np.array([np.asarray(out[i]["q"], dtype=float)[: last + 1] for i in usable])
     payload = np.array([float(out[i].get("payload_kg", 0.0)) for i in usable])
     confident = [_confident(out[i]) for i in usable]
     for a, i in enumerate(usable):

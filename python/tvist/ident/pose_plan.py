@@ -14,8 +14,8 @@ the plan's range (:func:`covering_poses`; a map is identified only over the iner
 poses, :mod:`tvist.dynmap`), in the order that changes the payload least
 (:func:`campaign_order`); :func:`plan_shortfall` says why the map fit could not succeed on it,
 before anything moves. Each pose's excitations (:func:`pose_excitations`, of the base, the
-shoulder and the elbow by default, :data:`~tvist.ident.excited.EXCITED_JOINTS`) follow from
-its seed.
+shoulder and the robot's elbow by default, :func:`~tvist.ident.excited.default_excited_joints`)
+follow from its seed.
 
 Algorithm 1's plane and its inverse kinematics are written for a DH arm whose elbow follows
 the shoulder (UR). An arm placed as its URDF places it (FR3, iiwa14, ...) has no such plane:
@@ -35,7 +35,7 @@ import numpy as np
 from scipy import optimize
 
 from tvist.ident.excitation import Excitation, random_excitation
-from tvist.ident.excited import EXCITED_JOINTS, excited_joints
+from tvist.ident.excited import excited_joints
 from tvist.robots import Payload, Robot, params
 
 __all__ = [
@@ -46,6 +46,7 @@ __all__ = [
     "campaign_order",
     "campaign_poses",
     "cover_poses",
+    "covered_joints",
     "covering_poses",
     "plan_poses",
     "plan_shortfall",
@@ -71,10 +72,18 @@ NOMINAL_WRIST_RAD = (-math.pi / 2, 0.0, 0.0)
 GIVEN_POSE = -1
 #: The flange must land within this distance of the target, m.
 IK_TOLERANCE_M = 1e-6
-#: Joints whose axis inertia ``J_j`` (diagonal of the mass matrix) a plan covers: the base and
-#: the shoulder, which a paper10 map reads (and holds at the bound of its identified range
-#: outside it), and the elbow, whose stiffness a modal map fits.
-COVERED_JOINTS = (0, 1, 2)
+
+
+def covered_joints(robot_name: str) -> tuple[int, ...]:
+    """Joints whose axis inertia ``J_j`` (diagonal of the mass matrix) a plan covers: the base
+    and the shoulder, which a paper10 map reads (and holds at the bound of its identified
+    range outside it), and the robot's elbow
+    (:attr:`~tvist.robots.RobotParams.elbow_joint`), whose stiffness a modal map fits. A UR:
+    ``(0, 1, 2)``; an FR3 or iiwa14: ``(0, 1, 3)``."""
+    elbow = params(robot_name).elbow_joint
+    return (0, 1) if elbow is None else (0, 1, elbow)
+
+
 #: The workspace (:func:`workspace_poses`): shoulder from one horizontal to the other (upper
 #: arm at or above the shoulder), elbow from stretched to the demo's folded pose Q3 (150°),
 #: wrists anywhere, flange above the mounting plane.
@@ -390,16 +399,18 @@ def workspace_extremes(
     payload_kg: float,
     payload_com_m: Sequence[float],
     *,
-    joints: Sequence[int] = COVERED_JOINTS,
+    joints: Sequence[int] | None = None,
     samples: int = WORKSPACE_SAMPLES,
     seed: int = 0,
 ) -> np.ndarray:
     """The workspace poses ``(2 len(joints), 6)`` (rad) of the smallest and the largest
-    inertia ``J_j`` of each joint in ``joints`` with the payload: the best of ``samples``
+    inertia ``J_j`` of each joint in ``joints`` (default :func:`covered_joints`) with the
+    payload: the best of ``samples``
     random poses and the corners (:func:`workspace_poses`), refined by a bounded local search
     within the workspace (a refinement that leaves it, flange below the mounting plane, is
     not taken)."""
     robot = Robot(params(robot_name), Payload(payload_kg, tuple(payload_com_m)))
+    joints = covered_joints(robot_name) if joints is None else joints
     q = workspace_poses(robot_name, samples, seed=seed, corners=True)
     inertia = robot.joint_inertia_many(q)
     bounds = [tuple(row) for row in workspace_ranges(robot)[1:]]
@@ -423,10 +434,11 @@ def covering_poses(
     robot_name: str,
     plan: Sequence[CampaignPose],
     candidates: Sequence[CampaignPose],
-    joints: Sequence[int] = COVERED_JOINTS,
+    joints: Sequence[int] | None = None,
 ) -> list[CampaignPose]:
     """The ``candidates`` to add to ``plan`` so that, payload by payload, the inertias
-    ``J_j`` (``j`` in ``joints``) of every candidate lie within the range of the plan's.
+    ``J_j`` (``j`` in ``joints``, default :func:`covered_joints`) of every candidate lie
+    within the range of the plan's.
 
     Greedy: while a candidate lies outside (by more than :data:`COVER_TOLERANCE`), the one
     farthest outside (largest ``|log(J / bound)|`` over the joints) is added, which widens
@@ -435,7 +447,7 @@ def covering_poses(
     is its own (candidates of a payload the plan lacks start that payload's range).
     Unreachable poses (``q = None``) neither count nor are added.
     """
-    joints = list(joints)
+    joints = list(covered_joints(robot_name) if joints is None else joints)
     added: list[CampaignPose] = []
     groups: dict[tuple, list[CampaignPose]] = {}
     for pose in candidates:
@@ -486,7 +498,7 @@ def plan_poses(
     """A campaign plan, in :func:`campaign_order`.
 
     Every ``every``-th pose of :func:`campaign_poses` and, with them, the workspace poses of
-    the smallest and largest inertias :data:`COVERED_JOINTS` (:func:`workspace_extremes`
+    the smallest and largest inertias of :func:`covered_joints` (:func:`workspace_extremes`
     from ``workspace_samples`` random poses, keys ``m{payload}kg-W{i}``) that extend the
     plan's range over the whole workspace (:func:`covering_poses`; not with
     ``cover_workspace=False``); ``every = 0`` takes none of these. Then the user's
@@ -566,14 +578,19 @@ _SEED_DRAWS = 6
 
 
 def pose_excitations(
-    pose: CampaignPose, duration_s: float = 8.0, joints: Sequence[int] = EXCITED_JOINTS
+    pose: CampaignPose,
+    duration_s: float = 8.0,
+    joints: Sequence[int] | None = None,
+    *,
+    robot_name: str = "ur5e",
 ) -> list[Excitation]:
-    """The excitations of ``joints`` (default :data:`~tvist.ident.excited.EXCITED_JOINTS`;
-    checked with :func:`~tvist.ident.excited.excited_joints`) at ``pose`` (Algorithm 2),
+    """The excitations of ``joints`` (default: the base, shoulder and elbow of
+    ``robot_name``, :func:`~tvist.ident.excited.default_excited_joints`; checked with
+    :func:`~tvist.ident.excited.excited_joints`) at ``pose`` (Algorithm 2),
     lowest joint first, each ``duration_s`` (s) long; each with an integer seed drawn from
     the pose's seed (which also seeds a twin's sensor noise): joint ``j`` takes the ``j``-th
     draw, whichever joints are excited."""
-    joints = excited_joints(joints)
+    joints = excited_joints(joints, robot_name)
     if pose.q is None:
         raise ValueError(f"pose {pose.key} is unreachable")
     rng = np.random.default_rng(pose.seed)

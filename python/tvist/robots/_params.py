@@ -118,6 +118,11 @@ class RobotParams:
         Rated payload.
     placements
         URDF joint placement (``None`` for a DH arm).
+    elbow_joint
+        Index of the elbow: the joint whose flexibility bends the arm in the shoulder's
+        plane (a UR's 2; 3 on an arm whose joint 2 turns the upper arm about its own axis,
+        FR3, iiwa14). ``None`` at construction: :func:`elbow_by_axes` (still ``None`` for an
+        arm without one). The identification reads it (:mod:`tvist.ident.excited`).
     """
 
     name: str
@@ -134,6 +139,7 @@ class RobotParams:
     max_velocity_rad_s: np.ndarray
     max_payload_kg: float
     placements: JointPlacements | None = None
+    elbow_joint: int | None = None
     n_dof: int = field(init=False)
 
     def __post_init__(self) -> None:
@@ -168,6 +174,15 @@ class RobotParams:
         if not math.isfinite(payload) or payload < 0.0:
             raise ValueError(f"{self.name}: max_payload_kg must be finite and >= 0")
         object.__setattr__(self, "max_payload_kg", payload)
+        elbow = elbow_by_axes(self) if self.elbow_joint is None else self.elbow_joint
+        if elbow is not None:
+            if isinstance(elbow, bool) or int(elbow) != elbow or not 2 <= int(elbow) < n:
+                raise ValueError(
+                    f"{self.name}: elbow_joint must be a joint after the shoulder (2 to "
+                    f"{n - 1}), got {self.elbow_joint!r}"
+                )
+            elbow = int(elbow)
+        object.__setattr__(self, "elbow_joint", elbow)
 
     @property
     def inertia_tensors_kg_m2(self) -> np.ndarray:
@@ -196,6 +211,47 @@ class RobotParams:
             )
         except (KeyError, TypeError) as exc:
             raise ValueError(f"{name}: missing or malformed field {exc}") from None
+
+
+#: Two joint axes are parallel if they are within this angle of each other (or of opposite
+#: directions), rad: room for angles a URDF writes to 4 decimals (1.5708 for π/2 is 4e-6
+#: off), far below any skew an arm is built with.
+PARALLEL_AXES_RAD = 1e-3
+
+
+def joint_axes_at_home(robot: RobotParams) -> np.ndarray:
+    """``(n, 3)`` unit axes of the joints in the base frame at ``q = 0``: DH joint ``i`` turns
+    about ``z`` of DH frame ``i - 1``; a URDF-placed joint about its ``axis`` in the frame of
+    its origin."""
+    from tvist.robots.rpy import rpy_matrix
+
+    rot = np.eye(3)
+    axes = []
+    placed = robot.placements
+    for i in range(robot.n_dof):
+        if placed is None:
+            axes.append(rot[:, 2].copy())
+            c, s = math.cos(robot.alpha_rad[i]), math.sin(robot.alpha_rad[i])
+            rot = rot @ np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+        else:
+            rot = rot @ rpy_matrix(placed.origin_rpy_rad[i])
+            axes.append(rot @ placed.axis[i] / np.linalg.norm(placed.axis[i]))
+    return np.array(axes)
+
+
+def elbow_by_axes(robot: RobotParams) -> int | None:
+    """The elbow of an arm whose data does not state it: the first joint after the shoulder
+    (joint 1) whose axis is parallel to the shoulder's at ``q = 0`` (within
+    :data:`PARALLEL_AXES_RAD`, either direction), the next joint that bends the arm in the
+    shoulder's plane. A UR: 2; FR3, iiwa14, Gen3 (joint 2 turns the upper arm about its own
+    axis): 3. ``None`` if no joint is."""
+    if robot.n_dof < 3:
+        return None
+    axes = joint_axes_at_home(robot)
+    for j in range(2, robot.n_dof):
+        if abs(float(axes[j] @ axes[1])) >= math.cos(PARALLEL_AXES_RAD):
+            return j
+    return None
 
 
 @dataclass(frozen=True)

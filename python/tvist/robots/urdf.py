@@ -97,6 +97,7 @@ def urdf_params(
     tip_link: str,
     name: str | None = None,
     max_payload_kg: float = 0.0,
+    elbow_joint: int | None = None,
 ) -> RobotParams:
     """Parameters of the serial chain from ``base_link`` to ``tip_link`` of URDF ``path``.
 
@@ -110,6 +111,10 @@ def urdf_params(
         Robot name (default: the URDF's robot name); maps identified on it carry it.
     max_payload_kg
         Rated payload (URDF does not give one).
+    elbow_joint
+        Index of the elbow (URDF does not name one); ``None``: the first joint after the
+        shoulder whose axis is parallel to the shoulder's at ``q = 0``
+        (:func:`tvist.robots.elbow_by_axes`).
 
     Raises
     ------
@@ -196,6 +201,7 @@ def urdf_params(
         max_velocity_rad_s=np.array(speeds),
         max_payload_kg=max_payload_kg,
         placements=placements,
+        elbow_joint=elbow_joint,
     )
 
 
@@ -360,13 +366,14 @@ def dh_urdf(params: RobotParams) -> str:
 PROXIMAL_JOINTS: tuple[int, ...] = (0, 1, 2, 3)
 
 #: The arms shipped as URDF data (``urdf_data/``, provenance and license in each file):
-#: name → (file, base link, tip link, rated payload in kg). URDF gives no rated payload; the
-#: makers' data sheets do: Franka Research 3 3 kg, KUKA LBR iiwa 14 R820 14 kg, Kinova Gen3
-#: (7 DOF) 4 kg at mid-range.
-SHIPPED_URDFS: dict[str, tuple[str, str, str, float]] = {
-    "fr3": ("fr3.urdf", "fr3_link0", "fr3_link8", 3.0),
-    "iiwa14": ("iiwa14.urdf", "iiwa_link_0", "iiwa_link_ee", 14.0),
-    "gen3": ("gen3.urdf", "base_link", "end_effector_link", 4.0),
+#: name → (file, base link, tip link, rated payload in kg, elbow joint). URDF gives no rated
+#: payload; the makers' data sheets do: Franka Research 3 3 kg, KUKA LBR iiwa 14 R820 14 kg,
+#: Kinova Gen3 (7 DOF) 4 kg at mid-range. Nor does it name the elbow: on all three joint 2
+#: turns the upper arm about its own axis and joint 3 is the elbow (the makers' "joint 4").
+SHIPPED_URDFS: dict[str, tuple[str, str, str, float, int]] = {
+    "fr3": ("fr3.urdf", "fr3_link0", "fr3_link8", 3.0, 3),
+    "iiwa14": ("iiwa14.urdf", "iiwa_link_0", "iiwa_link_ee", 14.0, 3),
+    "gen3": ("gen3.urdf", "base_link", "end_effector_link", 4.0, 3),
 }
 
 
@@ -374,7 +381,7 @@ def shipped_urdf(name: str) -> tuple[Path, str, str]:
     """``(path, base_link, tip_link)`` of shipped arm ``name`` (one of :data:`SHIPPED_URDFS`)."""
     if name not in SHIPPED_URDFS:
         raise ValueError(f"unknown shipped arm {name!r}; known: {', '.join(SHIPPED_URDFS)}")
-    file, base, tip, _ = SHIPPED_URDFS[name]
+    file, base, tip, *_ = SHIPPED_URDFS[name]
     return Path(__file__).parent / "urdf_data" / file, base, tip
 
 
@@ -383,7 +390,8 @@ def shipped_params(name: str) -> RobotParams:
     """Parameters of shipped arm ``name`` (its chain and rated payload), read once;
     :func:`tvist.robots.params` serves them under the same names."""
     path, base, tip = shipped_urdf(name)
+    *_, payload_kg, elbow = SHIPPED_URDFS[name]
     with warnings.catch_warnings():
         # Gen3's continuous joints get ±2π limits: stated in the module docstring.
         warnings.simplefilter("ignore")
-        return urdf_params(path, base, tip, name=name, max_payload_kg=SHIPPED_URDFS[name][3])
+        return urdf_params(path, base, tip, name=name, max_payload_kg=payload_kg, elbow_joint=elbow)
