@@ -14,9 +14,8 @@ import numpy as np
 import pytest
 
 from tvist.demo.identified import DEMO_PLAN, CampaignPlan
-from tvist.demo.modal_rows import DEMO_FLEX_JOINTS
 from tvist.demo.motions import PAYLOAD_COM_M, PAYLOAD_KG
-from tvist.ident.modal_fit import fit_modal_map
+from tvist.ident.modal_fit import DEFAULT_FLEX_JOINTS, fit_modal_map
 from tvist.sim import Twin, default_flex
 
 #: Identification-size noise: 0.5 % on ω, 5 % on ζ (the demo campaign's local fits are within
@@ -72,7 +71,7 @@ def _stiffness(modal, joint: int) -> dict:
 
 def test_the_demo_plan_recovers_the_twins_gear_stiffnesses():
     twin_k = default_flex("ur5e").k1_nm_per_rad
-    modal = fit_modal_map(_plan_records(DEMO_PLAN), "ur5e", flex_joints=DEMO_FLEX_JOINTS)
+    modal = fit_modal_map(_plan_records(DEMO_PLAN), "ur5e", flex_joints=DEFAULT_FLEX_JOINTS)
     # Base, shoulder, elbow and wrist 2 are kept; wrist 1 is not determined by these modes
     # with 0.5 % noise and is made rigid. (While the core blended every mode by share⁴, the
     # data's dominant modes did not fit it at poses where two far-apart modes share a joint,
@@ -92,7 +91,7 @@ def test_one_payload_cannot_determine_the_elbow():
     # The same plan at the experiment's payload only: load and inertia of the shoulder grow
     # together with the reach, and the elbow's stiffness is not determined (made rigid).
     one_payload = CampaignPlan(payloads_kg=(PAYLOAD_KG,), angles_rad=DEMO_PLAN.angles_rad)
-    modal = fit_modal_map(_plan_records(one_payload), "ur5e", flex_joints=DEMO_FLEX_JOINTS)
+    modal = fit_modal_map(_plan_records(one_payload), "ur5e", flex_joints=DEFAULT_FLEX_JOINTS)
     assert 2 not in _joints(modal)
     assert "joint 2 made rigid" in modal.metadata["fit_statistics"]["dropped"]
 
