@@ -371,13 +371,15 @@ def _standard_errors(jac: np.ndarray, residual: np.ndarray) -> np.ndarray:
         return np.zeros(0)
     if n < p:
         return np.full(p, math.inf)
-    s2 = float(residual @ residual) / max(n - p, 1)
     out = np.full(p, math.inf)
     norm = np.linalg.norm(jac, axis=0)
     seen = norm > 0
     if not seen.any():
         return out
     _, sv, vt = np.linalg.svd(jac[:, seen] / norm[seen], full_matrices=False)
+    # Degrees of freedom: the residuals less the directions the data determine.
+    rank = int(np.sum(sv > JACOBIAN_RTOL * sv[0]))
+    s2 = float(residual @ residual) / max(n - rank, 1)
     sv = np.maximum(sv, JACOBIAN_RTOL * sv[0])
     out[seen] = np.sqrt(np.einsum("ki,k->i", vt**2, 1.0 / sv**2) * s2) / norm[seen]
     return out
