@@ -18,7 +18,9 @@ than base and shoulder (the pairing depends on them), robust least squares with 
 undamped modes; (2) damping, non-negative least squares on the matched damping ratios with
 the damping projected on the undamped modes (linear in the coefficients); (3) both together on
 ``ω`` and ``ζ`` with the exact damped modes (the core's model), each in units of its scatter.
-Load terms below ``drop_t`` standard errors are dropped.
+Load terms below ``drop_t`` standard errors are dropped, the weakest first (standard errors
+per parameter: the load terms of a joint no identified mode involves are not determined, and
+must not make the others' infinite, :func:`_standard_errors`).
 
 **Every candidate joint stays flexible** (:func:`flexible_candidates`: base to wrist 2 on a
 UR). A joint's gear is a spring whether or not its own mode was identified, and a joint made
