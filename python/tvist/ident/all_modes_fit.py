@@ -18,7 +18,9 @@ than base and shoulder (the pairing depends on them), robust least squares with 
 undamped modes; (2) damping, non-negative least squares on the matched damping ratios with
 the damping projected on the undamped modes (linear in the coefficients); (3) both together on
 ``ω`` and ``ζ`` with the exact damped modes (the core's model), each in units of its scatter.
-Load terms below ``drop_t`` standard errors are dropped.
+Load terms below ``drop_t`` standard errors are dropped, the weakest first (standard errors
+per parameter: the load terms of a joint no identified mode involves are not determined, and
+must not make the others' infinite, :func:`_standard_errors`).
 
 **Every candidate joint stays flexible** (:func:`flexible_candidates`: base to wrist 2 on a
 UR). A joint's gear is a spring whether or not its own mode was identified, and a joint made
@@ -138,6 +140,9 @@ MATCH_PASSES = 4
 #: Smallest relative standard errors believed of a local fit (ω, ζ), as the label-based fit.
 MIN_RELATIVE_SE = (1.0e-3, 1.0e-2)
 ROBUST_SCALE = 0.02
+#: Relative accuracy of the least-squares Jacobians (finite differences: about √ε); their
+#: singular values below this times the largest are not told from zero (standard errors).
+JACOBIAN_RTOL = 1.5e-8
 STIFFNESS_SPAN = 100.0
 MIN_LOAD_SPAN_NM = 1.0
 DAMPING_LOAD = {0: 1}
@@ -356,7 +361,16 @@ def _best_frequency_fit(
 
 
 def _standard_errors(jac: np.ndarray, residual: np.ndarray) -> np.ndarray:
-    """``√diag(σ² (JᵀJ)⁻¹)`` over the inliers (within 4 robust standard deviations)."""
+    """``√diag(σ² (JᵀJ)⁻¹)`` over the inliers (within 4 robust standard deviations), per
+    parameter.
+
+    A parameter the data do not determine (the load terms of a joint no identified mode
+    involves, a wrist's on a UR) makes ``J`` singular; that must not make every standard
+    error infinite, which would read as every load term being weak. ``J``'s columns are scaled
+    to unit length (the parameters' units then do not matter) and its singular values floored
+    at :data:`JACOBIAN_RTOL` times the largest (the finite-difference Jacobian's accuracy):
+    a direction the data do not see gets that floor's variance, so a parameter along it has a
+    huge standard error and the others keep theirs."""
     sigma = _robust_scale(residual)
     keep = np.abs(residual) <= 4 * sigma
     if keep.sum() > jac.shape[1]:
@@ -364,11 +378,20 @@ def _standard_errors(jac: np.ndarray, residual: np.ndarray) -> np.ndarray:
     n, p = jac.shape
     if p == 0:
         return np.zeros(0)
-    s2 = float(residual @ residual) / max(n - p, 1)
-    _, sv, vt = np.linalg.svd(jac, full_matrices=False)
-    if sv.size < p or sv[-1] <= 1e-12 * sv[0]:
+    if n < p:
         return np.full(p, math.inf)
-    return np.sqrt(np.einsum("ki,k->i", vt**2, 1.0 / sv**2) * s2)
+    out = np.full(p, math.inf)
+    norm = np.linalg.norm(jac, axis=0)
+    seen = norm > 0
+    if not seen.any():
+        return out
+    _, sv, vt = np.linalg.svd(jac[:, seen] / norm[seen], full_matrices=False)
+    # Degrees of freedom: the residuals less the directions the data determine.
+    rank = int(np.sum(sv > JACOBIAN_RTOL * sv[0]))
+    s2 = float(residual @ residual) / max(n - rank, 1)
+    sv = np.maximum(sv, JACOBIAN_RTOL * sv[0])
+    out[seen] = np.sqrt(np.einsum("ki,k->i", vt**2, 1.0 / sv**2) * s2) / norm[seen]
+    return out
 
 
 def _candidate(obs: ObservedModes, flex: Sequence[int]) -> _Model:
