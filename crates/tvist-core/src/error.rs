@@ -8,7 +8,7 @@ use core::fmt;
 /// Everything that can go wrong while configuring a filter. Returned only at setup time.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Error {
-    /// A shaper name not in the registry ([`crate::shaper::SHAPER_NAMES`]).
+    /// A shaper name not in the registry ([`crate::shaping::shapers::SHAPER_NAMES`]).
     UnknownShaper(String),
     /// An interpolation name other than `"linear"` or `"cubic"`.
     UnknownInterpolation(String),
@@ -55,7 +55,7 @@ impl fmt::Display for Error {
             Error::UnknownShaper(name) => write!(
                 f,
                 "unknown shaper {name:?}; expected one of {:?}",
-                crate::shaper::SHAPER_NAMES
+                crate::shaping::shapers::SHAPER_NAMES
             ),
             Error::UnknownInterpolation(name) => {
                 write!(
@@ -120,7 +120,7 @@ impl Status {
     /// Input or output slice of the wrong length: nothing was computed.
     pub const BAD_LENGTH: Status = Status(16);
     /// A mode's damping ratio exceeded the range of the shaper's published approximation
-    /// ([`crate::shaper::ShaperKind::max_zeta`]); the shaper was designed at that limit.
+    /// ([`crate::shaping::shapers::ShaperKind::max_zeta`]); the shaper was designed at that limit.
     pub const ZETA_CLAMPED: Status = Status(32);
     /// A mode's natural frequency is at or above the Nyquist frequency of the control rate
     /// (`ω_n >= π/dt_s`): the mode cannot be represented at this rate, so shaping cannot
@@ -129,7 +129,7 @@ impl Status {
     /// flag says that the mode is out of reach.
     pub const MODE_ABOVE_NYQUIST: Status = Status(64);
     /// A mode changed faster than a slowly varying mode can
-    /// ([`crate::multimode::MAX_LN_WN_RATE_PER_S`], [`crate::multimode::MAX_ZETA_RATE_PER_S`]):
+    /// ([`crate::tv_shaper::MAX_LN_WN_RATE_PER_S`], [`crate::tv_shaper::MAX_ZETA_RATE_PER_S`]):
     /// the provider's mode jumped (a map that switched eigenmodes, a callback that switched
     /// modes) and the filter approached it at that limit instead, so that the shaped
     /// reference gets no step.

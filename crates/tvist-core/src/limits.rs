@@ -16,7 +16,7 @@ pub const MAX_DELAY_LINE_BYTES: usize = 256 * 1024 * 1024;
 
 /// Largest number of modes of a shaper, a dynamic map or a map file (one cascaded filter
 /// per mode, evaluated every cycle). A robot arm has one structural mode per flexible joint
-/// worth shaping (at most [`crate::modal_map::MAX_FLEX_JOINTS`] = 9 flexible coordinates in the modal map, 2 in
+/// worth shaping (at most [`crate::modes::modal::modal_map::MAX_FLEX_JOINTS`] = 9 flexible coordinates in the modal map, 2 in
 /// the published map); 64 leaves an order of magnitude of room while keeping the cycle cost
 /// bounded (each mode costs one filter update per channel per cycle: 64 constant modes on 6
 /// channels take about 2.5 µs per cycle, measured with the Python `TvShaper.shape`).

@@ -1,7 +1,7 @@
 //! The exact EI solver's input domain: a tolerance must lie strictly inside (0, 1) and the
 //! damping ratio in [0, 1); outside it there is no shaper, whatever Newton would converge to.
 
-use tvist_core::ei;
+use tvist_core::shaping::ei;
 
 #[test]
 fn refine_refuses_a_tolerance_outside_the_open_unit_interval() {

@@ -3,8 +3,8 @@
 //! shaper limits and reports any faster change of a provider's mode.
 
 use core::f64::consts::PI;
-use tvist_core::modal_map::HANDOVER_STEP;
-use tvist_core::multimode::MAX_LN_WN_RATE_PER_S;
+use tvist_core::modes::modal::modal_map::HANDOVER_STEP;
+use tvist_core::tv_shaper::MAX_LN_WN_RATE_PER_S;
 use tvist_core::{
     Dynamics, FlexJoint, LoadLaw, ModalMap, Mode, ModeTrack, ShapedModes, ShaperKind, Status,
     TvShaper, TvShaperConfig,

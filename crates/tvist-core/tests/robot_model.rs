@@ -187,7 +187,7 @@ fn point_payload_mass_matrix_and_gravity_follow_from_the_jacobian() {
                         m_kg * (0..3).map(|k| jac[k * n + r] * jac[k * n + c]).sum::<f64>();
                     assert!((m[r * n + c] - want).abs() < 1e-12, "{name} M[{r},{c}]");
                 }
-                let want = m_kg * tvist_core::robot::GRAVITY_M_S2 * jac[2 * n + r];
+                let want = m_kg * tvist_core::robot::model::GRAVITY_M_S2 * jac[2 * n + r];
                 assert!((tau[r] - want).abs() < 1e-11, "{name} tau[{r}]");
             }
         }

@@ -2,8 +2,8 @@
 //! delay-line memory limits, overflowing payloads, maps of another robot; and a mode above the
 //! Nyquist frequency is reported in every cycle.
 
+use tvist_core::files::robot_data::ur_e_series;
 use tvist_core::limits::{MAX_DELAY_LINE_BYTES, MAX_DOF};
-use tvist_core::robot_data::ur_e_series;
 use tvist_core::{
     ConstantModes, DynamicMap, Error, MapDynamics, Mode, RigidBody, ShaperKind, Status, TvShaper,
     TvShaperConfig,

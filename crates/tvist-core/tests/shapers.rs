@@ -2,8 +2,9 @@
 
 use core::f64::consts::PI;
 use proptest::prelude::*;
-use tvist_core::shaper::MAX_IMPULSES;
-use tvist_core::{ei, prv, Error, Impulses, Mode, ShaperKind, SHAPER_NAMES};
+use tvist_core::shaping::ei;
+use tvist_core::shaping::shapers::MAX_IMPULSES;
+use tvist_core::{prv, Error, Impulses, Mode, ShaperKind, SHAPER_NAMES};
 
 /// Modes used throughout: low and high frequency, undamped to strongly damped.
 const MODES: [(f64, f64); 6] = [

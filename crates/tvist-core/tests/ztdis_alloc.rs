@@ -8,7 +8,7 @@
 mod alloc_support;
 
 use alloc_support::{allocations_in, the_counter_sees_this_thread_only};
-use tvist_core::ztdis::{Compensator, Discretization};
+use tvist_core::shaping::ztdis::{Compensator, Discretization};
 use tvist_core::{Mode, Status};
 
 #[test]

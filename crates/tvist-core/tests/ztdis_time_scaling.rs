@@ -6,7 +6,7 @@
 //! on a piecewise-linear input, 16 substeps per sample.
 
 use std::f64::consts::PI;
-use tvist_core::ztdis::{modified_alpha, Compensator, Discretization};
+use tvist_core::shaping::ztdis::{modified_alpha, Compensator, Discretization};
 use tvist_core::{Mode, ShaperKind};
 
 /// Minimum-jerk rest-to-rest move from 0 to 1 over `t_s` seconds.

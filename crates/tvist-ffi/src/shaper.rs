@@ -14,11 +14,11 @@ use crate::codes::{
 use core::ffi::{c_char, CStr};
 use core::ptr;
 use std::path::Path;
-use tvist_core::dynmap::PAPER_MAP_ROBOT;
 use tvist_core::error::N_STATUS_FLAGS;
-use tvist_core::map_file::{MapFile, MapForm};
-use tvist_core::robot::Robot;
-use tvist_core::robot_data::{robot_file, ur_e_series_entries, RobotEntry};
+use tvist_core::files::map_file::{MapFile, MapForm};
+use tvist_core::files::robot_data::{robot_file, ur_e_series_entries, RobotEntry};
+use tvist_core::modes::paper10::dynamic_map::PAPER_MAP_ROBOT;
+use tvist_core::robot::model::Robot;
 use tvist_core::{
     ConstantModes, DynamicMap, Interpolation, MapDynamics, ModalDynamics, Mode, Provider,
     RigidBody, ShaperKind, Status, StatusCounter, TvShaper, TvShaperConfig,

@@ -10,7 +10,7 @@ use tvist::{
     TVIST_ERR_NULL, TVIST_ERR_TOO_LARGE, TVIST_ERR_UNKNOWN_ROBOT, TVIST_ERR_UNKNOWN_SHAPER,
     TVIST_MAX_DOF, TVIST_MAX_MODES, TVIST_OK,
 };
-use tvist_core::robot_data::ur_e_series;
+use tvist_core::files::robot_data::ur_e_series;
 use tvist_core::{
     ConstantModes, DynamicMap, MapDynamics, Mode, RigidBody, ShaperKind, Status, TvShaper,
     TvShaperConfig,

@@ -160,10 +160,11 @@ fn unknown_robot_comment_lists_every_robot_the_library_accepts() {
         .skip(1)
         .step_by(2)
         .collect();
-    let known: std::collections::BTreeSet<&str> = tvist_core::robot_data::ur_e_series_entries()
-        .expect("robot data")
-        .iter()
-        .map(|e| e.name.as_str())
-        .collect();
+    let known: std::collections::BTreeSet<&str> =
+        tvist_core::files::robot_data::ur_e_series_entries()
+            .expect("robot data")
+            .iter()
+            .map(|e| e.name.as_str())
+            .collect();
     assert_eq!(listed, known);
 }

@@ -13,8 +13,8 @@ use tvist::{
     TVIST_ERR_NULL, TVIST_ERR_ROBOT_MISMATCH, TVIST_ERR_TOO_LARGE, TVIST_ERR_UNKNOWN_ROBOT,
     TVIST_INTERP_CUBIC, TVIST_MAX_MODES, TVIST_N_STATUS_FLAGS, TVIST_OK,
 };
-use tvist_core::map_file::{MapFile, MapForm};
-use tvist_core::robot_data::ur_e_series;
+use tvist_core::files::map_file::{MapFile, MapForm};
+use tvist_core::files::robot_data::ur_e_series;
 use tvist_core::{
     ConstantModes, DynamicMap, Dynamics, FlexJoint, Interpolation, LoadLaw, MapDynamics,
     ModalDynamics, ModalMap, Mode, RigidBody, ShapedModes, ShaperKind, Status, TvShaper,

@@ -15,7 +15,7 @@ use tvist::{
     tvist_shaper_new_ur_map, tvist_shaper_reset, tvist_shaper_status_counts, tvist_shaper_step,
     TvistShaper, TVIST_N_STATUS_FLAGS, TVIST_OK,
 };
-use tvist_core::map_file::{MapFile, MapForm};
+use tvist_core::files::map_file::{MapFile, MapForm};
 use tvist_core::{DynamicMap, FlexJoint, LoadLaw, ModalMap};
 
 /// Runs 500 cycles of a moving 6-joint input, a reset and delay queries on `shaper`.

@@ -9,7 +9,7 @@ use tvist::{
     tvist_shaper_free, tvist_shaper_new_constant_ex, tvist_shaper_new_map_ex, tvist_shaper_step,
     TvistShaper, TvistShaperOptions, ERROR_CODES, TVIST_OK,
 };
-use tvist_core::map_file::{MapFile, MapForm};
+use tvist_core::files::map_file::{MapFile, MapForm};
 use tvist_core::DynamicMap;
 
 /// Doubles that matter at a boundary: signs, zeros, tiny, huge, non-finite, ordinary values.

@@ -588,8 +588,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MAX_DELAY_LINE_BYTES", core::limits::MAX_DELAY_LINE_BYTES)?;
     m.add(
         "MAX_LN_WN_RATE_PER_S",
-        core::multimode::MAX_LN_WN_RATE_PER_S,
+        core::tv_shaper::MAX_LN_WN_RATE_PER_S,
     )?;
-    m.add("MAX_ZETA_RATE_PER_S", core::multimode::MAX_ZETA_RATE_PER_S)?;
+    m.add("MAX_ZETA_RATE_PER_S", core::tv_shaper::MAX_ZETA_RATE_PER_S)?;
     Ok(())
 }

@@ -11,8 +11,8 @@ use crate::json::{self, NonFinite};
 use crate::modal::PyModalMap;
 use crate::robot_modes;
 use pyo3::types::PyDict;
-use tvist_core::map_file::{self, MapFile, MapForm};
-use tvist_core::robot_data;
+use tvist_core::files::map_file::{self, MapFile, MapForm};
+use tvist_core::files::robot_data;
 
 pub(crate) fn check_len(what: &str, got: usize, expected: usize) -> PyResult<()> {
     if got == expected {

@@ -77,7 +77,7 @@ macro_rules! robot_modes_class {
             /// Number of configurations checked at construction.
             #[classattr]
             fn validation_poses() -> usize {
-                tvist_core::robot_modes::VALIDATION_POSES
+                tvist_core::modes::robot_law::VALIDATION_POSES
             }
 
             #[getter]

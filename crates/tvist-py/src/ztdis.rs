@@ -1,10 +1,10 @@
-//! Bindings of `tvist_core::ztdis`: the zero-time-delay time scales and the modified-ZTDIS
+//! Bindings of `tvist_core::shaping::ztdis`: the zero-time-delay time scales and the modified-ZTDIS
 //! compensator. Thin wrappers only; the equations live in the core.
 
 use numpy::{IntoPyArray, PyArray1, PyArrayDyn, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use tvist_core::ztdis::{self, Compensator, Discretization};
+use tvist_core::shaping::ztdis::{self, Compensator, Discretization};
 use tvist_core::{Mode, Status};
 
 use crate::convert;

@@ -10,7 +10,8 @@
 //! both give the same output.
 
 use std::f64::consts::PI;
-use tvist_core::{trig, MapCoefficients, Robot};
+use tvist_core::math::trig;
+use tvist_core::{MapCoefficients, Robot};
 
 /// Mass, first moment `h` and second moment `E = ∫ r rᵀ dm` (`[xx, yy, zz, xy, xz, yz]`) of a
 /// body about a frame's origin, in that frame.

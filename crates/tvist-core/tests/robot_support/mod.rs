@@ -6,8 +6,11 @@ use tvist_core::{DhJoint, JointPlacement, Origin, RigidBody, Robot};
 
 /// Joints and links of robot `name` from the project's robot-data file.
 pub fn ur_chain(name: &str) -> (Vec<DhJoint>, Vec<RigidBody>) {
-    tvist_core::robot_data::robot_chain(tvist_core::robot_data::UR_E_SERIES_JSON, name)
-        .expect("robot data")
+    tvist_core::files::robot_data::robot_chain(
+        tvist_core::files::robot_data::UR_E_SERIES_JSON,
+        name,
+    )
+    .expect("robot data")
 }
 
 /// UR robot `name` with a point payload of `payload_kg` 5 cm beyond the flange (flange z).

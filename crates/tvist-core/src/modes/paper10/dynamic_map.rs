@@ -74,7 +74,7 @@
 //! Table 3) the term is absent and nothing changes.
 
 use crate::error::{Error, Status};
-use crate::shaper::Mode;
+use crate::shaping::shapers::Mode;
 
 /// Relative width `ε` of each blend zone of the soft clamp into an [`InertiaRange`]: the
 /// saturation is the identity on `[min(1 + ε), max(1 − ε)]`, exactly `min` below `min(1 − ε)`

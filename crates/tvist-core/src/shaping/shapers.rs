@@ -9,7 +9,7 @@
 //!
 //!   These four are defined once (`ClosedForm`); the general shape and the time-varying
 //!   filter's direct path both evaluate that definition.
-//! - EI: designed exactly for the damped mode ([`crate::ei`]: residual vibration `V` at the
+//! - EI: designed exactly for the damped mode ([`crate::shaping::ei`]: residual vibration `V` at the
 //!   design point, its local maximum, and zero vibration at one frequency either side), starting
 //!   from the published polynomial-in-ζ fit; the vibration tolerance `V` is a parameter
 //!   (default 5 %).
@@ -19,8 +19,8 @@
 //! [`ShaperKind::design`] is allocation-free and used every control cycle; [`Impulses`] is the
 //! heap-backed set used offline (custom sets, convolution, analysis).
 
-use crate::ei;
 use crate::error::Error;
+use crate::shaping::ei;
 use core::f64::consts::PI;
 
 /// The largest impulse count of a registry shaper (3-hump EI has five).

@@ -22,9 +22,9 @@
 //! 1. The undamped problem `K φ = ω² M_ff φ`: with `K` diagonal and positive it becomes the
 //!    standard symmetric problem `B v = μ v`, `B = K^{-1/2} M_ff K^{-1/2}`, `μ = 1/ω²`,
 //!    `φ = K^{-1/2} v`, brought to nearly diagonal form by a few Jacobi sweeps
-//!    ([`crate::sym_eigen::sym_diagonalize`], [`JACOBI_TOLERANCE`]).
+//!    ([`crate::math::sym_eigen::sym_diagonalize`], [`JACOBI_TOLERANCE`]).
 //! 2. In those coordinates `(λ² VᵀBV + λ Vᵀ(C/K)V + I) z = 0`, solved exactly by Aberth's
-//!    iteration ([`crate::damped_modes`]) from the modal-damping estimates
+//!    iteration ([`crate::modes::modal::damped_roots`]) from the modal-damping estimates
 //!    `ζ_i = (ω_i/2) Σ_j c_j v_ij² / k_j` (the damping projected on the undamped modes, its
 //!    off-diagonal part neglected).
 //!
@@ -44,7 +44,7 @@
 //! `v(L) = v_0 + v_1 |L|_s + v_2 L²` with `L` a static gravity torque (N m): for the
 //! stiffness of joint `j` its own `τ_g,j`; for its damping the torque of `damping_load_joint`
 //! (for a base joint, which carries no gravity torque, the shoulder's: the tilting moment on
-//! its bearing). `|x|_s` is [`crate::dynmap::smooth_abs_torque_nm`]. The coefficients are
+//! its bearing). `|x|_s` is [`crate::modes::paper10::dynamic_map::smooth_abs_torque_nm`]. The coefficients are
 //! non-negative and `k_0 > 0`, so stiffness is positive everywhere.
 //!
 //! **Which modes are shaped.** A map names its shaped modes in one of two ways
@@ -91,11 +91,11 @@
 //!
 //! The per-pose rule ([`ModalMap::modes_from_mass_matrix`]) remains for checks at
 //! independent poses (a map against measured modes). Whatever the provider, the shaper also
-//! limits how fast any slot's mode may change ([`crate::multimode::MAX_LN_WN_RATE_PER_S`]) and
+//! limits how fast any slot's mode may change ([`crate::tv_shaper::MAX_LN_WN_RATE_PER_S`]) and
 //! reports it when that binds, so a jump that reaches it anyway is spread out and flagged.
 //!
 //! **Bending links** ([`LinkHinge`]). A link that bends is modelled as a lumped hinge pair at a
-//! point along it, about the two axes perpendicular to the link ([`crate::link_hinges`]: the
+//! point along it, about the two axes perpendicular to the link ([`crate::robot::link_hinges`]: the
 //! link's inertia split between its two halves so that at zero hinge angle the arm is the
 //! rigid one), with a rotational spring `k_h` and damper `c_h` per axis (the same about both
 //! axes, as for a round tube). The flexible coordinates are then the flexible joints followed
@@ -109,12 +109,12 @@
 //! Evaluation ([`ModalMap::modes_from_mass_matrix`]) uses fixed-size arrays only: no
 //! allocation, no panic.
 
-use crate::damped_modes::damped_modes;
-use crate::dynmap::smooth_abs_torque_nm;
 use crate::error::{Error, Status};
-use crate::link_hinges::hinged_index;
-use crate::shaper::Mode;
-use crate::sym_eigen::{sym_diagonalize, MAX_DIM};
+use crate::math::sym_eigen::{sym_diagonalize, MAX_DIM};
+use crate::modes::modal::damped_roots::damped_modes;
+use crate::modes::paper10::dynamic_map::smooth_abs_torque_nm;
+use crate::robot::link_hinges::hinged_index;
+use crate::shaping::shapers::Mode;
 use num_complex::Complex64;
 
 /// Largest number of flexible coordinates: flexible joints plus two per link hinge.
@@ -957,7 +957,7 @@ pub const TRACK_FREQUENCY_SCALE: f64 = 0.1;
 
 /// Per call, how much of a handover's remaining gap a slot closes: `0.004` in `ln ω_n` and in
 /// `ζ`. At a 2 ms cycle that is 2/s, below the shaper's slew limit of 5/s
-/// ([`crate::multimode::MAX_LN_WN_RATE_PER_S`]), so a handover is never reported as a jump
+/// ([`crate::tv_shaper::MAX_LN_WN_RATE_PER_S`]), so a handover is never reported as a jump
 /// down to a 0.8 ms cycle; a handover from 15 to 31 Hz (`Δ ln ω = 0.73`) takes 0.37 s at
 /// 2 ms.
 pub const HANDOVER_STEP: f64 = 0.004;

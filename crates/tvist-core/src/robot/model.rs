@@ -5,7 +5,7 @@
 //! fixed to frame `k + 1` and frame `n` is the flange. Two ways build it ([`Chain`]): standard
 //! DH parameters (`S_k = Tz(d_k) Tx(a_k) Rx(α_k)`, frame 0 the base), or joints placed as URDF
 //! places them ([`JointPlacement`]: an origin, then a turn about an axis), from which
-//! [`crate::placement`] derives the steps and the pose of frame 0 in the base. Gravity is
+//! [`crate::robot::placement`] derives the steps and the pose of frame 0 in the base. Gravity is
 //! [`GRAVITY_M_S2`] along `−z` of the base; joint 0 turns about that axis in every DH chain
 //! (and then nothing depends on `q_0`), about any axis in a placed one. Everything is link
 //! side: no rotor inertia.
@@ -16,9 +16,9 @@
 //! A non-finite joint angle (in any joint, also one nothing depends on) gives NaN entries.
 
 use crate::error::{Error, Status};
-use crate::inertia_pass::{leading_joint_inertias, AxialMoments, InertiaStep, Turn};
-use crate::placement::{apply3, joint_frames, JointPlacement, Origin, Pose};
-use crate::sym_eigen::{sym_eigen, Matrix, MAX_DIM};
+use crate::math::sym_eigen::{sym_eigen, Matrix, MAX_DIM};
+use crate::robot::inertia_pass::{leading_joint_inertias, AxialMoments, InertiaStep, Turn};
+use crate::robot::placement::{apply3, joint_frames, JointPlacement, Origin, Pose};
 
 /// Standard gravity used for gravity torques, m/s².
 pub const GRAVITY_M_S2: f64 = 9.81;
@@ -559,7 +559,7 @@ pub struct Robot {
     /// same at every pose): where a pass that reads none of the joints from `fixed_from − 1`
     /// on starts.
     fixed_before_turn: Moments,
-    /// Per joint, the constants of the inertia-only pass ([`crate::inertia_pass`]).
+    /// Per joint, the constants of the inertia-only pass ([`crate::robot::inertia_pass`]).
     inertia_steps: Vec<InertiaStep>,
     /// [`Self::fixed_before_turn`] in that pass's form.
     fixed_start: AxialMoments,
@@ -780,7 +780,7 @@ impl Robot {
         ws.pos[0] = p;
         let frames = ws.rot[1..].iter_mut().zip(&mut ws.pos[1..]);
         for ((qk, dh), (rot, pos)) in q.iter().zip(&self.dh).zip(frames) {
-            let (st, ct) = crate::trig::sin_cos(*qk);
+            let (st, ct) = crate::math::trig::sin_cos(*qk);
             if let Twist::Any = dh.twist {
                 // R Rz(q) then the step: p += R Rz(q) shift, R ← R Rz(q) rot.
                 let turn = [ct, -st, 0.0, st, ct, 0.0, 0.0, 0.0, 1.0];
@@ -865,7 +865,7 @@ impl Robot {
         // q_0 matters only to the gravity torques of a first joint off the gravity axis.
         let tilted = self.tilted_first_joint && tau_g.is_some();
         let first = usize::from(!tilted);
-        crate::trig::sin_cos_each(&q[first..start], &mut ws.sin_cos[first..start]);
+        crate::math::trig::sin_cos_each(&q[first..start], &mut ws.sin_cos[first..start]);
         if tau_g.is_some() {
             // u_{k+1} = S_kᵀ Rz(q_k)ᵀ u_k from u_0, the base's up in frame 0 (Rz(q_0) leaves
             // it as it is when it is the axis).
@@ -1052,8 +1052,9 @@ impl Robot {
         // Inertias alone at angles the inline sine takes (finite ones, in practice all):
         // the specialised pass. Non-finite angles (NaN entries) and gravity: the general one.
         let in_range = || {
-            q.iter()
-                .fold(true, |ok, v| ok & (v.abs() <= crate::trig::FAST_RANGE_RAD))
+            q.iter().fold(true, |ok, v| {
+                ok & (v.abs() <= crate::math::trig::FAST_RANGE_RAD)
+            })
         };
         if tau_g.is_none() && in_range() {
             self.inertia_only_pass(q, &mut inertia[..joints]);
@@ -1075,7 +1076,7 @@ impl Robot {
         inertia.len() == n && q.len() == n && joints <= n && tau_ok
     }
 
-    /// `J_k` for `k < out.len()` by the specialised pass of [`crate::inertia_pass`] (every
+    /// `J_k` for `k < out.len()` by the specialised pass of [`crate::robot::inertia_pass`] (every
     /// `|q_k| <= trig::FAST_RANGE_RAD`, checked by the caller; lengths too). Kept out of line:
     /// inlined next to the general pass, the general pass (with gravity) ran slower.
     #[inline(never)]
@@ -1211,7 +1212,7 @@ pub(crate) fn principal_moments(inertia: &[f64; 6]) -> [f64; 3] {
 }
 
 /// Eigenvalues of a symmetric 3×3 matrix in ascending order, by the cyclic Jacobi method of
-/// [`crate::sym_eigen`]: each within a few ulp of the matrix's largest entry of the exact one,
+/// [`crate::math::sym_eigen`]: each within a few ulp of the matrix's largest entry of the exact one,
 /// also for equal or nearly equal eigenvalues (a thin rod's two equal moments, a disc's
 /// `k, k, 2k`), where the trigonometric closed form loses half the digits (`acos` near ±1).
 /// NaN for non-finite input. Setup-time only.

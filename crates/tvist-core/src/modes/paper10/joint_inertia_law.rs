@@ -2,12 +2,12 @@
 //! every cycle the robot's joint inertias (and gravity torques, if the map reads them) at the
 //! previous shaped output, turned into modes by the map.
 
-use crate::dynmap::{DynamicMap, InertiaRange};
 use crate::error::Status;
-use crate::robot::Robot;
-pub use crate::robot_modes::VALIDATION_POSES;
-use crate::robot_modes::{ModeLaw, RobotModes};
-use crate::shaper::Mode;
+use crate::modes::paper10::dynamic_map::{DynamicMap, InertiaRange};
+pub use crate::modes::robot_law::VALIDATION_POSES;
+use crate::modes::robot_law::{ModeLaw, RobotModes};
+use crate::robot::model::Robot;
+use crate::shaping::shapers::Mode;
 
 /// Per-cycle modes from `robot` inertia + a [`DynamicMap`]. Allocation-free after
 /// construction.
@@ -15,7 +15,7 @@ use crate::shaper::Mode;
 /// [`MapDynamics::new`] also rejects a map that gives an invalid mode (non-positive stiffness
 /// or inertia term, `ζ >= 1`, non-finite) at any sampled configuration. The check evaluates
 /// the map exactly as every cycle does, i.e. with the robot's inertias clamped into the map's
-/// identified ranges (see [`crate::dynmap`]): a fitted map that would be overdamped only by
+/// identified ranges (see [`crate::modes::paper10::dynamic_map`]): a fitted map that would be overdamped only by
 /// extrapolation is accepted, one that is invalid at inertias inside its own range that the
 /// robot reaches is rejected.
 pub type MapDynamics = RobotModes<DynamicMap>;
@@ -108,14 +108,16 @@ fn range_text(range: Option<InertiaRange>) -> String {
 #[cfg(all(test, feature = "json"))]
 mod tests {
     use super::*;
-    use crate::dynamics::Dynamics;
-    use crate::dynmap::{MapCoefficients, ModeMap};
-    use crate::robot::RigidBody;
+    use crate::modes::dynamics::Dynamics;
+    use crate::modes::paper10::dynamic_map::{MapCoefficients, ModeMap};
+    use crate::robot::model::RigidBody;
 
     fn ur5e_5kg() -> Robot {
-        let (joints, links) =
-            crate::robot_data::robot_chain(crate::robot_data::UR_E_SERIES_JSON, "ur5e")
-                .expect("robot data");
+        let (joints, links) = crate::files::robot_data::robot_chain(
+            crate::files::robot_data::UR_E_SERIES_JSON,
+            "ur5e",
+        )
+        .expect("robot data");
         Robot::new(joints, links, RigidBody::point(5.0, [0.0, 0.0, 0.05])).expect("robot")
     }
 

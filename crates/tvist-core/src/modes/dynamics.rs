@@ -1,9 +1,9 @@
 //! Dynamics providers: where a time-varying shaper gets its modes from each cycle.
 
 use crate::error::{Error, Status};
-use crate::map_dynamics::MapDynamics;
-use crate::modal_dynamics::ModalDynamics;
-use crate::shaper::Mode;
+use crate::modes::modal::mass_matrix_law::ModalDynamics;
+use crate::modes::paper10::joint_inertia_law::MapDynamics;
+use crate::shaping::shapers::Mode;
 
 /// Supplies the modes `(ω_n, ζ)` to shape for, given the configuration `q` (the previous
 /// final shaped output, `q**_{n−1}`).

@@ -16,8 +16,8 @@
 //! compensator runs per control cycle: [`Compensator::step`] never allocates, locks or panics.
 
 use crate::error::{Error, Status};
-use crate::held_input::HeldInput;
-use crate::shaper::Mode;
+use crate::shaping::held_input::HeldInput;
+use crate::shaping::shapers::Mode;
 use core::f64::consts::PI;
 
 /// Checks that a move length `T` and a shaper delay `Δ_n` are usable, naming the culprit.
@@ -369,7 +369,7 @@ impl Compensator {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shaper::{ShaperKind, SHAPER_NAMES};
+    use crate::shaping::shapers::{ShaperKind, SHAPER_NAMES};
 
     fn benchmark_mode() -> Mode {
         Mode::new(2.0 * PI * 2.55, 0.04)

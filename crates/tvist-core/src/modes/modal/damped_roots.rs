@@ -45,9 +45,9 @@
 //!
 //! Overdamped modes (real root pairs) cannot be represented by the conjugate-pair iteration:
 //! the solve then reports failure and the caller decides (see
-//! [`crate::modal_map::ModalMap::solve`]).
+//! [`crate::modes::modal::modal_map::ModalMap::solve`]).
 
-use crate::sym_eigen::MAX_DIM;
+use crate::math::sym_eigen::MAX_DIM;
 use num_complex::Complex64;
 
 /// Upper bound on the sweeps (each sweep updates every root once). From the modal-damping
@@ -377,7 +377,7 @@ pub fn damped_modes(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sym_eigen::embed;
+    use crate::math::sym_eigen::embed;
 
     fn diagonal(values: &[f64]) -> [[f64; MAX_DIM]; MAX_DIM] {
         let mut a = [[0.0; MAX_DIM]; MAX_DIM];

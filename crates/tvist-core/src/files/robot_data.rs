@@ -13,13 +13,13 @@
 //! the link frame after joint `i`), never both (see [`Chain`]).
 
 use crate::error::Error;
-use crate::placement::{JointPlacement, Origin};
-use crate::robot::{Chain, DhJoint, RigidBody, Robot};
+use crate::robot::model::{Chain, DhJoint, RigidBody, Robot};
+use crate::robot::placement::{JointPlacement, Origin};
 use serde_json::Value;
 use std::sync::OnceLock;
 
 /// The UR e-Series parameter file, embedded at build time.
-pub const UR_E_SERIES_JSON: &str = include_str!("../data/ur_e_series.json");
+pub const UR_E_SERIES_JSON: &str = include_str!("../../data/ur_e_series.json");
 
 /// The `schema_version` this reader understands.
 pub const SCHEMA_VERSION: u64 = 1;

@@ -4,12 +4,12 @@
 //! of the cascade (it stands in for where the robot is), and filter `m` uses mode `m`. Chaining
 //! filters that each update from their own input would be wrong.
 
-use crate::delay_line::{DelayLine, Interpolation};
-use crate::dynamics::{Dynamics, Provider};
 use crate::error::{Error, Status};
-use crate::held_input::HeldInput;
-use crate::shaper::{Mode, ShaperKind};
-use crate::tvist::ModeFilter;
+use crate::modes::dynamics::{Dynamics, Provider};
+use crate::shaping::delay_line::{DelayLine, Interpolation};
+use crate::shaping::held_input::HeldInput;
+use crate::shaping::mode_filter::ModeFilter;
+use crate::shaping::shapers::{Mode, ShaperKind};
 
 /// Default delay-line safety factor over the largest expected delay.
 pub const DEFAULT_SAFETY_FACTOR: f64 = 1.5;

@@ -4,7 +4,7 @@
 //! and every read index is reduced modulo the capacity, so no read can leave the buffer.
 
 use crate::error::Error;
-use crate::shaper::MAX_IMPULSES;
+use crate::shaping::shapers::MAX_IMPULSES;
 
 /// Fractional-delay interpolation: Lagrange order 1 (`Linear`, default) or 3 (`Cubic`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -170,7 +170,7 @@ impl Sequence {
     }
 
     /// [`Self::assign`] for `N` impulses of which only the first has delay 0 (`delays[0] == 0`
-    /// and every other delay `> 0`, as in every closed-form shaper, [`crate::shaper`]), whose
+    /// and every other delay `> 0`, as in every closed-form shaper, [`crate::shaping::shapers`]), whose
     /// first weight is not `−0.0`: the same sequence (`now` is the first weight, as `0 + w`
     /// is), with nothing left to count or to test at run time.
     #[inline(always)]

@@ -3,10 +3,10 @@
 //! at the previous shaped output, and the map's eigenproblem.
 
 use crate::error::{Error, Status};
-use crate::modal_map::{ModalMap, ModeTrack};
-use crate::robot::Robot;
-use crate::robot_modes::{ModeLaw, RobotModes};
-use crate::shaper::Mode;
+use crate::modes::modal::modal_map::{ModalMap, ModeTrack};
+use crate::modes::robot_law::{ModeLaw, RobotModes};
+use crate::robot::model::Robot;
+use crate::shaping::shapers::Mode;
 
 /// Per-cycle modes from `robot`'s mass matrix + a [`ModalMap`]. Allocation-free after
 /// construction.
@@ -59,7 +59,7 @@ impl ModeLaw for ModalMap {
         ModalMap::uses_gravity(self)
     }
 
-    /// The eigenmode branch each slot follows (module docs of [`crate::modal_map`]).
+    /// The eigenmode branch each slot follows (module docs of [`crate::modes::modal::modal_map`]).
     type Track = ModeTrack;
 
     #[inline]

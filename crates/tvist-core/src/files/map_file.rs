@@ -24,15 +24,15 @@
 //!
 //! - `schema_version` is the integer 1 (not `1.0`, not `true`).
 //! - `kind` names the form of the map. `"paper10"`: the ten-coefficient physical map of
-//!   [`crate::dynmap`] ([`MapForm::Paper10`]); `"modal"`: the modal map of
-//!   [`crate::modal_map`] ([`MapForm::Modal`]: load laws `[at_zero, per_nm, per_nm2]` of
+//!   [`crate::modes::paper10::dynamic_map`] ([`MapForm::Paper10`]); `"modal"`: the modal map of
+//!   [`crate::modes::modal::modal_map`] ([`MapForm::Modal`]: load laws `[at_zero, per_nm, per_nm2]` of
 //!   every flexible joint, and which modes are shaped: exactly one of `mode_joints`, the
 //!   joints naming the shaped modes in cascade order, or `shaped_modes`, the number of
 //!   lowest-frequency modes shaped, 1 to the number of flexible coordinates). The optional
-//!   `link_hinges` makes links bend ([`crate::modal_map::LinkHinge`]: a hinge pair about the
+//!   `link_hinges` makes links bend ([`crate::modes::modal::modal_map::LinkHinge`]: a hinge pair about the
 //!   two axes perpendicular to link `link` at `at_fraction` of its length, stiffness and
 //!   damping per axis); the flexible coordinates are then the joints plus two per hinge, at
-//!   most [`crate::modal_map::MAX_FLEX_JOINTS`]. Without it (every file written before it
+//!   most [`crate::modes::modal::modal_map::MAX_FLEX_JOINTS`]. Without it (every file written before it
 //!   existed) the links are rigid. Files
 //!   written before `kind` named the form carry
 //!   `"tvist.dynamic_map"` or no `kind`; both are read as `"paper10"` (and written back as it).
@@ -47,7 +47,7 @@
 //!   deeper than 128 levels and an object with a repeated key are refused with an error naming
 //!   the problem (the key). A leading UTF-8 byte-order mark is accepted.
 //! - A `paper10` map has at most [`crate::limits::MAX_MODES`] modes, each physical at every
-//!   inertia it reads ([`crate::dynmap::ModeMap::check_physical`]: the rules of every
+//!   inertia it reads ([`crate::modes::paper10::dynamic_map::ModeMap::check_physical`]: the rules of every
 //!   [`DynamicMap`]); a `modal` map's laws follow the signs of [`ModalMap::new`].
 //! - A file is at most [`crate::limits::MAX_MAP_FILE_BYTES`] (1 MiB) long; a longer one, or a
 //!   device such as `/dev/zero`, is refused without being read whole.
@@ -55,9 +55,11 @@
 //! Every error is an [`Error::Document`] whose path names the field (`modes[1].k_0`,
 //! `metadata.payload.com_m`, `schema_version`) and whose reason says what is wrong.
 
-use crate::dynmap::{DynamicMap, InertiaRange, MapCoefficients, ModeMap, MAX_JOINT_INDEX};
 use crate::error::Error;
-use crate::modal_map::{FlexJoint, LinkHinge, LoadLaw, ModalMap, ShapedModes};
+use crate::modes::modal::modal_map::{FlexJoint, LinkHinge, LoadLaw, ModalMap, ShapedModes};
+use crate::modes::paper10::dynamic_map::{
+    DynamicMap, InertiaRange, MapCoefficients, ModeMap, MAX_JOINT_INDEX,
+};
 use serde::de::{Deserialize, Deserializer, Error as _, MapAccess, SeqAccess, Visitor};
 use serde_json::{Map, Number, Value};
 use std::io::Read;
@@ -125,7 +127,7 @@ const COMMON_FIELDS: [&str; 3] = ["schema_version", "kind", "metadata"];
 pub enum MapForm {
     /// The ten-coefficient physical map from joint inertias (paper eqs. 42–51).
     Paper10(DynamicMap),
-    /// Modes from the mass matrix and the flexible joints' load laws ([`crate::modal_map`]).
+    /// Modes from the mass matrix and the flexible joints' load laws ([`crate::modes::modal::modal_map`]).
     Modal(ModalMap),
 }
 
@@ -599,7 +601,7 @@ pub fn mode_from(value: &Value, path: &str) -> Result<ModeMap, Error> {
         .zip(["damping_gain_exponent", "frequency_gain_exponent"])
     {
         *e = f(key)?;
-        let bound = crate::dynmap::MAX_GAIN_EXPONENT;
+        let bound = crate::modes::paper10::dynamic_map::MAX_GAIN_EXPONENT;
         if e.abs() > bound {
             return Err(Error::document(
                 format!("{path}.{key}"),

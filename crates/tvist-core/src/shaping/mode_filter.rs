@@ -17,10 +17,12 @@
 //! interpolates its tabulated solution ([`EiTable`], within 1e-9 of the Newton solve) instead
 //! of solving.
 
-use crate::delay_line::{DelayLine, Interpolation, Reads, Sequence};
-use crate::ei::EiTable;
 use crate::error::{Error, Status};
-use crate::shaper::{ClosedForm, ClosedShape, DampedShape, ImpulseArray, Mode, ShaperKind};
+use crate::shaping::delay_line::{DelayLine, Interpolation, Reads, Sequence};
+use crate::shaping::ei::EiTable;
+use crate::shaping::shapers::{
+    ClosedForm, ClosedShape, DampedShape, ImpulseArray, Mode, ShaperKind,
+};
 
 /// One time-varying shaper for one mode, applied to all channels.
 #[derive(Debug, Clone)]

@@ -19,8 +19,8 @@
 //!
 //! The results equal the general pass to rounding (the sums are associated differently).
 
-use crate::placement::apply3;
-use crate::robot::{rotate_pair, rotate_sym_full, Moments, StepConstants, Twist};
+use crate::robot::model::{rotate_pair, rotate_sym_full, Moments, StepConstants, Twist};
+use crate::robot::placement::apply3;
 
 /// The mass-free part of [`Moments`] (about the frame origin, in frame coordinates) in the
 /// form a turn about `z` acts on simply: `sum = E_xx + E_yy` (the inertia about `z`, kept by
@@ -295,7 +295,7 @@ impl Turn {
     /// For `|q| <= trig::FAST_RANGE_RAD` (checked by the caller).
     #[inline(always)]
     fn of(q: f64) -> Turn {
-        let (sin, cos) = crate::trig::sin_cos_in_range(q);
+        let (sin, cos) = crate::math::trig::sin_cos_in_range(q);
         Turn {
             sin,
             cos,

@@ -8,11 +8,11 @@
 //! robot evaluation of only the joints the law reads, and the reuse of the previous modes for
 //! a bit-identical pose. Allocation-free after construction.
 
-use crate::dynamics::Dynamics;
 use crate::error::{Error, Status};
-use crate::link_hinges::hinged_index;
-use crate::robot::Robot;
-use crate::shaper::Mode;
+use crate::modes::dynamics::Dynamics;
+use crate::robot::link_hinges::hinged_index;
+use crate::robot::model::Robot;
+use crate::shaping::shapers::Mode;
 
 /// Number of configurations checked at construction (and used for the delay bound).
 ///

@@ -3,7 +3,7 @@
 //! its own frame). Setup-time only.
 
 use crate::error::Error;
-use crate::robot::RigidBody;
+use crate::robot::model::RigidBody;
 
 /// A fixed frame as URDF writes it: translation `xyz_m`, then the rotation by fixed-axis
 /// roll, pitch and yaw, `R = Rz(yaw) Ry(pitch) Rx(roll)` (`rpy_rad = [roll, pitch, yaw]`).

@@ -1,0 +1,5 @@
+//! Small numerical kernels shared by the robot model and the mode maps: allocation-free,
+//! fixed-size, no panics.
+
+pub mod sym_eigen;
+pub mod trig;
