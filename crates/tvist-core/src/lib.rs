@@ -32,12 +32,7 @@ pub mod files;
 pub mod limits;
 pub mod math;
 pub mod modes;
-pub mod robot {
-    mod inertia_pass;
-    pub mod link_hinges;
-    pub mod model;
-    pub mod placement;
-}
+pub mod robot;
 pub mod shaping;
 pub mod tv_shaper;
 
@@ -50,9 +45,11 @@ pub use modes::modal::modal_map::{
 pub use modes::paper10::dynamic_map::{DynamicMap, InertiaRange, MapCoefficients, ModeMap};
 pub use modes::paper10::joint_inertia_law::MapDynamics;
 pub use modes::robot_law::{ModeLaw, RobotModes};
+pub use robot::chain::{Chain, DhJoint};
 pub use robot::link_hinges::{split_link, LinkSegment};
-pub use robot::model::{Chain, DhJoint, RigidBody, Robot};
+pub use robot::model::Robot;
 pub use robot::placement::{JointPlacement, Origin};
+pub use robot::rigid_body::RigidBody;
 pub use shaping::delay_line::{DelayLine, Interpolation};
 pub use shaping::mode_filter::ModeFilter;
 pub use shaping::prv::prv;

@@ -13,8 +13,10 @@
 //! the link frame after joint `i`), never both (see [`Chain`]).
 
 use crate::error::Error;
-use crate::robot::model::{Chain, DhJoint, RigidBody, Robot};
+use crate::robot::chain::{Chain, DhJoint};
+use crate::robot::model::Robot;
 use crate::robot::placement::{JointPlacement, Origin};
+use crate::robot::rigid_body::RigidBody;
 use serde_json::Value;
 use std::sync::OnceLock;
 

@@ -19,8 +19,10 @@
 //!
 //! The results equal the general pass to rounding (the sums are associated differently).
 
-use crate::robot::model::{rotate_pair, rotate_sym_full, Moments, StepConstants, Twist};
-use crate::robot::placement::apply3;
+use crate::math::mat3::apply3;
+use crate::math::mat3::{rotate_pair, rotate_sym_full};
+use crate::robot::frame_step::{StepConstants, Twist};
+use crate::robot::mass_moments::Moments;
 
 /// The mass-free part of [`Moments`] (about the frame origin, in frame coordinates) in the
 /// form a turn about `z` acts on simply: `sum = E_xx + E_yy` (the inertia about `z`, kept by

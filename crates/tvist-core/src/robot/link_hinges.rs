@@ -26,8 +26,10 @@
 //! bending moves.
 
 use crate::error::Error;
-use crate::robot::model::{Chain, RigidBody, Robot};
+use crate::robot::chain::Chain;
+use crate::robot::model::Robot;
 use crate::robot::placement::{JointPlacement, Origin};
+use crate::robot::rigid_body::RigidBody;
 
 /// Shortest link (joint-to-joint distance, m) that can be cut into segments.
 pub const MIN_LINK_LENGTH_M: f64 = 0.05;
@@ -127,7 +129,7 @@ fn physical(inertia: &[f64; 6]) -> bool {
         com_m: [0.0; 3],
         inertia_kg_m2: *inertia,
     };
-    let [e0, _, _] = crate::robot::model::principal_moments(inertia);
+    let [e0, _, _] = crate::robot::rigid_body::principal_moments(inertia);
     e0 > 1e-9 && body.validate("segment").is_ok()
 }
 

@@ -3,7 +3,8 @@
 //! its own frame). Setup-time only.
 
 use crate::error::Error;
-use crate::robot::model::RigidBody;
+use crate::math::mat3::{add3, apply3, mul3, transpose3};
+use crate::robot::rigid_body::RigidBody;
 
 /// A fixed frame as URDF writes it: translation `xyz_m`, then the rotation by fixed-axis
 /// roll, pitch and yaw, `R = Rz(yaw) Ry(pitch) Rx(roll)` (`rpy_rad = [roll, pitch, yaw]`).
@@ -214,32 +215,6 @@ pub(crate) fn joint_frames(
         steps,
         bodies,
     })
-}
-
-fn mul3(a: &[f64; 9], b: &[f64; 9]) -> [f64; 9] {
-    let mut c = [0.0; 9];
-    for i in 0..3 {
-        for j in 0..3 {
-            c[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
-        }
-    }
-    c
-}
-
-fn transpose3(a: &[f64; 9]) -> [f64; 9] {
-    [a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8]]
-}
-
-pub(crate) fn apply3(a: &[f64; 9], v: &[f64; 3]) -> [f64; 3] {
-    [
-        a[0] * v[0] + a[1] * v[1] + a[2] * v[2],
-        a[3] * v[0] + a[4] * v[1] + a[5] * v[2],
-        a[6] * v[0] + a[7] * v[1] + a[8] * v[2],
-    ]
-}
-
-fn add3(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
 #[cfg(test)]

@@ -110,7 +110,7 @@ mod tests {
     use super::*;
     use crate::modes::dynamics::Dynamics;
     use crate::modes::paper10::dynamic_map::{MapCoefficients, ModeMap};
-    use crate::robot::model::RigidBody;
+    use crate::robot::rigid_body::RigidBody;
 
     fn ur5e_5kg() -> Robot {
         let (joints, links) = crate::files::robot_data::robot_chain(
