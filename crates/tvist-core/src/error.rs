@@ -8,7 +8,7 @@ use core::fmt;
 /// Everything that can go wrong while configuring a filter. Returned only at setup time.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Error {
-    /// A shaper name not in the registry ([`crate::shaping::shapers::SHAPER_NAMES`]).
+    /// A shaper name not in the registry ([`crate::shaping::shaper_names::SHAPER_NAMES`]).
     UnknownShaper(String),
     /// An interpolation name other than `"linear"` or `"cubic"`.
     UnknownInterpolation(String),
@@ -55,7 +55,7 @@ impl fmt::Display for Error {
             Error::UnknownShaper(name) => write!(
                 f,
                 "unknown shaper {name:?}; expected one of {:?}",
-                crate::shaping::shapers::SHAPER_NAMES
+                crate::shaping::shaper_names::SHAPER_NAMES
             ),
             Error::UnknownInterpolation(name) => {
                 write!(

@@ -37,13 +37,14 @@ pub mod shaping;
 pub mod tv_shaper;
 
 pub use error::{Error, Status, StatusCounter};
-pub use modes::dynamics::{ConstantModes, Dynamics, NoCallback, Provider};
+pub use modes::dynamics::{ConstantModes, Dynamics};
 pub use modes::modal::mass_matrix_law::ModalDynamics;
 pub use modes::modal::modal_map::{
     FlexJoint, LinkHinge, LoadLaw, ModalMap, ModeTrack, ShapedModes,
 };
 pub use modes::paper10::dynamic_map::{DynamicMap, InertiaRange, MapCoefficients, ModeMap};
 pub use modes::paper10::joint_inertia_law::MapDynamics;
+pub use modes::provider::{NoCallback, Provider};
 pub use modes::robot_law::{ModeLaw, RobotModes};
 pub use robot::chain::{Chain, DhJoint};
 pub use robot::link_hinges::{split_link, LinkSegment};
@@ -53,6 +54,7 @@ pub use robot::rigid_body::RigidBody;
 pub use shaping::delay_line::{DelayLine, Interpolation};
 pub use shaping::mode_filter::ModeFilter;
 pub use shaping::prv::prv;
-pub use shaping::shapers::{ImpulseArray, Impulses, Mode, ShaperKind, SHAPER_NAMES};
+pub use shaping::shaper_names::SHAPER_NAMES;
+pub use shaping::shapers::{ImpulseArray, Impulses, Mode, ShaperKind};
 pub use shaping::ztdis::{Compensator, Discretization};
 pub use tv_shaper::{TvShaper, TvShaperConfig};

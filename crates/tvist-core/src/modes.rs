@@ -8,4 +8,5 @@
 pub mod dynamics;
 pub mod modal;
 pub mod paper10;
+pub mod provider;
 pub mod robot_law;

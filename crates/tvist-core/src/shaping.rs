@@ -7,5 +7,6 @@ pub mod ei;
 pub(crate) mod held_input;
 pub mod mode_filter;
 pub mod prv;
+pub mod shaper_names;
 pub mod shapers;
 pub mod ztdis;

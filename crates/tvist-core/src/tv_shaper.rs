@@ -5,7 +5,8 @@
 //! filters that each update from their own input would be wrong.
 
 use crate::error::{Error, Status};
-use crate::modes::dynamics::{Dynamics, Provider};
+use crate::modes::dynamics::Dynamics;
+use crate::modes::provider::Provider;
 use crate::shaping::delay_line::{DelayLine, Interpolation};
 use crate::shaping::held_input::HeldInput;
 use crate::shaping::mode_filter::ModeFilter;

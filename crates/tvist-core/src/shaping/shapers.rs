@@ -26,9 +26,6 @@ use core::f64::consts::PI;
 /// The largest impulse count of a registry shaper (3-hump EI has five).
 pub const MAX_IMPULSES: usize = 5;
 
-/// Registry names, in the order documented to users.
-pub const SHAPER_NAMES: [&str; 7] = ["zv", "zvd", "zvdd", "mzv", "ei", "2hump_ei", "3hump_ei"];
-
 /// Default vibration tolerance of the EI shaper (5 %).
 pub const DEFAULT_EI_TOLERANCE: f64 = 0.05;
 

@@ -369,7 +369,8 @@ impl Compensator {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shaping::shapers::{ShaperKind, SHAPER_NAMES};
+    use crate::shaping::shaper_names::SHAPER_NAMES;
+    use crate::shaping::shapers::ShaperKind;
 
     fn benchmark_mode() -> Mode {
         Mode::new(2.0 * PI * 2.55, 0.04)
