@@ -11,7 +11,7 @@ use crate::convert::{self, rows, value_error};
 use crate::robot::PyRobot;
 use crate::robot_modes;
 
-use tvist_core::files::map_file::FLEX_JOINT_FIELDS;
+use tvist_core::files::modal_doc::FLEX_JOINT_FIELDS;
 
 fn law_from(d: &Bound<'_, PyDict>, key: &str, joint: usize) -> PyResult<core::LoadLaw> {
     let item = d

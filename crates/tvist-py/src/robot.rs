@@ -12,6 +12,7 @@ use crate::modal::PyModalMap;
 use crate::robot_modes;
 use pyo3::types::PyDict;
 use tvist_core::files::map_file::{self, MapFile, MapForm};
+use tvist_core::files::paper10_doc;
 use tvist_core::files::robot_data;
 
 pub(crate) fn check_len(what: &str, got: usize, expected: usize) -> PyResult<()> {
@@ -410,7 +411,7 @@ fn evaluate_trial_mode<'py>(
     gravity_torque_nm: Option<PyReadonlyArray2<'py, f64>>,
 ) -> PyResult<(NdArray<'py>, NdArray<'py>)> {
     let value = json::to_value(mode, "mode", NonFinite::Refuse)?;
-    let mode = map_file::mode_from(&value, "mode").map_err(value_error)?;
+    let mode = paper10_doc::mode_from(&value, "mode").map_err(value_error)?;
     let cols = inertia_kg_m2.shape()[1];
     if cols < mode.required_joints() {
         return Err(PyValueError::new_err(format!(
@@ -690,7 +691,7 @@ impl PyDynamicMap {
         self.inner
             .mode_maps()
             .iter()
-            .map(|m| json::to_py(py, &map_file::mode_to_value(m)))
+            .map(|m| json::to_py(py, &paper10_doc::mode_to_value(m)))
             .collect()
     }
 
@@ -724,8 +725,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyRobot>()?;
     m.add_class::<PyDynamicMap>()?;
     m.add_class::<PyMapDynamics>()?;
-    m.add("MODE_MAP_FIELDS", map_file::MODE_FIELDS.to_vec())?;
-    m.add("MODE_MAP_RANGE_FIELDS", map_file::RANGE_FIELDS.to_vec())?;
+    m.add("MODE_MAP_FIELDS", paper10_doc::MODE_FIELDS.to_vec())?;
+    m.add("MODE_MAP_RANGE_FIELDS", paper10_doc::RANGE_FIELDS.to_vec())?;
     m.add("MAP_METADATA_FIELDS", map_file::METADATA_FIELDS.to_vec())?;
     m.add("MAP_SCHEMA_VERSION", map_file::SCHEMA_VERSION)?;
     m.add("MAP_KIND_PAPER10", map_file::KIND_PAPER10)?;
