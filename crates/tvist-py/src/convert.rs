@@ -83,3 +83,14 @@ pub fn real_input<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<Bound<'p
     }
     Ok(array.into_any())
 }
+
+/// `got` values where `expected` are needed: a `ValueError` naming `what` otherwise.
+pub fn check_len(what: &str, got: usize, expected: usize) -> PyResult<()> {
+    if got == expected {
+        Ok(())
+    } else {
+        Err(PyValueError::new_err(format!(
+            "{what} has {got} values, expected {expected}"
+        )))
+    }
+}

@@ -8,58 +8,16 @@ use tvist_core as core;
 use tvist_core::Mode;
 
 use crate::convert::{self, rows, value_error};
+use crate::json::{self, NonFinite};
 use crate::robot::PyRobot;
-use crate::robot_modes;
+use crate::robot_law;
 
-use tvist_core::files::modal_doc::FLEX_JOINT_FIELDS;
-
-fn law_from(d: &Bound<'_, PyDict>, key: &str, joint: usize) -> PyResult<core::LoadLaw> {
-    let item = d
-        .get_item(key)?
-        .ok_or_else(|| PyValueError::new_err(format!("flexible joint {joint}: missing {key:?}")))?;
-    let v: Vec<f64> = item.extract().map_err(|_| {
-        PyValueError::new_err(format!(
-            "flexible joint {joint}: {key:?} must be [at_zero, per_nm, per_nm2]"
-        ))
-    })?;
-    if v.len() != 3 {
-        return Err(PyValueError::new_err(format!(
-            "flexible joint {joint}: {key:?} must have 3 values [at_zero, per_nm, per_nm2], got {}",
-            v.len()
-        )));
-    }
-    Ok(core::LoadLaw {
-        at_zero: v[0],
-        per_nm: v[1],
-        per_nm2: v[2],
-    })
-}
-
-fn flex_from(d: &Bound<'_, PyDict>, index: usize) -> PyResult<core::FlexJoint> {
-    let get_u = |key: &str| -> PyResult<usize> {
-        d.get_item(key)?
-            .ok_or_else(|| {
-                PyValueError::new_err(format!("flexible joint entry {index}: missing {key:?}"))
-            })?
-            .extract::<usize>()
-            .map_err(|_| {
-                PyValueError::new_err(format!(
-                    "flexible joint entry {index}: {key:?} must be a non-negative integer"
-                ))
-            })
-    };
-    let joint = get_u("joint")?;
-    Ok(core::FlexJoint {
-        joint,
-        stiffness_nm_per_rad: law_from(d, "stiffness_nm_per_rad", joint)?,
-        damping_nms_per_rad: law_from(d, "damping_nms_per_rad", joint)?,
-        damping_load_joint: get_u("damping_load_joint")?,
-    })
-}
+use tvist_core::files::modal_doc::{self, FLEX_JOINT_FIELDS};
 
 /// Modal map: flexible joints (dicts of FLEX_JOINT_FIELDS, laws as [at_zero, per_nm,
 /// per_nm2]) and the shaped modes: exactly one of the joints naming them in cascade order
-/// (`mode_joints`) or the number of lowest-frequency modes (`shaped_modes`).
+/// (`mode_joints`) or the number of lowest-frequency modes (`shaped_modes`). Read by the
+/// core's map-file parser, as the fields of a `modal` document (errors name the field).
 #[pyclass(name = "ModalMap", module = "tvist._core", frozen)]
 #[derive(Clone)]
 pub struct PyModalMap {
@@ -75,22 +33,22 @@ impl PyModalMap {
         mode_joints: Option<Vec<usize>>,
         shaped_modes: Option<usize>,
     ) -> PyResult<Self> {
+        // The modal form's fields of a map document, read by the core's map-file parser.
         let flex = flex_joints
             .iter()
             .enumerate()
-            .map(|(i, d)| flex_from(d, i))
+            .map(|(i, d)| json::to_value(d, &format!("flex_joints[{i}]"), NonFinite::Refuse))
             .collect::<PyResult<Vec<_>>>()?;
-        let shaped = match (mode_joints, shaped_modes) {
-            (Some(joints), None) => core::ShapedModes::ByJoint(joints),
-            (None, Some(k)) => core::ShapedModes::Lowest(k),
-            _ => {
-                return Err(PyValueError::new_err(
-                    "give exactly one of mode_joints and shaped_modes",
-                ))
-            }
-        };
+        let mut doc = serde_json::Map::new();
+        doc.insert("flex_joints".into(), serde_json::Value::Array(flex));
+        if let Some(joints) = mode_joints {
+            doc.insert("mode_joints".into(), joints.into());
+        }
+        if let Some(k) = shaped_modes {
+            doc.insert("shaped_modes".into(), k.into());
+        }
         Ok(PyModalMap {
-            inner: core::ModalMap::shaping(flex, shaped).map_err(value_error)?,
+            inner: modal_doc::modal_from(&doc).map_err(value_error)?,
         })
     }
 
@@ -278,7 +236,7 @@ pub struct PyModalDynamics {
     pub inner: core::ModalDynamics,
 }
 
-robot_modes::robot_modes_class!(PyModalDynamics, modal_map, PyModalMap);
+robot_law::robot_modes_class!(PyModalDynamics, modal_map, PyModalMap);
 
 /// Registers the classes of this module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

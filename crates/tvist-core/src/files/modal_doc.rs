@@ -23,8 +23,9 @@ pub const FLEX_JOINT_FIELDS: [&str; 4] = [
     "damping_load_joint",
 ];
 
-/// The `modal` form's fields: `flex_joints` and one of `mode_joints` and `shaped_modes`.
-pub(crate) fn modal_from(doc: &Map<String, Value>) -> Result<ModalMap, Error> {
+/// The `modal` form's fields of a map document: `flex_joints`, `link_hinges` (optional) and
+/// one of `mode_joints` and `shaped_modes`; errors name the field.
+pub fn modal_from(doc: &Map<String, Value>) -> Result<ModalMap, Error> {
     let mode_joints = match (doc.get("mode_joints"), doc.get("shaped_modes")) {
         (None, None) => {
             return Err(Error::document(

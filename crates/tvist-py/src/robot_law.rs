@@ -7,8 +7,7 @@ use pyo3::prelude::*;
 use tvist_core as core;
 use tvist_core::{Dynamics, Mode, ModeLaw, RobotModes};
 
-use crate::convert::value_error;
-use crate::robot::check_len;
+use crate::convert::{check_len, value_error};
 
 /// The provider of `robot` and `law`; `allow_other_robot` accepts a law identified on another
 /// robot (research use). Setup errors become `ValueError`.
@@ -59,19 +58,19 @@ macro_rules! robot_modes_class {
                 allow_other_robot: bool,
             ) -> PyResult<Self> {
                 let (robot, map) = (robot.inner.clone(), $map_arg.inner.clone());
-                let inner = $crate::robot_modes::new_provider(robot, map, allow_other_robot)?;
+                let inner = $crate::robot_law::new_provider(robot, map, allow_other_robot)?;
                 Ok($class { inner })
             }
 
             /// Modes [(wn_rad_s, zeta), ...] at configuration q alone (invalid ones as NaN).
             fn modes(&mut self, q: numpy::PyReadonlyArray1<'_, f64>) -> PyResult<Vec<(f64, f64)>> {
-                $crate::robot_modes::modes_at(&mut self.inner, q)
+                $crate::robot_law::modes_at(&mut self.inner, q)
             }
 
             /// Per-mode (wn_rad_s, zeta) bounds used to size the delay lines.
             #[getter]
             fn slowest_modes(&self) -> Vec<(f64, f64)> {
-                $crate::robot_modes::pairs(self.inner.slowest_modes())
+                $crate::robot_law::pairs(self.inner.slowest_modes())
             }
 
             /// Number of configurations checked at construction.
