@@ -12,8 +12,9 @@
 //!   Jacobian, joint-space inertia (composite rigid body) and gravity torques, allocation-free
 //!   per call; bending links as hinges.
 //! - [`modes`]: where the modes come from. [`modes::dynamics`]: the provider trait and
-//!   constant modes; [`modes::robot_law`]: the provider that evaluates the robot and a mode
-//!   law every cycle; [`modes::paper10`]: the ten-coefficient dynamic map from joint-axis
+//!   constant modes; [`modes::provider`]: every built-in provider in one type, for the
+//!   bindings; [`modes::robot_law`]: the provider that evaluates the robot and a mode law
+//!   every cycle; [`modes::paper10`]: the ten-coefficient dynamic map from joint-axis
 //!   inertias (eqs. 42–51); [`modes::modal`]: modes from the mass matrix and joint
 //!   flexibility (the damped eigenproblem).
 //! - [`math`]: symmetric eigenproblems (Jacobi) and fast `sin`/`cos` for the robot and maps.

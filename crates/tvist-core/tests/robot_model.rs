@@ -404,7 +404,7 @@ fn gravity_term_uses_the_frequency_joints_torque() {
         .modes_from_inertia(&[3.0, 4.0], &[0.0, -20.0], &mut out)
         .is_ok());
     let (j, tau) = (4.0f64, 20.0f64);
-    // |τ| smoothed with τ_s = 1 N m (dynmap module docs, "Gravity term").
+    // |τ| smoothed with τ_s = 1 N m (modes::paper10::dynamic_map module docs, "Gravity term").
     let k = 1e4 + 800.0 * j + 50.0 * ((tau * tau + 1.0).sqrt() - 1.0);
     let wn = ((1.0 + 2.0 / j) * k / j).sqrt();
     let zeta = (1.0 + 2.0 / j).sqrt() * (1.0 + 0.2 * j.sqrt() + 0.1 * j) * (1.0 + 3.0 * j)

@@ -264,7 +264,7 @@ impl PyRobot {
     }
 }
 
-/// The segments of a link (tvist-core `link_hinges::split_link`): offset of the next joint
+/// The segments of a link (tvist-core `robot::link_hinges::split_link`): offset of the next joint
 /// (3,), mass, centre of mass (3,), inertia about it (3, 3) in the link's frame, hinge
 /// fractions -> ([(hinge point or None, mass, com, inertia (3, 3))], bending axes (2, 3)).
 #[pyfunction]
