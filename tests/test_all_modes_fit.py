@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from tvist.demo.identified import DEMO_PLAN
-from tvist.modal_map import ModalMap
+from tvist.maps.modal import ModalMap
 from tvist.robots import Payload, Robot, params
 from tvist.sim.family import sample_variant
 from tvist.sim.map_truth import held_out_poses, physical_mode_errors
@@ -196,7 +196,7 @@ def test_map_truth_scores_the_variants_own_gear_laws_near_zero_and_a_stiffer_elb
     static deflection and servo in series: measured 0.43 % at most), by joint and by
     frequency rank. Control: the elbow made 4 x stiffer puts its mode 79-98 % high at the
     same poses (measured), far over the 20 % required here."""
-    from tvist.modal_map import modal_map_from_flex
+    from tvist.maps.modal import modal_map_from_flex
     from tvist.sim.map_truth import ranked_mode_errors
 
     variant = sample_variant("ur5e", SOFT_ELBOW_SEED)

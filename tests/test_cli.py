@@ -115,7 +115,7 @@ def test_shape_with_the_paper_map_and_zero_delay_equals_zero_delay(move_file, tm
 
 def test_run_takes_a_modal_map_file_like_shape_does(move_file, tmp_path):
     """``tvist run --map FILE`` reads either map kind (as ``tvist shape`` does): its live
-    shaper for a modal map file is ``TvShaper(MapDynamics(robot, ModalMap.load(FILE)))``,
+    shaper for a modal map file is ``TvShaper(ModalDynamics(robot, ModalMap.load(FILE)))``,
     step for step; a paper10 file gives the paper10 provider."""
     from tvist.cli import build_parser
     from tvist.cli.live import _shaper
@@ -149,7 +149,7 @@ def test_run_takes_a_modal_map_file_like_shape_does(move_file, tmp_path):
             + ["--payload-kg", "5", "--payload-com", "0", "0", "0.05"]
         )
         live = _shaper(args, q)
-        expected = tvist.TvShaper(tvist.MapDynamics(robot, loaded), DT_S, 6, shaper="zv")
+        expected = tvist.TvShaper(tvist.maps.dynamics_for(robot, loaded), DT_S, 6, shaper="zv")
         live.reset(q[0])
         expected.reset(q[0])
         got = np.array([live.step(row) for row in q])

@@ -14,7 +14,7 @@ from modal_fit_reference import LAWS_UR5E, exact_records, write_jsonl
 from tvist.cli import main
 from tvist.ident.campaign import campaign_poses
 from tvist.ident.robustness import evaluate_map
-from tvist.modal_map import ModalMap
+from tvist.maps.modal import ModalMap
 
 
 @pytest.fixture

@@ -14,7 +14,7 @@ from map_smoothing_reference import (
     smooth_abs_torque,
     soft_clamp,
 )
-from tvist.dynmap import MODE_FIELDS, RANGE_FIELDS, general_mode
+from tvist.maps.paper10 import MODE_FIELDS, RANGE_FIELDS, general_mode
 
 # Table 1 / Table 2 of the paper (UR5e), typed in independently of the core.
 BASE = {"k_0": 10000.0, "k_j": 1060.0, "k_p": 2.54, "c_0": 1.53, "c_2": 0.39, "c_tau": 3.81}

@@ -242,7 +242,7 @@ def test_the_modal_map_prior_of_a_servo_joint_is_its_series_stiffness() -> None:
     """``modal_map_from_flex`` with a servo: ``k_e + q L²`` is the series joint's tangent
     stiffness at the deflection carrying the load ``L`` (from the exact spring law), to the
     order it neglects: the next term is ``O(L⁴)``, ~1e-4 relative at 30 N m here."""
-    from tvist.modal_map import modal_map_from_flex
+    from tvist.maps.modal import modal_map_from_flex
 
     servo = (4e4, 3e4, 2e5, 3e4, 3e4, 4e3)
     flex = dataclasses.replace(default_flex("ur5e"), servo_nm_per_rad=servo)

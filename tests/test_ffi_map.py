@@ -96,7 +96,7 @@ def _python_shaped(robot_name: str, map_path: Path, q: np.ndarray) -> np.ndarray
     payload = tvist.robots.Payload(_payload_kg(robot_name), COM_M)
     robot = tvist.robots.Robot(tvist.robots.params(robot_name), payload)
     shaper = tvist.TvShaper(
-        tvist.MapDynamics(robot, tvist.load_map(map_path)), DT_S, robot.n_dof, shaper="zv"
+        tvist.maps.dynamics_for(robot, tvist.load_map(map_path)), DT_S, robot.n_dof, shaper="zv"
     )
     shaper.reset(q[0])
     return shaper.shape(q)
@@ -187,7 +187,7 @@ def test_cpp_shapes_a_urdf_arm_from_its_robot_file_exactly_as_python(program, tm
     args = ["robot-file", str(path), "--base-link", base, "--tip-link", tip, "--name", "iiwa14"]
     assert main([*args, "--out", str(robot_file)]) == 0
     # The twin's design laws (tvist.sim.flex.IIWA14_FLEX) as a map.
-    from tvist.modal_map import modal_map_from_flex
+    from tvist.maps.modal import modal_map_from_flex
     from tvist.sim import default_flex
 
     laws = modal_map_from_flex(default_flex("iiwa14"), joints=(0, 1, 2, 3)).flex_joints

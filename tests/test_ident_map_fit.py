@@ -15,8 +15,8 @@ import pytest
 
 import tvist
 from map_reference import PAPER_MODES, mode_reference, modes_reference
-from tvist.dynmap import RANGE_FIELDS
 from tvist.ident.map_fit import K_0_FIXED, ModeSpec, fit_map
+from tvist.maps.paper10 import RANGE_FIELDS
 from tvist.robots import ur5e
 
 ROBOTS = {p: ur5e(p, (0.0, 0.0, 0.05)) for p in (0.0, 1.0, 3.0, 5.0)}

@@ -22,7 +22,7 @@ from tvist.demo.motions import MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
 from tvist.ident.logs import Record
 from tvist.learn import MapLearner, observe_decay
 from tvist.learn.twin_moves import move, ordinary_moves, random_poses
-from tvist.modal_map import ModalMap, modal_map_from_flex, modes_to_shape
+from tvist.maps import ModalMap, modal_map_from_flex, modes_to_shape
 from tvist.sim import Twin
 
 #: Accelerometer noise of the twin, m/s² (as in the demo's campaign).

@@ -19,7 +19,7 @@ from tvist.demo.motions import PAYLOAD_COM_M, PAYLOAD_KG
 from tvist.learn import MapLearner
 from tvist.learn.learner import _SeenMode
 from tvist.learn.twin_moves import random_poses
-from tvist.modal_map import modal_map_from_flex
+from tvist.maps.modal import modal_map_from_flex
 from tvist.sim import Twin
 
 #: Relative standard deviation of every observed frequency (a fit's 0.5 % and the map

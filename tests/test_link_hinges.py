@@ -18,7 +18,7 @@ import pytest
 import tvist
 from pinocchio_reference import _fixed_dh, _pin
 from tvist import _core
-from tvist.modal_map import ModalMap, modal_map_from_flex
+from tvist.maps.modal import ModalMap, modal_map_from_flex
 from tvist.robots import Payload, params
 from tvist.sim.family import sample_variant
 
@@ -132,7 +132,7 @@ def test_hinged_velocity_torques_equal_pinocchio_recursive_newton_euler() -> Non
     # RNEA(q, 0, 0) of the split chain. Tolerance 1e-7 N m: the differences' truncation
     # (step² ~ 1e-12 relative) and rounding (1e-16 / 1e-6 = 1e-10 relative) on torques of a
     # few N m.
-    from tvist.modal_residual import velocity_torque_many
+    from tvist.maps.mode_choice import velocity_torque_many
 
     robot = tvist.robots.ur5e(PAYLOAD.mass_kg, PAYLOAD.com_m)
     arm = robot.with_link_hinges(HINGES)

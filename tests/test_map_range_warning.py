@@ -13,7 +13,7 @@ import pytest
 
 import tvist
 from tvist.cli import main
-from tvist.dynmap import MapRangeWarning
+from tvist.maps.paper10 import MapRangeWarning
 from tvist.robots import ur5e
 from tvist.trajectory import PAPER_POSES, double_s, shape_samples
 

@@ -84,14 +84,18 @@ def test_map_dynamics_reports_modes_bounds_and_pose_count():
 def test_map_dynamics_rejects_a_map_invalid_in_the_workspace():
     robot = _ur5e_5kg()
     overdamped = tvist.DynamicMap(
-        [tvist.dynmap.general_mode(1, k_0=1e4, k_j=763.0, k_p=1.73, c_0=1e4, c_2=0.0, c_tau=0.0)]
+        [
+            tvist.maps.paper10.general_mode(
+                1, k_0=1e4, k_j=763.0, k_p=1.73, c_0=1e4, c_2=0.0, c_tau=0.0
+            )
+        ]
     )
     with pytest.raises(ValueError, match="no underdamped mode 0"):
         tvist.MapDynamics(robot, overdamped)
     # A negative stiffness is no map at all (the map's own sign rules, before any robot).
     with pytest.raises(ValueError, match=r"modes\[0\]: the stiffness k_0 \+ k_j J_f must be > 0"):
-        tvist.dynmap.general_mode(1, k_0=-1e6, k_j=0.0, k_p=1.73, c_0=1.0, c_2=0.0, c_tau=0.0)
-    too_far = tvist.DynamicMap([tvist.dynmap.general_mode(6, **_shoulder())])
+        tvist.maps.paper10.general_mode(1, k_0=-1e6, k_j=0.0, k_p=1.73, c_0=1.0, c_2=0.0, c_tau=0.0)
+    too_far = tvist.DynamicMap([tvist.maps.paper10.general_mode(6, **_shoulder())])
     with pytest.raises(ValueError, match="joints read by the dynamic map"):
         tvist.MapDynamics(robot, too_far)
 
@@ -125,7 +129,7 @@ RANGE_KG_M2 = (2.0, 7.0)
 
 def _kinked_map_parts() -> tuple[dict, dict]:
     base, shoulder = tvist.DynamicMap.paper_ur5e().mode_maps
-    ranges = dict.fromkeys(tvist.dynmap.RANGE_FIELDS, list(RANGE_KG_M2))
+    ranges = dict.fromkeys(tvist.maps.paper10.RANGE_FIELDS, list(RANGE_KG_M2))
     return {**base, "k_g": K_G, **ranges}, {**shoulder, "k_g": K_G, **ranges}
 
 

@@ -18,7 +18,7 @@ from tvist.demo.identified import DEMO_PLAN
 from tvist.demo.motions import PAYLOAD_COM_M
 from tvist.ident.campaign import load_results
 from tvist.ident.modal_fit import fit_modal_map, modal_poses
-from tvist.modal_map import ModalMap
+from tvist.maps.modal import ModalMap
 from tvist.trajectory.poses import PAPER_POSES
 
 FLEX = (0, 1, 2)

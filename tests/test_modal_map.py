@@ -13,7 +13,7 @@ import pytest
 import tvist
 from tvist.ident.campaign import campaign_poses
 from tvist.ident.modal_fit import cross_validate, fit_modal_map
-from tvist.modal_map import ModalMap, modal_map_from_flex
+from tvist.maps.modal import ModalMap, modal_map_from_flex
 from tvist.sim import Twin, default_flex
 from tvist.sim.modal import modal_analysis
 
@@ -167,7 +167,7 @@ def test_a_file_in_the_earlier_python_layout_loads_through_the_core(tmp_path):
 
 def test_a_modal_map_of_another_robot_is_refused_unless_allowed():
     other = ModalMap(ENTRIES, metadata={"robot": "ur10e"})
-    for make in (tvist.MapDynamics, tvist.ModalDynamics):
+    for make in (tvist.maps.dynamics_for, tvist.ModalDynamics):
         with pytest.raises(ValueError, match="identified on ur10e, not on ur5e"):
             make(ROBOT, other)
         provider = make(ROBOT, other, allow_other_robot=True)
@@ -175,12 +175,19 @@ def test_a_modal_map_of_another_robot_is_refused_unless_allowed():
         q = np.array([0.3, -1.2, 1.0, -1.5, 0.0, 0.0])
         np.testing.assert_allclose(provider.modes(q), other.modes(ROBOT, q), rtol=1e-12)
     # A map without a robot name is not checked.
-    assert tvist.MapDynamics(ROBOT, ModalMap(ENTRIES)).n_modes == 2
+    assert tvist.ModalDynamics(ROBOT, ModalMap(ENTRIES)).n_modes == 2
 
 
-def test_map_dynamics_takes_a_modal_map_and_shapes_in_rust():
+def test_map_dynamics_refuses_a_modal_map_naming_the_provider_of_either_kind():
+    with pytest.raises(TypeError, match=r"got ModalMap: tvist\.maps\.dynamics_for"):
+        tvist.MapDynamics(ROBOT, ModalMap(ENTRIES))
+    paper = tvist.maps.dynamics_for(ROBOT, tvist.DynamicMap.paper_ur5e())
+    assert type(paper) is tvist.MapDynamics
+
+
+def test_dynamics_for_a_modal_map_is_its_provider_and_shapes_in_rust():
     modal = ModalMap(ENTRIES)
-    provider = tvist.MapDynamics(ROBOT, modal)
+    provider = tvist.maps.dynamics_for(ROBOT, modal)
     assert isinstance(provider, tvist.ModalDynamics) and provider.n_modes == 2
     q0 = np.array([0.0, -math.pi, 0.0, -math.pi / 2, 0.0, 0.0])
     q1 = np.array([math.pi / 2, -math.pi / 2, 5 * math.pi / 6, -math.pi / 2, 0.0, 0.0])
@@ -306,7 +313,7 @@ def test_fit_map_cli_writes_a_modal_map_that_shapes_a_ur10e(tmp_path, capsys):
         # are matched by frequency alone, and on 24 poses the joint test keeps base, shoulder
         # and elbow flexible (the twin's wrists also are). The label-based fit: 3.1 %.
         assert wn == pytest.approx(true_wn, rel=0.04)
-    shaper = tvist.TvShaper(tvist.MapDynamics(robot, modal), 0.002, 6)
+    shaper = tvist.TvShaper(tvist.ModalDynamics(robot, modal), 0.002, 6)
     shaper.reset(q)
     shaper.shape(np.repeat(q[None, :], 10, axis=0))
     assert shaper.delay_s > 0
@@ -333,7 +340,7 @@ def test_set_map_between_moves_shapes_as_a_new_shaper_and_is_refused_mid_move():
     rest = np.repeat(there[-1:], 1000, axis=0)  # 2 s at q1: far beyond the longest delay line
 
     def shaper(modal: ModalMap) -> tvist.TvShaper:
-        return tvist.TvShaper(tvist.MapDynamics(ROBOT, modal), 0.002, 6, shaper="zv")
+        return tvist.TvShaper(tvist.ModalDynamics(ROBOT, modal), 0.002, 6, shaper="zv")
 
     old, new = _stiffer(1.0), _stiffer(1.3)
     swapped, unchanged = shaper(old), shaper(old)

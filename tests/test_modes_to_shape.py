@@ -1,5 +1,5 @@
 """Frequency-ranked modal maps (``shaped_modes``), changing the number of shaped modes between
-moves, and the rule that picks it for a move (``tvist.modal_map.modes_to_shape``)."""
+moves, and the rule that picks it for a move (``tvist.maps.modes_to_shape``)."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ import scipy.linalg
 import pinocchio_reference
 import tvist
 from test_modal_map import ENTRIES, ROBOT, _system
-from tvist.modal_map import ModalMap, modes_to_shape
-from tvist.modal_residual import NEAR_RATIO
+from tvist.maps import ModalMap, modes_to_shape
+from tvist.maps.mode_choice import NEAR_RATIO
 from tvist.sim.modal import modal_analysis
 from tvist.trajectory import PAPER_POSES
 
@@ -66,7 +66,7 @@ def test_set_shaped_modes_between_moves_adds_the_delay_of_the_modes_shaped():
     q1 = np.array(PAPER_POSES["Q3"])
     move = tvist.trajectory.double_s(q0, q1, DT_S).q
     rest = np.repeat(move[-1:], 1000, axis=0)  # 2 s: far beyond the longest delay line
-    shaper = tvist.TvShaper(tvist.MapDynamics(ROBOT, _map(mode_joints=[0, 1])), DT_S, 6)
+    shaper = tvist.TvShaper(tvist.ModalDynamics(ROBOT, _map(mode_joints=[0, 1])), DT_S, 6)
     shaper.shape(move[:200])
     with pytest.raises(ValueError, match="mid-move"):
         shaper.set_shaped_modes(3)
@@ -228,7 +228,7 @@ def test_velocity_torques_equal_pinocchio_recursive_newton_euler():
     # pinocchio's RNEA(q, q', 0) - RNEA(q, 0, 0) at random states. Tolerance 1e-7 N m: the
     # differences' truncation (step² ~ 1e-12 relative) and rounding (1e-16 / 1e-6 = 1e-10
     # relative) on torques of a few N m.
-    from tvist.modal_residual import velocity_torque_many
+    from tvist.maps.mode_choice import velocity_torque_many
 
     rng = np.random.default_rng(7)
     q = rng.uniform(-np.pi, np.pi, (50, 6))
@@ -264,7 +264,7 @@ def test_the_expected_residual_takes_the_maps_uncertainty_and_a_neighbours_filte
     # far mode (the seed-1 arm of the family at Q2: 5.74 Hz ζ 0.379, 6.39 Hz ζ 0.351, 62 Hz).
     # E(K) is the fraction-weighted worst corner of ±1 standard error of the closed-form ZV
     # residuals, products over the K filters: it must equal that to rounding (1e-9).
-    from tvist.modal_residual import ModeResidual, _robust_n_modes
+    from tvist.maps.mode_choice import ModeResidual, _robust_n_modes
 
     def mode(rank, hz, zeta, fraction):
         wn = 2 * math.pi * hz
@@ -301,7 +301,7 @@ def test_a_map_states_its_uncertainty_and_the_choice_follows_it():
     # The same map and move with the fit statistics of an accurate map (0.01 % / 0.1 %) and
     # of a poor one (3 % / 30 %): the poor one expects more residual for every K, and each
     # shapes at least the significant modes and what its own E(K) asks for.
-    from tvist.modal_residual import _robust_n_modes
+    from tvist.maps.mode_choice import _robust_n_modes
 
     traj = tvist.trajectory.double_s(PAPER_POSES["Q3"], PAPER_POSES["Q2"], DT_S)
     expected = {}
@@ -330,7 +330,7 @@ def test_a_map_states_its_uncertainty_and_the_choice_follows_it():
 def test_a_mode_close_to_a_significant_one_is_shaped_too():
     # Two modes 5 % apart, the model putting all the ringing in the lower one: both are shaped
     # (NEAR_RATIO); a mode 30 % above with no ringing is not.
-    from tvist.modal_residual import ModeResidual, ShapingChoice
+    from tvist.maps.mode_choice import ModeResidual, ShapingChoice
 
     def mode(rank, hz, fraction):
         wn = 2 * math.pi * hz
@@ -341,12 +341,12 @@ def test_a_mode_close_to_a_significant_one_is_shaped_too():
 
 
 def test_set_modes_for_move_shapes_the_modes_each_move_needs():
-    from tvist.modal_map import set_modes_for_move
+    from tvist.maps import set_modes_for_move
 
     # The one place the commands and demo rows choose K: for a frequency-ranked map it sets
     # the shaper to the K modes_to_shape gives for the move (the move as a trajectory or as
     # its samples), and leaves any other provider alone.
-    lowest = tvist.MapDynamics(ROBOT, _map(shaped_modes=3))
+    lowest = tvist.ModalDynamics(ROBOT, _map(shaped_modes=3))
     for a, b in [("Q1", "Q2"), ("Q1", "Q3"), ("Q3", "Q1")]:
         move = tvist.trajectory.double_s(PAPER_POSES[a], PAPER_POSES[b], DT_S)
         want = modes_to_shape(_map(shaped_modes=3), ROBOT, move).n_modes
@@ -356,7 +356,7 @@ def test_set_modes_for_move_shapes_the_modes_each_move_needs():
             assert choice is not None and choice.n_modes == want, (a, b)
             shaper.shape(move.q)
             assert len(shaper.current_modes) == want
-    named = tvist.MapDynamics(ROBOT, _map(mode_joints=[0, 1]))
+    named = tvist.ModalDynamics(ROBOT, _map(mode_joints=[0, 1]))
     shaper = tvist.TvShaper(named, DT_S, 6)
     assert set_modes_for_move(shaper, named, move) is None
     assert len(shaper.max_delay_s) == 2
@@ -442,7 +442,7 @@ def _hinged_reference_residuals(modal, traj, end: int) -> tuple[np.ndarray, np.n
 @pytest.mark.slow
 def test_modes_to_shape_with_bending_links_predicts_a_direct_simulation():
     from test_link_hinges import HINGES, _known_maps
-    from tvist.modal_map import set_modes_for_move
+    from tvist.maps import set_modes_for_move
 
     # Family variant 0 (bending upper arm and forearm) with its known joints and hinges.
     hinged, _ = _known_maps(0)
@@ -473,7 +473,7 @@ def test_modes_to_shape_with_bending_links_predicts_a_direct_simulation():
     # The shaper of a frequency-ranked hinged map now shapes the modes the move needs.
     # Its five lowest: the hinge modes above are overdamped at some poses of the space.
     lowest = ModalMap(hinged.flex_joints, shaped_modes=5, link_hinges=hinged.link_hinges)
-    provider = tvist.MapDynamics(ROBOT, lowest)
+    provider = tvist.ModalDynamics(ROBOT, lowest)
     shaper = tvist.TvShaper(provider, DT_S, 6)
     chosen = set_modes_for_move(shaper, provider, traj)
     assert chosen is not None and chosen.n_modes == choice.n_modes

@@ -115,7 +115,7 @@ def test_modal_map_file_fd_tvist_equals_the_modal_map_driven_shaper(move_csv, tm
     assert main(args) == 0
     shaped, _ = read_joint_csv(out)
     robot = tvist.robots.ur5e(3.0, (0.0, 0.0, 0.05))  # the default CoM of every command
-    ref = tvist.TvShaper(tvist.MapDynamics(robot, tvist.ModalMap.load(map_path)), DT, 6)
+    ref = tvist.TvShaper(tvist.ModalDynamics(robot, tvist.ModalMap.load(map_path)), DT, 6)
     padded = np.vstack([q, np.repeat(q[-1:], shaped.shape[0] - q.shape[0], axis=0)])
     expected = ref.shape(padded)
     # The move must be shaped for the comparison to mean anything.

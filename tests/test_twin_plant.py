@@ -7,10 +7,11 @@ import pytest
 import ruckig
 from scipy.spatial.transform import Rotation
 
+from tvist import rtde_wire
 from tvist.sim import Twin
 from tvist.sim.plant import TwinPlant, rotation_vector
 from tvist.trajectory import PAPER_POSES
-from tvist.urserver import rtde
+from tvist.urserver import variables
 from tvist.urserver.control_script import ControlScript, Registers
 from tvist.urserver.motion import JointMotion, SafetyViolation
 from tvist.urserver.server import _split_program
@@ -165,7 +166,7 @@ def test_control_script_register_handshake(twin) -> None:
 
 def test_rtde_recipe_round_trip() -> None:
     names = ["timestamp", "actual_q", "robot_mode", "actual_tool_accelerometer"]
-    recipe = rtde.Recipe(3, names, [rtde.OUTPUTS[n] for n in names])
+    recipe = rtde_wire.Recipe(3, names, [variables.OUTPUTS[n] for n in names])
     values = {
         "timestamp": 1.25,
         "actual_q": [0.1, 0.2, 0.3, 0.4, 0.5, 0.6],
@@ -173,7 +174,7 @@ def test_rtde_recipe_round_trip() -> None:
         "actual_tool_accelerometer": [0.0, 0.0, 9.81],
     }
     package = recipe.pack(values)
-    size, kind = rtde.HEADER.unpack_from(package)
+    size, kind = rtde_wire.HEADER.unpack_from(package)
     assert size == len(package) == 3 + 1 + 8 + 48 + 4 + 24 and kind == ord("U")
     assert recipe.unpack(package[3:]) == values
     with pytest.raises(ValueError, match="expected"):

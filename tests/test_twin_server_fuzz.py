@@ -20,7 +20,7 @@ import time
 import numpy as np
 import pytest
 
-from tvist.urserver import rtde
+from tvist.urserver import variables
 from twin_server_fixture import (
     HOST,
     Commander,
@@ -100,10 +100,10 @@ def _rtde_case(rng) -> None:
             what = rng.random()
             if what < 0.2:
                 frequency = float(rng.choice([*HOSTILE, 125.0, 500.0, 499.9]))
-                payload = struct.pack(">d", frequency) + _names(rng, list(rtde.OUTPUTS))
+                payload = struct.pack(">d", frequency) + _names(rng, list(variables.OUTPUTS))
                 sock.sendall(_package(ord("O"), payload))
             elif what < 0.4:
-                sock.sendall(_package(ord("I"), _names(rng, list(rtde.INPUTS))))
+                sock.sendall(_package(ord("I"), _names(rng, list(variables.INPUTS))))
             elif what < 0.6:
                 values = rng.choice(HOSTILE, size=int(rng.integers(0, 20)))
                 payload = bytes([int(rng.integers(0, 4))]) + struct.pack(

@@ -502,17 +502,18 @@ def test_subscribers_that_do_not_read_cost_the_tick_no_packing(local_server, mon
     full the tick drops their packages without packing them, so it packs one package per
     tick, the reading subscriber's, not 51 (which made the simulated clock run at 72 % of
     the wall clock)."""
-    from tvist.urserver import rtde
+    from tvist import rtde_wire
+    from tvist.urserver import variables
 
     packed = [0]
-    pack = rtde.Recipe.pack
+    pack = rtde_wire.Recipe.pack
 
     def counting_pack(self, values):
         packed[0] += 1
         return pack(self, values)
 
-    monkeypatch.setattr(rtde.Recipe, "pack", counting_pack)
-    names = [n for n in rtde.OUTPUTS if not n.startswith(("input_", "output_"))]
+    monkeypatch.setattr(rtde_wire.Recipe, "pack", counting_pack)
+    names = [n for n in variables.OUTPUTS if not n.startswith(("input_", "output_"))]
     stalled = []
     try:
         for i in range(50):

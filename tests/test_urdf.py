@@ -241,7 +241,7 @@ def test_cpp_shapes_from_a_robot_file_exactly_as_python(shape_with_map, tmp_path
     start = np.array([0.0, -0.3, 0.0, -2.0, 0.0, 1.8, 0.8])
     q = start + np.outer(blend, [0.6, 0.5, 0.0, 0.4, 0.0, 0.0, 0.0])
     robot = Robot(tvist.robots.robot_file(robot_path), Payload(1.0, com))
-    shaper = tvist.TvShaper(tvist.MapDynamics(robot, tvist.load_map(map_path)), dt_s, 7, "zv")
+    shaper = tvist.TvShaper(tvist.maps.dynamics_for(robot, tvist.load_map(map_path)), dt_s, 7, "zv")
     shaper.reset(q[0])
     expected = shaper.shape(q)
     samples, shaped = tmp_path / "in.txt", tmp_path / "out.txt"

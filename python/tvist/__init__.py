@@ -12,9 +12,7 @@ import numpy as np
 
 from tvist import _core, robots
 from tvist._core import ConstantModes, Impulses, TvShaper
-from tvist.dynmap import DynamicMap, MapDynamics
-from tvist.map_files import load_map
-from tvist.modal_map import ModalDynamics, ModalMap
+from tvist.maps import DynamicMap, MapDynamics, ModalDynamics, ModalMap, load_map
 from tvist.ztdis import ZeroDelayResult, zero_delay
 
 __all__ = [

@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 import tvist
-from tvist.dynmap import DynamicMap
+from tvist.maps.paper10 import DynamicMap
 from tvist.robots import Robot
 
 __all__ = [

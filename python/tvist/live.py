@@ -131,7 +131,7 @@ class RtdeRecorder:
         import socket
         import struct
 
-        from tvist.urserver import rtde
+        from tvist import rtde_wire as rtde
 
         self._rtde = rtde
         self.path = None if path is None else Path(path)

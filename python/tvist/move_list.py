@@ -29,8 +29,8 @@ import numpy as np
 
 from tvist.cartesian import _rotvec, joints_from_tcp, shape_cartesian, tcp_path_deviation_m
 from tvist.robots import Robot
+from tvist.trajectory.scalar_trapezoid import trapezoid_duration, trapezoid_position
 from tvist.urserver.kinematics import pose_matrix
-from tvist.urserver.motion import trapezoid_duration, trapezoid_position
 from tvist.urserver.tool_motion import Line
 
 __all__ = ["LinearMove", "MoveList", "PlannedMoves", "is_move_list", "plan", "read_move_list"]

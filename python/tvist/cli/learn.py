@@ -40,8 +40,8 @@ def add_learn_command(sub: argparse._SubParsersAction) -> None:
 
 def modal_prior(path: str, flag: str):
     """The modal map in file ``path`` to learn from; a paper10 map is refused naming ``flag``."""
-    from tvist.map_files import load_map
-    from tvist.modal_map import ModalMap
+    from tvist.maps.files import load_map
+    from tvist.maps.modal import ModalMap
 
     prior = load_map(path)
     if not isinstance(prior, ModalMap):
@@ -53,7 +53,7 @@ def _cmd_learn(args: argparse.Namespace) -> int:
     from tvist.cli.args import map_payload, payload_from_args
     from tvist.ident.logs import log_payload
     from tvist.learn import MapLearner
-    from tvist.map_files import load_map
+    from tvist.maps.files import load_map
     from tvist.robots import Robot, params
 
     prior = load_map(args.map)

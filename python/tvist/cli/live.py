@@ -23,8 +23,8 @@ def _shaper(args: argparse.Namespace, Q):  # noqa: N803 (the move, as elsewhere)
     import tvist
     from tvist.cli.args import map_dynamics, map_from_args, payload_from_args, robot_from_args
     from tvist.cli.shape import parse_modes
-    from tvist.dynmap import range_report_of
-    from tvist.modal_residual import set_modes_for_move
+    from tvist.maps.mode_choice import set_modes_for_move
+    from tvist.maps.paper10 import range_report_of
 
     n_dof = Q.shape[1]
     if args.unshaped:

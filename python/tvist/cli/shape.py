@@ -199,7 +199,7 @@ def shape_file(
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
     if (modes is None) == (dynmap is None or robot is None):
         raise ValueError("give either fixed modes or a robot with a dynamic map")
-    dynamics = modes if modes is not None else tvist.MapDynamics(robot, dynmap)
+    dynamics = modes if modes is not None else tvist.maps.dynamics_for(robot, dynmap)
     out, added, end_modes, alpha, counts = shape_samples(
         Q, dt_s, dynamics, method=method, shaper=shaper
     )
@@ -366,7 +366,7 @@ def _cmd_shape(args: argparse.Namespace) -> int:
         existing_dir(args.bag, "--bag")
     import warnings
 
-    from tvist.dynmap import MapRangeWarning
+    from tvist.maps.paper10 import MapRangeWarning
 
     robot, dynamics = _robot_and_dynamics(args)
     with warnings.catch_warnings(record=True) as caught:

@@ -3,7 +3,7 @@
 The campaign excites the base and the shoulder in turn at every pose (Algorithm 2), fits the
 local transfer function to the noisy tool accelerometer (eq. 17) and fits the dynamic map to
 the identified modes (section 5.3). The fitted map is limited to the inertias of its poses (it
-never extrapolates, see :mod:`tvist.dynmap`), so the campaign must cover the inertias the test
+never extrapolates, see :mod:`tvist.maps.paper10`), so the campaign must cover the inertias the test
 motions pass through: its radii reach from the folded pose Q3 (0.25 m from the shoulder axis)
 to the stretched pose Q1 (0.92 m), beyond the paper's 0.4-0.9 m. It is reduced to two
 payloads (none and the experiment's 5 kg) and 3 angles x 6 radii, 36 poses, so that it fits the
@@ -34,7 +34,7 @@ import numpy as np
 from tvist import robots
 from tvist.demo.methods import Method, fd_tvist_map
 from tvist.demo.motions import PAYLOAD_COM_M, PAYLOAD_KG
-from tvist.dynmap import DynamicMap, MapDynamics
+from tvist.maps.paper10 import DynamicMap, MapDynamics
 
 KEY = "fd-tvist-identified-map"
 LABEL = "FD-TVIST ZV, identified map"

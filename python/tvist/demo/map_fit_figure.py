@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tvist.dynmap import RANGE_FIELDS, DynamicMap
+from tvist.maps.paper10 import RANGE_FIELDS, DynamicMap
 
 _MODE_NAMES = ("base", "shoulder")
 

@@ -22,7 +22,7 @@ import numpy as np
 
 import tvist
 from tvist.demo.motions import Motion
-from tvist.dynmap import DynamicMap, MapDynamics
+from tvist.maps.paper10 import DynamicMap, MapDynamics
 from tvist.robots import Robot
 from tvist.sim import Twin
 from tvist.trajectory import Trajectory
@@ -119,8 +119,8 @@ def _run_tv_shaper(
     shaper: Any, ctx: MotionContext, provider_name: str, provider: Any = None
 ) -> Reference:
     """Shapes the motion with ``shaper``; with ``provider`` (the shaper's) a frequency-ranked
-    modal map shapes the modes this move needs (:func:`tvist.modal_map.set_modes_for_move`)."""
-    from tvist.modal_map import set_modes_for_move
+    modal map shapes the modes this move needs (:func:`tvist.maps.set_modes_for_move`)."""
+    from tvist.maps import set_modes_for_move
 
     q = np.ascontiguousarray(ctx.trajectory.q)
     set_modes_for_move(shaper, provider, ctx.trajectory)

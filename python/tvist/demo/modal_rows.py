@@ -1,6 +1,6 @@
 """The demo's modal-map row: a :class:`tvist.ModalMap` fitted to the same reduced campaign as
 the identified published map, shaping through the same real-time path
-(``tvist.MapDynamics(robot, modal_map)``, evaluated in Rust every cycle)."""
+(``tvist.ModalDynamics(robot, modal_map)``, evaluated in Rust every cycle)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from typing import Any
 
 import tvist
 from tvist.demo.methods import TVIST_SHAPER, Method, MotionContext, Reference, _run_tv_shaper
-from tvist.modal_map import ModalMap
+from tvist.maps.modal import ModalMap
 
 KEY = "fd-tvist-identified-modal-map"
 LABEL = "FD-TVIST ZV, identified modal map"
@@ -18,11 +18,11 @@ MAP_FILE = "identified_modal_map.json"
 
 
 def fd_tvist_modal(key: str, label: str, modal: ModalMap) -> Method:
-    """A ZV FD-TVIST row driven by ``modal`` through :class:`tvist.MapDynamics` (a
+    """A ZV FD-TVIST row driven by ``modal`` through :class:`tvist.ModalDynamics` (a
     frequency-ranked map shapes the modes each move needs)."""
 
     def build(ctx: MotionContext) -> Reference:
-        provider = tvist.MapDynamics(ctx.robot, modal)
+        provider = tvist.ModalDynamics(ctx.robot, modal)
         shaper = tvist.TvShaper(
             provider, ctx.trajectory.dt_s, ctx.trajectory.n_dof, shaper=TVIST_SHAPER
         )
@@ -52,7 +52,7 @@ def identify_modal_map(
         # The real-time provider rejects a map with an overdamped mode at a sampled pose.
         from tvist.demo.motions import PAYLOAD_COM_M, PAYLOAD_KG
 
-        tvist.MapDynamics(
+        tvist.ModalDynamics(
             tvist.robots.ur5e(payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M), modal
         )
     except ValueError as exc:

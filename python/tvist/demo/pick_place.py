@@ -101,7 +101,7 @@ def pick_place_methods(dynmap: Any | None, map_name: str = "identified modal map
     ZTDIS on the twin's exact end-pose modes as an oracle reference."""
     from tvist.demo.fixed import fixed_robust_row, fixed_start_row
     from tvist.demo.modal_rows import fd_tvist_modal
-    from tvist.modal_map import ModalMap
+    from tvist.maps.modal import ModalMap
 
     rows = [default_methods()[0], fixed_start_row(), fixed_robust_row()]
     if dynmap is not None:

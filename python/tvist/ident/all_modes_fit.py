@@ -79,7 +79,7 @@ from scipy import optimize, stats
 
 from tvist.ident.model_modes import ModelModes, joint_laws, model_modes, undamped_frequencies
 from tvist.ident.observed_modes import HINGE_AT_FRACTION, ObservedModes, observed_modes
-from tvist.modal_map import ModalMap
+from tvist.maps.modal import ModalMap
 
 __all__ = [
     "CANDIDATE_JOINTS",

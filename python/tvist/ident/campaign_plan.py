@@ -21,8 +21,8 @@ from tvist.ident.excitation import to_urscript, write_trajectory_csv
 from tvist.ident.excited import excited_joints
 from tvist.ident.pose_plan import CampaignPose, pose_excitations
 from tvist.robots import params
+from tvist.trajectory.scalar_trapezoid import trapezoid_duration
 from tvist.units import check_trajectory
-from tvist.urserver.motion import trapezoid_duration
 
 __all__ = ["APPROACH_ACCEL_RAD_S2", "APPROACH_SPEED_RAD_S", "PlanSummary", "write_plan"]
 

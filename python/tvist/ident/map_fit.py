@@ -37,7 +37,7 @@ UR5e) is dropped (set to 0) and the step refitted, as the paper did.
 
 The fitted map is limited to the data: each mode stores the range ``[min, max]`` of ``J_f`` and
 of ``J_d`` over the poses it was fitted to, and the map clamps inertias into those ranges when
-evaluated (see :mod:`tvist.dynmap`), so it never extrapolates beyond what was identified.
+evaluated (see :mod:`tvist.maps.paper10`), so it never extrapolates beyond what was identified.
 
 The map equations are evaluated only through :class:`tvist.DynamicMap` (the Rust core). The
 starting values use the fact that, for a fixed ``k_p``, ``ω_n²`` is affine in
@@ -62,7 +62,7 @@ import numpy as np
 from scipy import optimize
 
 from tvist import _core
-from tvist.dynmap import DynamicMap
+from tvist.maps.paper10 import DynamicMap
 
 __all__ = [
     "DEFAULT_MODE_SPECS",

@@ -50,7 +50,7 @@ from typing import Any
 import numpy as np
 from scipy import optimize
 
-from tvist.modal_map import ModalMap
+from tvist.maps.modal import ModalMap
 from tvist.robots import Payload, Robot, params
 
 __all__ = [

@@ -11,7 +11,7 @@ A plan (:func:`plan_poses`) is every ``every``-th of these poses, plus the poses
 its range of joint-axis inertias over the whole workspace (:func:`workspace_poses`) and over
 the poses the user gives (:func:`cover_poses`), added until every one of those lies within
 the plan's range (:func:`covering_poses`; a map is identified only over the inertias of its
-poses, :mod:`tvist.dynmap`), in the order that changes the payload least
+poses, :mod:`tvist.maps.paper10`), in the order that changes the payload least
 (:func:`campaign_order`); :func:`plan_shortfall` says why the map fit could not succeed on it,
 before anything moves. Each pose's excitations (:func:`pose_excitations`, of the base, the
 shoulder and the robot's elbow by default, :func:`~tvist.ident.excited.default_excited_joints`)
@@ -100,7 +100,7 @@ _COVERING_STREAM = 3_000_000
 _RANDOM_PLAN_STREAM = 5_000_000
 #: A pose whose inertias lie less than this (relative) outside the plan's range counts as
 #: covered: angles written with 6 decimals move an inertia by ~1e-8, and a paper10 map's soft
-#: clamp bends the inertia it reads by up to 0.9 % near a bound anyway (:mod:`tvist.dynmap`).
+#: clamp bends the inertia it reads by up to 0.9 % near a bound anyway (:mod:`tvist.maps.paper10`).
 COVER_TOLERANCE = 1e-3
 
 # --------------------------------------------------------------------------- poses

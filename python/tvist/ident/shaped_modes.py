@@ -24,7 +24,7 @@ its mode 12.6 % RMS off the arm's true elbow mode.
 **How many modes a map shapes.** A map shapes its ``K`` lowest eigenmodes (frequency-ranked,
 ``"shaped_modes": K``): the streaming shaper follows each of the ``K`` lowest along a motion
 and per move shapes only the lowest ones that move makes ring
-(:func:`tvist.modal_residual.set_modes_for_move`). A physical mode does not keep its frequency
+(:func:`tvist.maps.mode_choice.set_modes_for_move`). A physical mode does not keep its frequency
 rank over the poses (on a 16-pose FR3 campaign the base mode is the lowest at 5 poses and the
 fourth at 4, where it is a stiff 49-75 Hz mode with at most 17 % flange participation), so
 the ``K`` lowest are not exactly the shaped modes at every pose. :func:`shaping_field`
@@ -139,7 +139,7 @@ def shaping_field(report: list[dict[str, Any]]) -> dict[str, Any]:
     The one place that chooses the field. Frequency-ranked because the streaming shaper then
     follows each of the ``K`` lowest eigenmodes along a motion (two that cross or veer keep
     their filters) and shapes per move only the lowest ones that move makes ring
-    (:func:`tvist.modal_residual.set_modes_for_move`, at most ``K``); a joint-named mode would
+    (:func:`tvist.maps.mode_choice.set_modes_for_move`, at most ``K``); a joint-named mode would
     follow the one eigenmode that strains its joint most, which can be another far-apart one
     at the next pose. Raises ``ValueError`` if no mode was identified often enough.
     """

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from tvist.dynmap import DynamicMap
-from tvist.modal_map import ModalMap
+from tvist.maps.modal import ModalMap
+from tvist.maps.paper10 import DynamicMap
 from tvist.robots import Robot
 from tvist.trajectory import PAPER_POSES
 

@@ -10,7 +10,7 @@ import numpy as np
 
 import tvist
 from tvist.demo.motions import A_MAX_RAD_S2, DT_S, JERK_TIME_S, PRE_S, V_MAX_RAD_S
-from tvist.modal_map import ModalMap
+from tvist.maps.modal import ModalMap
 from tvist.robots import Robot
 from tvist.trajectory import double_s
 
@@ -74,7 +74,7 @@ def move(
     q = np.ascontiguousarray(traj.q)
     if modal_map is None:
         return np.array(q)
-    shaper = tvist.TvShaper(tvist.MapDynamics(robot, modal_map), DT_S, q.shape[1], shaper="zv")
+    shaper = tvist.TvShaper(tvist.ModalDynamics(robot, modal_map), DT_S, q.shape[1], shaper="zv")
     shaper.reset(np.ascontiguousarray(q[0]))
     return np.array(shaper.shape(q))
 

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from tvist.dynmap import warn_outside_range
+from tvist.maps.paper10 import warn_outside_range
 from tvist.trajectory.resample import resample
 
 __all__ = ["METHODS", "ShapedTrajectory", "modes_at", "shape_samples", "shape_waypoints"]
@@ -142,7 +142,7 @@ def shape_samples(
             _provider(dynamics), dt_s=dt_s, n_dof=q.shape[1], shaper=shaper, interp=interp, **kwargs
         )
         # A frequency-ranked modal map shapes the K lowest modes this move needs.
-        from tvist.modal_residual import set_modes_for_move
+        from tvist.maps.mode_choice import set_modes_for_move
 
         choice = set_modes_for_move(shaper_, dynamics, q, dt_s)
         if choice is not None:

@@ -24,7 +24,7 @@ from tvist.robots import Robot
 from tvist.sim import SimulationDiverged, Twin
 from tvist.sim.plant import TwinPlant
 from tvist.sim.twin import check_payload_mass
-from tvist.urserver import rtde
+from tvist.urserver import variables
 from tvist.urserver.control_script import (
     ControlScript,
     Registers,
@@ -83,7 +83,7 @@ class TwinController:
         self._actual_speed = PoseRate()
         self._target_speed = PoseRate()
         self._actual_flange = self.kinematics.forward(self._actual_q, np.zeros(6))
-        self.registers = Registers.zeros(rtde.N_REGISTERS)
+        self.registers = Registers.zeros(variables.N_REGISTERS)
         self.script: ControlScript | MoveProgram | None = None
         self.program_name = ""
         self.protective_stop = False
@@ -330,9 +330,9 @@ class TwinController:
             "input_bit_registers32_to_63": 0,
         }
         values["safety_status"] = values["safety_mode"]
-        for name in rtde.UNMEASURED_OUTPUTS:
-            values[name] = nan6 if rtde.OUTPUTS[name] == "VECTOR6D" else math.nan
-        for i in range(rtde.N_REGISTERS):
+        for name in variables.UNMEASURED_OUTPUTS:
+            values[name] = nan6 if variables.OUTPUTS[name] == "VECTOR6D" else math.nan
+        for i in range(variables.N_REGISTERS):
             values[f"output_int_register_{i}"] = regs.out_int[i]
             values[f"output_double_register_{i}"] = regs.out_double[i]
             values[f"input_int_register_{i}"] = regs.in_int[i]

@@ -32,6 +32,8 @@ import math
 
 import numpy as np
 
+from tvist.trajectory.scalar_trapezoid import trapezoid_duration, trapezoid_position
+
 log = logging.getLogger("tvist.urserver")
 
 #: servoj's ``lookahead_time`` (s) and ``gain`` (1/s) ranges (URScript manual).
@@ -80,14 +82,6 @@ def positive_value(value, what: str) -> float:
     if not number > 0.0:
         raise CommandRefused(f"{what} = {number:g} must be > 0")
     return number
-
-
-def trapezoid_duration(distance: float, v_max: float, a_max: float) -> tuple[float, float]:
-    """``(duration_s, cruise_speed)`` of a rest-to-rest trapezoidal profile over ``distance``."""
-    if distance <= 0.0:
-        return 0.0, 0.0
-    v = min(v_max, math.sqrt(distance * a_max))  # triangle if v_max is not reached
-    return distance / v + v / a_max, v
 
 
 class JointMotion:
@@ -371,18 +365,3 @@ class JointMotion:
             return 1.0
         s = trapezoid_position(t, self._move_speed, self._move_accel, self._move_duration, distance)
         return min(max(s / distance, 0.0), 1.0)
-
-
-def trapezoid_position(
-    t: float, speed: float, accel: float, total: float, distance: float
-) -> float:
-    """Way done at time ``t`` of a rest-to-rest trapezoidal profile over ``distance`` that
-    cruises at ``speed``, accelerates at ``accel`` and lasts ``total`` (see
-    :func:`trapezoid_duration`)."""
-    t_acc = speed / accel
-    if t <= t_acc:
-        return 0.5 * accel * t * t
-    if t <= total - t_acc:
-        return 0.5 * accel * t_acc * t_acc + speed * (t - t_acc)
-    rest = max(total - t, 0.0)
-    return distance - 0.5 * accel * rest * rest

@@ -28,7 +28,8 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from tvist.urserver import rtde
+from tvist import rtde_wire
+from tvist.urserver import variables
 from tvist.urserver.controller import TwinController
 
 log = logging.getLogger("tvist.urserver")
@@ -94,8 +95,8 @@ class PortInUse(OSError):
 class _RtdeSession:
     sock: socket.socket
     address: str
-    outputs: list[rtde.Recipe] = field(default_factory=list)
-    inputs: dict[int, rtde.Recipe] = field(default_factory=dict)
+    outputs: list[rtde_wire.Recipe] = field(default_factory=list)
+    inputs: dict[int, rtde_wire.Recipe] = field(default_factory=dict)
     n_inputs: int = 0
     frequency_hz: float = MAX_FREQUENCY_HZ
     phase: float = 0.0
@@ -344,16 +345,16 @@ class TwinServer:
             self._sessions.append(session)
         try:
             while not self._stop.is_set():
-                header = _recv_exact(conn, rtde.HEADER.size)
+                header = _recv_exact(conn, rtde_wire.HEADER.size)
                 if header is None:
                     return
-                size, kind = rtde.HEADER.unpack(header)
-                if size < rtde.HEADER.size:
+                size, kind = rtde_wire.HEADER.unpack(header)
+                if size < rtde_wire.HEADER.size:
                     # The stream can no longer be split into packages: end this connection.
-                    session.send(rtde.text_message(f"malformed package header (size {size})"))
+                    session.send(rtde_wire.text_message(f"malformed package header (size {size})"))
                     log.warning("RTDE %s: malformed package (size %d), closing", address, size)
                     return
-                payload = _recv_exact(conn, size - rtde.HEADER.size)
+                payload = _recv_exact(conn, size - rtde_wire.HEADER.size)
                 if payload is None:
                     return
                 self._rtde_package(session, kind, payload)
@@ -364,65 +365,67 @@ class TwinServer:
                     self._owners.pop(name, None)
 
     def _rtde_package(self, session: _RtdeSession, kind: int, payload: bytes) -> None:
-        if kind == rtde.REQUEST_PROTOCOL_VERSION:
-            ok = len(payload) == 2 and struct.unpack(">H", payload)[0] == rtde.PROTOCOL_VERSION
-            session.send(rtde.package(kind, bytes([int(ok)])))
-        elif kind == rtde.GET_URCONTROL_VERSION:
-            session.send(rtde.package(kind, struct.pack(">IIII", *CONTROLLER_VERSION)))
-        elif kind == rtde.CONTROL_PACKAGE_SETUP_OUTPUTS:
+        if kind == rtde_wire.REQUEST_PROTOCOL_VERSION:
+            ok = len(payload) == 2 and struct.unpack(">H", payload)[0] == rtde_wire.PROTOCOL_VERSION
+            session.send(rtde_wire.package(kind, bytes([int(ok)])))
+        elif kind == rtde_wire.GET_URCONTROL_VERSION:
+            session.send(rtde_wire.package(kind, struct.pack(">IIII", *CONTROLLER_VERSION)))
+        elif kind == rtde_wire.CONTROL_PACKAGE_SETUP_OUTPUTS:
             session.send(_setup_reply(session, kind, self._setup_outputs(session, payload)))
-        elif kind == rtde.CONTROL_PACKAGE_SETUP_INPUTS:
+        elif kind == rtde_wire.CONTROL_PACKAGE_SETUP_INPUTS:
             session.send(_setup_reply(session, kind, self._setup_inputs(session, payload)))
-        elif kind == rtde.CONTROL_PACKAGE_START:
+        elif kind == rtde_wire.CONTROL_PACKAGE_START:
             ok = bool(session.outputs) or bool(session.inputs)
             # First package at the next tick, then one every 1 / frequency.
             session.phase = 1.0 - session.frequency_hz * self.controller.dt_s
             session.started = ok
-            session.send(rtde.package(kind, bytes([int(ok)])))
-        elif kind == rtde.CONTROL_PACKAGE_PAUSE:
+            session.send(rtde_wire.package(kind, bytes([int(ok)])))
+        elif kind == rtde_wire.CONTROL_PACKAGE_PAUSE:
             session.started = False
-            session.send(rtde.package(kind, b"\x01"))
-        elif kind == rtde.DATA_PACKAGE:
+            session.send(rtde_wire.package(kind, b"\x01"))
+        elif kind == rtde_wire.DATA_PACKAGE:
             self._data_package(session, payload)
         else:
-            session.send(rtde.text_message(f"unknown package type {kind}"))
+            session.send(rtde_wire.text_message(f"unknown package type {kind}"))
 
     def _setup_outputs(self, session: _RtdeSession, payload: bytes) -> bytes:
         if len(payload) < 8:
             return b"\x00" + b"NOT_FOUND"
         refusal = _recipe_refusal(len(session.outputs), len(payload) - 8)
         if refusal:
-            session.send(rtde.text_message(refusal))
+            session.send(rtde_wire.text_message(refusal))
             return b"\x00"
         frequency = struct.unpack(">d", payload[:8])[0]
-        names = rtde.split_names(payload[8:])
-        types = [rtde.OUTPUTS.get(n, "NOT_FOUND") for n in names]
+        names = rtde_wire.split_names(payload[8:])
+        types = [variables.OUTPUTS.get(n, "NOT_FOUND") for n in names]
         valid = bool(names) and "NOT_FOUND" not in types and 0.0 < frequency <= MAX_FREQUENCY_HZ
         if not 0.0 < frequency <= MAX_FREQUENCY_HZ:
-            session.send(rtde.text_message(f"output frequency {frequency:g} Hz not in (0, 500] Hz"))
+            session.send(
+                rtde_wire.text_message(f"output frequency {frequency:g} Hz not in (0, 500] Hz")
+            )
         recipe_id = len(session.outputs) + 1 if valid else 0
         if valid:
-            session.outputs.append(rtde.Recipe(recipe_id, names, types))
+            session.outputs.append(rtde_wire.Recipe(recipe_id, names, types))
             session.frequency_hz = frequency
         return bytes([recipe_id]) + ",".join(types).encode()
 
     def _setup_inputs(self, session: _RtdeSession, payload: bytes) -> bytes:
         refusal = _recipe_refusal(len(session.inputs), len(payload))
         if refusal:
-            session.send(rtde.text_message(refusal))
+            session.send(rtde_wire.text_message(refusal))
             return b"\x00"
-        names = rtde.split_names(payload)
+        names = rtde_wire.split_names(payload)
         with self._lock:
             types = []
             for name in names:
                 owner = self._owners.get(name)
-                if name not in rtde.INPUTS:
+                if name not in variables.INPUTS:
                     types.append("NOT_FOUND")
                 elif owner is not None and owner is not session:
                     types.append("IN_USE")
                 else:
-                    types.append(rtde.INPUTS[name])
-            valid = bool(names) and all(t in rtde.TYPE_FORMATS for t in types)
+                    types.append(variables.INPUTS[name])
+            valid = bool(names) and all(t in rtde_wire.TYPE_FORMATS for t in types)
             unknown = [n for n, t in zip(names, types, strict=True) if t == "NOT_FOUND"]
             if unknown:
                 message = (
@@ -439,7 +442,7 @@ class TwinServer:
                 session.n_inputs += 1
                 recipe_id = session.n_inputs if valid else 0
             if recipe_id:
-                session.inputs[recipe_id] = rtde.Recipe(recipe_id, names, types)
+                session.inputs[recipe_id] = rtde_wire.Recipe(recipe_id, names, types)
                 for name in names:
                     self._owners[name] = session
                     session.owned.add(name)
@@ -448,12 +451,12 @@ class TwinServer:
     def _data_package(self, session: _RtdeSession, payload: bytes) -> None:
         recipe = session.inputs.get(payload[0]) if payload else None
         if recipe is None:
-            session.send(rtde.text_message("data package for an unknown input recipe ignored"))
+            session.send(rtde_wire.text_message("data package for an unknown input recipe ignored"))
             return
         try:
             values = recipe.unpack(payload)
         except (ValueError, struct.error) as exc:
-            session.send(rtde.text_message(f"malformed data package ignored: {exc}"))
+            session.send(rtde_wire.text_message(f"malformed data package ignored: {exc}"))
             return
         regs = self.controller.registers
         with self._lock:
@@ -467,7 +470,7 @@ class TwinServer:
                 refusal = self.controller.set_speed_slider(values.get("speed_slider_fraction"))
                 if refusal:
                     log.error("%s", refusal)
-                    session.send(rtde.text_message(refusal))
+                    session.send(rtde_wire.text_message(refusal))
 
     # ------------------------------------------------------------------ dashboard
 
@@ -586,10 +589,10 @@ def _recipe_refusal(n_recipes: int, names_bytes: int) -> str | None:
 
 def _setup_reply(session: _RtdeSession, kind: int, reply: bytes) -> bytes:
     """The setup reply package, or a failed one (recipe id 0) if it would not fit in one."""
-    if rtde.HEADER.size + len(reply) > rtde.MAX_PACKAGE_BYTES:
-        session.send(rtde.text_message("recipe refused: its reply does not fit in a package"))
-        return rtde.package(kind, b"\x00")
-    return rtde.package(kind, reply)
+    if rtde_wire.HEADER.size + len(reply) > rtde_wire.MAX_PACKAGE_BYTES:
+        session.send(rtde_wire.text_message("recipe refused: its reply does not fit in a package"))
+        return rtde_wire.package(kind, b"\x00")
+    return rtde_wire.package(kind, reply)
 
 
 def _split_program(buffer: str) -> tuple[str | None, str]:

@@ -25,14 +25,9 @@ import numpy as np
 
 from tvist.cartesian import _matrix
 from tvist.sim.plant import rotation_vector
+from tvist.trajectory.scalar_trapezoid import trapezoid_duration, trapezoid_position
 from tvist.urserver.kinematics import Kinematics, pose_matrix, rotation_matrix
-from tvist.urserver.motion import (
-    CommandRefused,
-    SafetyViolation,
-    positive_value,
-    trapezoid_duration,
-    trapezoid_position,
-)
+from tvist.urserver.motion import CommandRefused, SafetyViolation, positive_value
 
 
 class _ToolSource:

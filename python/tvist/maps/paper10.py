@@ -64,7 +64,7 @@ from typing import Any
 import numpy as np
 
 from tvist import _core
-from tvist.map_files import MapDocument, RobotModesMixin, plain_metadata
+from tvist.maps.files import MapDocument, RobotModesMixin, plain_metadata
 from tvist.robots import Robot
 
 SCHEMA_VERSION: int = _core.MAP_SCHEMA_VERSION
@@ -312,9 +312,10 @@ class MapDynamics(RobotModesMixin, _core.MapDynamics):
     robot
         The arm with its payload (:class:`tvist.robots.Robot`).
     dynmap
-        The map (:class:`DynamicMap`, or a :class:`tvist.ModalMap`, which gives a
-        :class:`tvist.ModalDynamics`). A map identified on another robot (its
+        The map (:class:`DynamicMap`). A map identified on another robot (its
         ``metadata["robot"]`` differs from the robot's name) raises ``ValueError`` naming both.
+        A :class:`tvist.ModalMap` has its own provider, :class:`tvist.ModalDynamics`;
+        :func:`tvist.maps.dynamics_for` builds the provider of a map of either kind.
     allow_other_robot
         Accept such a map anyway (research use).
     """
@@ -322,11 +323,10 @@ class MapDynamics(RobotModesMixin, _core.MapDynamics):
     def __new__(
         cls, robot: Robot, dynmap: DynamicMap, *, allow_other_robot: bool = False
     ) -> MapDynamics:
-        from tvist.modal_map import ModalDynamics, ModalMap
-
-        if isinstance(dynmap, ModalMap):  # the modal map's own provider (same protocol)
-            return ModalDynamics(  # type: ignore[return-value]
-                robot, dynmap, allow_other_robot=allow_other_robot
+        if isinstance(dynmap, MapDocument) and not isinstance(dynmap, DynamicMap):
+            raise TypeError(
+                f"dynmap must be a tvist.DynamicMap, got {type(dynmap).__name__}: "
+                "tvist.maps.dynamics_for(robot, map) builds the provider of either kind"
             )
         cls._check(robot, dynmap, DynamicMap, "dynmap")
         return super().__new__(cls, robot.core, dynmap.core, bool(allow_other_robot))

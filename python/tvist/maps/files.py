@@ -12,8 +12,8 @@ from tvist import _core
 from tvist.robots import Payload
 
 if TYPE_CHECKING:
-    from tvist.dynmap import DynamicMap
-    from tvist.modal_map import ModalMap
+    from tvist.maps.modal import ModalMap
+    from tvist.maps.paper10 import DynamicMap
 
 __all__ = ["MapDocument", "RobotModesMixin", "load_map", "parse_map_file"]
 
@@ -128,9 +128,9 @@ def parse_map_file(path: str | Path) -> tuple[Any, dict[str, Any]]:
 def load_map(path: str | Path) -> DynamicMap | ModalMap:
     """The map in ``path``: a :class:`~tvist.DynamicMap` for a ``"paper10"`` file (and files
     written before ``kind`` named the form), a :class:`~tvist.ModalMap` for a ``"modal"`` one.
-    Either goes to :class:`tvist.MapDynamics`."""
-    from tvist.dynmap import DynamicMap
-    from tvist.modal_map import ModalMap
+    :func:`tvist.maps.dynamics_for` builds the provider of either."""
+    from tvist.maps.modal import ModalMap
+    from tvist.maps.paper10 import DynamicMap
 
     core, metadata = parse_map_file(path)
     if isinstance(core, _core.ModalMap):

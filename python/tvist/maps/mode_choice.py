@@ -1,7 +1,7 @@
 """Which modes a move makes ring: predicted residual vibration per eigenmode, and the number
 of lowest-frequency modes worth shaping (:func:`modes_to_shape`).
 
-**Model** (the modal map's, :mod:`tvist.modal_map`). The motors follow the reference ``q_r(t)``
+**Model** (the modal map's, :mod:`tvist.maps.modal`). The motors follow the reference ``q_r(t)``
 rigidly; the deflections ``δ`` of the flexible joints obey
 
     M_ff(q) δ'' + C(q) δ' + K(q) δ = −M_f·(q) q_r''(t) − h_f(q, q_r')
@@ -76,7 +76,7 @@ from tvist.robots._robot import HingedArm
 from tvist.trajectory import Trajectory, double_s
 
 if TYPE_CHECKING:
-    from tvist.modal_map import ModalMap
+    from tvist.maps.modal import ModalMap
 
 __all__ = [
     "DEFAULT_THRESHOLD",
@@ -462,7 +462,7 @@ def set_modes_for_move(
     move ending at its last change). Returns the choice, or ``None`` (nothing changed) for any
     other provider or map. ``K`` is at most the map's own ``shaped_modes``.
     """
-    from tvist.modal_map import ModalMap
+    from tvist.maps.modal import ModalMap
 
     modal = getattr(provider, "dynmap", None)
     if not isinstance(modal, ModalMap) or modal.shaped_modes is None:

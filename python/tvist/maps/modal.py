@@ -2,17 +2,21 @@
 
 The physics lives in the Rust core (``tvist-core/src/modal_map.rs``): every flexible joint
 ``j`` is a torsional spring ``k_j`` and damper ``c_j`` between its motor (held rigidly by the
-servo) and its link; at each pose the modes solve ``K φ = ω² M_ff(q) φ`` with ``M_ff`` the
-block of the link-side mass matrix on the flexible joints, solved exactly with the joint
-dampers: ``ω_n = |λ|``, ``ζ = −Re λ / |λ|`` of the roots of ``det(λ² M_ff + λ C + K) = 0``.
-The shaped modes are named in one of two ways:
+servo) and its link, each with its own load law (below), so ``K = diag(k_j)`` and
+``C = diag(c_j)``. At each pose the modes are the roots ``λ`` of the damped eigenproblem
+``det(λ² M_ff(q) + λ C + K) = 0``, with ``M_ff`` the block of the link-side mass matrix on the
+flexible joints: ``ω_n = |λ|``, ``ζ = −Re λ / |λ|``. The core solves it exactly (from the
+undamped modes of ``K φ = ω² M_ff φ``), so the damping coupling of close modes is kept, not
+the joint dampers projected onto the undamped modes; only a pose with a mode at or beyond
+critical damping falls back to that projection, where the overdamped mode has ``ζ >= 1`` and
+the shaper holds its last valid modes. The shaped modes are named in one of two ways:
 
 - ``mode_joints`` (e.g. ``[0, 1]``): mode ``m`` is the eigenmode that stores the largest share
   of its strain energy in joint ``mode_joints[m]``, so "base" and "shoulder" keep their meaning
   when their frequencies cross.
 - ``shaped_modes`` (an integer K): the K lowest-frequency eigenmodes as a set, whatever
   joint they strain most, shaped in slots ordered by the joint each strains most.
-  :func:`modes_to_shape` picks K for a move.
+  :func:`tvist.maps.modes_to_shape` picks K for a move.
 
 Each shaped mode is an eigenmode as it is. That rule picks the eigenmodes at a pose; along a
 motion the streaming shaper keeps each member of the rule's set in the filter whose eigenmode
@@ -32,9 +36,11 @@ inertia is split between its halves so that with straight hinges the arm is the 
 The flexible coordinates are then the joints plus two per hinge (at most 9 in all) and
 ``M_ff`` is the mass-matrix block of the hinged arm (:meth:`tvist.Robot.with_link_hinges`).
 
-Stiffness and damping grow with the static load ``L`` (gravity
-torque, N m): ``v(L) = v_0 + v_1 |L|_s + v_2 L²``; the stiffness of joint ``j`` reads its own
-gravity torque, its damping that of ``damping_load_joint``.
+**Load laws.** A flexible joint's stiffness and damping grow with a static load ``L``
+(gravity torque, N m): ``v(L) = v_0 + v_1 |L|_s + v_2 L²``; the stiffness of joint ``j`` reads
+its own gravity torque, its damping that of ``damping_load_joint``. The laws are the joints'
+(a hinge's spring and damper are constant); a mode's damping ratio follows from them through
+the eigenproblem above.
 
 Map files are strict JSON, read, checked and written by the Rust core (one validation for
 Python, Rust and C; errors name the field path, e.g. ``flex_joints[1].stiffness_nm_per_rad``),
@@ -50,10 +56,10 @@ Python, Rust and C; errors name the field path, e.g. ``flex_joints[1].stiffness_
      "link_hinges": [{"link": 1, "at_fraction": 0.5, "stiffness_nm_per_rad": k_h,
                       "damping_nms_per_rad": c_h}, ...]}       (optional; rigid links without)
 
-``metadata`` is as in a paper10 map file (:mod:`tvist.dynmap`): ``metadata.robot`` names the
-robot the map was identified on, and :class:`ModalDynamics` refuses the map for another
-robot unless ``allow_other_robot=True``. :func:`tvist.load_map` reads a map file of either
-kind.
+``metadata`` is as in a paper10 map file (:mod:`tvist.maps.paper10`): ``metadata.robot``
+names the robot the map was identified on, and :class:`ModalDynamics` refuses the map for
+another robot unless ``allow_other_robot=True``. :func:`tvist.load_map` reads a map file of
+either kind.
 """
 
 from __future__ import annotations
@@ -64,8 +70,7 @@ from typing import Any
 import numpy as np
 
 from tvist import _core
-from tvist.map_files import MapDocument, RobotModesMixin
-from tvist.modal_residual import ModeResidual, ShapingChoice, modes_to_shape, set_modes_for_move
+from tvist.maps.files import MapDocument, RobotModesMixin
 from tvist.robots import Robot
 from tvist.robots._robot import HingedArm
 
@@ -74,11 +79,7 @@ __all__ = [
     "SCHEMA_VERSION",
     "ModalDynamics",
     "ModalMap",
-    "ModeResidual",
-    "ShapingChoice",
     "modal_map_from_flex",
-    "modes_to_shape",
-    "set_modes_for_move",
 ]
 
 SCHEMA_VERSION: int = _core.MAP_SCHEMA_VERSION
@@ -283,7 +284,7 @@ class ModalDynamics(RobotModesMixin, _core.ModalDynamics):
 
     Every cycle the mass matrix (and the gravity torques, if the map's laws read them) of
     ``robot`` are evaluated at the previous shaped output and the modal eigenproblem is
-    solved, in Rust, allocation-free. ``tvist.MapDynamics(robot, modal_map)`` returns one.
+    solved, in Rust, allocation-free. :func:`tvist.maps.dynamics_for` builds it for a modal map.
     Construction rejects a map that gives an overdamped mode at any of
     ``ModalDynamics.validation_poses`` sampled configurations or reads joints the robot
     does not have. A map identified on another robot (its ``metadata["robot"]`` differs from

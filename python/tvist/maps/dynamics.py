@@ -1,0 +1,25 @@
+"""The per-cycle provider of a map of either kind: :func:`dynamics_for`."""
+
+from __future__ import annotations
+
+from tvist.maps.modal import ModalDynamics, ModalMap
+from tvist.maps.paper10 import DynamicMap, MapDynamics
+from tvist.robots import Robot
+
+__all__ = ["dynamics_for"]
+
+
+def dynamics_for(
+    robot: Robot, dynmap: DynamicMap | ModalMap, *, allow_other_robot: bool = False
+) -> MapDynamics | ModalDynamics:
+    """The provider of ``dynmap`` on ``robot``: a :class:`~tvist.MapDynamics` for a
+    :class:`~tvist.DynamicMap`, a :class:`~tvist.ModalDynamics` for a :class:`~tvist.ModalMap`
+    (both evaluated in Rust every cycle, the same protocol for :class:`tvist.TvShaper`).
+
+    For a map read with :func:`tvist.load_map`, whose kind the file decides. Anything other
+    than a modal map goes to :class:`~tvist.MapDynamics`, which checks it (``TypeError`` for
+    a non-map, ``ValueError`` for a map of another robot unless ``allow_other_robot``).
+    """
+    if isinstance(dynmap, ModalMap):
+        return ModalDynamics(robot, dynmap, allow_other_robot=allow_other_robot)
+    return MapDynamics(robot, dynmap, allow_other_robot=allow_other_robot)
