@@ -1,6 +1,6 @@
 """The dynamic map (paper eqs. 42-51) as data: build, evaluate, save and load.
 
-The equations live in the Rust core (``tvist-core/src/dynmap.rs``). Per mode, with ``J_f`` the
+The equations live in the Rust core (``tvist-core/src/modes/paper10/dynamic_map.rs``). Per mode, with ``J_f`` the
 inertia of the frequency joint, ``J_d`` that of the damping joint, ``τ_f`` the gravity torque of
 the frequency joint and ``K = k_0 + k_J J_f + k_g |τ_f|_s``::
 
