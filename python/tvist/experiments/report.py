@@ -11,11 +11,11 @@ from typing import Any
 import numpy as np
 
 from tvist.analysis import peak_acceleration, peak_velocity
-from tvist.demo.experiment import DemoResult, MotionRun
-from tvist.demo.measure import damped_frequency_hz, zv_delay_s
-from tvist.demo.motions import DT_S
-from tvist.demo.settle import CRITERIA, SETTLE_HOLD_S, format_settle
-from tvist.demo.slow_down import ACCEL_SCALES, JERK_TIMES_S
+from tvist.experiments.experiment import DemoResult, MotionRun
+from tvist.experiments.measure import damped_frequency_hz, zv_delay_s
+from tvist.experiments.motions import DT_S
+from tvist.experiments.settle import CRITERIA, SETTLE_HOLD_S, format_settle
+from tvist.experiments.slow_down import ACCEL_SCALES, JERK_TIMES_S
 
 #: Paper Table 4 (real UR5e, average of 10 repetitions): unshaped RV, shaped RV (m/s²),
 #: measured delay (ms) and reduction (%), for comparison in the report.
@@ -163,7 +163,7 @@ def print_table(result: DemoResult, console: Any = None) -> None:
 
 def make_figures(result: DemoResult, out: Path) -> dict[str, list[Path]]:
     """Write the figures; returns ``{"acceleration": [...], "spectra": [...], "modes": [...]}``."""
-    from tvist.demo import plots
+    from tvist.experiments import plots
 
     figures: dict[str, list[Path]] = {"acceleration": [], "spectra": [], "modes": []}
     panels = []
@@ -604,7 +604,7 @@ def _identification_section(result: DemoResult) -> list[str]:
 
 def _clamp_summary(result: DemoResult) -> str:
     """Share of each motion's reference on which the identified map clamped an inertia."""
-    from tvist.demo.identified import KEY
+    from tvist.experiments.identified import KEY
 
     parts = []
     for motion in result.motions:
@@ -648,7 +648,7 @@ _IDENTIFICATION_CAPTIONS = {
 
 def _map_jerk_notes(result: DemoResult) -> list[str]:
     """Why a map row's reference is jerkier than the planned one, from how the map was used
-    along it (:func:`tvist.demo.methods.map_use`).
+    along it (:func:`tvist.experiments.methods.map_use`).
 
     The map has no kink (tvist-core ``dynmap``: inertias are saturated into their ranges by a
     C² soft clamp, the gravity term uses a smoothed ``|τ|``), so what is left are places where
@@ -747,7 +747,7 @@ def _rank_key(option: _Option) -> tuple[float, float]:
 def recommendation(motion: MotionRun) -> str:
     """One line: which runnable method settles first on this motion, and by how much.
 
-    Rows a user can run are those without :attr:`~tvist.demo.methods.Method.oracle`, the
+    Rows a user can run are those without :attr:`~tvist.experiments.methods.Method.oracle`, the
     unshaped move and the best "slow down instead" profile included. The one that settles
     first at :data:`RANK_CRITERION` wins; rows within :data:`SETTLE_TIE_S` of it tie, and
     the tie goes to the faster at the stricter band, then to the higher reduction.
@@ -808,7 +808,7 @@ def _recommendation_lines(result: DemoResult) -> list[str]:
 def _fixed_section(result: DemoResult) -> list[str]:
     """Fixed shapers (tune once at the start pose; robust over the move) against FD-TVIST
     with the identified map, per motion, with what the time variation buys."""
-    from tvist.demo.identified import KEY
+    from tvist.experiments.identified import KEY
 
     lines: list[str] = []
     for motion in result.motions:

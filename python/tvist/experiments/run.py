@@ -7,8 +7,8 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from tvist.demo.experiment import DemoResult, run_experiment
-from tvist.demo.methods import Method, default_methods
+from tvist.experiments.experiment import DemoResult, run_experiment
+from tvist.experiments.methods import Method, default_methods
 
 
 def run_demo(
@@ -28,22 +28,23 @@ def run_demo(
         Output folder (created if missing).
     quick
         Only the first motion (Q1->Q2) with a shorter tail, and a smaller campaign
-        (:data:`~tvist.demo.identified.QUICK_PLAN`).
+        (:data:`~tvist.experiments.identified.QUICK_PLAN`).
     methods
-        The rows, unshaped first (default :func:`~tvist.demo.methods.default_methods`).
+        The rows, unshaped first (default :func:`~tvist.experiments.methods.default_methods`).
     identify
         Identify a map on the twin first: a reduced mapping campaign
-        (:func:`~tvist.demo.identified.identify_map`, :data:`~tvist.demo.identified.DEMO_PLAN`,
-        1-3 min on two cores, depending on their load; its records are cached in ``out_dir``
-        and reused by the next run) and the map fit; its FD-TVIST row joins the map rows.
+        (:func:`~tvist.experiments.identified.identify_map`,
+        :data:`~tvist.experiments.identified.DEMO_PLAN`, 1-3 min on two cores, depending on
+        their load; its records are cached in ``out_dir`` and reused by the next run) and the
+        map fit; its FD-TVIST row joins the map rows.
         ``False`` skips it.
     verbose
         Print progress lines and the table.
     """
     from rich.console import Console
 
-    from tvist.demo.identified import DEMO_PLAN, QUICK_PLAN, identify_map
-    from tvist.demo.report import print_table, write_outputs
+    from tvist.experiments.identified import DEMO_PLAN, QUICK_PLAN, identify_map
+    from tvist.experiments.report import print_table, write_outputs
 
     console = Console(quiet=not verbose)
     if not console.is_terminal and console.width < 160:
@@ -62,7 +63,7 @@ def run_demo(
             # Right after the last map-driven row, so the map rows stand together.
             after = max((i for i, m in enumerate(rows) if m.dynmap is not None), default=0)
             rows.insert(after + 1, identified.method)
-            from tvist.demo.modal_rows import identify_modal_map
+            from tvist.experiments.modal_rows import identify_modal_map
 
             modal_row, modal_summary = identify_modal_map(
                 identified.records, out_dir, console.print
