@@ -19,9 +19,10 @@ from tvist.experiments.fixed import (
 )
 from tvist.experiments.methods import Method, MotionContext, default_methods
 from tvist.experiments.motions import DT_S, MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
-from tvist.experiments.report import _rows as report_rows
-from tvist.experiments.report import format_reduction, recommendation
 from tvist.experiments.settle import CRITERIA
+from tvist.experiments.table import format_reduction
+from tvist.experiments.table import table_rows as report_rows
+from tvist.experiments.verdict import recommendation
 from tvist.sim import Twin
 
 

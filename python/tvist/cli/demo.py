@@ -31,6 +31,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         return 0
     from tvist import ModalMap, load_map
     from tvist.cli.args import existing_file
+    from tvist.cli.demo_table import print_table
     from tvist.experiments import default_methods, fd_tvist_map, run_demo
     from tvist.experiments.modal_rows import fd_tvist_modal
 
@@ -46,6 +47,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         quick=args.quick,
         methods=methods,
         identify=args.identify and "tvist" in chosen,
+        show_table=print_table,
     )
     return 0
 

@@ -379,12 +379,13 @@ def plot_cycle(result: PickPlaceResult, path: Path, key: str = CRITERIA[0].key) 
 
 def write_pick_place(result: PickPlaceResult, out_dir: str | Path) -> dict[str, Any]:
     """Write ``results.json``, ``report.md`` and ``cycle.png`` to ``out_dir``."""
-    from tvist.experiments.report import _json_safe, _md_table
+    from tvist.experiments.results_json import json_safe
+    from tvist.experiments.table import markdown_table
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     results = out / "results.json"
-    results.write_text(json.dumps(_json_safe(result.to_json()), indent=2) + "\n", encoding="utf-8")
+    results.write_text(json.dumps(json_safe(result.to_json()), indent=2) + "\n", encoding="utf-8")
     figure = plot_cycle(result, out / "cycle.png")
     header, rows = _table(result)
     per_move_header = ["move", "move [s]", *[r.label for r in result.rows]]
@@ -415,13 +416,13 @@ def write_pick_place(result: PickPlaceResult, out_dir: str | Path) -> dict[str, 
         "",
         "## Cycle time to settled",
         "",
-        _md_table(header, rows),
+        markdown_table(header, rows),
         "",
         *[f"- {line}" for line in findings(result)],
         "",
         f"## Per move, settled to {CRITERIA[0].text} [s]",
         "",
-        _md_table(per_move_header, per_move),
+        markdown_table(per_move_header, per_move),
         "",
         f"![cycle]({figure.name})",
         "",

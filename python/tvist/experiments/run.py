@@ -1,11 +1,12 @@
-"""``tvist demo``: run the experiment, print the table, write the report."""
+"""``tvist demo``: run the experiment and write the report (the command prints the table)."""
 
 from __future__ import annotations
 
 import dataclasses
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 from tvist.experiments.experiment import DemoResult, run_experiment
 from tvist.experiments.methods import Method, default_methods
@@ -18,9 +19,10 @@ def run_demo(
     *,
     identify: bool = True,
     verbose: bool = True,
+    show_table: Callable[[DemoResult, Any], None] | None = None,
 ) -> DemoResult:
-    """Run the experiment, print the table and write ``results.json``, ``report.md`` and the
-    figures to ``out_dir``.
+    """Run the experiment and write ``results.json``, ``report.md`` and the figures to
+    ``out_dir``; ``show_table`` prints the table.
 
     Parameters
     ----------
@@ -39,12 +41,15 @@ def run_demo(
         map fit; its FD-TVIST row joins the map rows.
         ``False`` skips it.
     verbose
-        Print progress lines and the table.
+        Print progress lines (and the table, through ``show_table``).
+    show_table
+        Called with the result and the rich console once the outputs are written (``tvist
+        demo`` passes :func:`tvist.cli.demo_table.print_table`); ``None``: no table.
     """
     from rich.console import Console
 
     from tvist.experiments.identified import DEMO_PLAN, QUICK_PLAN, identify_map
-    from tvist.experiments.report import print_table, write_outputs
+    from tvist.experiments.report import write_outputs
 
     console = Console(quiet=not verbose)
     if not console.is_terminal and console.width < 160:
@@ -78,7 +83,8 @@ def run_demo(
         wall_time_s=time.perf_counter() - start,
     )
     outputs = write_outputs(result, out_dir)
-    print_table(result, console)
+    if show_table is not None:
+        show_table(result, console)
     n_figures = sum(len(v) for v in outputs["figures"].values())
     n_figures += len((identification or {}).get("figures", []))
     console.print(
