@@ -69,8 +69,6 @@ def table_rows(motion: MotionRun) -> list[list[str]]:
 
 
 _SETTLE_HEADER = [f"Settled, {c.text} [s]" for c in CRITERIA]
-
-
 TABLE_HEADER = [
     "Method",
     "Delay [ms]",

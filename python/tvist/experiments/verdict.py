@@ -14,8 +14,6 @@ from tvist.experiments.table import planned_move_s
 
 #: Recommendations rank by time to settled at this criterion (the first of CRITERIA) ...
 RANK_CRITERION = CRITERIA[0]
-
-
 #: ... rows within this much of the fastest tie (s: one 2 ms sample, the grid of the stop),
 #: and the tie goes to the faster one at the stricter band (the second criterion), then to
 #: the higher reduction.

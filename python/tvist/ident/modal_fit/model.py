@@ -20,8 +20,6 @@ from tvist.ident.modal_fit.poses import MODE_JOINTS, ModalPoses
 #: are identified from the same campaign to about ±15 %. Wrist 3 (tool axis) hardly moves
 #: in the base and shoulder modes.
 DEFAULT_FLEX_JOINTS = (0, 1, 2, 3, 4)
-
-
 #: Joints with a damper in the default fit: those of the identified modes. A campaign gives two
 #: damping ratios per pose (base and shoulder mode), which cannot tell a damper at the elbow or
 #: a wrist from one at the base or shoulder; left free, such dampers take up the damping
@@ -31,13 +29,9 @@ DEFAULT_FLEX_JOINTS = (0, 1, 2, 3, 4)
 #: (0.15 / 0.7 % held out), against 0.52 / 6.5 % (0.31 / 2.8 %) with a damper at every
 #: flexible joint, which put wrist 1 at 11 100 N m/rad (twin: 15 000).
 DEFAULT_DAMPED_JOINTS = MODE_JOINTS
-
-
 #: The base carries no gravity torque; its bearing and gear friction grow with the arm's
 #: tilting moment, which the shoulder's gravity torque measures (see ``tvist.sim.flex``).
 DEFAULT_DAMPING_LOAD = {0: 1}
-
-
 #: A joint whose gravity torque stays below this over the poses gets no load terms, N m.
 MIN_LOAD_SPAN_NM = 1.0
 

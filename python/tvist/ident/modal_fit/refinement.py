@@ -20,8 +20,6 @@ from tvist.ident.modal_fit.two_stage import _INVALID_RESIDUAL, _LSQ, STIFFNESS_S
 #: a local fit of a few seconds of noisy response does not fix ω_n better than 0.1 % or ζ better
 #: than 1 %, whatever its covariance says, and one pose must not outweigh the campaign.
 MIN_RELATIVE_SE = (1.0e-3, 1.0e-2)
-
-
 #: Passes of the joint refinement, each with the error scales of the previous one's residuals.
 JOINT_PASSES = 2
 

@@ -16,15 +16,9 @@ from tvist.ident.modal_fit.poses import MODE_JOINTS, ModalPoses
 
 #: Relative frequency error beyond which a residual counts as an outlier (robust loss).
 ROBUST_SCALE = 0.02
-
-
 #: A fitted zero-load stiffness stays within this factor of its starting value.
 STIFFNESS_SPAN = 100.0
-
-
 _LSQ = {"x_scale": "jac", "xtol": 1e-12, "ftol": 1e-12, "gtol": 1e-12, "max_nfev": 400}
-
-
 _INVALID_RESIDUAL = 10.0
 
 
