@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tvist.demo.identified import DEMO_PLAN
+from tvist.experiments.identified import DEMO_PLAN
 from tvist.ident.all_modes_fit import fit_all_modes, fitted_map
 from tvist.sim.family import nominal_variant, sample_variant
 from tvist.sim.map_truth import held_out_poses, physical_mode_errors, ranked_mode_errors

@@ -72,7 +72,7 @@ def cli_reference() -> str:
 
 def zero_delay_tables() -> str:
     """The benchmark of `tvist zero-delay`, computed now."""
-    from tvist.demo.ztdis_benchmark import format_table, run_benchmark
+    from tvist.experiments.ztdis_benchmark import format_table, run_benchmark
 
     tables = [format_table(run_benchmark(ref)) for ref in ("min_jerk", "trapezoid")]
     return "".join(f"\n{table.strip()}\n" for table in tables)  # markdown tables

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 import tvist
-from tvist.demo.ztdis_benchmark import format_table, plot_benchmark, run_benchmark
+from tvist.experiments.ztdis_benchmark import format_table, plot_benchmark, run_benchmark
 from tvist.trajectory import min_jerk
 
 wn_rad_s, zeta, dt_s = 2.0 * np.pi * 2.55, 0.04, 0.002

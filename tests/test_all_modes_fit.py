@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tvist.demo.identified import DEMO_PLAN
+from tvist.experiments.identified import DEMO_PLAN
 from tvist.maps.modal import ModalMap
 from tvist.robots import Payload, Robot, params
 from tvist.sim.family import sample_variant

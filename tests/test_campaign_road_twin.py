@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tvist.demo.motions import motion_by_name
+from tvist.experiments.motions import motion_by_name
 from tvist.live import residual_vibration
 from twin_server_fixture import HOST, PAYLOAD_COM_M, PAYLOAD_KG, twin_server
 

@@ -10,7 +10,7 @@ import pytest
 import tvist
 from tvist.cli import build_parser
 from tvist.cli.demo import demo_row_method
-from tvist.demo import default_methods
+from tvist.experiments import default_methods
 
 
 def test_every_command_parses_its_help():
@@ -57,7 +57,7 @@ def test_zero_delay_command_prints_the_benchmark_of_the_library(tmp_path, capsys
     """``tvist zero-delay``: the printed table is ``format_table(run_benchmark(...))`` and the
     plot is written; the benchmark's own numbers are checked against closed forms."""
     from tvist.cli import main
-    from tvist.demo.ztdis_benchmark import format_table, run_benchmark
+    from tvist.experiments.ztdis_benchmark import format_table, run_benchmark
 
     out = tmp_path / "zero_delay.png"
     assert main(["zero-delay", "--reference", "min_jerk", "--plot", str(out)]) == 0

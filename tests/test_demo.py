@@ -13,11 +13,11 @@ import pytest
 import tvist
 from map_reference import PAPER_MODES, modes_reference
 from tvist.cli import build_parser, main
-from tvist.demo import default_methods, fd_tvist_map, run_demo, run_experiment
-from tvist.demo.identified import QUICK_PLAN, _prepare_cache, identify_map
-from tvist.demo.measure import stop_time_s, tool_acceleration
-from tvist.demo.motions import DT_S, MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
-from tvist.demo.settle import CRITERIA
+from tvist.experiments import default_methods, fd_tvist_map, run_demo, run_experiment
+from tvist.experiments.identified import QUICK_PLAN, _prepare_cache, identify_map
+from tvist.experiments.measure import stop_time_s, tool_acceleration
+from tvist.experiments.motions import DT_S, MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
+from tvist.experiments.settle import CRITERIA
 from tvist.sim import GRAVITY_M_S2, Twin
 from tvist.trajectory import PAPER_POSES
 from twin_calibration import TWIN_CALIBRATION

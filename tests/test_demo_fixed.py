@@ -9,19 +9,20 @@ import numpy as np
 import pytest
 
 from tvist import robots
-from tvist.demo import run_experiment
-from tvist.demo.fixed import (
+from tvist.experiments import run_experiment
+from tvist.experiments.fixed import (
     ROBUST_PRV_LIMIT,
     fixed_robust_row,
     fixed_start_row,
     modes_along,
     search_robust_shaper,
 )
-from tvist.demo.methods import Method, MotionContext, default_methods
-from tvist.demo.motions import DT_S, MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
-from tvist.demo.report import _rows as report_rows
-from tvist.demo.report import format_reduction, recommendation
-from tvist.demo.settle import CRITERIA
+from tvist.experiments.methods import Method, MotionContext, default_methods
+from tvist.experiments.motions import DT_S, MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
+from tvist.experiments.settle import CRITERIA
+from tvist.experiments.table import format_reduction
+from tvist.experiments.table import table_rows as report_rows
+from tvist.experiments.verdict import recommendation
 from tvist.sim import Twin
 
 

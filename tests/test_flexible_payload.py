@@ -12,7 +12,7 @@ from scipy import signal
 
 from tvist import cartesian, robots
 from tvist.cli import main
-from tvist.demo.flexible_payload import DT_S, START_POSE
+from tvist.experiments.flexible_payload import DT_S, START_POSE
 from tvist.sim.payload import FlexiblePayload, PayloadTwin
 
 ROW_KEYS = (
@@ -137,7 +137,7 @@ def test_figures_leave_the_global_matplotlib_backend_alone(tmp_path):
         "import sys, numpy as np, matplotlib\n"
         "matplotlib.use('svg')\n"
         "from tvist import DynamicMap\n"
-        "from tvist.demo import plots\n"
+        "from tvist.experiments import plots\n"
         "from tvist.ident.plots import plot_prv_sensitivity\n"
         "t = np.linspace(0, 1, 50)\n"
         f"plots.plot_velocity_references(t, {{'a': np.sin(t)}}, 0.5, r'{tmp_path}/v.png',\n"

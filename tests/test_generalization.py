@@ -1,4 +1,4 @@
-"""The pieces of the generalization harness (``python -m tvist.demo.generalization``): seeds,
+"""The pieces of the generalization harness (``python -m tvist.experiments.generalization``): seeds,
 evaluation poses, matching a map's modes to the true ones, errors, wrong-and-confident
 identifications and the table. A full run (minutes per variant) is not a test."""
 
@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from tvist.demo.generalization import (
+from tvist.experiments.generalization import (
     EVALUATION_POSES,
     frequency_errors,
     main,
@@ -42,7 +42,7 @@ def test_bad_arguments_exit_2(capsys):
 
 
 def test_evaluation_poses_are_workspace_poses_apart_from_the_plans():
-    from tvist.demo.generalization import evaluation_poses
+    from tvist.experiments.generalization import evaluation_poses
     from tvist.ident.pose_plan import WORKSPACE_SAMPLES, workspace_poses
 
     q = evaluation_poses("ur5e", 3)

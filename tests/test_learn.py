@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 from tvist import robots
-from tvist.demo.experiment import run_motion
-from tvist.demo.methods import default_methods
-from tvist.demo.modal_rows import fd_tvist_modal
-from tvist.demo.motions import MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
+from tvist.experiments.experiment import run_motion
+from tvist.experiments.methods import default_methods
+from tvist.experiments.modal_rows import fd_tvist_modal
+from tvist.experiments.motions import MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
 from tvist.ident.logs import Record
 from tvist.learn import MapLearner, observe_decay
 from tvist.learn.twin_moves import move, ordinary_moves, random_poses
@@ -117,8 +117,8 @@ def test_learned_map_shaped_with_the_modes_the_rule_picks():
 def test_learning_from_the_published_paper10_map_improves_the_demo_moves():
     """The paper's published map (91.0 % on Q1->Q3 on this twin) as the prior: converted into
     a modal map, then 20 ordinary moves between 10 random poses, each pose reached once
-    unshaped (the sequence of :func:`tvist.demo.learning_study.learn_from_paper_map`)."""
-    from tvist.demo.learning_study import learn_from_paper_map
+    unshaped (the sequence of :func:`tvist.experiments.learning_study.learn_from_paper_map`)."""
+    from tvist.experiments.learning_study import learn_from_paper_map
 
     result = learn_from_paper_map(3)
     # The payload is the declared one throughout. The unshaped move to the 4th pose
@@ -135,7 +135,7 @@ def test_learning_from_the_published_paper10_map_improves_the_demo_moves():
     # 39-48 N m of shoulder load is seen unshaped: 99.61 / 98.48 / 98.90 %). The floor asked
     # of a learned map, 99 %, is asserted on Q1->Q2 and Q3->Q1 (the twin's true modes:
     # 99.98 / 99.37 %). Not on Q1->Q3 (98.2-99.4 % over seeds 0-4,
-    # `python -m tvist.demo.learning_study --seed N`): with two modes shaped even the twin's
+    # `python -m tvist.experiments.learning_study --seed N`): with two modes shaped even the twin's
     # exact gear laws reach only 99.23 % there (a third mode, 48 Hz at Q3, elbow and wrists,
     # holds ~3 % of the ringing), the learned base mode at Q3 is 4 % high, and Q3 (upper arm
     # vertical) lies outside the ordinary moves' range, so the learned laws are extrapolated
@@ -498,7 +498,7 @@ def test_the_third_mode_rings_below_the_noise_after_ordinary_moves():
     near its third mode (39-60 Hz, elbow and wrists) is below the spectral level of the
     accelerometer noise alone (measured 0.001-0.14 of it, seed 3), so no decay fit of one log
     can see it."""
-    from tvist.demo.learning_study import third_mode_visibility
+    from tvist.experiments.learning_study import third_mode_visibility
 
     seen = third_mode_visibility(3)
     assert len(seen) == 6
@@ -506,7 +506,7 @@ def test_the_third_mode_rings_below_the_noise_after_ordinary_moves():
 
 
 def test_learning_study_refuses_a_bad_wrist_stiffness(capsys):
-    from tvist.demo.learning_study import main
+    from tvist.experiments.learning_study import main
 
     assert main(["--wrist-stiffness", "-5"]) == 2
     err = capsys.readouterr().err.strip().splitlines()

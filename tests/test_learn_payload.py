@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from tvist import robots
-from tvist.demo.motions import PAYLOAD_COM_M, PAYLOAD_KG
+from tvist.experiments.motions import PAYLOAD_COM_M, PAYLOAD_KG
 from tvist.learn import MapLearner
 from tvist.learn.learner import _SeenMode
 from tvist.learn.twin_moves import random_poses

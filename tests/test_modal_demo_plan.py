@@ -13,8 +13,8 @@ import math
 import numpy as np
 import pytest
 
-from tvist.demo.identified import DEMO_PLAN, CampaignPlan
-from tvist.demo.motions import PAYLOAD_COM_M, PAYLOAD_KG
+from tvist.experiments.identified import DEMO_PLAN, CampaignPlan
+from tvist.experiments.motions import PAYLOAD_COM_M, PAYLOAD_KG
 from tvist.ident.modal_fit import DEFAULT_FLEX_JOINTS, fit_modal_map
 from tvist.sim import Twin, default_flex
 

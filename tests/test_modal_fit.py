@@ -14,8 +14,8 @@ import pytest
 
 import tvist
 from modal_fit_reference import LAWS_UR5E, exact_records, law, write_jsonl
-from tvist.demo.identified import DEMO_PLAN
-from tvist.demo.motions import PAYLOAD_COM_M
+from tvist.experiments.identified import DEMO_PLAN
+from tvist.experiments.motions import PAYLOAD_COM_M
 from tvist.ident.campaign import load_results
 from tvist.ident.modal_fit import fit_modal_map, modal_poses
 from tvist.maps.modal import ModalMap

@@ -9,8 +9,13 @@ import pytest
 
 from tvist import DynamicMap
 from tvist.cli import main
-from tvist.demo.pick_place import cell_moves, fastest_runnable, run_pick_place, write_pick_place
-from tvist.demo.settle import CRITERIA
+from tvist.experiments.pick_place import (
+    cell_moves,
+    fastest_runnable,
+    run_pick_place,
+    write_pick_place,
+)
+from tvist.experiments.settle import CRITERIA
 
 
 @pytest.fixture(scope="module")
@@ -86,7 +91,7 @@ def test_cycle_totals_are_sums_of_the_simulated_settle_times(quick_cycle):
     assert result.row("slow-down").total_s(accel.key) <= result.row("unshaped").total_s(accel.key)
 
 
-# Fast although above the slow criterion: the cheapest test of tvist.demo.pick_place
+# Fast although above the slow criterion: the cheapest test of tvist.experiments.pick_place
 # (docs/test-quality.md).
 def test_cli_runs_the_experiment_without_a_map(tmp_path):
     assert (

@@ -270,7 +270,7 @@ def test_run_shaped_move_cuts_residual_vibration(server, twin, tmp_path) -> None
     sent: target within 1e-4 rad of Q2 and the link side at the twin's static equilibrium
     there within 1e-4 rad.
     """
-    from tvist.demo.motions import motion_by_name
+    from tvist.experiments.motions import motion_by_name
 
     motion = motion_by_name("Q1->Q2")
     move = tmp_path / "q1q2.csv"

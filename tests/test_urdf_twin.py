@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from pinocchio_reference import flexible_joint_modes, urdf_pinocchio_model
-from tvist.demo.motions import PAYLOAD_COM_M, demo_payload_kg, demo_poses
+from tvist.experiments.motions import PAYLOAD_COM_M, demo_payload_kg, demo_poses
 from tvist.ident.pose_plan import workspace_poses
 from tvist.robots import Payload, params, shipped_urdf
 from tvist.sim import Twin, default_flex
@@ -71,7 +71,7 @@ def test_shipped_arms_are_robots_by_name():
 
 
 #: The map's modes against the twin's: 3 % RMS over the held-out poses, per mode (the
-#: acceptance of a map in the generalization harness, tvist.demo.generalization).
+#: acceptance of a map in the generalization harness, tvist.experiments.generalization).
 MAP_RMS_PERCENT = 3.0
 
 
@@ -85,7 +85,7 @@ def test_modal_fit_on_a_small_fr3_campaign_recovers_its_lowest_modes(tmp_path):
     frequency rank, each within :data:`MAP_RMS_PERCENT` RMS."""
     import math
 
-    from tvist.demo.generalization import (
+    from tvist.experiments.generalization import (
         HarnessSettings,
         evaluation_poses,
         frequency_errors,

@@ -14,7 +14,7 @@ from scipy import signal
 
 import tvist
 from tvist import _core
-from tvist.demo.ztdis_benchmark import count_velocity_peaks, run_benchmark
+from tvist.experiments.ztdis_benchmark import count_velocity_peaks, run_benchmark
 from tvist.ztdis import compress, zero_delay
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -12,7 +12,7 @@ import numpy as np
 
 from tvist import _core, robots
 from tvist._core import ConstantModes, Impulses, TvShaper
-from tvist.maps import DynamicMap, MapDynamics, ModalDynamics, ModalMap, load_map
+from tvist.maps import DynamicMap, MapDynamics, ModalDynamics, ModalMap, dynamics_for, load_map
 from tvist.ztdis import ZeroDelayResult, zero_delay
 
 __all__ = [
@@ -33,6 +33,7 @@ __all__ = [
     "TvShaper",
     "ZeroDelayResult",
     "convolve",
+    "dynamics_for",
     "load_map",
     "prv",
     "robots",

@@ -43,7 +43,8 @@ class Compensator:
     @property
     def last_status(self) -> int: ...
 
-# --- robot model, dynamic map, map-driven provider (crates/tvist-py/src/{robot,robot_data,paper10,map_file}.rs) ---
+# --- robot model, dynamic map, map-driven provider ---
+# (crates/tvist-py/src/{robot,robot_data,paper10,map_file}.rs)
 
 MODE_MAP_FIELDS: list[str]
 MODE_MAP_RANGE_FIELDS: list[str]
@@ -207,7 +208,8 @@ class ModalDynamics:
     @property
     def n_modes(self) -> int: ...
 
-# --- shaping core: shapers, PRV, multi-mode FD-TVIST (crates/tvist-py/src/{shaping,providers,tv_shaper}.rs) ---
+# --- shaping core: shapers, PRV, multi-mode FD-TVIST ---
+# (crates/tvist-py/src/{shaping,providers,tv_shaper}.rs)
 
 SHAPERS: list[str]
 STATUS_FLAGS: dict[str, int]

@@ -17,22 +17,23 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     if args.robot != "ur5e":
         return _robot_demo(args)
     if args.experiment == "flexible-payload":
-        from tvist.demo.flexible_payload import run_from_args
+        from tvist.experiments.flexible_payload import run_from_args
 
         return run_from_args(args)
     if args.experiment == "pick-place":
-        from tvist.demo.pick_place import run_from_args as run_pick_place
+        from tvist.experiments.pick_place import run_from_args as run_pick_place
 
         return run_pick_place(args)
     if args.linear:
-        from tvist.demo.linear import run_linear_demo
+        from tvist.experiments.linear import run_linear_demo
 
         run_linear_demo(out_dir=args.out or "out/demo-linear", quick=args.quick)
         return 0
     from tvist import ModalMap, load_map
     from tvist.cli.args import existing_file
-    from tvist.demo import default_methods, fd_tvist_map, run_demo
-    from tvist.demo.modal_rows import fd_tvist_modal
+    from tvist.cli.demo_table import print_table
+    from tvist.experiments import default_methods, fd_tvist_map, run_demo
+    from tvist.experiments.modal_rows import fd_tvist_modal
 
     chosen = set(args.method or SHAPING_METHODS)
     methods = default_methods()
@@ -46,17 +47,23 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         quick=args.quick,
         methods=methods,
         identify=args.identify and "tvist" in chosen,
+        show_table=print_table,
     )
     return 0
 
 
 def _robot_demo(args: argparse.Namespace) -> int:
     """``tvist demo --robot NAME``: the campaign, identification, modal map and the three
-    moves on the arm's default twin (:func:`tvist.demo.generalization.run_variant`); the
+    moves on the arm's default twin (:func:`tvist.experiments.generalization.run_variant`); the
     table is printed and written to ``out/demo-NAME/table.md``."""
     from pathlib import Path
 
-    from tvist.demo.generalization import TABLE_FILE, HarnessSettings, run_variant, table_markdown
+    from tvist.experiments.generalization import (
+        TABLE_FILE,
+        HarnessSettings,
+        run_variant,
+        table_markdown,
+    )
     from tvist.robots import params
     from tvist.sim import default_flex
 
@@ -186,7 +193,7 @@ def _zero_delay_arguments(p: argparse.ArgumentParser) -> None:
 
 def _run_zero_delay(args: argparse.Namespace) -> int:
     """Run the benchmark as described by the parsed options; print tables."""
-    from tvist.demo.ztdis_benchmark import format_table, plot_benchmark, run_benchmark
+    from tvist.experiments.ztdis_benchmark import format_table, plot_benchmark, run_benchmark
 
     benches = [
         run_benchmark(ref, dt_s=args.dt_s, rest_s=tuple(args.rest_s)) for ref in args.reference

@@ -3,6 +3,9 @@
 By default the fit uses every identified mode (:mod:`tvist.ident.all_modes_fit`);
 ``--select-folds K`` runs the label-based fit of the base and shoulder modes with its held-out
 term selection (:mod:`tvist.ident.modal_fit`).
+
+``python -m tvist.cli.modal_fit RESULTS.jsonl``: the label-based fit against the published
+form on held-out poses (:func:`main`).
 """
 
 from __future__ import annotations
@@ -12,7 +15,7 @@ import sys
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-__all__ = ["fit_modal_command"]
+__all__ = ["fit_modal_command", "main"]
 
 _UNITS = {"stiffness": "N m/rad", "damping": "N m s/rad"}
 _PER = {"at_zero": "", "per_nm": " per N m", "per_nm2": " per (N m)²"}
@@ -162,3 +165,30 @@ def _labelled_fit(records: Sequence[Mapping[str, Any]], args: argparse.Namespace
     modal.save(args.out)
     print(f"modal map written to {args.out}")
     return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m tvist.cli.modal_fit RESULTS.jsonl [--robot R] [--folds K]``: both map
+    forms' errors, in-sample and on held-out poses, as a markdown table
+    (:func:`tvist.ident.modal_fit.cross_validation.cross_validate`)."""
+    from tvist.ident.campaign import load_results
+    from tvist.ident.modal_fit.cross_validation import cross_validate, format_comparison
+
+    p = argparse.ArgumentParser(prog="python -m tvist.cli.modal_fit", description=main.__doc__)
+    p.add_argument("results", help="campaign results (JSON lines)")
+    p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
+    p.add_argument("--folds", type=int, default=5, help="folds over poses (default 5)")
+    args = p.parse_args(argv)
+    records = load_results(args.results)
+    try:
+        cv = cross_validate(records, args.robot, folds=args.folds)
+    except ValueError as exc:
+        print(f"python -m tvist.cli.modal_fit: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"{cv['n_poses']} poses, {cv['folds']}-fold over poses (seed {cv['seed']})")
+    print(format_comparison(cv))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

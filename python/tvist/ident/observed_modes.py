@@ -146,7 +146,7 @@ def observed_modes(
         No usable record, a malformed ``q`` or payload, or stored joint inertias that are not
         this robot's (the campaign ran with another robot or payload).
     """
-    from tvist.ident.modal_fit import _check_stored_inertia, _record_payload
+    from tvist.ident.modal_fit.poses import _check_stored_inertia, _record_payload
 
     robot_params = params(robot_name)
     robots: dict[tuple, Robot] = {}

@@ -36,7 +36,7 @@ J0_FIXED_KG_M2 = 4.5
 
 def _figure(nrows: int, ncols: int, figsize: tuple[float, float], **kwargs):
     """A standalone figure and its axes (no pyplot state)."""
-    from tvist.demo.plots import new_figure
+    from tvist.figures import new_figure
 
     fig = new_figure(figsize=figsize)
     return fig, fig.subplots(nrows, ncols, **kwargs)

@@ -1,5 +1,5 @@
 """Ordinary moves on the twin to learn from: rest-to-rest double-S moves between random poses
-with the demo's limits (:mod:`tvist.demo.motions`), unshaped or shaped with a modal map."""
+with the demo's limits (:mod:`tvist.experiments.motions`), unshaped or shaped with a modal map."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 import tvist
-from tvist.demo.motions import A_MAX_RAD_S2, DT_S, JERK_TIME_S, PRE_S, V_MAX_RAD_S
+from tvist.experiments.motions import A_MAX_RAD_S2, DT_S, JERK_TIME_S, PRE_S, V_MAX_RAD_S
 from tvist.maps.modal import ModalMap
 from tvist.robots import Robot
 from tvist.trajectory import double_s
@@ -59,7 +59,7 @@ def move(
     modal_map: ModalMap | None = None,
     tail_s: float = TAIL_S,
 ) -> np.ndarray:
-    """The reference ``(n_samples, 6)`` of a move at :data:`~tvist.demo.motions.DT_S`,
+    """The reference ``(n_samples, 6)`` of a move at :data:`~tvist.experiments.motions.DT_S`,
     unshaped, or shaped by the two-mode ZV FD-TVIST cascade of ``modal_map``."""
     traj = double_s(
         q_start,

@@ -1,8 +1,8 @@
 """The modal map as data: flexible joints, their load laws, save and load.
 
-The physics lives in the Rust core (``tvist-core/src/modes/modal/modal_map.rs``): every flexible joint
-``j`` is a torsional spring ``k_j`` and damper ``c_j`` between its motor (held rigidly by the
-servo) and its link, each with its own load law (below), so ``K = diag(k_j)`` and
+The physics lives in the Rust core (``tvist-core/src/modes/modal/modal_map.rs``): every
+flexible joint ``j`` is a torsional spring ``k_j`` and damper ``c_j`` between its motor (held
+rigidly by the servo) and its link, each with its own load law (below), so ``K = diag(k_j)`` and
 ``C = diag(c_j)``. At each pose the modes are the roots ``λ`` of the damped eigenproblem
 ``det(λ² M_ff(q) + λ C + K) = 0``, with ``M_ff`` the block of the link-side mass matrix on the
 flexible joints: ``ω_n = |λ|``, ``ζ = −Re λ / |λ|``. The core solves it exactly (from the

@@ -1,8 +1,8 @@
 """The dynamic map (paper eqs. 42-51) as data: build, evaluate, save and load.
 
-The equations live in the Rust core (``tvist-core/src/modes/paper10/dynamic_map.rs``). Per mode, with ``J_f`` the
-inertia of the frequency joint, ``J_d`` that of the damping joint, ``τ_f`` the gravity torque of
-the frequency joint and ``K = k_0 + k_J J_f + k_g |τ_f|_s``::
+The equations live in the Rust core (``tvist-core/src/modes/paper10/dynamic_map.rs``). Per
+mode, with ``J_f`` the inertia of the frequency joint, ``J_d`` that of the damping joint,
+``τ_f`` the gravity torque of the frequency joint and ``K = k_0 + k_J J_f + k_g |τ_f|_s``::
 
     ω_n = √(1 + k_p/J_f) · √(K / J_f)
     ζ   = (1 + k_p/J_d)^e_d · (1 + k_p/J_f)^e_f · (c_0 + c_1 √J_d + c_2 J_d)(1 + c_τ J_d)

@@ -10,9 +10,9 @@ the gravity-free tool acceleration after the stop is reduced to the paper's numb
 - **reduction**: ``1 − RV / RV_unshaped`` of the same motion, %;
 - **peak jerk** of the reference (third difference), rad/s³;
 - **spectrum** of the acceleration after the stop (eq. 56);
-- **time to settled** from the start of the move (:mod:`tvist.demo.settle`), beside the
+- **time to settled** from the start of the move (:mod:`tvist.experiments.settle`), beside the
   move's own duration, and the same for the best "slow down instead" profile
-  (:mod:`tvist.demo.slow_down`).
+  (:mod:`tvist.experiments.slow_down`).
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ from tvist.analysis import (
     peak_jerk,
     peak_velocity,
 )
-from tvist.demo.measure import (
+from tvist.experiments.measure import (
     damped_frequency_hz,
     measure_residual,
     modes_json,
@@ -43,8 +43,8 @@ from tvist.demo.measure import (
     tool_acceleration,
     zv_delay_s,
 )
-from tvist.demo.methods import Method, MotionContext, default_methods
-from tvist.demo.motions import (
+from tvist.experiments.methods import Method, MotionContext, default_methods
+from tvist.experiments.motions import (
     A_MAX_RAD_S2,
     DT_S,
     JERK_TIME_S,
@@ -54,14 +54,14 @@ from tvist.demo.motions import (
     V_MAX_RAD_S,
     Motion,
 )
-from tvist.demo.settle import (
+from tvist.experiments.settle import (
     SettleTimes,
     flange_error_m,
     measure_settle,
     rest_flange_position,
     settle_config,
 )
-from tvist.demo.slow_down import ACCEL_SCALES, JERK_TIMES_S, Candidate, SlowDown, slow_down
+from tvist.experiments.slow_down import ACCEL_SCALES, JERK_TIMES_S, Candidate, SlowDown, slow_down
 from tvist.sim import Twin
 from tvist.trajectory import Trajectory
 
@@ -128,9 +128,9 @@ class MethodRun:
         Largest distance of the reference's flange path from the planned one, m
         (:func:`tvist.analysis.path_deviation`).
     details
-        How the reference was made (from :class:`~tvist.demo.methods.Reference`).
+        How the reference was made (from :class:`~tvist.experiments.methods.Reference`).
     settle
-        Time to settled from the start of the move (:mod:`tvist.demo.settle`).
+        Time to settled from the start of the move (:mod:`tvist.experiments.settle`).
     """
 
     method: Method
@@ -322,7 +322,7 @@ def run_motion(
     log
         Optional ``log(text)`` for progress lines.
     with_slow_down
-        Also run the "slow down instead" grid (:mod:`tvist.demo.slow_down`).
+        Also run the "slow down instead" grid (:mod:`tvist.experiments.slow_down`).
     """
     if not methods or methods[0].key != "unshaped":
         raise ValueError("the first method must be the 'unshaped' baseline")
@@ -431,9 +431,9 @@ def run_experiment(
     quick
         Only the first motion, with a shorter tail (for tests).
     methods
-        The rows (default :func:`~tvist.demo.methods.default_methods`), unshaped first.
+        The rows (default :func:`~tvist.experiments.methods.default_methods`), unshaped first.
     motions
-        The motions (default all of :data:`~tvist.demo.motions.MOTIONS`, or the first if
+        The motions (default all of :data:`~tvist.experiments.motions.MOTIONS`, or the first if
         ``quick``).
     log
         Optional ``log(text)`` for progress lines.

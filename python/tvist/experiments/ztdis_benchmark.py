@@ -304,7 +304,7 @@ def plot_benchmark(benches: list[Benchmark], path: str | Path) -> Path:
 
     Like the paper's Fig. 13, with the unshaped and conventionally shaped moves added.
     """
-    from tvist.demo.plots import new_figure
+    from tvist.figures import new_figure
 
     fig = new_figure(figsize=(6 * len(benches), 6), layout="tight")
     axes = fig.subplots(2, len(benches), sharex=True, squeeze=False)

@@ -35,7 +35,7 @@ def _usable(records: Sequence[dict], index: int) -> list[tuple[dict, dict, dict 
 
 def plot_identified_map(dynmap: DynamicMap, records: Sequence[dict], path: str | Path) -> Path:
     """Write the figure to ``path`` (PNG) and return the path."""
-    from tvist.demo.plots import new_figure
+    from tvist.figures import new_figure
 
     n_modes = min(dynmap.n_modes, len(_MODE_NAMES))
     fig = new_figure(figsize=(12, 4.2 * n_modes))

@@ -3,7 +3,7 @@
 Users pay in cycle time: the tool must be still enough to grip, place, measure or take a
 picture. Each run is measured against the criteria of :data:`CRITERIA`:
 
-- the gravity-free tool acceleration ``|ψ|`` (:func:`tvist.demo.measure.tool_acceleration`)
+- the gravity-free tool acceleration ``|ψ|`` (:func:`tvist.experiments.measure.tool_acceleration`)
   stays below 0.05 and 0.01 m/s²;
 - the flange stays within 0.1 mm of where it comes to rest: the twin's flange at rest under
   gravity with the motors at the end pose (:func:`rest_flange_position`). The commanded

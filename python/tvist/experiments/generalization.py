@@ -18,7 +18,7 @@ Per variant ``family:<robot>:<seed>``:
    ``k``-th lowest true mode; a ``mode_joints`` map's slots in order, each against the true
    mode not taken by an earlier slot that stores the largest share of its strain energy in
    the slot's joint.
-4. **The demo's three moves** (:func:`tvist.demo.motions.demo_motions` of the robot) on the
+4. **The demo's three moves** (:func:`tvist.experiments.motions.demo_motions` of the robot) on the
    variant's twin: unshaped, shaped with the identified map (the demo's modal row, time
    varying), the identified map's modes at the end pose held over the move, and the ceiling:
    ZV on every true mode below :data:`TRUE_MODE_MAX_HZ` at the end pose; residual vibration
@@ -30,7 +30,7 @@ Per variant ``family:<robot>:<seed>``:
 Each variant's result is a JSON file (``<robot>-<seed>/result.json``; a rerun with the same
 settings skips finished variants) and ``table.md`` lists them all::
 
-    python -m tvist.demo.generalization --robot ur5e --seeds 0-4 --out out/generalization
+    python -m tvist.experiments.generalization --robot ur5e --seeds 0-4 --out out/generalization
 
 ``--seeds nominal`` runs the robot's default twin instead (any robot with a default twin,
 e.g. ``--robot fr3``; ``tvist demo --robot fr3`` does this).
@@ -101,7 +101,7 @@ class HarnessSettings:
     robot
         Robot of the family.
     payloads_kg
-        Payloads of the plan, kg (centre of mass :data:`~tvist.demo.motions.PAYLOAD_COM_M`).
+        Payloads of the plan, kg (centre of mass :data:`~tvist.experiments.motions.PAYLOAD_COM_M`).
     every
         Every ``every``-th of Algorithm 1's poses (the workspace coverage is added to them).
     duration_s
@@ -136,7 +136,7 @@ class HarnessSettings:
 
     def plan(self) -> list:
         """The campaign poses (payloads above the robot's rated one are left out)."""
-        from tvist.demo.motions import PAYLOAD_COM_M
+        from tvist.experiments.motions import PAYLOAD_COM_M
         from tvist.ident.pose_plan import plan_poses
         from tvist.robots import params
 
@@ -288,7 +288,7 @@ def _cell(value: float | None, digits: int = 1) -> str:
 
 def table_markdown(results: Sequence[Mapping[str, Any]]) -> str:
     """The markdown table of variant results (:func:`run_variant`), one row per variant."""
-    from tvist.demo.motions import MOTIONS
+    from tvist.experiments.motions import MOTIONS
 
     names = [m.name for m in MOTIONS]  # every robot's demo moves have these names
     header = (
@@ -386,7 +386,7 @@ def _write_logs(variant: str, settings: HarnessSettings, poses: Sequence, folder
 def _identify_and_fit(settings: HarnessSettings, logs: Path, folder: Path) -> Path:
     """``tvist identify`` per payload folder, the records concatenated, then ``tvist fit-map
     --kind modal``; returns the map file."""
-    from tvist.demo.motions import PAYLOAD_COM_M
+    from tvist.experiments.motions import PAYLOAD_COM_M
 
     cli_log = folder / "cli.log"
     cli_log.unlink(missing_ok=True)
@@ -430,7 +430,7 @@ def _identify_and_fit(settings: HarnessSettings, logs: Path, folder: Path) -> Pa
 def map_vs_truth(variant, modal, robot, q_eval: np.ndarray) -> dict[str, Any]:
     """The shaped modes of the modal map ``modal`` (named by :func:`shaped_mode_names`)
     against the variant's true modes at ``q_eval``, with the demo's payload (``robot``)."""
-    from tvist.demo.motions import PAYLOAD_COM_M, demo_payload_kg
+    from tvist.experiments.motions import PAYLOAD_COM_M, demo_payload_kg
     from tvist.sim.family import modes_of
 
     names = shaped_mode_names(
@@ -465,7 +465,7 @@ def _ceiling_row():
     """ZV on every true mode of the twin below :data:`TRUE_MODE_MAX_HZ` at the end pose,
     held over the move (an oracle: it reads the twin's exact modes)."""
     import tvist
-    from tvist.demo.methods import TVIST_SHAPER, Method, _run_tv_shaper
+    from tvist.experiments.methods import TVIST_SHAPER, Method, _run_tv_shaper
     from tvist.sim.family import modes_of
 
     def build(ctx):
@@ -488,7 +488,7 @@ def _end_pose_map_row(modal):
     """ZV on the map's shaped modes at the end pose, held over the move: the identified map
     without time variation (what the map gives where its time-varying path cannot run)."""
     import tvist
-    from tvist.demo.methods import TVIST_SHAPER, Method, _run_tv_shaper
+    from tvist.experiments.methods import TVIST_SHAPER, Method, _run_tv_shaper
 
     def build(ctx):
         modes = [tuple(m) for m in modal.modes(ctx.robot, ctx.motion.q_end)]
@@ -511,11 +511,11 @@ def _moves(variant, map_path: Path, robot) -> dict[str, Any]:
     row the twin refuses (a shaped reference over the joint speed limits) is reported with
     its error instead of its reduction."""
     from tvist import load_map
-    from tvist.demo.experiment import run_motion
-    from tvist.demo.measure import zv_delay_s
-    from tvist.demo.methods import default_methods
-    from tvist.demo.modal_rows import fd_tvist_modal
-    from tvist.demo.motions import DT_S, PAYLOAD_COM_M, demo_motions, demo_payload_kg
+    from tvist.experiments.experiment import run_motion
+    from tvist.experiments.measure import zv_delay_s
+    from tvist.experiments.methods import default_methods
+    from tvist.experiments.modal_rows import fd_tvist_modal
+    from tvist.experiments.motions import DT_S, PAYLOAD_COM_M, demo_motions, demo_payload_kg
     from tvist.sim.family import modes_of
 
     modal = load_map(map_path)
@@ -583,7 +583,7 @@ def run_variant(seed: int | None, out: str | Path, settings: HarnessSettings) ->
     default twin, ``family:<robot>:nominal``; see the module docstring), written to
     ``out/<robot>-<seed>/result.json`` and returned; a result already there with the same
     settings is returned as it is. A failure is a result with ``"error"``."""
-    from tvist.demo.motions import PAYLOAD_COM_M, demo_payload_kg
+    from tvist.experiments.motions import PAYLOAD_COM_M, demo_payload_kg
     from tvist.robots import Payload, Robot, params
     from tvist.sim.family import nominal_variant, sample_variant
 
@@ -673,9 +673,9 @@ def _run_one(args: tuple[int | None, str, HarnessSettings]) -> dict[str, Any]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m tvist.demo.generalization``: see the module docstring."""
+    """``python -m tvist.experiments.generalization``: see the module docstring."""
     p = argparse.ArgumentParser(
-        prog="python -m tvist.demo.generalization",
+        prog="python -m tvist.experiments.generalization",
         description="Campaign, identification, modal map and the demo's moves on variants of "
         "the family (family:ROBOT:SEED); one JSON per variant and a markdown table.",
     )
@@ -754,7 +754,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             for future in as_completed(futures):
                 results[futures[future]] = _report(future.result(), start)
     table = table_markdown([results[s] for s in seeds])
-    command = "python -m tvist.demo.generalization " + " ".join(
+    command = "python -m tvist.experiments.generalization " + " ".join(
         argv if argv is not None else sys.argv[1:]
     )
     (out / TABLE_FILE).write_text(f"`{command}`\n\n{table}", encoding="utf-8")

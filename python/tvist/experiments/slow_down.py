@@ -4,7 +4,7 @@ A softer jerk ramp or a lower acceleration limit excites the arm less; the move 
 but may settle sooner. For a move, every profile of a small grid (:data:`JERK_TIMES_S` ×
 :data:`ACCEL_SCALES`, the speed limit unchanged) is planned by ruckig
 (:func:`tvist.trajectory.double_s`), run unshaped on the twin and measured like every other
-row (:mod:`tvist.demo.settle`). The best slow-down per criterion is the candidate that
+row (:mod:`tvist.experiments.settle`). The best slow-down per criterion is the candidate that
 settles first, the planned (unshaped) move itself included.
 """
 
@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from tvist.demo.measure import tool_acceleration
-from tvist.demo.settle import CRITERIA, SettleTimes, flange_error_m, measure_settle
+from tvist.experiments.measure import tool_acceleration
+from tvist.experiments.settle import CRITERIA, SettleTimes, flange_error_m, measure_settle
 from tvist.sim import Twin
 from tvist.trajectory import double_s
 
@@ -96,8 +96,8 @@ def slow_down(
     from ``q_start`` to ``q_end`` on ``twin`` and measure its settle times.
 
     ``rest_m`` is the flange's rest position at ``q_end``
-    (:func:`tvist.demo.settle.rest_flange_position`); ``pre_s`` and ``tail_s`` the rest before
-    and after each move, s.
+    (:func:`tvist.experiments.settle.rest_flange_position`); ``pre_s`` and ``tail_s`` the rest
+    before and after each move, s.
     """
     out = [planned]
     for accel_scale in ACCEL_SCALES:

@@ -1,21 +1,29 @@
-"""Outputs of the experiment: console table, ``results.json``, figures and ``report.md``."""
+"""``report.md`` of the UR5e experiment: tables, modes, verdict, discussion and figure links;
+:func:`write_outputs` writes it with ``results.json`` and the figures."""
 
 from __future__ import annotations
 
-import json
 import math
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from tvist.analysis import peak_acceleration, peak_velocity
-from tvist.demo.experiment import DemoResult, MotionRun
-from tvist.demo.measure import damped_frequency_hz, zv_delay_s
-from tvist.demo.motions import DT_S
-from tvist.demo.settle import CRITERIA, SETTLE_HOLD_S, format_settle
-from tvist.demo.slow_down import ACCEL_SCALES, JERK_TIMES_S
+from tvist.experiments.experiment import DemoResult, MotionRun
+from tvist.experiments.measure import damped_frequency_hz, zv_delay_s
+from tvist.experiments.motions import DT_S
+from tvist.experiments.plots import make_figures
+from tvist.experiments.report_identification import IDENTIFICATION_CAPTIONS, identification_section
+from tvist.experiments.results_json import write_json
+from tvist.experiments.settle import CRITERIA, SETTLE_HOLD_S
+from tvist.experiments.slow_down import ACCEL_SCALES, JERK_TIMES_S
+from tvist.experiments.table import (
+    TABLE_HEADER,
+    format_reduction,
+    markdown_table,
+    planned_move_s,
+    table_rows,
+)
+from tvist.experiments.verdict import RANK_CRITERION, recommendation
 
 #: Paper Table 4 (real UR5e, average of 10 repetitions): unshaped RV, shaped RV (m/s²),
 #: measured delay (ms) and reduction (%), for comparison in the report.
@@ -26,213 +34,12 @@ PAPER_TABLE_4 = {
 }
 
 
-def _json_safe(value: Any) -> Any:
-    """NaN and infinities become null (JSON has no NaN); numpy scalars become floats."""
-    if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
-    if isinstance(value, (np.floating, float)):
-        return float(value) if math.isfinite(float(value)) else None
-    if isinstance(value, np.integer):
-        return int(value)
-    return value
-
-
-def format_reduction(percent: float) -> str:
-    """A reduction in % with enough decimals that it never rounds to 100: one decimal, and
-    one more per decade the remainder ``100 − percent`` falls below 1 (99.2, 99.98, 99.996)."""
-    if not math.isfinite(percent):
-        return "n/a"
-    rest = 100.0 - percent
-    decimals = 1 if rest >= 1.0 or rest <= 0.0 else max(1, math.ceil(-math.log10(rest)) + 1)
-    return f"{percent:.{min(decimals, 6)}f}"
-
-
-#: How each residual-vibration estimate is named in tables (see
-#: :class:`tvist.analysis.ResidualVibration`).
-RV_ESTIMATES = {
-    "damped_sine_fit": "one-mode fit",
-    "log_decay": "peak decay",
-    "max_abs": "largest peak (upper bound)",
-}
-
-
-def write_json(result: DemoResult, path: Path) -> Path:
-    """Write ``results.json``."""
-    path.write_text(json.dumps(_json_safe(result.to_json()), indent=2) + "\n", encoding="utf-8")
-    return path
-
-
-def row_label(run: Any) -> str:
-    """A row's label, marked when a user cannot run it."""
-    return run.method.label + (" (oracle)" if run.method.oracle else "")
-
-
-def _settle_cells(settle: Any) -> list[str]:
-    if settle is None:
-        return ["-"] * len(CRITERIA)
-    return [format_settle(settle.get(c.key), settle.record_s) for c in CRITERIA]
-
-
-def _rows(motion: MotionRun) -> list[list[str]]:
-    analytic_ms = f"{1e3 * motion.analytic_zv_delay_s:.1f}"
-    rows = []
-    for r in motion.runs:
-        baseline = r.method.key == "unshaped"
-        rows.append(
-            [
-                row_label(r),
-                f"{1e3 * r.delay_s:.0f}",
-                "-" if baseline else analytic_ms,
-                f"{r.residual.amplitude:.4f}",
-                "-" if baseline else format_reduction(r.reduction_percent),
-                *_settle_cells(r.settle),
-                f"{r.peak_jerk_rad_s3:.0f}",
-                RV_ESTIMATES.get(r.residual.method, r.residual.method)
-                + ("" if r.residual.reliable else " (unreliable)"),
-            ]
-        )
-    if motion.slow_down is not None:
-        cells = []
-        for c in CRITERIA:
-            best = motion.slow_down.best(c.key)
-            cells.append("not settled" if best is None else format_settle(best.settle.get(c.key)))
-        rows.append(["Slow down instead (best of the grid)", "-", "-", "-", "-", *cells, "-", "-"])
-    return rows
-
-
-_SETTLE_HEADER = [f"Settled, {c.text} [s]" for c in CRITERIA]
-_HEADER = [
-    "Method",
-    "Delay [ms]",
-    "ZV delay at end, true modes [ms]",
-    "Res. vibration [m/s²]",
-    "Reduction [%]",
-    *_SETTLE_HEADER,
-    "Peak jerk [rad/s³]",
-    "RV estimate",
-]
-#: Shorter headers for the console.
-_CONSOLE_HEADER = [
-    "Method",
-    "Delay\n[ms]",
-    "Analytic ZV\ndelay [ms]",
-    "RV\n[m/s²]",
-    "Reduction\n[%]",
-    "Settled\n0.05 m/s²\n[s]",
-    "Settled\n0.01 m/s²\n[s]",
-    "Settled\n0.1 mm\n[s]",
-    "Peak jerk\n[rad/s³]",
-    "RV estimate",
-]
-
-
-def print_table(result: DemoResult, console: Any = None) -> None:
-    """Print a Table-4-style table per motion, with the analytic ZV delay and end-pose modes."""
-    from rich.console import Console
-    from rich.table import Table
-    from rich.text import Text
-
-    if console is None:
-        console = Console()
-    if not console.is_terminal and console.width < 160:
-        console.width = 160  # a log file or pipe: keep each row on one line
-    for motion in result.motions:
-        modes = ", ".join(
-            f"{name} damped f_d {damped_frequency_hz(w, z):.2f} Hz ζ {z:.3f}"
-            for name, (w, z) in zip(("base", "shoulder"), motion.true_end_modes, strict=False)
-        )
-        table = Table(
-            title=f"{motion.motion.name}: analytic two-mode ZV delay at {motion.motion.end} "
-            f"(true modes) = {1e3 * motion.analytic_zv_delay_s:.1f} ms; settle times from the "
-            f"start of the move, which itself lasts {_move_s(motion):.3f} s (the limit)",
-            caption=f"true modes at {motion.motion.end}: {modes}",
-        )
-        for i, name in enumerate(_CONSOLE_HEADER):
-            last = len(_CONSOLE_HEADER) - 1
-            table.add_column(
-                Text(name), justify="left" if i in (0, last) else "right", no_wrap=i == 0
-            )
-        for row in _rows(motion):
-            table.add_row(*(Text(cell) for cell in row))
-        console.print(table)
-        console.print(recommendation(motion))
-    console.print(f"simulation and analysis wall time: {result.wall_time_s:.1f} s")
-
-
-def make_figures(result: DemoResult, out: Path) -> dict[str, list[Path]]:
-    """Write the figures; returns ``{"acceleration": [...], "spectra": [...], "modes": [...]}``."""
-    from tvist.demo import plots
-
-    figures: dict[str, list[Path]] = {"acceleration": [], "spectra": [], "modes": []}
-    panels = []
-    for motion in result.motions:
-        traces = {
-            r.method.label: (
-                np.linalg.norm(r.psi, axis=1),
-                r.t_stop_s,
-                r.residual.amplitude,
-                r.residual.decay_rate_1_s,
-            )
-            for r in motion.runs
-        }
-        name = motion.motion.name.replace("->", " → ")
-        figures["acceleration"].append(
-            plots.plot_stop_aligned_acceleration(
-                motion.t_s,
-                traces,
-                motion.t_stop_unshaped_s,
-                out / f"acceleration_{motion.motion.slug}.png",
-                title=f"{name}: gravity-free tool acceleration |ψ|, 5 kg payload (simulated UR5e)",
-            )
-        )
-        spectra = {r.method.label: (r.spectrum.freq_hz, r.spectrum.energy) for r in motion.runs}
-        marks = {
-            f"twin (true): damped f_d at {motion.motion.end}": [
-                damped_frequency_hz(w, z) for w, z in motion.true_end_modes
-            ]
-        }
-        for label, modes in motion.map_end_modes.items():
-            marks[f"{label}: damped f_d at {motion.motion.end}"] = [
-                damped_frequency_hz(w, z) for w, z in modes
-            ]
-        panels.append((f"{name}: residual vibration after the stop", spectra, marks))
-        traj_start = float(motion.tracks.t_s[0])
-        figures["modes"].append(
-            plots.plot_mode_tracks(
-                motion.tracks.t_s - traj_start,
-                motion.tracks.inertia_kg_m2,
-                motion.tracks.modes,
-                out / f"modes_{motion.motion.slug}.png",
-                title=f"{name}: inertias and modes along the planned move",
-                t_marks_s={
-                    "planned move starts": _move_start(motion) - traj_start,
-                    "planned move stops (t_b)": motion.t_stop_unshaped_s - traj_start,
-                },
-            )
-        )
-    window = result.config["spectrum_window_s"]
-    figures["spectra"].append(
-        plots.plot_energy_spectra(
-            panels,
-            out / "spectra.png",
-            title=f"Energy spectra (eq. 56) of the gravity-free tool acceleration, {window:g} s "
-            "after each stop",
-        )
-    )
-    return figures
-
-
-def _move_start(motion: MotionRun) -> float:
-    q = motion.runs[0].q
-    moving = np.flatnonzero(np.any(q != q[0], axis=1))
-    return float(motion.t_s[moving[0] - 1]) if moving.size else float(motion.t_s[0])
-
-
 def _slow_down_text(motion: MotionRun) -> str:
     """The move's own duration and the best slow-down profile per band."""
-    text = f"The planned move lasts **{_move_s(motion):.3f} s** (the limit of every settle time)."
+    text = (
+        f"The planned move lasts **{planned_move_s(motion):.3f} s** (the limit of every "
+        "settle time)."
+    )
     if motion.slow_down is None:
         return text
     parts = []
@@ -247,17 +54,6 @@ def _slow_down_text(motion: MotionRun) -> str:
             )
     n = len(motion.slow_down.candidates)
     return f"{text} Slow down instead, best of {n} profiles: " + "; ".join(parts) + "."
-
-
-def _md_table(header: list[str], rows: list[list[str]]) -> str:
-    """A markdown table; a ``|`` inside a cell (``|ψ|``) is escaped, else it splits the cell."""
-
-    def line(cells: list[str]) -> str:
-        return "| " + " | ".join(cell.replace("|", "\\|") for cell in cells) + " |"
-
-    lines = [line(header), "|" + "|".join("---" for _ in header) + "|"]
-    lines += [line(row) for row in rows]
-    return "\n".join(lines)
 
 
 def _discussion(result: DemoResult) -> list[str]:
@@ -351,7 +147,7 @@ def write_markdown(result: DemoResult, path: Path, figures: dict[str, list[Path]
     for motion in result.motions:
         name = motion.motion.name
         lines += [f"## {name.replace('->', ' → ')}", ""]
-        lines.append(_md_table(_HEADER, _rows(motion)))
+        lines.append(markdown_table(TABLE_HEADER, table_rows(motion)))
         lines.append("")
         lines.append(_slow_down_text(motion))
         lines.append("")
@@ -388,7 +184,7 @@ def write_markdown(result: DemoResult, path: Path, figures: dict[str, list[Path]
                 [label] + [f"{damped_frequency_hz(w, z):.2f} Hz / {z:.3f}" for w, z in modes]
             )
         lines.append(
-            _md_table(
+            markdown_table(
                 [
                     f"modes at {motion.motion.end}",
                     "base damped f_d / ζ",
@@ -417,7 +213,7 @@ def write_markdown(result: DemoResult, path: Path, figures: dict[str, list[Path]
             )
             lines.append("")
     lines += _fixed_section(result)
-    lines += _identification_section(result)
+    lines += identification_section(result)
     lines += ["## Discussion", ""]
     lines += _discussion(result)
     lines += ["", *_NOTES]
@@ -437,7 +233,7 @@ def write_markdown(result: DemoResult, path: Path, figures: dict[str, list[Path]
             lines.append(f"- {captions[kind]}: [{p.name}]({p.name})")
             lines.append(f"  ![{p.name}]({p.name})")
     for name in (result.identification or {}).get("figures", []):
-        caption = _IDENTIFICATION_CAPTIONS.get(name, "Identified map")
+        caption = IDENTIFICATION_CAPTIONS.get(name, "Identified map")
         lines.append(f"- {caption}: [{name}]({name})")
         lines.append(f"  ![{name}]({name})")
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
@@ -475,160 +271,6 @@ _NOTES = [
 ]
 
 
-def _range_text(value: Any) -> str:
-    return "unbounded" if value is None else f"{value[0]:.3g} - {value[1]:.3g}"
-
-
-def _pct(entry: dict[str, Any], key: str) -> str:
-    return f"{entry[f'{key}_rms_percent']:.1f} / {entry[f'{key}_max_percent']:.1f}"
-
-
-#: Map coefficients as the paper writes them (eqs. 42-51), by their keys in the map file.
-_COEFFICIENT_NAMES = {
-    "k_0": "k_0",
-    "k_j": "k_J",
-    "k_p": "k_p",
-    "k_g": "k_g",
-    "c_0": "c_0",
-    "c_1": "c_1",
-    "c_2": "c_2",
-    "c_tau": "c_τ",
-}
-
-
-def _identification_section(result: DemoResult) -> list[str]:
-    info = result.identification
-    if info is None:
-        return []
-    lines = ["## Identified map (reduced campaign on the twin)", ""]
-    if "error" in info:
-        return [*lines, f"Identification failed, so the row is missing: `{info['error']}`.", ""]
-    plan = info["plan"]
-    usable = ", ".join(f"{k}: {v}" for k, v in info["usable_identifications"].items())
-    angles = ", ".join(f"{math.degrees(a):g}°" for a in plan["angles_rad"])
-    if info["poses_reused"]:
-        cache = (
-            f"{info['poses_reused']} of the {info['poses']} pose records were reused from "
-            f"[{info['campaign_file']}]({info['campaign_file']}) (same settings and code; "
-            "delete it to rerun the campaign)"
-        )
-    else:
-        cache = (
-            f"all {info['poses']} poses were run now; their records are kept in "
-            f"[{info['campaign_file']}]({info['campaign_file']}), so the next run with the same "
-            "settings and code reuses them"
-        )
-    lines.append(
-        f"{info['poses']} poses: payload {', '.join(f'{m:g}' for m in plan['payloads_kg'])} kg, "
-        f"angles {angles} × radii {', '.join(f'{r:g}' for r in plan['radii_m'])} m (Algorithm "
-        f"1; the radii reach from Q3 to Q1 so that the map covers the inertias of the test "
-        f"motions). Base and shoulder excited in turn for {plan['duration_s']:g} s each "
-        f"(Algorithm 2), local fits (eq. 17) on the accelerometer with "
-        f"{plan['accel_noise_std_m_s2']:g} m/s² noise, then the map fit (section 5.3) to the "
-        f"{info.get('map_poses', info['poses'])} poses with the experiment's payload (the "
-        f"modal map's fit uses every pose). "
-        f"Identifications used (not low-confidence): {usable}. Campaign "
-        f"{info['campaign_wall_time_s']:.1f} s ({cache}); identification in total "
-        f"{info['wall_time_s']:.1f} s. Map file: [{info['map_file']}]({info['map_file']})."
-    )
-    lines.append("")
-    rows = []
-    stats = (info.get("fit_statistics") or {}).get("modes", [])
-    for i, mode in enumerate(info["modes"]):
-        stat = stats[i] if i < len(stats) else {}
-        freq_err = stat.get("frequency", {}).get("rms_relative_error")
-        damp_err = stat.get("damping", {}).get("rms_relative_error")
-        coeffs = ", ".join(f"{shown} {mode[k]:.4g}" for k, shown in _COEFFICIENT_NAMES.items())
-        f_range = mode["frequency_inertia_range_kg_m2"]
-        d_range = mode["damping_inertia_range_kg_m2"]
-        rows.append(
-            [
-                ("base", "shoulder")[i] if i < 2 else str(i),
-                f"J_{mode['frequency_joint']}: {_range_text(f_range)}",
-                f"J_{mode['damping_joint']}: {_range_text(d_range)}",
-                coeffs,
-                "-" if freq_err is None else f"{100 * freq_err:.1f}",
-                "-" if damp_err is None else f"{100 * damp_err:.1f}",
-            ]
-        )
-    header = [
-        "mode",
-        "frequency from, range [kg m²]",
-        "damping from, range [kg m²]",
-        "coefficients (N m/rad, kg m², N m s)",
-        "f fit rms err [%]",
-        "ζ fit rms err [%]",
-    ]
-    lines += [_md_table(header, rows), ""]
-    lines.append(
-        "The map is evaluated only inside these inertia ranges (the inertias of the poses it "
-        "was fitted to): an inertia is saturated smoothly into its range (a 5 % blend at "
-        "each bound, so the modes stay differentiable along a move) and beyond it the map "
-        "holds the value at the bound instead of extrapolating. " + _clamp_summary(result)
-    )
-    lines.append("")
-    versus = info.get("versus_true_modes") or {}
-    if versus:
-        vrows = [
-            [
-                name,
-                str(entry["n_poses"]),
-                _pct(entry["identified"], "f_n"),
-                _pct(entry["identified"], "zeta"),
-                _pct(entry["map"], "f_n"),
-                _pct(entry["map"], "zeta"),
-            ]
-            for name, entry in versus.items()
-        ]
-        lines.append(
-            "Against the twin's true modes (eigen-analysis) at the campaign poses, relative "
-            "errors RMS / max in %:"
-        )
-        lines.append("")
-        lines.append(
-            _md_table(
-                [
-                    "mode",
-                    "poses",
-                    "identified f_n",
-                    "identified ζ",
-                    "fitted map f_n",
-                    "fitted map ζ",
-                ],
-                vrows,
-            )
-        )
-        lines.append("")
-    return lines
-
-
-def _clamp_summary(result: DemoResult) -> str:
-    """Share of each motion's reference on which the identified map clamped an inertia."""
-    from tvist.demo.identified import KEY
-
-    parts = []
-    for motion in result.motions:
-        try:
-            use = motion.run(KEY).details.get("map_use")
-        except KeyError:
-            continue
-        if use:
-            shares = ", ".join(
-                f"{name} {v:.0f} %"
-                for name, v in zip(
-                    ("base", "shoulder"), use["inertia_clamped_percent"], strict=False
-                )
-            )
-            parts.append(f"{motion.motion.name.replace('->', ' → ')}: {shares}")
-    if not parts:
-        return ""
-    return (
-        "Share of each shaped reference at which an inertia was outside its range: "
-        + "; ".join(parts)
-        + "."
-    )
-
-
 _JERK_NOTE = (
     "- Peak jerk is the largest third difference of the sent reference. A true-modes row "
     "above the unshaped value comes from a sharp turn of the true damping: the twin's gear "
@@ -639,16 +281,9 @@ _JERK_NOTE = (
 )
 
 
-_IDENTIFICATION_CAPTIONS = {
-    "identified_map_fit.png": "Identified map: f_n and ζ against inertia; identified, true and "
-    "fitted modes at the campaign poses and the map curve with its range (like Figs. 23-26)",
-    "identified_vs_map.png": "Identified against fitted modes at the campaign poses",
-}
-
-
 def _map_jerk_notes(result: DemoResult) -> list[str]:
     """Why a map row's reference is jerkier than the planned one, from how the map was used
-    along it (:func:`tvist.demo.methods.map_use`).
+    along it (:func:`tvist.experiments.methods.map_use`).
 
     The map has no kink (tvist-core ``dynmap``: inertias are saturated into their ranges by a
     C² soft clamp, the gravity term uses a smoothed ``|τ|``), so what is left are places where
@@ -700,100 +335,6 @@ def _jerk_spike(result: DemoResult) -> bool:
     return False
 
 
-#: Recommendations rank by time to settled at this criterion (the first of CRITERIA) ...
-RANK_CRITERION = CRITERIA[0]
-#: ... rows within this much of the fastest tie (s: one 2 ms sample, the grid of the stop),
-#: and the tie goes to the faster one at the stricter band (the second criterion), then to
-#: the higher reduction.
-SETTLE_TIE_S = 1.5 * DT_S
-
-
-@dataclass(frozen=True)
-class _Option:
-    """A runnable choice of the recommendation: a row, or the best slow-down profile."""
-
-    label: str
-    settle: Any
-    reduction_percent: float
-    run: Any = None
-
-
-def _move_s(motion: MotionRun) -> float:
-    """The planned move's duration (the physical limit of every settle time), s."""
-    return float(motion.runs[0].settle.move_s)
-
-
-def _options(motion: MotionRun) -> list[_Option]:
-    """The runnable rows (no oracle) and the best slow-down profile at the ranking criterion."""
-    out = [
-        _Option(r.method.label, r.settle, r.reduction_percent, r)
-        for r in motion.runs
-        if r.method.oracle is None and r.settle is not None
-    ]
-    if motion.slow_down is not None:
-        best = motion.slow_down.best(RANK_CRITERION.key)
-        # The grid's first candidate is the planned move: already the unshaped row.
-        if best is not None and best is not motion.slow_down.candidates[0]:
-            out.append(_Option(f"Slow down instead ({best.text()})", best.settle, math.nan))
-    return out
-
-
-def _rank_key(option: _Option) -> tuple[float, float]:
-    second = option.settle.get(CRITERIA[1].key)
-    reduction = option.reduction_percent if math.isfinite(option.reduction_percent) else 0.0
-    return (math.inf if second is None else second, -reduction)
-
-
-def recommendation(motion: MotionRun) -> str:
-    """One line: which runnable method settles first on this motion, and by how much.
-
-    Rows a user can run are those without :attr:`~tvist.demo.methods.Method.oracle`, the
-    unshaped move and the best "slow down instead" profile included. The one that settles
-    first at :data:`RANK_CRITERION` wins; rows within :data:`SETTLE_TIE_S` of it tie, and
-    the tie goes to the faster at the stricter band, then to the higher reduction.
-    """
-    name = motion.motion.name.replace("->", " → ")
-    key = RANK_CRITERION.key
-    options = [o for o in _options(motion) if o.settle.get(key) is not None]
-    if not options:
-        return f"{name}: no runnable row settles to {RANK_CRITERION.text} within the record."
-    fastest = min(o.settle.get(key) for o in options)
-    pick = min((o for o in options if o.settle.get(key) <= fastest + SETTLE_TIE_S), key=_rank_key)
-    t_pick = pick.settle.get(key)
-    why = (
-        f"settled ({RANK_CRITERION.text}) {t_pick:.3f} s after the move starts; the move "
-        f"itself lasts {_move_s(motion):.3f} s"
-    )
-    unshaped = motion.runs[0].settle.get(key)
-    if pick.run is not motion.runs[0] and unshaped is not None:
-        why += f", unshaped {unshaped:.3f} s ({100 * (1 - t_pick / unshaped):.0f} % sooner)"
-    others = sorted(
-        (o for o in options if o is not pick and o.run is not motion.runs[0]),
-        key=lambda o: o.settle.get(key),
-    )[:2]
-    if others:
-        why += "; next: " + ", ".join(f"{o.label} {o.settle.get(key):.3f} s" for o in others)
-    caveat = ""
-    if pick.run is not None and "alpha" in pick.run.details:
-        caveat = (
-            " (zero-delay shaping needs the whole rest-to-rest move in advance and the modes "
-            "at its end pose)"
-        )
-    line = f"{name}: use **{pick.label}**: {why}{caveat}."
-    oracles = [
-        r for r in motion.runs if r.method.oracle is not None and r.settle and r.settle.get(key)
-    ]
-    if oracles:
-        best_oracle = min(oracles, key=lambda r: r.settle.get(key))
-        if best_oracle.settle.get(key) < t_pick:
-            line += (
-                f" Not recommended although faster: {best_oracle.method.label} "
-                f"({best_oracle.settle.get(key):.3f} s), an oracle row: it "
-                f"{best_oracle.method.oracle}."
-            )
-    return line
-
-
 def _recommendation_lines(result: DemoResult) -> list[str]:
     lines = [f"- {recommendation(m)}" for m in result.motions]
     lines.append(
@@ -808,7 +349,7 @@ def _recommendation_lines(result: DemoResult) -> list[str]:
 def _fixed_section(result: DemoResult) -> list[str]:
     """Fixed shapers (tune once at the start pose; robust over the move) against FD-TVIST
     with the identified map, per motion, with what the time variation buys."""
-    from tvist.demo.identified import KEY
+    from tvist.experiments.identified import KEY
 
     lines: list[str] = []
     for motion in result.motions:

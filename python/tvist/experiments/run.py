@@ -1,14 +1,15 @@
-"""``tvist demo``: run the experiment, print the table, write the report."""
+"""``tvist demo``: run the experiment and write the report (the command prints the table)."""
 
 from __future__ import annotations
 
 import dataclasses
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
-from tvist.demo.experiment import DemoResult, run_experiment
-from tvist.demo.methods import Method, default_methods
+from tvist.experiments.experiment import DemoResult, run_experiment
+from tvist.experiments.methods import Method, default_methods
 
 
 def run_demo(
@@ -18,9 +19,10 @@ def run_demo(
     *,
     identify: bool = True,
     verbose: bool = True,
+    show_table: Callable[[DemoResult, Any], None] | None = None,
 ) -> DemoResult:
-    """Run the experiment, print the table and write ``results.json``, ``report.md`` and the
-    figures to ``out_dir``.
+    """Run the experiment and write ``results.json``, ``report.md`` and the figures to
+    ``out_dir``; ``show_table`` prints the table.
 
     Parameters
     ----------
@@ -28,22 +30,26 @@ def run_demo(
         Output folder (created if missing).
     quick
         Only the first motion (Q1->Q2) with a shorter tail, and a smaller campaign
-        (:data:`~tvist.demo.identified.QUICK_PLAN`).
+        (:data:`~tvist.experiments.identified.QUICK_PLAN`).
     methods
-        The rows, unshaped first (default :func:`~tvist.demo.methods.default_methods`).
+        The rows, unshaped first (default :func:`~tvist.experiments.methods.default_methods`).
     identify
         Identify a map on the twin first: a reduced mapping campaign
-        (:func:`~tvist.demo.identified.identify_map`, :data:`~tvist.demo.identified.DEMO_PLAN`,
-        1-3 min on two cores, depending on their load; its records are cached in ``out_dir``
-        and reused by the next run) and the map fit; its FD-TVIST row joins the map rows.
+        (:func:`~tvist.experiments.identified.identify_map`,
+        :data:`~tvist.experiments.identified.DEMO_PLAN`, 1-3 min on two cores, depending on
+        their load; its records are cached in ``out_dir`` and reused by the next run) and the
+        map fit; its FD-TVIST row joins the map rows.
         ``False`` skips it.
     verbose
-        Print progress lines and the table.
+        Print progress lines (and the table, through ``show_table``).
+    show_table
+        Called with the result and the rich console once the outputs are written (``tvist
+        demo`` passes :func:`tvist.cli.demo_table.print_table`); ``None``: no table.
     """
     from rich.console import Console
 
-    from tvist.demo.identified import DEMO_PLAN, QUICK_PLAN, identify_map
-    from tvist.demo.report import print_table, write_outputs
+    from tvist.experiments.identified import DEMO_PLAN, QUICK_PLAN, identify_map
+    from tvist.experiments.report import write_outputs
 
     console = Console(quiet=not verbose)
     if not console.is_terminal and console.width < 160:
@@ -62,7 +68,7 @@ def run_demo(
             # Right after the last map-driven row, so the map rows stand together.
             after = max((i for i, m in enumerate(rows) if m.dynmap is not None), default=0)
             rows.insert(after + 1, identified.method)
-            from tvist.demo.modal_rows import identify_modal_map
+            from tvist.experiments.modal_rows import identify_modal_map
 
             modal_row, modal_summary = identify_modal_map(
                 identified.records, out_dir, console.print
@@ -77,7 +83,8 @@ def run_demo(
         wall_time_s=time.perf_counter() - start,
     )
     outputs = write_outputs(result, out_dir)
-    print_table(result, console)
+    if show_table is not None:
+        show_table(result, console)
     n_figures = sum(len(v) for v in outputs["figures"].values())
     n_figures += len((identification or {}).get("figures", []))
     console.print(

@@ -5,16 +5,17 @@ Short, fast moves are where ringing is a large share of the cycle. A cobot cell'
 (:data:`CELL_POSES`, from stretched to folded, base turned 0-0.9 rad), 5 kg payload, fast
 double-S profile (3 rad/s, 4 rad/s², 20 ms acceleration ramp). At each pose the tool must
 be still before it grips or places, so the cycle time is the sum over the moves of the time
-from the start of the move until settled (:mod:`tvist.demo.settle`). Every move starts from
-rest (the previous one has settled; what is left under the band is not carried over).
+from the start of the move until settled (:mod:`tvist.experiments.settle`). Every move starts
+from rest (the previous one has settled; what is left under the band is not carried over).
 
 Rows: unshaped; *slow down instead* (per move the profile of the grid
-:mod:`tvist.demo.slow_down` that settles first); fixed shapers tuned per move (two-mode ZV
-at its start pose; the shortest robust library shaper over its modes, :mod:`tvist.demo.fixed`);
-FD-TVIST with the identified modal map (the demo's reduced campaign and fit,
-:mod:`tvist.demo.identified`, :mod:`tvist.demo.modal_rows`); zero-delay shaping (ZTDIS and
-modified ZTDIS) with that map's modes at each end pose; and, as an oracle reference, ZTDIS on
-the twin's exact end-pose modes. The limit is the sum of the moves' own durations.
+:mod:`tvist.experiments.slow_down` that settles first); fixed shapers tuned per move (two-mode
+ZV at its start pose; the shortest robust library shaper over its modes,
+:mod:`tvist.experiments.fixed`); FD-TVIST with the identified modal map (the demo's reduced
+campaign and fit, :mod:`tvist.experiments.identified`, :mod:`tvist.experiments.modal_rows`);
+zero-delay shaping (ZTDIS and modified ZTDIS) with that map's modes at each end pose; and, as
+an oracle reference, ZTDIS on the twin's exact end-pose modes. The limit is the sum of the
+moves' own durations.
 """
 
 from __future__ import annotations
@@ -32,11 +33,11 @@ from typing import Any
 import numpy as np
 
 from tvist import robots
-from tvist.demo.experiment import MotionRun, run_motion
-from tvist.demo.methods import Method, default_methods, fd_tvist_map, zero_delay_row
-from tvist.demo.motions import DT_S, PAYLOAD_COM_M, PAYLOAD_KG, Motion
-from tvist.demo.settle import CRITERIA, SETTLE_HOLD_S, format_settle, settle_config
-from tvist.demo.slow_down import ACCEL_SCALES, JERK_TIMES_S
+from tvist.experiments.experiment import MotionRun, run_motion
+from tvist.experiments.methods import Method, default_methods, fd_tvist_map, zero_delay_row
+from tvist.experiments.motions import DT_S, PAYLOAD_COM_M, PAYLOAD_KG, Motion
+from tvist.experiments.settle import CRITERIA, SETTLE_HOLD_S, format_settle, settle_config
+from tvist.experiments.slow_down import ACCEL_SCALES, JERK_TIMES_S
 from tvist.sim import Twin
 
 __all__ = [
@@ -99,8 +100,8 @@ def pick_place_methods(dynmap: Any | None, map_name: str = "identified modal map
     """The rows: unshaped, fixed shapers, and with ``dynmap`` (a map with
     ``modes(robot, q)``, called ``map_name`` in labels) FD-TVIST and zero-delay shaping on it;
     ZTDIS on the twin's exact end-pose modes as an oracle reference."""
-    from tvist.demo.fixed import fixed_robust_row, fixed_start_row
-    from tvist.demo.modal_rows import fd_tvist_modal
+    from tvist.experiments.fixed import fixed_robust_row, fixed_start_row
+    from tvist.experiments.modal_rows import fd_tvist_modal
     from tvist.maps.modal import ModalMap
 
     rows = [default_methods()[0], fixed_start_row(), fixed_robust_row()]
@@ -378,12 +379,13 @@ def plot_cycle(result: PickPlaceResult, path: Path, key: str = CRITERIA[0].key) 
 
 def write_pick_place(result: PickPlaceResult, out_dir: str | Path) -> dict[str, Any]:
     """Write ``results.json``, ``report.md`` and ``cycle.png`` to ``out_dir``."""
-    from tvist.demo.report import _json_safe, _md_table
+    from tvist.experiments.results_json import json_safe
+    from tvist.experiments.table import markdown_table
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     results = out / "results.json"
-    results.write_text(json.dumps(_json_safe(result.to_json()), indent=2) + "\n", encoding="utf-8")
+    results.write_text(json.dumps(json_safe(result.to_json()), indent=2) + "\n", encoding="utf-8")
     figure = plot_cycle(result, out / "cycle.png")
     header, rows = _table(result)
     per_move_header = ["move", "move [s]", *[r.label for r in result.rows]]
@@ -414,13 +416,13 @@ def write_pick_place(result: PickPlaceResult, out_dir: str | Path) -> dict[str, 
         "",
         "## Cycle time to settled",
         "",
-        _md_table(header, rows),
+        markdown_table(header, rows),
         "",
         *[f"- {line}" for line in findings(result)],
         "",
         f"## Per move, settled to {CRITERIA[0].text} [s]",
         "",
-        _md_table(per_move_header, per_move),
+        markdown_table(per_move_header, per_move),
         "",
         f"![cycle]({figure.name})",
         "",
@@ -436,8 +438,8 @@ def run_from_args(args: Any) -> int:
     from rich.console import Console
     from rich.table import Table
 
-    from tvist.demo.identified import DEMO_PLAN, QUICK_PLAN, identify_map
-    from tvist.demo.modal_rows import identify_modal_map
+    from tvist.experiments.identified import DEMO_PLAN, QUICK_PLAN, identify_map
+    from tvist.experiments.modal_rows import identify_modal_map
 
     console = Console()
     if not console.is_terminal and console.width < 160:

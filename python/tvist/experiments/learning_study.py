@@ -19,9 +19,9 @@ study measures both sides of that:
 
 ::
 
-    python -m tvist.demo.learning_study --seed 3
-    python -m tvist.demo.learning_study --seed 3 --wrists-from-twin
-    python -m tvist.demo.learning_study --seed 3 --wrist-stiffness 4000
+    python -m tvist.experiments.learning_study --seed 3
+    python -m tvist.experiments.learning_study --seed 3 --wrists-from-twin
+    python -m tvist.experiments.learning_study --seed 3 --wrist-stiffness 4000
 """
 
 from __future__ import annotations
@@ -35,10 +35,10 @@ from dataclasses import dataclass
 import numpy as np
 
 import tvist
-from tvist.demo.experiment import run_motion
-from tvist.demo.methods import default_methods
-from tvist.demo.modal_rows import fd_tvist_modal
-from tvist.demo.motions import MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
+from tvist.experiments.experiment import run_motion
+from tvist.experiments.methods import default_methods
+from tvist.experiments.modal_rows import fd_tvist_modal
+from tvist.experiments.motions import MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
 from tvist.ident.logs import Record
 from tvist.learn import MapLearner
 from tvist.learn.decay import DECAY_S, stop_index
@@ -162,7 +162,7 @@ def third_mode_visibility(seed: int) -> list[tuple[str, float, float]]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     p = argparse.ArgumentParser(
-        prog="python -m tvist.demo.learning_study",
+        prog="python -m tvist.experiments.learning_study",
         description="Learning from the published map on the twin, and what limits Q1->Q3.",
     )
     p.add_argument("--seed", type=int, default=3, help="noise and pose seed (default 3)")

@@ -3,7 +3,8 @@
 A joint-space double-S move drives a plant whose tool acceleration is the sum of two
 base-excited second-order modes. The reference is shaped by ``TvShaper`` with the plant's own
 (constant) modes, and the residual vibration of both runs is compared. This needs no robot
-model and no simulator; :mod:`tvist.demo.experiment` on the MuJoCo twin is the full experiment.
+model and no simulator; :mod:`tvist.experiments.experiment` on the MuJoCo twin is the full
+experiment.
 """
 
 from __future__ import annotations
@@ -89,7 +90,7 @@ def run_linear_demo(
             f"{r.reduction_percent:>11.1f}%{r.peak_jerk_rad_s3:>12.1f}"
         )
     (out / "results.json").write_text(json.dumps([asdict(r) for r in table], indent=2))
-    from tvist.demo.plots import plot_traces
+    from tvist.experiments.plots import plot_traces
 
     plot_traces(
         traj.t_s,

@@ -1,6 +1,6 @@
-"""Figures for reports. matplotlib is imported lazily; every figure is a standalone
-:class:`matplotlib.figure.Figure` saved to a file, so plotting never selects or changes the
-global pyplot backend (inline plots in Jupyter keep working)."""
+"""Figures of the experiments' reports, and :func:`make_figures`, those of the UR5e experiment.
+Every figure is a standalone :func:`tvist.figures.new_figure` saved to a file, so plotting
+never selects or changes the global pyplot backend (inline plots in Jupyter keep working)."""
 
 from __future__ import annotations
 
@@ -8,13 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
-
-def new_figure(**kwargs):
-    """A standalone figure (no pyplot state): ``Figure(layout="constrained", **kwargs)``."""
-    from matplotlib.figure import Figure
-
-    kwargs.setdefault("layout", "constrained")
-    return Figure(**kwargs)
+from tvist.experiments.experiment import DemoResult, MotionRun
+from tvist.experiments.measure import damped_frequency_hz
+from tvist.figures import new_figure
 
 
 def plot_traces(
@@ -342,3 +338,70 @@ def plot_path_deviation(
     ax.legend(fontsize=9)
     fig.savefig(path, dpi=120)
     return Path(path)
+
+
+def make_figures(result: DemoResult, out: Path) -> dict[str, list[Path]]:
+    """Write the figures; returns ``{"acceleration": [...], "spectra": [...], "modes": [...]}``."""
+    figures: dict[str, list[Path]] = {"acceleration": [], "spectra": [], "modes": []}
+    panels = []
+    for motion in result.motions:
+        traces = {
+            r.method.label: (
+                np.linalg.norm(r.psi, axis=1),
+                r.t_stop_s,
+                r.residual.amplitude,
+                r.residual.decay_rate_1_s,
+            )
+            for r in motion.runs
+        }
+        name = motion.motion.name.replace("->", " → ")
+        figures["acceleration"].append(
+            plot_stop_aligned_acceleration(
+                motion.t_s,
+                traces,
+                motion.t_stop_unshaped_s,
+                out / f"acceleration_{motion.motion.slug}.png",
+                title=f"{name}: gravity-free tool acceleration |ψ|, 5 kg payload (simulated UR5e)",
+            )
+        )
+        spectra = {r.method.label: (r.spectrum.freq_hz, r.spectrum.energy) for r in motion.runs}
+        marks = {
+            f"twin (true): damped f_d at {motion.motion.end}": [
+                damped_frequency_hz(w, z) for w, z in motion.true_end_modes
+            ]
+        }
+        for label, modes in motion.map_end_modes.items():
+            marks[f"{label}: damped f_d at {motion.motion.end}"] = [
+                damped_frequency_hz(w, z) for w, z in modes
+            ]
+        panels.append((f"{name}: residual vibration after the stop", spectra, marks))
+        traj_start = float(motion.tracks.t_s[0])
+        figures["modes"].append(
+            plot_mode_tracks(
+                motion.tracks.t_s - traj_start,
+                motion.tracks.inertia_kg_m2,
+                motion.tracks.modes,
+                out / f"modes_{motion.motion.slug}.png",
+                title=f"{name}: inertias and modes along the planned move",
+                t_marks_s={
+                    "planned move starts": _move_start(motion) - traj_start,
+                    "planned move stops (t_b)": motion.t_stop_unshaped_s - traj_start,
+                },
+            )
+        )
+    window = result.config["spectrum_window_s"]
+    figures["spectra"].append(
+        plot_energy_spectra(
+            panels,
+            out / "spectra.png",
+            title=f"Energy spectra (eq. 56) of the gravity-free tool acceleration, {window:g} s "
+            "after each stop",
+        )
+    )
+    return figures
+
+
+def _move_start(motion: MotionRun) -> float:
+    q = motion.runs[0].q
+    moving = np.flatnonzero(np.any(q != q[0], axis=1))
+    return float(motion.t_s[moving[0] - 1]) if moving.size else float(motion.t_s[0])

@@ -9,7 +9,7 @@ example a map identified on the twin with :func:`fd_tvist_map` (the CLI's ``--ma
     run_demo(methods=methods)
 
 ``run_demo()`` (``tvist demo``) adds such a row itself from a reduced mapping campaign on the
-twin (:mod:`tvist.demo.identified`) unless ``identify=False`` (``--no-identify``).
+twin (:mod:`tvist.experiments.identified`) unless ``identify=False`` (``--no-identify``).
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 import tvist
-from tvist.demo.motions import Motion
+from tvist.experiments.motions import Motion
 from tvist.maps.paper10 import DynamicMap, MapDynamics
 from tvist.robots import Robot
 from tvist.sim import Twin
@@ -295,7 +295,7 @@ def default_methods() -> list[Method]:
 
 
 def _fixed_rows() -> list[Method]:
-    """The time-invariant baselines (:mod:`tvist.demo.fixed`)."""
-    from tvist.demo.fixed import fixed_robust_row, fixed_start_row
+    """The time-invariant baselines (:mod:`tvist.experiments.fixed`)."""
+    from tvist.experiments.fixed import fixed_robust_row, fixed_start_row
 
     return [fixed_start_row(), fixed_robust_row()]

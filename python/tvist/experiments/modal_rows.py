@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 import tvist
-from tvist.demo.methods import TVIST_SHAPER, Method, MotionContext, Reference, _run_tv_shaper
+from tvist.experiments.methods import TVIST_SHAPER, Method, MotionContext, Reference, _run_tv_shaper
 from tvist.maps.modal import ModalMap
 
 KEY = "fd-tvist-identified-modal-map"
@@ -40,7 +40,7 @@ def identify_modal_map(
     ``tvist fit-map --kind modal`` makes, :func:`tvist.ident.all_modes_fit.fit_all_modes`),
     save it next to them, and return its row with a summary (the shaped modes' frequency
     errors against the twin's true modes at workspace poses unlike the campaign's,
-    :func:`tvist.demo.generalization.map_vs_truth`),
+    :func:`tvist.experiments.generalization.map_vs_truth`),
     or ``(None, {"error": ...})`` if the fit fails."""
     from tvist.ident.all_modes_fit import fit_all_modes, fitted_map
 
@@ -50,7 +50,7 @@ def identify_modal_map(
         modal = fitted_map(fit, {"source": f"reduced campaign on the twin ({n_poses} poses)"})
         modal.save(Path(out_dir) / MAP_FILE)
         # The real-time provider rejects a map with an overdamped mode at a sampled pose.
-        from tvist.demo.motions import PAYLOAD_COM_M, PAYLOAD_KG
+        from tvist.experiments.motions import PAYLOAD_COM_M, PAYLOAD_KG
 
         tvist.ModalDynamics(
             tvist.robots.ur5e(payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M), modal
@@ -73,8 +73,8 @@ def identify_modal_map(
 def _versus_true_modes(modal: ModalMap) -> list[dict[str, Any]]:
     """Per shaped mode of ``modal``: RMS and largest frequency error (%) against the default
     twin's true modes at the generalization harness's evaluation poses."""
-    from tvist.demo.generalization import evaluation_poses, map_vs_truth
-    from tvist.demo.motions import PAYLOAD_COM_M, PAYLOAD_KG
+    from tvist.experiments.generalization import evaluation_poses, map_vs_truth
+    from tvist.experiments.motions import PAYLOAD_COM_M, PAYLOAD_KG
     from tvist.sim.family import nominal_variant
 
     robot = tvist.robots.ur5e(payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M)
@@ -89,8 +89,8 @@ def compare_on_variant(variant: str, records_path: str | Path) -> list[tuple[str
     experiment's three motions, e.g.
     ``compare_on_variant("ur5e-soft-gears", "out/campaign_variant.jsonl")`` (or a family
     variant, ``"family:ur5e:17"``)."""
-    from tvist.demo.experiment import run_experiment
-    from tvist.demo.methods import default_methods, fd_tvist_map
+    from tvist.experiments.experiment import run_experiment
+    from tvist.experiments.methods import default_methods, fd_tvist_map
     from tvist.ident.campaign import load_results
     from tvist.ident.map_fit import fit_map
     from tvist.ident.modal_fit import fit_modal_map

@@ -8,7 +8,7 @@ motions pass through: its radii reach from the folded pose Q3 (0.25 m from the s
 to the stretched pose Q1 (0.92 m), beyond the paper's 0.4-0.9 m. It is reduced to two
 payloads (none and the experiment's 5 kg) and 3 angles x 6 radii, 36 poses, so that it fits the
 demo's time budget (:data:`DEMO_PLAN` says why these); the published map is fitted to the 5 kg
-poses, the modal map (:mod:`tvist.demo.modal_rows`) to all. The full campaign is
+poses, the modal map (:mod:`tvist.experiments.modal_rows`) to all. The full campaign is
 :func:`tvist.ident.campaign.run_campaign` over :func:`tvist.ident.campaign.campaign_poses`.
 
 The campaign's pose records are kept in ``campaign.jsonl`` next to a fingerprint of its
@@ -32,8 +32,8 @@ from typing import Any
 import numpy as np
 
 from tvist import robots
-from tvist.demo.methods import Method, fd_tvist_map
-from tvist.demo.motions import PAYLOAD_COM_M, PAYLOAD_KG
+from tvist.experiments.methods import Method, fd_tvist_map
+from tvist.experiments.motions import PAYLOAD_COM_M, PAYLOAD_KG
 from tvist.maps.paper10 import DynamicMap, MapDynamics
 
 KEY = "fd-tvist-identified-map"
@@ -69,7 +69,7 @@ class CampaignPlan:
     Attributes
     ----------
     payloads_kg
-        Payloads, kg (centre of mass at :data:`~tvist.demo.motions.PAYLOAD_COM_M`).
+        Payloads, kg (centre of mass at :data:`~tvist.experiments.motions.PAYLOAD_COM_M`).
     radii_m
         Distances of the flange centre from the shoulder axis, m.
     angles_rad
@@ -329,7 +329,7 @@ def identify_map(
 def _figures(dynmap: DynamicMap, records: Sequence[dict], out: Path) -> list[Path]:
     """The map-fit figures (like Figs. 23-26): modes against inertia, and identified against
     fitted."""
-    from tvist.demo.map_fit_figure import plot_identified_map
+    from tvist.experiments.map_fit_figure import plot_identified_map
     from tvist.ident.plots import plot_map_fit
 
     paths = [plot_identified_map(dynmap, records, out / "identified_map_fit.png")]

@@ -304,7 +304,7 @@ def _measured_mode(exp: PayloadExperiment) -> tuple[float, float]:
 
 
 def _pct(value: float) -> str:
-    from tvist.demo.report import format_reduction
+    from tvist.experiments.table import format_reduction
 
     return format_reduction(value)
 
@@ -383,8 +383,8 @@ def _table(exp: PayloadExperiment) -> list[str]:
 
 def write_flexible_payload(exp: PayloadExperiment, out_dir: str | Path) -> dict[str, Path]:
     """Write ``results.json``, ``report.md`` and the figures to ``out_dir``."""
-    from tvist.demo import plots
-    from tvist.demo.report import _json_safe
+    from tvist.experiments import plots
+    from tvist.experiments.results_json import json_safe
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -419,7 +419,7 @@ def write_flexible_payload(exp: PayloadExperiment, out_dir: str | Path) -> dict[
         title="Distance of the shaped flange path from the planned straight line",
     )
     results = out / "results.json"
-    results.write_text(json.dumps(_json_safe(exp.to_json()), indent=2) + "\n", encoding="utf-8")
+    results.write_text(json.dumps(json_safe(exp.to_json()), indent=2) + "\n", encoding="utf-8")
     cfg = exp.config
     conv_dev, joint_dev = np.max(exp.deviation_cartesian_m), np.max(exp.deviation_joint_m)
     lines = [

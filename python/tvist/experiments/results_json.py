@@ -1,0 +1,31 @@
+"""``results.json`` of the experiments: their results as JSON, NaN and infinities as null."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tvist.experiments.experiment import DemoResult
+
+
+def json_safe(value: Any) -> Any:
+    """NaN and infinities become null (JSON has no NaN); numpy scalars become floats."""
+    if isinstance(value, dict):
+        return {k: json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_safe(v) for v in value]
+    if isinstance(value, (np.floating, float)):
+        return float(value) if math.isfinite(float(value)) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
+def write_json(result: DemoResult, path: Path) -> Path:
+    """Write ``results.json``."""
+    path.write_text(json.dumps(json_safe(result.to_json()), indent=2) + "\n", encoding="utf-8")
+    return path
