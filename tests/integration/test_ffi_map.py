@@ -26,7 +26,7 @@ import tvist
 from cpp_programs import target_lock
 from tvist.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAYLOAD_KG, COM_M, DT_S = 5.0, (0.0, 0.0, 0.05), 0.002
 TOLERANCE_RAD = 1e-12
 #: Poses of the synthetic campaign a fit-map file is made from. The check is that C++ and
