@@ -12,15 +12,15 @@ demo: build
 	$(PY) -m tvist.cli demo
 
 # Every example runs once: the C and C++ ones in ffi-test, the Python ones in pytest
-# (tests/test_examples.py, which also checks what they print).
+# (tests/integration/test_examples.py, which also checks what they print).
 test: build rust-test ffi-test lint docs pytest
 
-# The edit-compile-test loop (2-3 minutes): ruff, tvist-core's tests and every pytest test
-# not marked slow (see docs/test-quality.md). `make test` still runs everything.
+# The edit-compile-test loop: ruff, tvist-core's tests and the unit tier (tests/unit: fast,
+# no long simulator runs, no sockets, so nothing realtime; see docs/test-quality.md).
+# `make test` still runs everything.
 test-fast: build lint
 	cargo test -p tvist-core -q
-	$(PY) -m pytest -q --durations=10 $(PYTEST_PARALLEL) -m "not slow and not realtime"
-	$(PY) -m pytest -q --durations=5 $(PYTEST_PARALLEL) -m "realtime and not slow"
+	$(PY) -m pytest -q --durations=10 $(PYTEST_PARALLEL) tests/unit -m "not slow"
 
 $(PY):
 	python3 -m venv $(VENV)

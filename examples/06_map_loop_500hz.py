@@ -27,7 +27,7 @@ tvist.DynamicMap.paper_ur5e().save("ur5e_map.json")
 dynmap = tvist.load_map("ur5e_map.json")  # a paper10 or a modal map, by the file's kind
 
 robot = tvist.robots.ur5e(payload_kg=5.0, payload_com_m=(0.0, 0.0, 0.05))
-shaper = tvist.TvShaper(tvist.maps.dynamics_for(robot, dynmap), dt_s=DT_S, n_dof=6, shaper="zv")
+shaper = tvist.TvShaper(tvist.dynamics_for(robot, dynmap), dt_s=DT_S, n_dof=6, shaper="zv")
 
 plan = double_s(PAPER_POSES["Q1"], PAPER_POSES["Q3"], dt_s=DT_S, t_post_s=0.3).q
 shaper.reset(plan[0])

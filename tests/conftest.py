@@ -1,4 +1,7 @@
-"""Suite-wide pytest hooks and fixtures."""
+"""Suite-wide pytest hooks and fixtures.
+
+The helper modules in ``tests/support`` are importable by name from every tier through the
+``pythonpath`` option in pyproject.toml (set before this file is loaded)."""
 
 from pathlib import Path
 
@@ -15,22 +18,62 @@ __all__ = [
 ]
 
 
+TESTS = Path(__file__).resolve().parent
+
+#: The tiers, one folder each; every test in a folder gets the folder's marker.
+TIERS = ("unit", "integration", "reference")
+
+#: Tests outside the realtime modules that open a socket (paths relative to tests/, a file or
+#: one test's node id). Every realtime test is also ``network``: the twin server it drives
+#: listens on loopback ports.
+NETWORK = ("unit/test_twin_plant.py::test_server_names_a_taken_port",)
+
+
+def _is_realtime_module(module: object) -> bool:
+    """A module that uses the twin server's test helpers (``twin_server_fixture``) or says so
+    itself (``REALTIME = True``)."""
+    return getattr(module, "REALTIME", False) or any(
+        getattr(v, "__module__", None) == twin_server_fixture.__name__
+        for v in vars(module).values()
+    )
+
+
+def _relative_node_id(item: pytest.Item) -> str | None:
+    """``tier/test_file.py::test_name[...]`` relative to tests/, or None outside tests/."""
+    try:
+        path = item.path.resolve().relative_to(TESTS).as_posix()
+    except ValueError:
+        return None
+    return "::".join([path, *item.nodeid.split("::")[1:]])
+
+
+def _is_network(node_id: str) -> bool:
+    return any(
+        node_id == entry or node_id.startswith(entry + "::") or node_id.startswith(entry + "[")
+        for entry in NETWORK
+    )
+
+
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """Mark ``realtime`` every test of a module that uses the twin server's test helpers
-    (``twin_server_fixture``) or says so itself (``REALTIME = True``): the server
-    keeps real time at 500 Hz, and a CPU-bound test on another worker next to it makes its
-    moves late (a Ctrl-C test found its 3 s move already over). ``make pytest`` runs them in
-    one process after the parallel part."""
+    """Mark each test with its tier (its folder under tests/), ``realtime`` and ``network``.
+
+    ``realtime``: every test of a module that uses the twin server's test helpers or sets
+    ``REALTIME = True``: the server keeps real time at 500 Hz, and a CPU-bound test on another
+    worker next to it makes its moves late (a Ctrl-C test found its 3 s move already over).
+    ``make pytest`` runs them in one process after the parallel part."""
     for item in items:
         module = getattr(item, "module", None)
-        if module is not None and (
-            getattr(module, "REALTIME", False)
-            or any(
-                getattr(v, "__module__", None) == twin_server_fixture.__name__
-                for v in vars(module).values()
-            )
-        ):
+        realtime = module is not None and _is_realtime_module(module)
+        if realtime:
             item.add_marker(pytest.mark.realtime)
+        node_id = _relative_node_id(item)
+        if node_id is None:
+            continue
+        tier = node_id.split("/", 1)[0]
+        if tier in TIERS:
+            item.add_marker(getattr(pytest.mark, tier))
+        if realtime or _is_network(node_id):
+            item.add_marker(pytest.mark.network)
 
 
 @pytest.fixture(scope="session")

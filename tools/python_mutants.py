@@ -36,11 +36,17 @@ PACKAGE = ROOT / "python" / "tvist"
 
 #: Module (relative to python/tvist) -> the test files that must catch its mutants.
 MODULES: dict[str, tuple[str, ...]] = {
-    "ident/local_fit.py": ("tests/test_ident_local_fit.py", "tests/test_ident_base_mode.py"),
-    "ident/zoh.py": ("tests/test_ident_local_fit.py", "tests/test_ident_base_mode.py"),
-    "ident/map_fit.py": ("tests/test_ident_map_fit.py",),
-    "analysis/residual.py": ("tests/test_analysis.py",),
-    "ztdis.py": ("tests/test_zero_delay.py", "tests/test_ztdis_inputs.py"),
+    "ident/local_fit.py": (
+        "tests/unit/test_ident_local_fit.py",
+        "tests/integration/test_ident_base_mode.py",
+    ),
+    "ident/zoh.py": (
+        "tests/unit/test_ident_local_fit.py",
+        "tests/integration/test_ident_base_mode.py",
+    ),
+    "ident/map_fit.py": ("tests/reference/test_ident_map_fit.py",),
+    "analysis/residual.py": ("tests/reference/test_analysis.py",),
+    "ztdis.py": ("tests/reference/test_zero_delay.py", "tests/unit/test_ztdis_inputs.py"),
 }
 
 _BINOP_SWAP = {

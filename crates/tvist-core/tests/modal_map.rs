@@ -1,6 +1,6 @@
 //! The modal map against closed forms: two coupled joints (the quadratic characteristic
 //! equation), the overdamped fallback, mode assignment through a frequency crossing, and the
-//! UR5e provider. (The damped modes against LAPACK: tests/test_modal_map.py.)
+//! UR5e provider. (The damped modes against LAPACK: tests/reference/test_modal_map.py.)
 
 mod robot_support;
 

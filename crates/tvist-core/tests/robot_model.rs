@@ -1,8 +1,8 @@
 //! Robot model, dynamic map and map-driven provider: properties, cross-checks and bad input.
 //!
 //! The exact comparison against an independent rigid-body library (pinocchio) is in
-//! `tests/test_robots.py`; here the model is checked against identities that any correct
-//! implementation satisfies, with independent arithmetic.
+//! `tests/reference/test_robots.py`; here the model is checked against identities that any
+//! correct implementation satisfies, with independent arithmetic.
 
 mod robot_support;
 

@@ -209,7 +209,7 @@ def add_allow_other_robot(p: argparse.ArgumentParser) -> None:
 
 
 def map_dynamics(args: argparse.Namespace, robot, dynmap):
-    """``tvist.maps.dynamics_for(robot, dynmap)``; a map of another robot is refused naming
+    """``tvist.dynamics_for(robot, dynmap)``; a map of another robot is refused naming
     ``--allow-other-robot``, or used with a warning when that flag is given."""
     import tvist
 
@@ -227,7 +227,7 @@ def map_dynamics(args: argparse.Namespace, robot, dynmap):
             UserWarning,
             stacklevel=2,
         )
-    return tvist.maps.dynamics_for(robot, dynmap, allow_other_robot=allow)
+    return tvist.dynamics_for(robot, dynmap, allow_other_robot=allow)
 
 
 def map_from_args(args: argparse.Namespace):

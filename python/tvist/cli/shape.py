@@ -199,7 +199,7 @@ def shape_file(
         raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
     if (modes is None) == (dynmap is None or robot is None):
         raise ValueError("give either fixed modes or a robot with a dynamic map")
-    dynamics = modes if modes is not None else tvist.maps.dynamics_for(robot, dynmap)
+    dynamics = modes if modes is not None else tvist.dynamics_for(robot, dynmap)
     out, added, end_modes, alpha, counts = shape_samples(
         Q, dt_s, dynamics, method=method, shaper=shaper
     )

@@ -9,7 +9,7 @@ it hardly matters (upper arm at least 30° from vertical, :mod:`tvist.learn.twin
 study measures both sides of that:
 
 - :func:`learn_from_paper_map`: the learning sequence of
-  ``tests/test_learn.py::test_learning_from_the_published_paper10_map_improves_the_demo_moves``,
+  ``tests/integration/test_learn.py::test_learning_from_the_published_paper10_map_improves_the_demo_moves``,
   optionally with the converted prior's wrist stiffness given (a what-if: e.g. the twin's
   own, an oracle no prior has, or a gear-size scaling), and the three moves' residual
   vibration reduction with the paper map, the prior and the learned map;

@@ -7,7 +7,7 @@ in it. The model is the core's (``tvist-core/src/modes/modal/modal_map.rs``): th
 deflections ``δ`` of the flexible joints obey ``M_ff δ'' + C δ' + K δ = 0`` with
 ``K = diag(k_j(L))``, ``C = diag(c_j(L))`` and the load laws ``v_0 + v_1 |L|_s + v_2 L²``;
 the modes are the exact damped roots (``ω_n = |λ|``, ``ζ = −Re λ/|λ|``).
-``tests/test_model_modes.py`` checks this against the core's shaped modes.
+``tests/integration/test_all_modes_fit.py`` checks this against the core's shaped modes.
 
 Arrays are over poses first, modes in increasing ``ω_n`` (the frequency rank: continuous in
 the parameters and along a motion, also where two modes veer).

@@ -30,8 +30,8 @@ What is drawn, per joint ``j`` (nominal: :func:`tvist.sim.default_flex`):
   joint-to-joint and arm-to-arm spread of gear friction (temperature, lubricant, wear). Over
   seeds 0-99, with 5 kg at Q1 and Q3, the first three modes' ζ then span 0.029-0.64 on the
   UR5e (5-95 %: 0.054-0.39) and 0.020-0.54 on the UR10e (0.041-0.31): the measured UR5e
-  range with some margin on both sides (``tests/test_family.py`` checks every one stays
-  within 0.005-0.9).
+  range with some margin on both sides (``tests/integration/test_family.py`` checks every
+  one stays within 0.005-0.9).
 - **Flexible links** (:mod:`tvist.sim.beams`): half of the variants have a bending upper arm
   and forearm, a tube of 0.85-1.15 x the robot's nominal diameter (UR5e 80 mm, UR10e
   100 mm) with 2.5-4 mm wall and structural loss factor 0.01-0.04 (design choices, as for

@@ -27,8 +27,8 @@ by construction. A variant changes the plant, not the map:
     matter. With every joint held and the 5 kg payload, the upper arm, carrying the forearm,
     wrists and payload, bends at 21.4 Hz stretched out (Q1) and 45.7 Hz folded (Q3), the
     forearm at 46.2 Hz (a continuous Euler-Bernoulli beam with the carried links as a rigid
-    tip body: 21.3, 45.5 and 45.9 Hz, ``tests/test_flex_links.py``). No joint-spring model
-    contains these degrees of freedom: at stretched poses the links' bending adds compliance
+    tip body: 21.3, 45.5 and 45.9 Hz, ``tests/reference/test_flex_links.py``). No joint-spring
+    model contains these degrees of freedom: at stretched poses the links' bending adds compliance
     in series with the gears (base and shoulder modes at Q1 7.45 and 7.21 Hz instead of 7.90
     and 7.67), at folded poses it couples with them (Q3 18.21 and 18.15 Hz instead of 20.16
     and 19.22), by amounts that depend on the pose.

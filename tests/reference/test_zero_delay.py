@@ -17,7 +17,7 @@ from tvist import _core
 from tvist.experiments.ztdis_benchmark import count_velocity_peaks, run_benchmark
 from tvist.ztdis import compress, zero_delay
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 # The paper's experiment: 2.55 Hz payload mode, zeta = 0.04, ZVD, T = 0.734 s. 500 Hz control.
 WN = 2.0 * np.pi * 2.55

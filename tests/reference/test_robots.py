@@ -162,7 +162,7 @@ def _data_text() -> str:
     return tvist._core.ROBOT_DATA_JSON
 
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DATA_FILE = ROOT / "crates" / "tvist-core" / "data" / "ur_e_series.json"
 
 

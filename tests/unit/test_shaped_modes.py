@@ -37,7 +37,7 @@ def _report(ranks: dict[str, str], shaped: set[str], participation=None) -> list
 
 
 #: The physical modes' frequency ranks at the 16 poses of the FR3 test campaign
-#: (tests/test_urdf_twin.py), as its fit's model gives them, and the base mode's flange
+#: (tests/integration/test_urdf_twin.py), as its fit's model gives them, and the base mode's flange
 #: participation there. Joint index 2's mode was identified at 2 of the 16 poses: not shaped.
 FR3_RANKS = {
     "joint 0": "3241211241422412",

@@ -135,7 +135,7 @@ def test_plan_record_identify_fit_run_on_the_twin(tmp_path) -> None:
         unshaped = residual_vibration(unshaped_log)
         # A servo loop that woke too late jumps over samples (tvist run warns), and the
         # jumps excite the arm: such a run does not measure the shaping and is run again (at
-        # most twice), as in tests/test_twin_server.py.
+        # most twice), as in tests/integration/test_twin_server.py.
         for attempt in range(3):
             shaped_log, output = run(f"map{attempt}", "--map", str(dynmap))
             # With a map, the payload is the controller's (the server's 5 kg).

@@ -34,9 +34,9 @@ def test_twin_modes_equal_pinocchio_eigen_analysis(name):
         )
         np.testing.assert_allclose(twin.equilibrium(q), ref.q_link, rtol=0, atol=1e-10)
         analysis = twin.modal_analysis(q)
-        # As for the UR twin (tests/test_sim.py): the central-difference gravity stiffness
-        # rounds at ~1e-8 N m/rad against stiffnesses >= 100 N m/rad, the equilibria agree to
-        # ~1e-13 rad; 1e-7 relative is far above both and far below any modelling change.
+        # As for the UR twin (tests/integration/test_sim.py): the central-difference gravity
+        # stiffness rounds at ~1e-8 N m/rad against stiffnesses >= 100 N m/rad, the equilibria
+        # agree to ~1e-13 rad; 1e-7 relative is far above both and far below any modelling change.
         np.testing.assert_allclose(analysis.wn_rad_s, ref.wn_rad_s, rtol=1e-7)
         np.testing.assert_allclose(analysis.zeta, ref.zeta, rtol=1e-7)
 

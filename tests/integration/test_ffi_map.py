@@ -26,7 +26,7 @@ import tvist
 from cpp_programs import target_lock
 from tvist.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAYLOAD_KG, COM_M, DT_S = 5.0, (0.0, 0.0, 0.05), 0.002
 TOLERANCE_RAD = 1e-12
 #: Poses of the synthetic campaign a fit-map file is made from. The check is that C++ and
@@ -179,7 +179,7 @@ def test_cpp_shapes_a_urdf_arm_from_its_robot_file_exactly_as_python(program, tm
     of the form ``tvist fit-map --kind modal`` gives these arms (four flexible proximal
     joints, the three lowest modes shaped as a set), shaped in C++ from the two files and in
     Python from the shipped arm. (The FR3 with two flexible joints named by joint is
-    tests/test_urdf.py's case.)"""
+    tests/reference/test_urdf.py's case.)"""
     from tvist.robots import shipped_urdf
 
     path, base, tip = shipped_urdf("iiwa14")

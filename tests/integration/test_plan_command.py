@@ -28,7 +28,7 @@ def test_plan_writes_programs_and_trajectories_payload_by_payload(tmp_path, caps
     cover = tmp_path / "mine.csv"
     np.savetxt(cover, [PAPER_POSES["Q2"]], delimiter=",")
     args = ["plan", "--payloads", "3", "0", "--every", "16", "--duration", "2"]
-    args += ["--no-workspace-cover"]  # (tests/test_plan_coverage.py)
+    args += ["--no-workspace-cover"]  # (tests/integration/test_plan_coverage.py)
     assert main([*args, "--cover", str(cover), "--out", str(out)]) == 0
     text = capsys.readouterr().out
     plan = json.loads((out / "plan.json").read_text())

@@ -19,7 +19,7 @@ import tvist
 import tvist.cli.live
 from tvist.cli import COMMANDS, build_parser, main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _tvist(*argv: str) -> subprocess.CompletedProcess:

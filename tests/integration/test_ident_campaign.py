@@ -117,7 +117,7 @@ def test_runner_appends_per_pose_and_resumes(tmp_path):
             assert fit["wn_rad_s"] == pytest.approx(wn, rel=0.01)
             assert fit["zeta"] == pytest.approx(zeta, rel=0.05)
         # The elbow log's mode is a ringing entry of its own log (the local fit's 1 %; its
-        # confidence is the multi-mode fit's matter, tests/test_ident_ringing.py).
+        # confidence is the multi-mode fit's matter, tests/reference/test_ident_ringing.py).
         elbow = [m for m in record["ringing"] if m["log_joint"] == 2]
         assert any(m["wn_rad_s"] == pytest.approx(ELBOW_MODE[0], rel=0.01) for m in elbow)
     table = pose_table(all_results, joint=1)  # the records feed the map fit directly

@@ -28,7 +28,7 @@ rtde_receive = pytest.importorskip("rtde_receive")
 
 DT_S = 0.002
 Q1 = np.array(PAPER_POSES["Q1"])
-ROBOT_DATA = Path(__file__).parents[1] / "crates/tvist-core/data/ur_e_series.json"
+ROBOT_DATA = Path(__file__).parents[2] / "crates/tvist-core/data/ur_e_series.json"
 UR5E = json.loads(ROBOT_DATA.read_text())["robots"]["ur5e"]
 SPEED_LIMIT_RAD_S = np.array(UR5E["max_velocity_rad_s"])
 JOINT_LIMITS_RAD = np.array(UR5E["joint_limits_rad"])

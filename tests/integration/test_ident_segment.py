@@ -46,7 +46,7 @@ def test_identify_finds_the_excitation_after_an_approach_move(joint, tmp_path, c
     assert fit["joint"] == joint
     assert "wn_rad_s" in fit, fit  # not "no ringing above noise"
     # The campaign's acceptance for a local fit: ω_n within 3 %; ζ within 15 % (the local
-    # fit's two-mode damping accuracy on the twin, tests/test_ident_local_fit.py).
+    # fit's two-mode damping accuracy on the twin, tests/unit/test_ident_local_fit.py).
     assert fit["wn_rad_s"] == pytest.approx(wn_true, rel=0.03)
     assert fit["zeta"] == pytest.approx(zeta_true, rel=0.15)
     # The segment starts where the approach has ended and stops at most MAX_REST_S after

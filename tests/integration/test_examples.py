@@ -19,7 +19,7 @@ import pytest
 
 import tvist
 
-EXAMPLES_DIR = Path(__file__).resolve().parent.parent / "examples"
+EXAMPLES_DIR = Path(__file__).resolve().parents[2] / "examples"
 EXAMPLES = sorted(EXAMPLES_DIR.glob("*.py"))
 TIMEOUT_S = 120
 #: examples/08 runs the twin server (conftest: realtime tests run alone).
