@@ -300,7 +300,12 @@ def run_campaign(
         finally:
             if bar is not None:
                 bar.close()
-        store.replace_all(flag_jumps(store.records, settings.robot_name))
+        # Parallel workers finish in any order: the file is rewritten in the order a sequential
+        # run writes it (campaign_order; records of poses not in this plan last), so the
+        # records, and any map fitted from them, are the same to the bit either way.
+        rank = {p.key: i for i, p in enumerate(campaign_order(poses))}
+        ordered = sorted(store.records, key=lambda r: rank.get(r["key"], len(rank)))
+        store.replace_all(flag_jumps(ordered, settings.robot_name))
         return list(store.records)
 
 
