@@ -33,9 +33,9 @@ from numpy.typing import ArrayLike
 import tvist
 from tvist.maps.paper10 import DynamicMap
 from tvist.robots import Robot
+from tvist.trajectory.shaping import METHODS
 
 __all__ = [
-    "CARTESIAN_METHODS",
     "CartesianShaped",
     "joints_from_tcp",
     "shape_cartesian",
@@ -45,10 +45,6 @@ __all__ = [
     "tcp_coordinates",
     "tcp_path_deviation_m",
 ]
-
-#: Shaping methods of :func:`shape_tcp`: FD-TVIST (time-invariant with constant modes,
-#: time-varying with a map or a provider), ZTDIS and modified ZTDIS.
-CARTESIAN_METHODS: tuple[str, ...] = ("tvist", "ztdis", "modified")
 
 #: Inverse kinematics converges when the position error is below this (m) and the orientation
 #: error below this (rad): far below any vibration of interest (micrometres) and above the
@@ -230,7 +226,8 @@ def shape_tcp(
         *joint* pose, evaluated every cycle at the joints of the previous shaped TCP sample
         (needs ``joints_of`` and ``max_delay_s``; a map also needs ``robot``).
     method
-        One of :data:`CARTESIAN_METHODS`.
+        One of :data:`tvist.trajectory.shaping.METHODS`: FD-TVIST (time-invariant with
+        constant modes, time-varying with a map or a provider), ZTDIS, modified ZTDIS.
     shaper
         Registry shaper (:data:`tvist.SHAPERS`).
     joints_of
@@ -249,8 +246,8 @@ def shape_tcp(
     x = np.ascontiguousarray(X, dtype=float)
     if x.ndim != 2 or x.shape[1] != 6:
         raise ValueError(f"X must be a (n_samples, 6) TCP reference, got {x.shape}")
-    if method not in CARTESIAN_METHODS:
-        raise ValueError(f"unknown method {method!r}; expected one of {CARTESIAN_METHODS}")
+    if method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; expected one of {METHODS}")
     fixed = not (isinstance(modes, DynamicMap) or callable(modes))
     if method != "tvist":
         if not fixed:
