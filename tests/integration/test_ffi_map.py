@@ -25,6 +25,8 @@ import pytest
 import tvist
 from cpp_programs import target_lock
 from tvist.cli import main
+from tvist.maps.modal import modal_map_from_flex
+from tvist.sim.flex import UR5E_FLEX
 
 ROOT = Path(__file__).resolve().parents[2]
 PAYLOAD_KG, COM_M, DT_S = 5.0, (0.0, 0.0, 0.05), 0.002
@@ -126,22 +128,9 @@ def _maps(robot_name: str, tmp: Path) -> dict[str, Path]:
     return {"fit-map": fitted, "save": saved}
 
 
-#: Gear laws of the modal map the modal files are made from (base and shoulder flexible,
-#: the base damper loaded by the shoulder's gravity torque; N m/rad, N m s/rad).
-MODAL_ENTRIES = [
-    {
-        "joint": 0,
-        "stiffness_nm_per_rad": [22000.0, 0.0, 0.0],
-        "damping_nms_per_rad": [5.0, 0.56, 0.0157],
-        "damping_load_joint": 1,
-    },
-    {
-        "joint": 1,
-        "stiffness_nm_per_rad": [18000.0, 0.0, 0.234],
-        "damping_nms_per_rad": [60.0, 0.6, 0.0],
-        "damping_load_joint": 1,
-    },
-]
+#: Gear laws of the modal map the modal files are made from: the twin's base and shoulder
+#: (tvist.sim.UR5E_FLEX), the base damper loaded by the shoulder's gravity torque.
+MODAL_ENTRIES = modal_map_from_flex(UR5E_FLEX, joints=(0, 1)).flex_joints
 
 
 def _modal_maps(robot_name: str, tmp: Path) -> dict[str, Path]:

@@ -10,6 +10,7 @@ from scipy.interpolate import make_interp_spline
 import tvist
 from tvist.cli import main
 from tvist.cli.shape import parse_modes, read_joint_csv, read_trajectory_csv
+from tvist.sim.flex import UR5E_FLEX
 from tvist.trajectory import PAPER_POSES, double_s
 from tvist.trajectory.joint_names import UR_JOINT_NAMES
 
@@ -101,11 +102,11 @@ def test_modal_map_file_fd_tvist_equals_the_modal_map_driven_shaper(move_csv, tm
     entries = [
         {
             "joint": j,
-            "stiffness_nm_per_rad": [k, 0.0, 0.0],
-            "damping_nms_per_rad": [c, 0.0, 0.0],
+            "stiffness_nm_per_rad": [UR5E_FLEX.k1_nm_per_rad[j], 0.0, 0.0],
+            "damping_nms_per_rad": [UR5E_FLEX.c0_nms_per_rad[j], 0.0, 0.0],
             "damping_load_joint": j,
         }
-        for j, k, c in ((0, 22000.0, 5.0), (1, 18000.0, 60.0))
+        for j in (0, 1)  # the twin's base and shoulder gears, without load terms
     ]
     modal = tvist.ModalMap(entries, (0, 1), {"robot": "ur5e"})
     map_path = tmp_path / "modal.json"

@@ -11,6 +11,7 @@ import tvist
 from tvist.cli import build_parser
 from tvist.cli.demo import demo_row_method
 from tvist.experiments import default_methods
+from tvist.sim.flex import UR5E_FLEX
 
 
 def test_every_command_parses_its_help():
@@ -121,19 +122,14 @@ def test_run_takes_a_modal_map_file_like_shape_does(move_file, tmp_path):
     from tvist.cli.live import _shaper
 
     path, q = move_file
-    entries = [
+    entries = [  # the twin's base and shoulder gears, without load terms
         {
-            "joint": 0,
-            "stiffness_nm_per_rad": [22000.0, 0.0, 0.0],
-            "damping_nms_per_rad": [5.0, 0.0, 0.0],
+            "joint": j,
+            "stiffness_nm_per_rad": [UR5E_FLEX.k1_nm_per_rad[j], 0.0, 0.0],
+            "damping_nms_per_rad": [UR5E_FLEX.c0_nms_per_rad[j], 0.0, 0.0],
             "damping_load_joint": 1,
-        },
-        {
-            "joint": 1,
-            "stiffness_nm_per_rad": [18000.0, 0.0, 0.0],
-            "damping_nms_per_rad": [60.0, 0.0, 0.0],
-            "damping_load_joint": 1,
-        },
+        }
+        for j in (0, 1)
     ]
     modal_path = tmp_path / "modal.json"
     tvist.ModalMap(entries, [0, 1], {"robot": "ur5e"}).save(modal_path)
