@@ -40,6 +40,10 @@ MODULES: dict[str, tuple[str, ...]] = {
         "tests/unit/test_ident_local_fit.py",
         "tests/integration/test_ident_base_mode.py",
     ),
+    "ident/local_identification.py": (
+        "tests/unit/test_ident_local_fit.py",
+        "tests/integration/test_ident_base_mode.py",
+    ),
     "ident/zoh.py": (
         "tests/unit/test_ident_local_fit.py",
         "tests/integration/test_ident_base_mode.py",

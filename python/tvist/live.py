@@ -27,7 +27,7 @@ import numpy as np
 
 log = logging.getLogger("tvist.live")
 
-#: RTDE fields of the logs (what :func:`tvist.ident.read_rtde_csv` reads, plus actual_qd).
+#: RTDE fields of the logs (what :func:`tvist.ident.logs.read_rtde_csv` reads, plus actual_qd).
 LOG_FIELDS = (
     "timestamp",
     "target_q",
@@ -553,7 +553,7 @@ def residual_vibration(log_path: str | Path, window_s: float = 1.0) -> float:
     ValueError
         If the log does not extend ``window_s`` + 0.2 s beyond the move.
     """
-    from tvist.ident import read_rtde_csv
+    from tvist.ident.logs import read_rtde_csv
 
     record = read_rtde_csv(log_path)
     t, target, accel = record.t_s, record.target_q, record.tool_accel

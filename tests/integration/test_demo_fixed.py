@@ -17,7 +17,8 @@ from tvist.experiments.fixed import (
     modes_along,
     search_robust_shaper,
 )
-from tvist.experiments.methods import Method, MotionContext, default_methods
+from tvist.experiments.method_row import Method, MotionContext
+from tvist.experiments.methods import default_methods
 from tvist.experiments.motions import DT_S, MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
 from tvist.experiments.settle import CRITERIA
 from tvist.experiments.table import format_reduction

@@ -13,7 +13,7 @@ import pytest
 
 from tvist.ident.campaign import campaign_poses
 from tvist.ident.excitation import random_excitation
-from tvist.ident.local_fit import identify_local
+from tvist.ident.local_identification import identify_local
 
 #: Every 5th pose of the 0 kg and 5 kg campaigns: 21 poses over all angles and radii (fixed
 #: before looking at the results).

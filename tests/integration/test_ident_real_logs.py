@@ -10,7 +10,7 @@ import pytest
 
 from ident_reference import generate_log
 from tvist.cli import main
-from tvist.ident.local_fit import identify_local
+from tvist.ident.local_identification import identify_local
 from tvist.ident.logs import LogWarning, read_rtde_csv
 from tvist.robots import Robot, params
 

@@ -16,12 +16,12 @@ import pytest
 
 from tvist import robots
 from tvist.experiments.experiment import run_motion
-from tvist.experiments.methods import default_methods
-from tvist.experiments.modal_rows import fd_tvist_modal
+from tvist.experiments.methods import default_methods, fd_tvist_modal
 from tvist.experiments.motions import MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
 from tvist.ident.logs import Record
 from tvist.learn import MapLearner, observe_decay
-from tvist.learn.twin_moves import move, ordinary_moves, random_poses
+from tvist.learn.poses import random_poses
+from tvist.learn.twin_moves import move, ordinary_moves
 from tvist.maps import ModalMap, modal_map_from_flex, modes_to_shape
 from tvist.sim import Twin
 

@@ -20,7 +20,8 @@ import pytest
 
 from ident_reference import generate_log, random_case
 from tvist.cli import main
-from tvist.ident.local_fit import FitOptions, fit_local, identify_local
+from tvist.ident.local_fit import FitOptions, fit_local
+from tvist.ident.local_identification import identify_local
 from tvist.ident.logs import read_rtde_csv
 from tvist.robots import ur5e
 from tvist.units import DEG, STANDARD_GRAVITY, UnitError, parse_units

@@ -15,7 +15,8 @@ import pytest
 from scipy import integrate, linalg
 
 from ident_reference import Profile, _expm, integrate_mode, mode_signals, random_case
-from tvist.ident.local_fit import FitOptions, fit_local, identify_local
+from tvist.ident.local_fit import FitOptions, fit_local
+from tvist.ident.local_identification import identify_local
 from tvist.ident.logs import read_rtde_csv
 from tvist.robots import ur5e
 

@@ -223,7 +223,7 @@ def flexible_record(joint: int, q0: np.ndarray, wn: float, zeta: float, seed: in
 
 @pytest.mark.parametrize("joint", [0, 1])
 def test_identify_local_end_to_end(joint):
-    from tvist.ident.local_fit import identify_local
+    from tvist.ident.local_identification import identify_local
 
     q0 = np.array([0.3, -1.7, 1.4, -1.2, 1.57, 0.0])
     wn, zeta = 2 * np.pi * (9.0 + 6 * joint), 0.06 + 0.1 * joint
@@ -237,7 +237,7 @@ def test_identify_local_end_to_end(joint):
 
 
 def test_identify_local_saturation_is_flagged_or_rejected():
-    from tvist.ident.local_fit import identify_local
+    from tvist.ident.local_identification import identify_local
 
     q0 = np.array([0.3, -1.7, 1.4, -1.2, 1.57, 0.0])
     wn, zeta = 2 * np.pi * 12.0, 0.05
@@ -259,7 +259,7 @@ def test_identify_local_saturation_is_flagged_or_rejected():
 
 
 def test_identify_local_resamples_gappy_logs_with_a_warning():
-    from tvist.ident.local_fit import identify_local
+    from tvist.ident.local_identification import identify_local
     from tvist.ident.logs import LogWarning
 
     q0 = np.array([0.3, -1.7, 1.4, -1.2, 1.57, 0.0])

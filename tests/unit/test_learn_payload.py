@@ -18,7 +18,7 @@ from tvist import robots
 from tvist.experiments.motions import PAYLOAD_COM_M, PAYLOAD_KG
 from tvist.learn import MapLearner
 from tvist.learn.learner import _SeenMode
-from tvist.learn.twin_moves import random_poses
+from tvist.learn.poses import random_poses
 from tvist.maps.modal import modal_map_from_flex
 from tvist.sim import Twin
 

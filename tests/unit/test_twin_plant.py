@@ -9,7 +9,8 @@ from scipy.spatial.transform import Rotation
 
 from tvist import rtde_wire
 from tvist.sim import Twin
-from tvist.sim.plant import TwinPlant, rotation_vector
+from tvist.sim.plant import rotation_vector
+from tvist.sim.twin_plant import TwinPlant
 from tvist.trajectory import PAPER_POSES
 from tvist.urserver import variables
 from tvist.urserver.control_script import ControlScript, Registers

@@ -4,11 +4,17 @@
 //! and anything with `tolist()` (numpy arrays and scalars). A non-finite float is either
 //! refused (coefficients: the message names the field) or written as `null` (metadata, where
 //! `null` means "not available"), as the caller chooses.
+//!
+//! [`map_file_from`] turns a map document (a Python dict) into the core's checked map file;
+//! both the map-file functions and `DynamicMap`'s constructor read documents through it.
 
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use serde_json::{Map, Number, Value};
+use tvist_core::files::map_file::MapFile;
+
+use crate::convert::value_error;
 
 /// Deepest nesting converted (the core's parser stops at 128 as well).
 const MAX_DEPTH: usize = 64;
@@ -121,4 +127,30 @@ pub fn to_py<'py>(py: Python<'py>, value: &Value) -> PyResult<Bound<'py, PyAny>>
             dict.into_any()
         }
     })
+}
+
+/// A map document (Python object) checked by the core's map-file validation.
+pub(crate) fn map_file_from(doc: &Bound<'_, PyAny>) -> PyResult<MapFile> {
+    let value = match doc.cast::<PyDict>() {
+        // Metadata may hold statistics that could not be computed (NaN): written as null.
+        // Everything else must be finite, and the error names the field.
+        Ok(d) => {
+            let mut map = Map::new();
+            for (k, v) in d.iter() {
+                let key: String = k
+                    .extract()
+                    .map_err(|_| PyValueError::new_err("map document: keys must be strings"))?;
+                let nf = if key == "metadata" {
+                    NonFinite::AsNull
+                } else {
+                    NonFinite::Refuse
+                };
+                let value = to_value(&v, &key, nf)?;
+                map.insert(key, value);
+            }
+            Value::Object(map)
+        }
+        Err(_) => to_value(doc, "(document)", NonFinite::Refuse)?,
+    };
+    MapFile::from_value(&value).map_err(value_error)
 }

@@ -2,41 +2,13 @@
 //! core's parser, and maps written back; the map is a `DynamicMap` or a `ModalMap` by the
 //! document's `kind`.
 
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 use tvist_core::files::map_file::{self, MapFile, MapForm};
 
 use crate::convert::value_error;
-use crate::json::{self, NonFinite};
+use crate::json::{self, map_file_from, NonFinite};
 use crate::modal::PyModalMap;
 use crate::paper10::PyDynamicMap;
-
-/// A map document (Python object) checked by the core's map-file validation.
-pub(crate) fn map_file_from(doc: &Bound<'_, PyAny>) -> PyResult<MapFile> {
-    let value = match doc.cast::<PyDict>() {
-        // Metadata may hold statistics that could not be computed (NaN): written as null.
-        // Everything else must be finite, and the error names the field.
-        Ok(d) => {
-            let mut map = serde_json::Map::new();
-            for (k, v) in d.iter() {
-                let key: String = k
-                    .extract()
-                    .map_err(|_| PyValueError::new_err("map document: keys must be strings"))?;
-                let nf = if key == "metadata" {
-                    NonFinite::AsNull
-                } else {
-                    NonFinite::Refuse
-                };
-                let value = json::to_value(&v, &key, nf)?;
-                map.insert(key, value);
-            }
-            serde_json::Value::Object(map)
-        }
-        Err(_) => json::to_value(doc, "(document)", NonFinite::Refuse)?,
-    };
-    MapFile::from_value(&value).map_err(value_error)
-}
 
 /// A parsed map file as `(DynamicMap or ModalMap, metadata dict)`, by the file's kind.
 fn map_parts(py: Python<'_>, file: MapFile) -> PyResult<(Bound<'_, PyAny>, Bound<'_, PyAny>)> {

@@ -9,8 +9,7 @@ use tvist_core as core;
 use tvist_core::Mode;
 
 use crate::convert::{self, check_len, rows, value_error};
-use crate::json::{self, NonFinite};
-use crate::map_file::map_file_from;
+use crate::json::{self, map_file_from, NonFinite};
 use crate::robot::PyRobot;
 use crate::robot_law;
 use tvist_core::files::map_file::{self, MapFile, MapForm};

@@ -33,7 +33,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from tvist.cli.args import existing_file
     from tvist.cli.demo_table import print_table
     from tvist.experiments import default_methods, fd_tvist_map, run_demo
-    from tvist.experiments.modal_rows import fd_tvist_modal
+    from tvist.experiments.methods import fd_tvist_modal
 
     chosen = set(args.method or SHAPING_METHODS)
     methods = default_methods()

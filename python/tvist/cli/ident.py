@@ -305,7 +305,7 @@ def _identify_one(args: argparse.Namespace, path: Path) -> int:
     import warnings
 
     from tvist.cli.args import payload_from_args
-    from tvist.ident.local_fit import identify_local
+    from tvist.ident.local_identification import identify_local
     from tvist.ident.logs import LogWarning, log_payload, read_rtde_csv
     from tvist.ident.segment import excitation_segment
     from tvist.robots import Robot, params

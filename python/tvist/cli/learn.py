@@ -40,7 +40,7 @@ def add_learn_command(sub: argparse._SubParsersAction) -> None:
 
 def modal_prior(path: str, flag: str):
     """The modal map in file ``path`` to learn from; a paper10 map is refused naming ``flag``."""
-    from tvist.maps.files import load_map
+    from tvist.maps.dynamics import load_map
     from tvist.maps.modal import ModalMap
 
     prior = load_map(path)
@@ -53,7 +53,7 @@ def _cmd_learn(args: argparse.Namespace) -> int:
     from tvist.cli.args import map_payload, payload_from_args
     from tvist.ident.logs import log_payload
     from tvist.learn import MapLearner
-    from tvist.maps.files import load_map
+    from tvist.maps.dynamics import load_map
     from tvist.robots import Robot, params
 
     prior = load_map(args.map)

@@ -35,14 +35,8 @@ from tvist.experiments.experiment import (
     run_motion,
 )
 from tvist.experiments.linear import run_linear_demo
-from tvist.experiments.methods import (
-    Method,
-    MotionContext,
-    Reference,
-    default_methods,
-    fd_tvist_map,
-    zero_delay_row,
-)
+from tvist.experiments.method_row import Method, MotionContext, Reference
+from tvist.experiments.methods import default_methods, fd_tvist_map, zero_delay_row
 from tvist.experiments.motions import MOTIONS, Motion
 from tvist.experiments.run import run_demo
 

@@ -43,7 +43,8 @@ from tvist.experiments.measure import (
     tool_acceleration,
     zv_delay_s,
 )
-from tvist.experiments.methods import Method, MotionContext, default_methods
+from tvist.experiments.method_row import Method, MotionContext
+from tvist.experiments.methods import default_methods
 from tvist.experiments.motions import (
     A_MAX_RAD_S2,
     DT_S,
@@ -128,7 +129,7 @@ class MethodRun:
         Largest distance of the reference's flange path from the planned one, m
         (:func:`tvist.analysis.path_deviation`).
     details
-        How the reference was made (from :class:`~tvist.experiments.methods.Reference`).
+        How the reference was made (from :class:`~tvist.experiments.method_row.Reference`).
     settle
         Time to settled from the start of the move (:mod:`tvist.experiments.settle`).
     """

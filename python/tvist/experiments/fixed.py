@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 import tvist
-from tvist.experiments.methods import Method, MotionContext, Reference
+from tvist.experiments.method_row import Method, MotionContext, Reference
 
 __all__ = [
     "ROBUST_PRV_LIMIT",

@@ -465,7 +465,8 @@ def _ceiling_row():
     """ZV on every true mode of the twin below :data:`TRUE_MODE_MAX_HZ` at the end pose,
     held over the move (an oracle: it reads the twin's exact modes)."""
     import tvist
-    from tvist.experiments.methods import TVIST_SHAPER, Method, _run_tv_shaper
+    from tvist.experiments.method_row import Method
+    from tvist.experiments.methods import TVIST_SHAPER, _run_tv_shaper
     from tvist.sim.family import modes_of
 
     def build(ctx):
@@ -488,7 +489,8 @@ def _end_pose_map_row(modal):
     """ZV on the map's shaped modes at the end pose, held over the move: the identified map
     without time variation (what the map gives where its time-varying path cannot run)."""
     import tvist
-    from tvist.experiments.methods import TVIST_SHAPER, Method, _run_tv_shaper
+    from tvist.experiments.method_row import Method
+    from tvist.experiments.methods import TVIST_SHAPER, _run_tv_shaper
 
     def build(ctx):
         modes = [tuple(m) for m in modal.modes(ctx.robot, ctx.motion.q_end)]
@@ -513,8 +515,7 @@ def _moves(variant, map_path: Path, robot) -> dict[str, Any]:
     from tvist import load_map
     from tvist.experiments.experiment import run_motion
     from tvist.experiments.measure import zv_delay_s
-    from tvist.experiments.methods import default_methods
-    from tvist.experiments.modal_rows import fd_tvist_modal
+    from tvist.experiments.methods import default_methods, fd_tvist_modal
     from tvist.experiments.motions import DT_S, PAYLOAD_COM_M, demo_motions, demo_payload_kg
     from tvist.sim.family import modes_of
 

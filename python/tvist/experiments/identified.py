@@ -32,7 +32,8 @@ from typing import Any
 import numpy as np
 
 from tvist import robots
-from tvist.experiments.methods import Method, fd_tvist_map
+from tvist.experiments.method_row import Method
+from tvist.experiments.methods import fd_tvist_map
 from tvist.experiments.motions import PAYLOAD_COM_M, PAYLOAD_KG
 from tvist.maps.paper10 import DynamicMap, MapDynamics
 

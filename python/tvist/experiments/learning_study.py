@@ -5,7 +5,7 @@ The converted prior (:mod:`tvist.learn.prior`) knows nothing of the wrists: the 
 reads joint inertias only, so their stiffness is a guess. Where the upper arm points up (Q3)
 the base mode is partly a torsion of the wrists and the arm's third mode (elbow and wrists)
 lies close above it, so the demo's Q1->Q3 depends on that guess; the ordinary moves end where
-it hardly matters (upper arm at least 30° from vertical, :mod:`tvist.learn.twin_moves`). This
+it hardly matters (upper arm at least 30° from vertical, :mod:`tvist.learn.poses`). This
 study measures both sides of that:
 
 - :func:`learn_from_paper_map`: the learning sequence of
@@ -36,15 +36,15 @@ import numpy as np
 
 import tvist
 from tvist.experiments.experiment import run_motion
-from tvist.experiments.methods import default_methods
-from tvist.experiments.modal_rows import fd_tvist_modal
+from tvist.experiments.methods import default_methods, fd_tvist_modal
 from tvist.experiments.motions import MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
 from tvist.ident.logs import Record
 from tvist.learn import MapLearner
 from tvist.learn.decay import DECAY_S, stop_index
 from tvist.learn.learner import PRIOR_LOG_SIGMA
+from tvist.learn.poses import random_poses
 from tvist.learn.prior import converted_prior_log_sigma, modal_prior_from_paper10
-from tvist.learn.twin_moves import move, ordinary_moves, random_poses
+from tvist.learn.twin_moves import move, ordinary_moves
 from tvist.robots import Robot, ur5e
 from tvist.sim import Twin
 

@@ -14,18 +14,17 @@ twin (:mod:`tvist.experiments.identified`) unless ``identify=False`` (``--no-ide
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
 import tvist
-from tvist.experiments.motions import Motion
+from tvist.experiments.fixed import fixed_robust_row, fixed_start_row
+from tvist.experiments.method_row import Method, MotionContext, Reference
+from tvist.maps.modal import ModalMap
 from tvist.maps.paper10 import DynamicMap, MapDynamics
 from tvist.robots import Robot
-from tvist.sim import Twin
-from tvist.trajectory import Trajectory
 
 #: Shaper of the FD-TVIST rows: one ZV filter per mode, base then shoulder, like the paper.
 TVIST_SHAPER = "zv"
@@ -35,80 +34,6 @@ ZERO_DELAY_SHAPER = "zv"
 #: Delay lines of a callable provider hold this multiple of the longest one-mode ZV delay seen
 #: along the motion (the spec's SF ≈ 1.5).
 DELAY_SAFETY_FACTOR = 1.5
-
-
-@dataclass(frozen=True)
-class MotionContext:
-    """What a method may use to build its reference for one motion.
-
-    Attributes
-    ----------
-    motion
-        The motion.
-    trajectory
-        The planned (unshaped) double-S reference, rest padding included.
-    twin
-        The simulated arm; ``twin.modes(q)`` is the ground truth by eigen-analysis.
-    robot
-        The rigid-body model (with payload) that map providers evaluate every cycle.
-    max_mode_delay_s
-        Longest one-mode ZV delay ``π/ω_d`` of the true modes along the planned move, s.
-    """
-
-    motion: Motion
-    trajectory: Trajectory
-    twin: Twin
-    robot: Robot
-    max_mode_delay_s: float
-
-
-@dataclass(frozen=True)
-class Reference:
-    """A method's reference for one motion and how it was made.
-
-    Attributes
-    ----------
-    q
-        Joint reference sent to the twin, rad, same shape as the planned one.
-    details
-        JSON-ready facts about the construction (shaper, provider, flags, ...).
-    """
-
-    q: np.ndarray
-    details: dict[str, Any] = field(default_factory=dict)
-
-
-@dataclass(frozen=True)
-class Method:
-    """One row of the table.
-
-    Attributes
-    ----------
-    key
-        Identifier in ``results.json`` (``"unshaped"`` is the baseline of every motion).
-    label
-        Human-readable name for tables and legends.
-    build
-        ``build(context) -> Reference``.
-    motions
-        Names of the motions the row is run for (``"Q1->Q2"``); ``None`` is all.
-    dynmap
-        The dynamic map the method uses, if any (its modes are plotted along each motion).
-    oracle
-        Why a user cannot run this row on a robot (it reads what only the twin knows), or
-        ``None`` for a row a user can run. Oracle rows are references, never recommended.
-    """
-
-    key: str
-    label: str
-    build: Callable[[MotionContext], Reference]
-    motions: tuple[str, ...] | None = None
-    dynmap: DynamicMap | None = None
-    oracle: str | None = None
-
-    def applies_to(self, motion: Motion) -> bool:
-        """Whether this row is run for ``motion``."""
-        return self.motions is None or motion.name in self.motions
 
 
 def _unshaped(ctx: MotionContext) -> Reference:
@@ -179,6 +104,22 @@ def fd_tvist_map(key: str, label: str, dynmap: DynamicMap) -> Method:
         return Reference(ref.q, {**ref.details, "map_use": map_use(dynmap, ctx.robot, ref.q)})
 
     return Method(key=key, label=label, build=build, dynmap=dynmap)
+
+
+def fd_tvist_modal(key: str, label: str, modal: ModalMap) -> Method:
+    """A ZV FD-TVIST row driven by ``modal`` through :class:`tvist.ModalDynamics` (a
+    frequency-ranked map shapes the modes each move needs)."""
+
+    def build(ctx: MotionContext) -> Reference:
+        provider = tvist.ModalDynamics(ctx.robot, modal)
+        shaper = tvist.TvShaper(
+            provider, ctx.trajectory.dt_s, ctx.trajectory.n_dof, shaper=TVIST_SHAPER
+        )
+        source = modal.metadata.get("source") or "modal map"
+        return _run_tv_shaper(shaper, ctx, f"MapDynamics (modal): {source}", provider)
+
+    # ``dynmap`` only needs ``modes(robot, q)`` (the mode tracks of the report).
+    return Method(key=key, label=label, build=build, dynmap=modal)  # type: ignore[arg-type]
 
 
 def map_use(dynmap: DynamicMap, robot: Robot, q: np.ndarray) -> dict[str, list]:
@@ -296,6 +237,4 @@ def default_methods() -> list[Method]:
 
 def _fixed_rows() -> list[Method]:
     """The time-invariant baselines (:mod:`tvist.experiments.fixed`)."""
-    from tvist.experiments.fixed import fixed_robust_row, fixed_start_row
-
     return [fixed_start_row(), fixed_robust_row()]

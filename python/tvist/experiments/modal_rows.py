@@ -9,28 +9,13 @@ from pathlib import Path
 from typing import Any
 
 import tvist
-from tvist.experiments.methods import TVIST_SHAPER, Method, MotionContext, Reference, _run_tv_shaper
+from tvist.experiments.method_row import Method
+from tvist.experiments.methods import fd_tvist_modal
 from tvist.maps.modal import ModalMap
 
 KEY = "fd-tvist-identified-modal-map"
 LABEL = "FD-TVIST ZV, identified modal map"
 MAP_FILE = "identified_modal_map.json"
-
-
-def fd_tvist_modal(key: str, label: str, modal: ModalMap) -> Method:
-    """A ZV FD-TVIST row driven by ``modal`` through :class:`tvist.ModalDynamics` (a
-    frequency-ranked map shapes the modes each move needs)."""
-
-    def build(ctx: MotionContext) -> Reference:
-        provider = tvist.ModalDynamics(ctx.robot, modal)
-        shaper = tvist.TvShaper(
-            provider, ctx.trajectory.dt_s, ctx.trajectory.n_dof, shaper=TVIST_SHAPER
-        )
-        source = modal.metadata.get("source") or "modal map"
-        return _run_tv_shaper(shaper, ctx, f"MapDynamics (modal): {source}", provider)
-
-    # ``dynmap`` only needs ``modes(robot, q)`` (the mode tracks of the report).
-    return Method(key=key, label=label, build=build, dynmap=modal)  # type: ignore[arg-type]
 
 
 def identify_modal_map(

@@ -34,7 +34,8 @@ import numpy as np
 
 from tvist import robots
 from tvist.experiments.experiment import MotionRun, run_motion
-from tvist.experiments.methods import Method, default_methods, fd_tvist_map, zero_delay_row
+from tvist.experiments.method_row import Method
+from tvist.experiments.methods import default_methods, fd_tvist_map, zero_delay_row
 from tvist.experiments.motions import DT_S, PAYLOAD_COM_M, PAYLOAD_KG, Motion
 from tvist.experiments.settle import CRITERIA, SETTLE_HOLD_S, format_settle, settle_config
 from tvist.experiments.slow_down import ACCEL_SCALES, JERK_TIMES_S
@@ -101,7 +102,7 @@ def pick_place_methods(dynmap: Any | None, map_name: str = "identified modal map
     ``modes(robot, q)``, called ``map_name`` in labels) FD-TVIST and zero-delay shaping on it;
     ZTDIS on the twin's exact end-pose modes as an oracle reference."""
     from tvist.experiments.fixed import fixed_robust_row, fixed_start_row
-    from tvist.experiments.modal_rows import fd_tvist_modal
+    from tvist.experiments.methods import fd_tvist_modal
     from tvist.maps.modal import ModalMap
 
     rows = [default_methods()[0], fixed_start_row(), fixed_robust_row()]

@@ -9,7 +9,8 @@ from pathlib import Path
 from typing import Any
 
 from tvist.experiments.experiment import DemoResult, run_experiment
-from tvist.experiments.methods import Method, default_methods
+from tvist.experiments.method_row import Method
+from tvist.experiments.methods import default_methods
 
 
 def run_demo(

@@ -54,7 +54,7 @@ def _rank_key(option: _Option) -> tuple[float, float]:
 def recommendation(motion: MotionRun) -> str:
     """One line: which runnable method settles first on this motion, and by how much.
 
-    Rows a user can run are those without :attr:`~tvist.experiments.methods.Method.oracle`, the
+    Rows a user can run are those without :attr:`~tvist.experiments.method_row.Method.oracle`, the
     unshaped move and the best "slow down instead" profile included. The one that settles
     first at :data:`RANK_CRITERION` wins; rows within :data:`SETTLE_TIE_S` of it tie, and
     the tie goes to the faster at the stricter band, then to the higher reduction.

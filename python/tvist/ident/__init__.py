@@ -30,7 +30,7 @@ _EXPORTS: dict[str, str] = {
     "Record": "tvist.ident.logs",
     "TangentialAcceleration": "tvist.ident.preprocess",
     "TwinRobot": "tvist.ident.campaign",
-    "TwoModeFit": "tvist.ident.two_mode",
+    "TwoModeFit": "tvist.ident.mode_estimates",
     "URRobot": "tvist.ident.campaign",
     "campaign_poses": "tvist.ident.campaign",
     "evaluate_map": "tvist.ident.robustness",
@@ -38,7 +38,7 @@ _EXPORTS: dict[str, str] = {
     "fit_local": "tvist.ident.local_fit",
     "fit_map": "tvist.ident.map_fit",
     "fit_two_modes": "tvist.ident.two_mode",
-    "identify_local": "tvist.ident.local_fit",
+    "identify_local": "tvist.ident.local_identification",
     "identify_pose": "tvist.ident.pose",
     "load_results": "tvist.ident.campaign",
     "prv_band": "tvist.ident.robustness",
@@ -61,13 +61,15 @@ if TYPE_CHECKING:
         run_campaign,
     )
     from tvist.ident.excitation import BangCoastBangMove, Excitation, random_excitation, to_urscript
-    from tvist.ident.local_fit import FitOptions, LocalFit, fit_local, identify_local
+    from tvist.ident.local_fit import FitOptions, LocalFit, fit_local
+    from tvist.ident.local_identification import identify_local
     from tvist.ident.logs import LogWarning, Record, find_gaps, read_rtde_csv
     from tvist.ident.map_fit import ModeSpec, fit_map
+    from tvist.ident.mode_estimates import TwoModeFit
     from tvist.ident.pose import PoseRecord, identify_pose
     from tvist.ident.preprocess import TangentialAcceleration, tangential_acceleration
     from tvist.ident.robustness import evaluate_map, prv_band, summarize, two_mode_shaper
-    from tvist.ident.two_mode import TwoModeFit, fit_two_modes
+    from tvist.ident.two_mode import fit_two_modes
 
 
 def __getattr__(name: str):

@@ -5,13 +5,13 @@ damped or moves the flange little (the paper's Fig. 22 situation), so that a sin
 returns the shoulder frequency or a blend. Two ways to tell the modes apart:
 
 - **from the base log alone** (:func:`separate_base_mode`, the default of
-  :func:`~tvist.ident.local_fit.identify_local` for joint 0): each mode moves the flange in
-  its own direction, the base mode along the base joint's tangent ``t_0``, the shoulder mode
-  along the shoulder's tangent ``t_1``. Every mode of the fit (one, or two when the two-mode
-  fit is significant) is fitted to the base-frame acceleration along ``t_0`` and along ``t_1``
-  of the same log; the mode with the larger share along ``t_0`` is the base mode. Where the
-  two tangents are nearly parallel (flange over the base axis) or the shares do not differ
-  clearly, the modes cannot be told apart and the result is flagged;
+  :func:`~tvist.ident.local_identification.identify_local` for joint 0): each mode moves the flange
+  in its own direction, the base mode along the base joint's tangent ``t_0``, the shoulder mode
+  along the shoulder's tangent ``t_1``. Every mode of the fit (one, or two when the two-mode fit is
+  significant) is fitted to the base-frame acceleration along ``t_0`` and along ``t_1`` of the same
+  log; the mode with the larger share along ``t_0`` is the base mode. Where the two tangents are
+  nearly parallel (flange over the base axis) or the shares do not differ clearly, the modes cannot
+  be told apart and the result is flagged;
 - **with the shoulder excitation of the same pose** (:func:`separated_base_mode`, used by
   :func:`~tvist.ident.pose.identify_pose` and the campaign): the component of the base log's
   two-mode fit at the shoulder log's frequency is the shoulder mode.
@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tvist.ident.two_mode import ModeEstimate
+from tvist.ident.mode_estimates import ModeEstimate
 from tvist.ident.zoh import least_squares_fit, shifted, zoh_responses
 
 if TYPE_CHECKING:

@@ -59,6 +59,7 @@ __all__ = [
     "plane_coordinates",
     "run_campaign",
     "run_pose",
+    "run_variant_campaign",
     "solve_plane_ik",
 ]
 
@@ -349,3 +350,34 @@ class _Progress:
 
     def close(self) -> None:
         self._progress.stop()
+
+
+def run_variant_campaign(
+    variant: str,
+    results_path: str | Path,
+    *,
+    every: int = 1,
+    part: tuple[int, int] = (0, 1),
+    seed: int = 0,
+    workers: int = 1,
+    progress: bool = False,
+) -> list[dict]:
+    """Algorithm 1's campaign (every ``every``-th pose) on a twin variant: ``tvist campaign
+    --sim --variant NAME --every N``.
+
+    ``part = (i, n)`` runs only poses ``i, i + n, ...`` of those (to split a campaign over
+    processes that write separate files).
+    """
+    from tvist.sim.variants import variant_robot
+
+    robot_name = variant_robot(variant)  # an unknown name is refused here, naming the known ones
+    poses = campaign_poses(robot_name, seed=seed)[::every]
+    return run_campaign(
+        poses[part[0] :: part[1]],
+        results_path,
+        robot_name=robot_name,
+        variant=variant,
+        workers=workers,
+        noise_seed=seed,
+        progress=progress,
+    )

@@ -51,7 +51,8 @@ from typing import Any
 import numpy as np
 
 from tvist.ident.base_mode import separate_base_mode, separated_base_mode
-from tvist.ident.local_fit import FitOptions, LocalFit, identify_local
+from tvist.ident.local_fit import FitOptions, LocalFit
+from tvist.ident.local_identification import identify_local
 from tvist.ident.logs import Record, is_uniform, resample_uniform
 from tvist.ident.preprocess import quiet_samples
 from tvist.ident.ringing import RingingMode, ringing_from_log
@@ -366,7 +367,7 @@ def identify_pose(
         Logs of further excited joints at the same pose, by joint (e.g. ``{2: elbow_log}``;
         ``None`` entries are missing logs): each adds the modes that ring in it as
         ``ringing`` entries (``log_joint`` its joint), after a single-mode local fit of it
-        for the input timing (:func:`~tvist.ident.local_fit.identify_local`). A log whose
+        for the input timing (:func:`~tvist.ident.local_identification.identify_local`). A log whose
         fits fail adds none (with a warning).
 
     Raises

@@ -471,7 +471,8 @@ def ringing_from_log(
     Parameters
     ----------
     record
-        The log (uniformly sampled; as :func:`~tvist.ident.local_fit.identify_local` takes).
+        The log (uniformly sampled; as
+        :func:`~tvist.ident.local_identification.identify_local` takes).
     joint
         Excited joint (0 base, 1 shoulder, 2 elbow, 3 wrist 1).
     robot

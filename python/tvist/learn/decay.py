@@ -26,8 +26,9 @@ import numpy as np
 
 from tvist.ident.local_fit import FitOptions, LocalFit, fit_local
 from tvist.ident.logs import Record
+from tvist.ident.mode_estimates import TwoModeFit
 from tvist.ident.preprocess import KinematicModel, tangential_acceleration
-from tvist.ident.two_mode import TwoModeFit, fit_two_modes
+from tvist.ident.two_mode import fit_two_modes
 
 __all__ = ["DECAY_S", "Decay", "ModeObservation", "observe_decay", "stop_index"]
 

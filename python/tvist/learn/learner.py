@@ -64,8 +64,8 @@ from scipy import optimize, stats
 import tvist
 from tvist.ident.logs import Record, read_rtde_csv
 from tvist.learn.decay import Decay, ModeObservation, observe_decay
+from tvist.learn.poses import random_poses
 from tvist.learn.prior import ConvertedPrior, converted_prior_log_sigma, modal_prior_from_paper10
-from tvist.learn.twin_moves import random_poses
 from tvist.maps.modal import ModalMap
 from tvist.maps.paper10 import DynamicMap
 from tvist.robots import Payload, Robot

@@ -1,21 +1,18 @@
-"""Map files of every kind through one loader: the Rust core reads the file, checks it and
+"""Map files of every kind through one reader: the Rust core reads the file, checks it and
 says which form it holds (``"paper10"``: :class:`tvist.DynamicMap`; ``"modal"``:
-:class:`tvist.ModalMap`). Python, Rust and C read a file identically."""
+:class:`tvist.ModalMap`; :func:`tvist.maps.dynamics.load_map` wraps it as one or the other).
+Python, Rust and C read a file identically."""
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
+from typing import Any, ClassVar, TypeVar
 
 from tvist import _core
 from tvist.robots import Payload
 
-if TYPE_CHECKING:
-    from tvist.maps.modal import ModalMap
-    from tvist.maps.paper10 import DynamicMap
-
-__all__ = ["MapDocument", "RobotModesMixin", "load_map", "parse_map_file"]
+__all__ = ["MapDocument", "RobotModesMixin", "parse_map_file"]
 
 _Map = TypeVar("_Map", bound="MapDocument")
 
@@ -123,16 +120,3 @@ def parse_map_file(path: str | Path) -> tuple[Any, dict[str, Any]]:
     not physical, longer than ``_core.MAX_MAP_FILE_BYTES``) raises ValueError naming the file
     and the field."""
     return _core.load_map_file(path)
-
-
-def load_map(path: str | Path) -> DynamicMap | ModalMap:
-    """The map in ``path``: a :class:`~tvist.DynamicMap` for a ``"paper10"`` file (and files
-    written before ``kind`` named the form), a :class:`~tvist.ModalMap` for a ``"modal"`` one.
-    :func:`tvist.maps.dynamics_for` builds the provider of either."""
-    from tvist.maps.modal import ModalMap
-    from tvist.maps.paper10 import DynamicMap
-
-    core, metadata = parse_map_file(path)
-    if isinstance(core, _core.ModalMap):
-        return ModalMap._from_core(core, metadata)
-    return DynamicMap._from_core(core, metadata)

@@ -73,7 +73,8 @@ import scipy.linalg
 
 from tvist.robots import Robot
 from tvist.robots._robot import HingedArm
-from tvist.trajectory import Trajectory, double_s
+from tvist.trajectory._types import Trajectory
+from tvist.trajectory.double_s import double_s
 
 if TYPE_CHECKING:
     from tvist.maps.modal import ModalMap

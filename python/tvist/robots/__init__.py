@@ -13,6 +13,7 @@ Examples
 
 from __future__ import annotations
 
+from tvist.robots._named import params, ur3e, ur5e, ur10e, ur16e, ur20
 from tvist.robots._params import (
     JointPlacements,
     Payload,
@@ -20,10 +21,9 @@ from tvist.robots._params import (
     elbow_by_axes,
     inertia_tensor,
     names,
-    params,
     robot_file,
 )
-from tvist.robots._robot import Robot, ur3e, ur5e, ur10e, ur16e, ur20
+from tvist.robots._robot import Robot
 from tvist.robots.urdf import (
     SHIPPED_URDFS,
     dh_urdf,

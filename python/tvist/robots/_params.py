@@ -1,7 +1,7 @@
 """Robot parameter records from the core's robot data (the one source of robot data).
 
 The numbers live in ``crates/tvist-core/data/ur_e_series.json``, embedded in and parsed once
-by the Rust core; :func:`params` reads them through the bindings (no second parser).
+by the Rust core; :func:`tvist.robots.params` reads them through the bindings (no second parser).
 
 Conventions (also stated in the JSON file):
 
@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import cache
 from typing import Any
 
 import numpy as np
@@ -317,17 +316,3 @@ def robot_file(path: str) -> RobotParams:
 def names() -> tuple[str, ...]:
     """Names of the robots in the robot data, e.g. ``("ur3e", "ur5e", ...)``."""
     return tuple(_core.robot_names())
-
-
-@cache
-def params(name: str) -> RobotParams:
-    """Parameters of robot ``name``: one of :func:`names` (the core's robot data) or an arm
-    shipped as URDF data (:data:`tvist.robots.SHIPPED_URDFS`, e.g. ``"fr3"``)."""
-    from tvist.robots.urdf import SHIPPED_URDFS, shipped_params
-
-    if name in SHIPPED_URDFS:
-        return shipped_params(name)
-    if name not in names():
-        known = ", ".join((*names(), *SHIPPED_URDFS))
-        raise ValueError(f"unknown robot {name!r}; known: {known}")
-    return _from_core(_core.robot_params(name))

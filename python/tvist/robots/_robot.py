@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from tvist import _core
-from tvist.robots._params import Payload, RobotParams, params
+from tvist.robots._params import Payload, RobotParams
 
 
 def _as_q(q: Sequence[float] | np.ndarray, n_dof: int) -> np.ndarray:
@@ -222,58 +222,3 @@ class HingedArm:
     def jacobian_many(self, q: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
         """``(n_samples, 6, n_dof)`` flange Jacobians with straight hinges."""
         return self._core.jacobian_many(self._q(q))
-
-
-def _named(
-    name: str,
-    payload_kg: float,
-    payload_com_m: Sequence[float],
-    payload_inertia_kg_m2: Sequence[float] | None,
-) -> Robot:
-    payload = Payload(payload_kg, tuple(payload_com_m), payload_inertia_kg_m2)
-    return Robot(params(name), payload)
-
-
-def ur3e(
-    payload_kg: float = 0.0,
-    payload_com_m: Sequence[float] = (0.0, 0.0, 0.0),
-    payload_inertia_kg_m2: Sequence[float] | None = None,
-) -> Robot:
-    """UR3e with a payload (centre of mass and inertia in the flange frame)."""
-    return _named("ur3e", payload_kg, payload_com_m, payload_inertia_kg_m2)
-
-
-def ur5e(
-    payload_kg: float = 0.0,
-    payload_com_m: Sequence[float] = (0.0, 0.0, 0.0),
-    payload_inertia_kg_m2: Sequence[float] | None = None,
-) -> Robot:
-    """UR5e with a payload (centre of mass and inertia in the flange frame)."""
-    return _named("ur5e", payload_kg, payload_com_m, payload_inertia_kg_m2)
-
-
-def ur10e(
-    payload_kg: float = 0.0,
-    payload_com_m: Sequence[float] = (0.0, 0.0, 0.0),
-    payload_inertia_kg_m2: Sequence[float] | None = None,
-) -> Robot:
-    """UR10e with a payload (centre of mass and inertia in the flange frame)."""
-    return _named("ur10e", payload_kg, payload_com_m, payload_inertia_kg_m2)
-
-
-def ur16e(
-    payload_kg: float = 0.0,
-    payload_com_m: Sequence[float] = (0.0, 0.0, 0.0),
-    payload_inertia_kg_m2: Sequence[float] | None = None,
-) -> Robot:
-    """UR16e with a payload (centre of mass and inertia in the flange frame)."""
-    return _named("ur16e", payload_kg, payload_com_m, payload_inertia_kg_m2)
-
-
-def ur20(
-    payload_kg: float = 0.0,
-    payload_com_m: Sequence[float] = (0.0, 0.0, 0.0),
-    payload_inertia_kg_m2: Sequence[float] | None = None,
-) -> Robot:
-    """UR20 with a payload (centre of mass and inertia in the flange frame)."""
-    return _named("ur20", payload_kg, payload_com_m, payload_inertia_kg_m2)

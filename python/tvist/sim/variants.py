@@ -37,8 +37,9 @@ by construction. A variant changes the plant, not the map:
     Variant ``seed`` of the seeded family of :mod:`tvist.sim.family` (UR5e and UR10e): gear
     and servo stiffness, stiffening, damping and link bending drawn from plausible ranges.
 
-Run a campaign on a variant with :func:`run_variant_campaign` (the twin campaign's records,
-with ``true_modes`` from the variant's own eigen-analysis), or build the twin directly:
+Run a campaign on a variant with :func:`tvist.ident.campaign.run_variant_campaign` (the
+twin campaign's records, with ``true_modes`` from the variant's own eigen-analysis), or build
+the twin directly:
 ``Twin("ur5e", flex=variant_flex(name), beams=variant_beams(name))``.
 
 Not a variant yet: gear hysteresis (a stiffness that depends on the loading history), which
@@ -48,14 +49,12 @@ needs the twin's time-stepping loop to carry extra state.
 from __future__ import annotations
 
 from dataclasses import replace
-from pathlib import Path
 
 from tvist.sim.beams import LinkBeams
 from tvist.sim.flex import UR5E_FLEX, FlexParams, stiffening_k3
 
 __all__ = [
     "VARIANTS",
-    "run_variant_campaign",
     "variant_beams",
     "variant_flex",
     "variant_robot",
@@ -161,34 +160,3 @@ def variant_flex(name: str) -> FlexParams:
         return VARIANTS[name][1]
     except KeyError:
         raise _unknown(name) from None
-
-
-def run_variant_campaign(
-    variant: str,
-    results_path: str | Path,
-    *,
-    every: int = 1,
-    part: tuple[int, int] = (0, 1),
-    seed: int = 0,
-    workers: int = 1,
-    progress: bool = False,
-) -> list[dict]:
-    """Algorithm 1's campaign (every ``every``-th pose) on a twin variant: ``tvist campaign
-    --sim --variant NAME --every N``.
-
-    ``part = (i, n)`` runs only poses ``i, i + n, ...`` of those (to split a campaign over
-    processes that write separate files).
-    """
-    from tvist.ident.campaign import campaign_poses, run_campaign
-
-    robot_name = variant_robot(variant)  # an unknown name is refused here, naming the known ones
-    poses = campaign_poses(robot_name, seed=seed)[::every]
-    return run_campaign(
-        poses[part[0] :: part[1]],
-        results_path,
-        robot_name=robot_name,
-        variant=variant,
-        workers=workers,
-        noise_seed=seed,
-        progress=progress,
-    )

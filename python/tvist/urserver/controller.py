@@ -2,7 +2,7 @@
 
 Each :meth:`TwinController.tick` runs one pass of the loaded program (ur_rtde's control
 script, or a movej/sleep program), advances the joint motion by one tick, moves the twin's
-motors to the new target over the tick (:class:`tvist.sim.plant.TwinPlant`) and returns the
+motors to the new target over the tick (:class:`tvist.sim.twin_plant.TwinPlant`) and returns the
 RTDE output values measured at the tick's start. Not thread-safe: the server calls it under
 its lock.
 
@@ -22,8 +22,8 @@ import numpy as np
 
 from tvist.robots import Robot
 from tvist.sim import SimulationDiverged, Twin
-from tvist.sim.plant import TwinPlant
 from tvist.sim.twin import check_payload_mass
+from tvist.sim.twin_plant import TwinPlant
 from tvist.urserver import variables
 from tvist.urserver.control_script import (
     ControlScript,

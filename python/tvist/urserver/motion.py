@@ -1,7 +1,7 @@
 """The controller's joint motion: what the servo is told to do, one 2 ms tick at a time.
 
 The motion owns the joint target ``q`` (rad) that the motors follow (the twin's motor side
-follows it exactly, see :mod:`tvist.sim.plant`), with its velocity ``qd`` (rad/s) and
+follows it exactly, see :mod:`tvist.sim.twin_plant`), with its velocity ``qd`` (rad/s) and
 acceleration ``qdd`` (rad/s²). Modes, as URScript's functions:
 
 - ``movej(q, a, v)``: a trapezoidal speed profile in joint space, all joints starting and

@@ -23,6 +23,7 @@ from tvist.ident.modal_fit.model import (
 )
 from tvist.ident.modal_fit.poses import MODE_JOINTS, ModalPoses, modal_poses
 from tvist.ident.modal_fit.refinement import _refine_jointly
+from tvist.ident.modal_fit.selection import select_terms
 from tvist.ident.modal_fit.statistics import (
     OUTLIER_SIGMAS,
     _coefficient_stats,
@@ -134,11 +135,14 @@ def fit_modal_map(
             f"got {select_folds}"
         )
     if select_folds is not None:
-        # Imported here: the selection refits through this function.
-        from tvist.ident.modal_fit.selection import select_terms
-
+        # The selection refits through this function, passed in.
         selection = select_terms(
-            poses, robot_name, folds=select_folds, exclude_terms=exclude_terms, **options
+            poses,
+            robot_name,
+            fit=fit_modal_map,
+            folds=select_folds,
+            exclude_terms=exclude_terms,
+            **options,
         )
         exclude_terms = tuple(selection["exclude"])
         stiffness_drop_t = 0.0

@@ -1,15 +1,20 @@
 """Selection of the stiffness model by held-out frequency error (``select_folds`` of
 :func:`~tvist.ident.modal_fit.fit.fit_modal_map`): a term is kept only if it lowers the
-frequency error on the poses a fit did not see."""
+frequency error on the poses a fit did not see.
+
+The selection refits the map many times, so it takes the fit as an argument (``fit``,
+:func:`~tvist.ident.modal_fit.fit.fit_modal_map` itself): that function calls
+:func:`select_terms`, and the two modules would otherwise import each other."""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
-from tvist.ident.modal_fit.fit import fit_modal_map
+from tvist import ModalMap
 from tvist.ident.modal_fit.model import DEFAULT_FLEX_JOINTS, _term_names
 from tvist.ident.modal_fit.poses import MODE_JOINTS, ModalPoses
 from tvist.ident.modal_fit.statistics import _json_number
@@ -19,13 +24,15 @@ def held_out_frequency_error(
     poses: ModalPoses,
     robot_name: str = "ur5e",
     *,
+    fit: Callable[..., ModalMap],
     folds: int = 5,
     seed: int = 0,
     **options: Any,
 ) -> float:
     """RMS relative error of the natural frequencies (base and shoulder pooled) on held-out
     poses: ``folds``-fold over poses (a seeded permutation), each fold predicted by
-    :func:`fit_modal_map` (``options``) of the others; infinite if a fold cannot be fitted."""
+    :func:`~tvist.ident.modal_fit.fit.fit_modal_map` (``fit``, with ``options``) of the others;
+    infinite if a fold cannot be fitted."""
     n = poses.n_poses
     if not 2 <= folds <= n:
         raise ValueError(f"folds must be in [2, {n}], got {folds}")
@@ -35,7 +42,7 @@ def held_out_frequency_error(
         test = np.sort(order[k::folds])
         train, held = poses.subset(np.setdiff1d(np.arange(n), test)), poses.subset(test)
         try:
-            modal = fit_modal_map(train, robot_name, **options)
+            modal = fit(train, robot_name, **options)
         except ValueError:
             return math.inf
         pred = modal.modes_from_mass_matrix_many(
@@ -54,6 +61,7 @@ def select_terms(
     poses: ModalPoses,
     robot_name: str = "ur5e",
     *,
+    fit: Callable[..., ModalMap],
     folds: int = 5,
     seed: int = 0,
     **options: Any,
@@ -72,7 +80,8 @@ def select_terms(
     lowers the held-out frequency error. Damping terms are left to the significance test.
 
     Returns ``{"folds", "seed", "exclude": [names], "moves": [{"move", "held_out_rms"}],
-    "held_out_rms": e}``; ``exclude`` as ``exclude_terms`` of :func:`fit_modal_map` takes it
+    "held_out_rms": e}``; ``exclude`` as ``exclude_terms`` of
+    :func:`~tvist.ident.modal_fit.fit.fit_modal_map` takes it
     (with ``stiffness_drop_t=0``).
     """
     options = {
@@ -81,7 +90,7 @@ def select_terms(
         if k not in ("select_folds", "exclude_terms", "stiffness_drop_t")
     }
     every = _term_names(options.get("flex_joints", DEFAULT_FLEX_JOINTS))
-    full = fit_modal_map(poses, robot_name, **options)
+    full = fit(poses, robot_name, **options)
     included = {f"joint {e['joint']}" for e in full.flex_joints if e["joint"] not in MODE_JOINTS}
     included |= {
         f"stiffness a_{('per_nm', 'per_nm2').index(t['term']) + 1} of joint {t['joint']}"
@@ -96,6 +105,7 @@ def select_terms(
         return held_out_frequency_error(
             poses,
             robot_name,
+            fit=fit,
             folds=folds,
             seed=seed,
             exclude_terms=exclude(terms),
