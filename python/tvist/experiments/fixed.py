@@ -38,8 +38,6 @@ ROBUST_PRV_LIMIT = 0.05
 #: Modes along the move are evaluated every this many samples (20 ms at 500 Hz): the modes
 #: change by less than 2 % between neighbours on the paper's motions.
 ROBUST_STRIDE = 10
-#: Registry shapers the search combines.
-SEARCH_SHAPERS = ("zv", "zvd", "zvdd", "mzv", "ei", "2hump_ei", "3hump_ei")
 #: How the registry shapers are written in reports.
 SHAPER_NAMES = {
     "zv": "ZV",
@@ -155,7 +153,7 @@ def search_robust_shaper(modes: np.ndarray, prv_limit: float = ROBUST_PRV_LIMIT)
     prv_limit
         Largest allowed residual vibration (fraction).
 
-    The candidates are every registry shaper of :data:`SEARCH_SHAPERS` designed on a
+    The candidates are every registry shaper of :data:`tvist.SHAPERS` designed on a
     geometric grid of natural frequencies (:data:`GRID_SPAN` × the range, :data:`GRID_SINGLE`
     points) and at the smallest, median and largest damping of ``modes``; and every
     convolution of two of them on a coarser grid (:data:`GRID_PAIR` points), at the median
@@ -171,12 +169,12 @@ def search_robust_shaper(modes: np.ndarray, prv_limit: float = ROBUST_PRV_LIMIT)
 
     candidates: list[tuple[Stage, ...]] = [
         (Stage(name, float(w), z),)
-        for name in SEARCH_SHAPERS
+        for name in tvist.SHAPERS
         for w in single_grid
         for z in z_choices
     ]
     for (na, wa), (nb, wb) in itertools.combinations_with_replacement(
-        [(n, float(w)) for n in SEARCH_SHAPERS for w in pair_grid], 2
+        [(n, float(w)) for n in tvist.SHAPERS for w in pair_grid], 2
     ):
         candidates.append((Stage(na, wa, z_mid), Stage(nb, wb, z_mid)))
 
