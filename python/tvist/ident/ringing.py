@@ -50,7 +50,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from scipy import optimize
 
-from tvist.ident.zoh import shifted, zoh_responses
+from tvist.ident.zoh import least_squares_fit, shifted, zoh_responses
 
 if TYPE_CHECKING:
     from tvist.ident.local_fit import FitOptions, LocalFit
@@ -164,21 +164,6 @@ class RingingMode:
         )
 
 
-def _solve(phi: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Least-squares coefficients of ``y ≈ phi @ beta`` for every column of ``y``."""
-    scale = np.linalg.norm(phi, axis=0)
-    scale[scale == 0.0] = 1.0
-    phi_n = phi / scale
-    gram = phi_n.T @ phi_n
-    try:
-        if np.linalg.cond(gram) > 1e12:
-            raise np.linalg.LinAlgError
-        return np.linalg.solve(gram, phi_n.T @ y) / scale[:, None]
-    except np.linalg.LinAlgError:
-        beta, *_ = np.linalg.lstsq(phi, y, rcond=None)
-        return beta
-
-
 class _Problem:
     """Shared-pole fit of the channels ``y`` (n_used, n_ch) from the held input ``u``."""
 
@@ -215,7 +200,7 @@ class _Problem:
         """Residual (n_used, n_ch), coefficients and the mode blocks."""
         blocks = self.blocks(modes)
         phi = np.column_stack([*blocks, self.fixed])
-        beta = _solve(phi, self.y)
+        beta = least_squares_fit(phi, self.y)
         return self.y - phi @ beta, beta, blocks
 
     def residual_vector(self, x: np.ndarray) -> np.ndarray:

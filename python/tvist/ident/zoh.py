@@ -107,7 +107,8 @@ def zoh_responses(
 
 
 def least_squares_fit(phi: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Linear least-squares coefficients of ``y ≈ phi @ beta`` (a few columns, many rows).
+    """Linear least-squares coefficients of ``y ≈ phi @ beta`` (a few columns, many rows),
+    for a signal ``y`` (n,) or for every column of ``y`` (n, n_channels).
 
     Normal equations on unit-norm columns: a small dense solve, far cheaper than an SVD of
     the tall matrix in the inner loop of the nonlinear searches; falls back to ``lstsq`` when
@@ -120,7 +121,7 @@ def least_squares_fit(phi: np.ndarray, y: np.ndarray) -> np.ndarray:
     try:
         if np.linalg.cond(gram) > 1e12:
             raise np.linalg.LinAlgError
-        return np.linalg.solve(gram, phi_n.T @ y) / scale
+        return np.linalg.solve(gram, phi_n.T @ y) / (scale if y.ndim == 1 else scale[:, None])
     except np.linalg.LinAlgError:
         beta, *_ = np.linalg.lstsq(phi, y, rcond=None)
         return beta
