@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from tvist.robots import Payload, Robot, params
+from tvist.robots import Robot, params
 
 __all__ = ["ObservedModes", "observed_modes"]
 
@@ -146,24 +146,15 @@ def observed_modes(
         No usable record, a malformed ``q`` or payload, or stored joint inertias that are not
         this robot's (the campaign ran with another robot or payload).
     """
-    from tvist.ident.modal_fit.poses import _check_stored_inertia, _record_payload
+    from tvist.ident.modal_fit.poses import checked_poses
 
     robot_params = params(robot_name)
     robots: dict[tuple, Robot] = {}
     qs, keys, truth = [], [], []
     payload_of: list[tuple] = []
     pose, log, wn, zeta, wn_se, zeta_se, direction = [], [], [], [], [], [], []
-    for i, r in enumerate(records):
-        q = r.get("q")
-        if q is None or r.get("error"):
-            continue
-        q = np.asarray(q, dtype=float)
-        if q.shape != (robot_params.n_dof,) or not np.all(np.isfinite(q)):
-            raise ValueError(f"records[{i}]: 'q' must be {robot_params.n_dof} finite angles")
-        key = _record_payload(r, i)
-        if key not in robots:
-            robots[key] = Robot(robot_params, Payload(key[0], key[1]))
-        _check_stored_inertia(r, i, robots[key].joint_inertia(q), robot_name)
+    for i, r, q, key, model in checked_poses(records, robot_name):
+        robots[key] = model
         p = len(qs)
         for m in _entries(r):
             if m.get("low_confidence", False) and not include_low_confidence:

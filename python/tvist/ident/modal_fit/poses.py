@@ -5,7 +5,7 @@ and the identified (for a twin's campaign also the true) base and shoulder modes
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -91,22 +91,9 @@ def modal_poses(
         No record with a configuration ``q``, or a record whose stored joint inertias are not
         this robot model's (a campaign run with another robot or payload).
     """
-    robot_params = params(robot_name)
-    robots: dict[tuple, Robot] = {}
     mass, tau, inertia, wn, zeta, twn, tzeta, keys = [], [], [], [], [], [], [], []
     wn_se, zeta_se = [], []
-    for i, r in enumerate(records):
-        q = r.get("q")
-        if q is None or r.get("error"):
-            continue
-        q = np.asarray(q, dtype=float)
-        if q.shape != (robot_params.n_dof,) or not np.all(np.isfinite(q)):
-            raise ValueError(f"records[{i}]: 'q' must be {robot_params.n_dof} finite angles")
-        key = _record_payload(r, i)
-        if key not in robots:
-            robots[key] = Robot(robot_params, Payload(key[0], key[1]))
-        model = robots[key]
-        _check_stored_inertia(r, i, model.joint_inertia(q), robot_name)
+    for i, r, q, _, model in checked_poses(records, robot_name):
         mass.append(model.mass_matrix(q))
         tau.append(model.gravity_torque(q))
         inertia.append(model.joint_inertia(q))
@@ -150,6 +137,34 @@ def modal_poses(
         np.array(wn_se),
         np.array(zeta_se),
     )
+
+
+def checked_poses(
+    records: Sequence[Mapping[str, Any]], robot_name: str
+) -> Iterator[tuple[int, Mapping[str, Any], np.ndarray, tuple[float, tuple[float, ...]], Robot]]:
+    """Every record with a configuration ``q`` and no error, checked, as ``(index, record,
+    q, payload, model)``: ``payload`` is ``(mass_kg, com_m)``, ``model`` the robot with that
+    payload (one model per payload, shared by its records).
+
+    Raises
+    ------
+    ValueError
+        A malformed ``q`` or payload, or stored joint inertias that are not this model's.
+    """
+    robot_params = params(robot_name)
+    robots: dict[tuple, Robot] = {}
+    for i, r in enumerate(records):
+        q = r.get("q")
+        if q is None or r.get("error"):
+            continue
+        q = np.asarray(q, dtype=float)
+        if q.shape != (robot_params.n_dof,) or not np.all(np.isfinite(q)):
+            raise ValueError(f"records[{i}]: 'q' must be {robot_params.n_dof} finite angles")
+        payload = _record_payload(r, i)
+        if payload not in robots:
+            robots[payload] = Robot(robot_params, Payload(payload[0], payload[1]))
+        _check_stored_inertia(r, i, robots[payload].joint_inertia(q), robot_name)
+        yield i, r, q, payload, robots[payload]
 
 
 #: Relative difference beyond which a record's stored joint inertias are not the robot
