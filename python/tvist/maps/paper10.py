@@ -326,7 +326,7 @@ class MapDynamics(RobotModesMixin, _core.MapDynamics):
         if isinstance(dynmap, MapDocument) and not isinstance(dynmap, DynamicMap):
             raise TypeError(
                 f"dynmap must be a tvist.DynamicMap, got {type(dynmap).__name__}: "
-                "tvist.maps.dynamics_for(robot, map) builds the provider of either kind"
+                "tvist.dynamics_for(robot, map) builds the provider of either kind"
             )
         cls._check(robot, dynmap, DynamicMap, "dynmap")
         return super().__new__(cls, robot.core, dynmap.core, bool(allow_other_robot))
