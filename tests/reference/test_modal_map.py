@@ -179,7 +179,7 @@ def test_a_modal_map_of_another_robot_is_refused_unless_allowed():
 
 
 def test_map_dynamics_refuses_a_modal_map_naming_the_provider_of_either_kind():
-    with pytest.raises(TypeError, match=r"got ModalMap: tvist\.maps\.dynamics_for"):
+    with pytest.raises(TypeError, match=r"got ModalMap: tvist\.dynamics_for"):
         tvist.MapDynamics(ROBOT, ModalMap(ENTRIES))
     paper = tvist.maps.dynamics_for(ROBOT, tvist.DynamicMap.paper_ur5e())
     assert type(paper) is tvist.MapDynamics
