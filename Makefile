@@ -6,7 +6,7 @@ export VIRTUAL_ENV := $(CURDIR)/$(VENV)
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml -o -name '*.json') Cargo.toml pyproject.toml
 
-.PHONY: demo test test-fast build lint fmt bench rust-test ffi-test c-cpp-examples c-example cpp-example cpp-containers examples docs pytest wheel clean mutants
+.PHONY: demo test test-fast build lint fmt bench quick-start rust-test ffi-test c-cpp-examples c-example cpp-example cpp-containers examples docs pytest wheel clean mutants
 
 demo: build
 	$(PY) -m tvist.cli demo
@@ -122,6 +122,12 @@ fmt: $(PY)
 	$(VENV)/bin/ruff check --fix python tests benches examples docs/gen_pages.py
 
 # Each benchmark's output is also kept in out/bench/ for the docs' benchmarks page.
+# The README's quick start run as written (the twin server on UR's ports on 127.0.0.1, so
+# nothing else may serve them); what it printed goes to out/quick-start/run.json, which the
+# docs' quick-start page shows. Not part of `make test`.
+quick-start: build
+	$(PY) tools/quick_start.py
+
 bench: build
 	@mkdir -p out/bench
 	set -o pipefail; cargo bench -q -p tvist-core --bench cycle | tee out/bench/cycle.txt

@@ -10,6 +10,8 @@ an earlier run, under its own heading, with the command that produced it.)
 - results/{demo,flexible-payload,pick-place}.md: the report.md of each experiment in out/,
   with its figures; without one, how to produce it.
 - benchmarks.md: the output `make bench` saved in out/bench/; without it, how to produce it.
+- quickstart.md: what the README's quick start printed and how long each step took, as
+  `make quick-start` (tools/quick_start.py) recorded it in out/quick-start/run.json.
 
 The hand-written part of each page stays in docs/ and this file appends to it.
 """
@@ -145,6 +147,33 @@ def bench_outputs() -> str:
     return "".join(parts)
 
 
+#: Lines of each quick-start step's output the page shows (the last ones: the results).
+QUICK_START_LINES = 6
+
+
+def quick_start_run() -> str:
+    """The README's quick start as tools/quick_start.py ran it: each command, its time and
+    the last lines it printed."""
+    import json
+
+    path = OUT / "quick-start" / "run.json"
+    if not path.is_file():
+        return missing("`out/quick-start/run.json`", "make quick-start")
+    run = json.loads(path.read_text(encoding="utf-8"))
+    parts = [
+        f"\n*Generated from `out/quick-start/run.json`: commit {run['commit']}, started "
+        f"{run['started_utc']} on {run['cpus']} CPUs at a load average of "
+        f"{run['load_average_1min']:.1f}. The server was ready after "
+        f"{run['server_ready_s']:.0f} s; the first shaped move ended "
+        f"{run.get('ready_to_first_shaped_move_s', float('nan')):.0f} s later; the whole run "
+        f"took {run['total_s'] / 60:.1f} min.*\n"
+    ]
+    for step in run["steps"]:
+        shown = "\n".join(step["printed"][-QUICK_START_LINES:])
+        parts.append(f"\n`{step['command']}`: {step['seconds']:.1f} s\n\n```text\n{shown}\n```\n")
+    return "".join(parts)
+
+
 with mkdocs_gen_files.open("reference/cli.md", "a") as f:
     f.write(cli_reference())
 with mkdocs_gen_files.open("results/model.md", "a") as f:
@@ -156,3 +185,5 @@ for page in EXPERIMENTS:
         f.write(experiment_report(page))
 with mkdocs_gen_files.open("benchmarks.md", "a") as f:
     f.write(bench_outputs())
+with mkdocs_gen_files.open("quickstart.md", "a") as f:
+    f.write(quick_start_run())
