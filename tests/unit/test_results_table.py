@@ -489,3 +489,10 @@ def test_update_keeps_the_entry_of_an_unusable_output(tmp_path):
     updated, lines = rt.update(tmp_path, copy.deepcopy(record))
     assert updated == record
     assert "quick run" in lines[0]
+
+
+def test_modal_fit_out_is_checked_before_the_fit(tmp_path, capsys):
+    from tvist.cli.modal_fit import main
+
+    assert main([str(tmp_path / "none.jsonl"), "--out", str(tmp_path)]) == 2
+    assert "--out" in capsys.readouterr().err
