@@ -6,7 +6,7 @@ export VIRTUAL_ENV := $(CURDIR)/$(VENV)
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml -o -name '*.json') Cargo.toml pyproject.toml
 
-.PHONY: demo test test-fast build lint fmt bench quick-start rust-test ffi-test c-cpp-examples c-example cpp-example cpp-containers examples docs pytest wheel clean mutants
+.PHONY: demo test test-fast build lint fmt bench quick-start rust-test ffi-test c-cpp-examples c-example cpp-example cpp-containers examples docs pytest wheel clean mutants results-table
 
 demo: build
 	$(PY) -m tvist.cli demo
@@ -101,8 +101,8 @@ wheel: $(PY)
 	$(VENV)/bin/maturin build --release --out dist
 
 lint: $(PY)
-	$(VENV)/bin/ruff check python tests benches examples docs/gen_pages.py
-	$(VENV)/bin/ruff format --check python tests benches examples docs/gen_pages.py
+	$(VENV)/bin/ruff check python tests benches examples tools docs/gen_pages.py
+	$(VENV)/bin/ruff format --check python tests benches examples tools docs/gen_pages.py
 
 # pytest in PYTEST_WORKERS processes (pytest-xdist; default: the cores, at most 2; 0: in this
 # process), worksteal: a worker that runs out of tests takes the other's last ones. Then the
@@ -118,8 +118,8 @@ pytest: build
 
 fmt: $(PY)
 	cargo fmt --all
-	$(VENV)/bin/ruff format python tests benches examples docs/gen_pages.py
-	$(VENV)/bin/ruff check --fix python tests benches examples docs/gen_pages.py
+	$(VENV)/bin/ruff format python tests benches examples tools docs/gen_pages.py
+	$(VENV)/bin/ruff check --fix python tests benches examples tools docs/gen_pages.py
 
 # Each benchmark's output is also kept in out/bench/ for the docs' benchmarks page.
 # The README's quick start run as written (the twin server on UR's ports on 127.0.0.1, so
@@ -133,6 +133,12 @@ bench: build
 	set -o pipefail; cargo bench -q -p tvist-core --bench cycle | tee out/bench/cycle.txt
 	set -o pipefail; $(PY) benches/bench_shape.py | tee out/bench/bench_shape.txt
 	set -o pipefail; $(PY) benches/bench_sim.py | tee out/bench/bench_sim.txt
+
+# README.md's results table: every row whose command has written its outputs (out/, see
+# docs/results/index.md) is read into docs/results/headline.json, and the table is rendered
+# from that record; rows without outputs keep their entry (tools/results_table.py).
+results-table: build
+	$(PY) tools/results_table.py --update
 
 # Mutation testing (not part of `make test`; see docs/mutants.md for run times): cargo-mutants on
 # tvist-core's numerical modules (.cargo/mutants.toml), then tools/python_mutants.py on the

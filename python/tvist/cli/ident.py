@@ -123,20 +123,13 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
         r for r in done if r["modes"] and all(not m.get("low_confidence", True) for m in r["modes"])
     ]
     print(f"{len(done)}/{len(poses)} poses in {args.out}; {len(confident)} fully confident")
-    truth = [r for r in done if "true_modes" in r]
-    for joint, name in ((0, "base"), (1, "shoulder")):
-        errors = []
-        for r in truth:
-            fit = next((m for m in r["modes"] if m.get("joint") == joint), None)
-            true = next(m for m in r["true_modes"] if m["joint"] == joint)
-            if fit is not None and "wn_rad_s" in fit:
-                errors.append(abs(fit["wn_rad_s"] / true["wn_rad_s"] - 1.0))
-        if errors:
-            within = sum(e < 0.03 for e in errors)
-            print(
-                f"  {name}: ω_n within 3 % of the twin's modes at {within}/{len(errors)} poses "
-                f"({100 * within / len(errors):.0f} %)"
-            )
+    from tvist.ident.true_mode_agreement import within_tolerance
+
+    for name, (within, compared) in within_tolerance(done).items():
+        print(
+            f"  {name}: ω_n within 3 % of the twin's modes at {within}/{compared} poses "
+            f"({100 * within / compared:.0f} %)"
+        )
     print(_ringing_summary(done))
     if args.map:
         from tvist.ident.map_fit import fit_map

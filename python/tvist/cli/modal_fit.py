@@ -168,9 +168,10 @@ def _labelled_fit(records: Sequence[Mapping[str, Any]], args: argparse.Namespace
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m tvist.cli.modal_fit RESULTS.jsonl [--robot R] [--folds K]``: both map
-    forms' errors, in-sample and on held-out poses, as a markdown table
-    (:func:`tvist.ident.modal_fit.cross_validation.cross_validate`)."""
+    """``python -m tvist.cli.modal_fit RESULTS.jsonl [--robot R] [--folds K] [--out FILE]``:
+    both map forms' errors, in-sample and on held-out poses, as a markdown table
+    (:func:`tvist.ident.modal_fit.cross_validation.cross_validate`); ``--out`` also writes
+    them as JSON."""
     from tvist.ident.campaign import load_results
     from tvist.ident.modal_fit.cross_validation import cross_validate, format_comparison
 
@@ -178,7 +179,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("results", help="campaign results (JSON lines)")
     p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
     p.add_argument("--folds", type=int, default=5, help="folds over poses (default 5)")
+    p.add_argument(
+        "--out",
+        metavar="FILE",
+        help="also write the errors as JSON (cross_validate's result, relative errors as "
+        "fractions, NaN as null) to FILE",
+    )
     args = p.parse_args(argv)
+    if args.out:
+        from tvist.cli.args import output_file
+
+        try:
+            output_file(args.out, "--out")
+        except ValueError as exc:
+            print(f"python -m tvist.cli.modal_fit: error: {exc}", file=sys.stderr)
+            return 2
     records = load_results(args.results)
     try:
         cv = cross_validate(records, args.robot, folds=args.folds)
@@ -187,7 +202,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     print(f"{cv['n_poses']} poses, {cv['folds']}-fold over poses (seed {cv['seed']})")
     print(format_comparison(cv))
+    if args.out:
+        _write_comparison(cv, args.results, args.robot, args.out)
+        print(f"written to {args.out}")
     return 0
+
+
+def _write_comparison(cv: Mapping[str, Any], results: str, robot: str, path: str) -> None:
+    """``cross_validate``'s result as JSON, with the records file and robot it was run on."""
+    import json
+    from pathlib import Path
+
+    from tvist.experiments.results_json import json_safe
+
+    document = {"results": results, "robot": robot, **json_safe(dict(cv))}
+    Path(path).write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
 
 
 if __name__ == "__main__":

@@ -21,7 +21,6 @@ reduction against the unshaped move, the number of TCP-speed peaks and the peak 
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from dataclasses import dataclass, field
@@ -384,7 +383,7 @@ def _table(exp: PayloadExperiment) -> list[str]:
 def write_flexible_payload(exp: PayloadExperiment, out_dir: str | Path) -> dict[str, Path]:
     """Write ``results.json``, ``report.md`` and the figures to ``out_dir``."""
     from tvist.experiments import plots
-    from tvist.experiments.results_json import json_safe
+    from tvist.experiments.results_json import write_document
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -418,8 +417,7 @@ def write_flexible_payload(exp: PayloadExperiment, out_dir: str | Path) -> dict[
         out / "path_deviation.png",
         title="Distance of the shaped flange path from the planned straight line",
     )
-    results = out / "results.json"
-    results.write_text(json.dumps(json_safe(exp.to_json()), indent=2) + "\n", encoding="utf-8")
+    results = write_document(exp.to_json(), out / "results.json")
     cfg = exp.config
     conv_dev, joint_dev = np.max(exp.deviation_cartesian_m), np.max(exp.deviation_joint_m)
     lines = [

@@ -20,7 +20,6 @@ moves' own durations.
 
 from __future__ import annotations
 
-import json
 import math
 import re
 import time
@@ -380,13 +379,12 @@ def plot_cycle(result: PickPlaceResult, path: Path, key: str = CRITERIA[0].key) 
 
 def write_pick_place(result: PickPlaceResult, out_dir: str | Path) -> dict[str, Any]:
     """Write ``results.json``, ``report.md`` and ``cycle.png`` to ``out_dir``."""
-    from tvist.experiments.results_json import json_safe
+    from tvist.experiments.results_json import write_document
     from tvist.experiments.table import markdown_table
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    results = out / "results.json"
-    results.write_text(json.dumps(json_safe(result.to_json()), indent=2) + "\n", encoding="utf-8")
+    results = write_document(result.to_json(), out / "results.json")
     figure = plot_cycle(result, out / "cycle.png")
     header, rows = _table(result)
     per_move_header = ["move", "move [s]", *[r.label for r in result.rows]]

@@ -25,7 +25,13 @@ def json_safe(value: Any) -> Any:
     return value
 
 
-def write_json(result: DemoResult, path: Path) -> Path:
-    """Write ``results.json``."""
-    path.write_text(json.dumps(json_safe(result.to_json()), indent=2) + "\n", encoding="utf-8")
+def write_document(document: dict[str, Any], path: Path) -> Path:
+    """Write an experiment's ``results.json``: ``document`` (its ``to_json()``) made JSON-safe
+    (:func:`json_safe`), indented by 2, with a final newline."""
+    path.write_text(json.dumps(json_safe(document), indent=2) + "\n", encoding="utf-8")
     return path
+
+
+def write_json(result: DemoResult, path: Path) -> Path:
+    """Write the UR5e experiment's ``results.json``."""
+    return write_document(result.to_json(), path)
