@@ -20,6 +20,9 @@ use tvist_core::{
 #[path = "../tests/robot_support/mod.rs"]
 mod robot_support;
 
+#[path = "support/ur5e_twin.rs"]
+mod ur5e_twin;
+
 const ROUNDS: usize = 400;
 const STEPS_PER_ROUND: u64 = 2_000;
 
@@ -39,31 +42,7 @@ fn pose(k: u64, q: &mut [f64; 6]) {
 /// The UR5e twin's gear laws (load-dependent stiffness and damping: gravity torques needed):
 /// base, shoulder and elbow, plus wrists 1-2 if `wrists`.
 fn modal_map(wrists: bool) -> ModalMap {
-    let law = |at_zero, per_nm, per_nm2| LoadLaw {
-        at_zero,
-        per_nm,
-        per_nm2,
-    };
-    let mut joints = vec![
-        FlexJoint {
-            joint: 0,
-            stiffness_nm_per_rad: LoadLaw::constant(22_000.0),
-            damping_nms_per_rad: law(5.0, 0.56, 0.0157),
-            damping_load_joint: 1,
-        },
-        FlexJoint {
-            joint: 1,
-            stiffness_nm_per_rad: law(18_000.0, 0.0, 0.234),
-            damping_nms_per_rad: law(60.0, 0.6, 0.0),
-            damping_load_joint: 1,
-        },
-        FlexJoint {
-            joint: 2,
-            stiffness_nm_per_rad: law(120_000.0, 0.0, 1.56),
-            damping_nms_per_rad: law(40.0, 0.4, 0.0),
-            damping_load_joint: 2,
-        },
-    ];
+    let mut joints = ur5e_twin::base_shoulder_elbow();
     if wrists {
         for joint in [3, 4] {
             joints.push(FlexJoint {

@@ -16,12 +16,13 @@
 
 use std::hint::black_box;
 use std::time::Instant;
-use tvist_core::{
-    DynamicMap, Dynamics, FlexJoint, LoadLaw, MapDynamics, ModalDynamics, ModalMap, Mode, Robot,
-};
+use tvist_core::{DynamicMap, Dynamics, MapDynamics, ModalDynamics, ModalMap, Mode, Robot};
 
 #[path = "../tests/robot_support/mod.rs"]
 mod robot_support;
+
+#[path = "support/ur5e_twin.rs"]
+mod ur5e_twin;
 
 #[path = "support/hand_ur5e.rs"]
 mod hand_ur5e;
@@ -46,32 +47,7 @@ fn poses(n: usize) -> Vec<f64> {
 
 /// Base, shoulder and elbow flexible with load-dependent laws (gravity torques needed).
 fn modal_map() -> ModalMap {
-    let law = |at_zero, per_nm, per_nm2| LoadLaw {
-        at_zero,
-        per_nm,
-        per_nm2,
-    };
-    let joints = vec![
-        FlexJoint {
-            joint: 0,
-            stiffness_nm_per_rad: LoadLaw::constant(22_000.0),
-            damping_nms_per_rad: law(5.0, 0.56, 0.0157),
-            damping_load_joint: 1,
-        },
-        FlexJoint {
-            joint: 1,
-            stiffness_nm_per_rad: law(18_000.0, 0.0, 0.234),
-            damping_nms_per_rad: law(60.0, 0.6, 0.0),
-            damping_load_joint: 1,
-        },
-        FlexJoint {
-            joint: 2,
-            stiffness_nm_per_rad: law(120_000.0, 0.0, 1.56),
-            damping_nms_per_rad: law(40.0, 0.4, 0.0),
-            damping_load_joint: 2,
-        },
-    ];
-    ModalMap::new(joints, &[0, 1]).expect("valid map")
+    ModalMap::new(ur5e_twin::base_shoulder_elbow(), &[0, 1]).expect("valid map")
 }
 
 type Run = Box<dyn FnMut() -> f64>;

@@ -4,18 +4,8 @@
 
 mod robot_support;
 
-use tvist_core::{
-    Dynamics, FlexJoint, LoadLaw, ModalDynamics, ModalMap, Mode, ModeTrack, ShapedModes,
-};
-
-fn joint(j: usize, k: f64, c: f64) -> FlexJoint {
-    FlexJoint {
-        joint: j,
-        stiffness_nm_per_rad: LoadLaw::constant(k),
-        damping_nms_per_rad: LoadLaw::constant(c),
-        damping_load_joint: j,
-    }
-}
+use robot_support::flex_joint;
+use tvist_core::{Dynamics, ModalDynamics, ModalMap, Mode, ModeTrack, ShapedModes};
 
 /// Roots ω² of det(K − ω² M) = 0 for 2 × 2 `M` and diagonal `K`:
 /// `det(M) λ² − (k1 m22 + k2 m11) λ + k1 k2 = 0`, ascending.
@@ -42,8 +32,11 @@ fn two_coupled_joints_match_the_characteristic_equation() {
         // Off-diagonal up to 90 % of the geometric mean: strongly coupled yet positive definite.
         let m12 = 0.9 * (2.0 * rng.next_f64() - 1.0) * (m11 * m22).sqrt();
         let (k1, k2) = (1e3 + 1e5 * rng.next_f64(), 1e3 + 1e5 * rng.next_f64());
-        let map =
-            ModalMap::new(vec![joint(0, k1, 0.0), joint(1, k2, 0.0)], &[0, 1]).expect("valid");
+        let map = ModalMap::new(
+            vec![flex_joint(0, k1, 0.0), flex_joint(1, k2, 0.0)],
+            &[0, 1],
+        )
+        .expect("valid");
         let sol = map
             .solve(&[m11, m12, m12, m22], 2, &[])
             .expect("positive definite");
@@ -64,7 +57,7 @@ fn two_coupled_joints_match_the_characteristic_equation() {
 #[test]
 fn modal_damping_of_a_single_joint_is_exact() {
     // One flexible joint: ζ = c / (2 √(k J)) exactly, whatever the rest of M.
-    let map = ModalMap::new(vec![joint(1, 2.0e4, 300.0)], &[1]).expect("valid");
+    let map = ModalMap::new(vec![flex_joint(1, 2.0e4, 300.0)], &[1]).expect("valid");
     let mass = [3.0, 0.4, 0.4, 5.0];
     let mut out = [Mode::new(0.0, 0.0)];
     assert!(map.modes_from_mass_matrix(&mass, 2, &[], &mut out).is_ok());
@@ -79,7 +72,8 @@ fn an_overdamped_mode_falls_back_to_the_projected_damping() {
     // ω = √(k/J), ζ = c / (2 √(k J)), whatever the (valid) joint 0 does.
     let (k0, j0, c0) = (2.0e4, 4.0, 0.1 * 2.0 * (2.0e4f64 * 4.0).sqrt());
     let (k1, j1, c1) = (1.8e4, 9.0, 1.5 * 2.0 * (1.8e4f64 * 9.0).sqrt());
-    let map = ModalMap::new(vec![joint(0, k0, c0), joint(1, k1, c1)], &[0, 1]).expect("valid");
+    let map =
+        ModalMap::new(vec![flex_joint(0, k0, c0), flex_joint(1, k1, c1)], &[0, 1]).expect("valid");
     let mut out = [Mode::new(0.0, 0.0); 2];
     assert!(map
         .modes_from_mass_matrix(&[j0, 0.0, 0.0, j1], 2, &[], &mut out)
@@ -105,7 +99,7 @@ fn modes_keep_their_joint_through_a_frequency_crossing() {
     for step in 0..=200 {
         let k_base = 1.0e4 + 2.0e2 * step as f64;
         let map = ModalMap::new(
-            vec![joint(0, k_base, 20.0), joint(1, k_shoulder, 80.0)],
+            vec![flex_joint(0, k_base, 20.0), flex_joint(1, k_shoulder, 80.0)],
             &[0, 1],
         )
         .expect("valid");
@@ -134,9 +128,9 @@ fn modes_keep_their_joint_through_a_frequency_crossing() {
 fn the_ur5e_provider_gives_valid_modes_above_its_delay_bound() {
     let map = ModalMap::new(
         vec![
-            joint(0, 22_000.0, 30.0),
-            joint(1, 18_000.0, 90.0),
-            joint(2, 120_000.0, 40.0),
+            flex_joint(0, 22_000.0, 30.0),
+            flex_joint(1, 18_000.0, 90.0),
+            flex_joint(2, 120_000.0, 40.0),
         ],
         &[0, 1],
     )
@@ -198,9 +192,9 @@ fn far_apart_modes_sharing_the_base_are_not_blended() {
     let mass = mass_with_modes(k, freq_hz, shares.map(f64::sqrt));
     let map = ModalMap::new(
         vec![
-            joint(0, k[0], 0.0),
-            joint(1, k[1], 0.0),
-            joint(2, k[2], 0.0),
+            flex_joint(0, k[0], 0.0),
+            flex_joint(1, k[1], 0.0),
+            flex_joint(2, k[2], 0.0),
         ],
         &[0],
     )
@@ -237,8 +231,11 @@ fn the_tracked_mode_is_continuous_through_a_veering_swap() {
     let mut track = ModeTrack::default();
     for step in 0..=400 {
         let k_base = 1.0e4 + 12.5 * step as f64;
-        let map =
-            ModalMap::new(vec![joint(0, k_base, 0.0), joint(1, 1.8e4, 0.0)], &[0]).expect("valid");
+        let map = ModalMap::new(
+            vec![flex_joint(0, k_base, 0.0), flex_joint(1, 1.8e4, 0.0)],
+            &[0],
+        )
+        .expect("valid");
         let mut out = [Mode::new(0.0, 0.0)];
         map.modes_tracked(&mass, 2, &[], &mut track, &mut out);
         let sol = map.solve(&mass, 2, &[]).expect("valid");
@@ -269,7 +266,7 @@ fn shaped_modes_are_the_lowest_frequencies_in_order() {
         let (m11, m22) = (0.5 + 10.0 * rng.next_f64(), 0.5 + 10.0 * rng.next_f64());
         let m12 = 0.9 * (2.0 * rng.next_f64() - 1.0) * (m11 * m22).sqrt();
         let (k1, k2) = (1e3 + 1e5 * rng.next_f64(), 1e3 + 1e5 * rng.next_f64());
-        let flex = vec![joint(0, k1, 0.0), joint(1, k2, 0.0)];
+        let flex = vec![flex_joint(0, k1, 0.0), flex_joint(1, k2, 0.0)];
         let want = closed_form_w2([m11, m12, m12, m22], k1, k2);
         for k in 1..=2 {
             let map = ModalMap::shaping(flex.clone(), ShapedModes::Lowest(k)).expect("valid");
@@ -286,7 +283,7 @@ fn shaped_modes_are_the_lowest_frequencies_in_order() {
         }
     }
     // 0 and more modes than flexible joints are refused.
-    let flex = vec![joint(0, 1.0, 0.0), joint(1, 1.0, 0.0)];
+    let flex = vec![flex_joint(0, 1.0, 0.0), flex_joint(1, 1.0, 0.0)];
     assert!(ModalMap::shaping(flex.clone(), ShapedModes::Lowest(0)).is_err());
     assert!(ModalMap::shaping(flex.clone(), ShapedModes::Lowest(3)).is_err());
     let two = ModalMap::new(flex, &[0]).expect("valid");

@@ -2,24 +2,17 @@
 //! branch (through a far dominance swap, and where the K-th and the next mode cross), and the
 //! shaper limits and reports any faster change of a provider's mode.
 
+mod robot_support;
+
 use core::f64::consts::PI;
+use robot_support::flex_joint;
 use tvist_core::modes::modal::modal_map::HANDOVER_STEP;
 use tvist_core::tv_shaper::MAX_LN_WN_RATE_PER_S;
 use tvist_core::{
-    Dynamics, FlexJoint, LoadLaw, ModalMap, Mode, ModeTrack, ShapedModes, ShaperKind, Status,
-    TvShaper, TvShaperConfig,
+    Dynamics, ModalMap, Mode, ModeTrack, ShapedModes, ShaperKind, Status, TvShaper, TvShaperConfig,
 };
 
 const DT_S: f64 = 0.002;
-
-fn joint(j: usize, k: f64, c: f64) -> FlexJoint {
-    FlexJoint {
-        joint: j,
-        stiffness_nm_per_rad: LoadLaw::constant(k),
-        damping_nms_per_rad: LoadLaw::constant(c),
-        damping_load_joint: j,
-    }
-}
 
 fn unit(v: [f64; 3]) -> [f64; 3] {
     let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
@@ -99,9 +92,9 @@ fn slots_follow_their_branch_through_a_far_dominance_swap() {
         })
         .collect();
     let flex = vec![
-        joint(0, k[0], 8.0),
-        joint(1, k[1], 8.0),
-        joint(2, k[2], 8.0),
+        flex_joint(0, k[0], 8.0),
+        flex_joint(1, k[1], 8.0),
+        flex_joint(2, k[2], 8.0),
     ];
     for shaped in [ShapedModes::ByJoint(vec![1]), ShapedModes::Lowest(2)] {
         let map = ModalMap::shaping(flex.clone(), shaped.clone()).expect("valid");
@@ -152,9 +145,9 @@ fn slot_damping_stays_continuous_where_the_kth_and_the_next_mode_cross() {
         // ζ 0.28 on joint 1 at every inertia: its damper follows its inertia.
         let map = ModalMap::shaping(
             vec![
-                joint(0, k, damping(0.1, j0)),
-                joint(1, k, damping(0.28, j1)),
-                joint(2, k, damping(0.14, j2)),
+                flex_joint(0, k, damping(0.1, j0)),
+                flex_joint(1, k, damping(0.28, j1)),
+                flex_joint(2, k, damping(0.14, j2)),
             ],
             ShapedModes::Lowest(2),
         )

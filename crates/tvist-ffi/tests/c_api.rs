@@ -1,7 +1,10 @@
 //! The C functions, called as C would: error codes for bad input, and results equal to the
 //! Rust core's.
 
-use std::ffi::{c_char, CStr, CString};
+mod ffi_support;
+
+use ffi_support::{c, last_error, Handle, DT_S, PAYLOAD_COM_M, PAYLOAD_KG};
+use std::ffi::c_char;
 use std::ptr;
 use tvist::{
     tvist_last_error_message, tvist_shaper_delay_s, tvist_shaper_free, tvist_shaper_n_dof,
@@ -20,48 +23,6 @@ const PI: f64 = std::f64::consts::PI;
 /// The paper's pose Q1 (arm stretched out) and Q3 (folded), SPEC section 3.
 const Q1: [f64; 6] = [0.0, -PI, 0.0, -PI / 2.0, 0.0, 0.0];
 const Q3: [f64; 6] = [PI / 2.0, -PI / 2.0, 5.0 * PI / 6.0, -PI / 2.0, 0.0, 0.0];
-const PAYLOAD_KG: f64 = 5.0;
-const PAYLOAD_COM_M: [f64; 3] = [0.0, 0.0, 0.05];
-const DT_S: f64 = 0.002;
-
-fn c(text: &str) -> CString {
-    CString::new(text).expect("no interior NUL")
-}
-
-/// This thread's last error text, through the C function.
-fn last_error() -> String {
-    let mut buf = [0 as c_char; 512];
-    // SAFETY: `buf` is writable for its length.
-    unsafe { tvist_last_error_message(buf.as_mut_ptr(), buf.len()) };
-    // SAFETY: the function NUL-terminates a non-empty buffer.
-    unsafe { CStr::from_ptr(buf.as_ptr()) }
-        .to_string_lossy()
-        .into_owned()
-}
-
-/// Owns a handle from a constructor; frees it on drop.
-struct Handle(*mut TvistShaper);
-
-impl Drop for Handle {
-    fn drop(&mut self) {
-        // SAFETY: from a constructor, freed exactly once here.
-        unsafe { tvist_shaper_free(self.0) };
-    }
-}
-
-impl Handle {
-    fn step(&mut self, q_in: &[f64], q_out: &mut [f64]) -> i32 {
-        assert_eq!(q_in.len(), q_out.len());
-        // SAFETY: live handle; both arrays hold `q_in.len()` doubles.
-        unsafe { tvist_shaper_step(self.0, q_in.as_ptr(), q_out.as_mut_ptr(), q_in.len()) }
-    }
-
-    fn delay_s(&self) -> f64 {
-        // SAFETY: live handle.
-        unsafe { tvist_shaper_delay_s(self.0) }
-    }
-}
-
 /// `tvist_shaper_new_constant` with Rust arguments: the code and the handle (null on error).
 fn new_constant(modes: &[(f64, f64)], dt_s: f64, n_dof: usize, shaper: &str) -> (i32, Handle) {
     let wn: Vec<f64> = modes.iter().map(|m| m.0).collect();

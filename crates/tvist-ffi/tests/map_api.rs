@@ -1,17 +1,19 @@
 //! Map files from C (`tvist_shaper_new_map[_ex]`), setup options, the memory limit and the
 //! per-flag status counts, called as C would and compared with the Rust core.
 
-use std::ffi::{c_char, CStr, CString};
+mod ffi_support;
+
+use ffi_support::{c, last_error, Handle, DT_S, PAYLOAD_COM_M, PAYLOAD_KG};
+use std::ffi::CString;
 use std::path::PathBuf;
 use std::ptr;
 use tvist::{
-    tvist_last_error_message, tvist_shaper_delay_s, tvist_shaper_free, tvist_shaper_new_constant,
-    tvist_shaper_new_constant_ex, tvist_shaper_new_map, tvist_shaper_new_map_ex,
-    tvist_shaper_new_ur_map, tvist_shaper_reset, tvist_shaper_set_map,
-    tvist_shaper_set_shaped_modes, tvist_shaper_status_counts, tvist_shaper_step, TvistShaper,
-    TvistShaperOptions, TVIST_ERR_INVALID_PARAMETER, TVIST_ERR_MAP_FILE, TVIST_ERR_MID_MOVE,
-    TVIST_ERR_NULL, TVIST_ERR_ROBOT_MISMATCH, TVIST_ERR_TOO_LARGE, TVIST_ERR_UNKNOWN_ROBOT,
-    TVIST_INTERP_CUBIC, TVIST_MAX_MODES, TVIST_N_STATUS_FLAGS, TVIST_OK,
+    tvist_shaper_new_constant, tvist_shaper_new_constant_ex, tvist_shaper_new_map,
+    tvist_shaper_new_map_ex, tvist_shaper_new_ur_map, tvist_shaper_reset, tvist_shaper_set_map,
+    tvist_shaper_set_shaped_modes, tvist_shaper_status_counts, TvistShaper, TvistShaperOptions,
+    TVIST_ERR_INVALID_PARAMETER, TVIST_ERR_MAP_FILE, TVIST_ERR_MID_MOVE, TVIST_ERR_NULL,
+    TVIST_ERR_ROBOT_MISMATCH, TVIST_ERR_TOO_LARGE, TVIST_ERR_UNKNOWN_ROBOT, TVIST_INTERP_CUBIC,
+    TVIST_MAX_MODES, TVIST_N_STATUS_FLAGS, TVIST_OK,
 };
 use tvist_core::files::map_file::{MapFile, MapForm};
 use tvist_core::files::robot_data::ur_e_series;
@@ -23,39 +25,8 @@ use tvist_core::{
 
 const PI: f64 = std::f64::consts::PI;
 const Q1: [f64; 6] = [0.0, -PI, 0.0, -PI / 2.0, 0.0, 0.0];
-const PAYLOAD_KG: f64 = 5.0;
-const PAYLOAD_COM_M: [f64; 3] = [0.0, 0.0, 0.05];
-const DT_S: f64 = 0.002;
-
-fn c(text: &str) -> CString {
-    CString::new(text).expect("no interior NUL")
-}
-
-fn last_error() -> String {
-    let mut buf = [0 as c_char; 1024];
-    // SAFETY: `buf` is writable for its length.
-    unsafe { tvist_last_error_message(buf.as_mut_ptr(), buf.len()) };
-    // SAFETY: NUL-terminated by the function.
-    unsafe { CStr::from_ptr(buf.as_ptr()) }
-        .to_string_lossy()
-        .into_owned()
-}
-
-struct Handle(*mut TvistShaper);
-
-impl Drop for Handle {
-    fn drop(&mut self) {
-        // SAFETY: from a constructor (or null), freed once.
-        unsafe { tvist_shaper_free(self.0) };
-    }
-}
 
 impl Handle {
-    fn step(&mut self, q_in: &[f64], q_out: &mut [f64]) -> i32 {
-        // SAFETY: live handle; both arrays hold `q_in.len()` doubles.
-        unsafe { tvist_shaper_step(self.0, q_in.as_ptr(), q_out.as_mut_ptr(), q_in.len()) }
-    }
-
     fn counts(&self) -> Vec<u64> {
         let mut counts = vec![u64::MAX; TVIST_N_STATUS_FLAGS + 2];
         // SAFETY: live handle; `counts` is writable for its length.
@@ -741,8 +712,7 @@ fn set_shaped_modes_between_moves_shapes_as_a_map_of_that_many_lowest_modes() {
             .iter()
             .map(|m| PI / (m.wn_rad_s * (1.0 - m.zeta * m.zeta).sqrt()))
             .sum();
-        // SAFETY: live handle.
-        let delay = unsafe { tvist_shaper_delay_s(h.0) };
+        let delay = h.delay_s();
         assert!(
             (delay - expected).abs() < 1e-9,
             "k = {k}: {delay} vs {expected}"

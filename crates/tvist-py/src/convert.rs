@@ -29,6 +29,33 @@ pub fn rows(
     Ok((shape[0], data))
 }
 
+/// Gravity torques (N m) for `n` poses: the rows of `gravity_torque_nm`, `(n, cols)`, or
+/// `None` when it is omitted and nothing reads it. `needed` is why it is read ("the map uses
+/// gravity torques ...") when the caller's map or mode reads it, `None` when not; omitting it
+/// then is an error that says so.
+pub fn gravity_rows(
+    gravity_torque_nm: Option<PyReadonlyArray2<'_, f64>>,
+    cols: usize,
+    n: usize,
+    needed: Option<&str>,
+) -> PyResult<Option<Vec<f64>>> {
+    match (gravity_torque_nm, needed) {
+        (Some(t), _) => {
+            let (tn, tau) = rows(&t, cols, "gravity_torque_nm")?;
+            if tn != n {
+                return Err(PyValueError::new_err(format!(
+                    "gravity_torque_nm has {tn} rows, expected {n} (one per pose)"
+                )));
+            }
+            Ok(Some(tau))
+        }
+        (None, Some(why)) => Err(PyValueError::new_err(format!(
+            "{why}: pass gravity_torque_nm, shape ({n}, {cols})"
+        ))),
+        (None, None) => Ok(None),
+    }
+}
+
 /// Checks that a start pose has `n` finite values.
 pub fn check_start_pose(q0: &[f64], n: usize) -> PyResult<()> {
     if q0.len() != n {

@@ -7,7 +7,7 @@ use pyo3::types::PyDict;
 use tvist_core as core;
 use tvist_core::Mode;
 
-use crate::convert::{self, rows, value_error};
+use crate::convert::{self, gravity_rows, rows, value_error};
 use crate::json::{self, NonFinite};
 use crate::robot::PyRobot;
 use crate::robot_law;
@@ -182,23 +182,11 @@ impl PyModalMap {
             )));
         }
         let (n, mass) = rows(&mass_kg_m2, n_dof * n_dof, "mass_kg_m2")?;
-        let tau = match gravity_torque_nm {
-            Some(t) => {
-                let (tn, tau) = rows(&t, n_dof, "gravity_torque_nm")?;
-                if tn != n {
-                    return Err(PyValueError::new_err(format!(
-                        "gravity_torque_nm has {tn} rows, mass_kg_m2 {n}"
-                    )));
-                }
-                tau
-            }
-            None if self.inner.uses_gravity() => {
-                return Err(PyValueError::new_err(
-                    "the modal map's laws read gravity torques: pass gravity_torque_nm",
-                ));
-            }
-            None => Vec::new(),
-        };
+        let needed = self
+            .inner
+            .uses_gravity()
+            .then_some("the modal map's laws read gravity torques");
+        let tau = gravity_rows(gravity_torque_nm, n_dof, n, needed)?.unwrap_or_default();
         let m = self.inner.n_modes();
         let mut modes = vec![Mode::new(0.0, 0.0); m];
         let mut out = vec![0.0; n * m * 2];

@@ -8,7 +8,7 @@ use pyo3::types::PyDict;
 use tvist_core as core;
 use tvist_core::Mode;
 
-use crate::convert::{self, check_len, rows, value_error};
+use crate::convert::{self, gravity_rows, rows, value_error};
 use crate::json::{self, map_file_from, NonFinite};
 use crate::robot::PyRobot;
 use crate::robot_law;
@@ -51,19 +51,12 @@ fn evaluate_trial_mode<'py>(
         )));
     }
     let (n, j) = rows(&inertia_kg_m2, cols, "inertia_kg_m2")?;
-    let tau = match gravity_torque_nm {
-        Some(t) => {
-            let (tn, tau) = rows(&t, cols, "gravity_torque_nm")?;
-            check_len("gravity_torque_nm rows", tn, n)?;
-            tau
-        }
-        None if mode.uses_gravity() => {
-            return Err(PyValueError::new_err(
-                "the mode uses gravity torques (k_g != 0): pass them",
-            ));
-        }
-        None => vec![0.0; n * cols],
-    };
+    let needed = mode
+        .uses_gravity()
+        .then_some("the mode uses gravity torques (k_g != 0)");
+    // Without a gravity term no torque is read; a zero row per pose keeps the pairing below.
+    let tau =
+        gravity_rows(gravity_torque_nm, cols, n, needed)?.unwrap_or_else(|| vec![0.0; n * cols]);
     let (mut wn, mut zeta) = (Vec::with_capacity(n), Vec::with_capacity(n));
     for (j_row, tau_row) in j.chunks_exact(cols).zip(tau.chunks_exact(cols)) {
         let m = mode.evaluate(j_row, tau_row);
@@ -161,19 +154,11 @@ impl PyDynamicMap {
             )));
         }
         let (n, j) = rows(&inertia_kg_m2, cols, "inertia_kg_m2")?;
-        let tau = match gravity_torque_nm {
-            Some(t) => {
-                let (tn, tau) = rows(&t, cols, "gravity_torque_nm")?;
-                check_len("gravity_torque_nm rows", tn, n)?;
-                tau
-            }
-            None if self.inner.uses_gravity() => {
-                return Err(PyValueError::new_err(format!(
-                    "the map uses gravity torques (k_g != 0): pass {need} per row"
-                )));
-            }
-            None => Vec::new(),
-        };
+        let needed = self
+            .inner
+            .uses_gravity()
+            .then_some("the map uses gravity torques (k_g != 0)");
+        let tau = gravity_rows(gravity_torque_nm, cols, n, needed)?.unwrap_or_default();
         let m = self.inner.n_modes();
         let mut modes = vec![Mode::new(0.0, 0.0); m];
         let mut out = vec![0.0; n * m * 2];

@@ -8,21 +8,6 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 
-def as_time(t_s: ArrayLike) -> np.ndarray:
-    """Finite, strictly increasing 1-D time stamps (s) with at least 2 samples."""
-    t = np.asarray(t_s, dtype=float)
-    if t.ndim != 1 or t.size < 2:
-        raise ValueError(f"t_s must be 1-D with at least 2 samples, got shape {t.shape}")
-    bad = np.flatnonzero(~np.isfinite(t))
-    if bad.size:
-        raise ValueError(f"t_s[{bad[0]}] is {t[bad[0]]}; time stamps must be finite")
-    not_increasing = np.flatnonzero(np.diff(t) <= 0.0)
-    if not_increasing.size:
-        row = not_increasing[0] + 1
-        raise ValueError(f"t_s is not increasing at row {row}")
-    return t
-
-
 def as_channels(name: str, x: ArrayLike, n_samples: int | None = None) -> np.ndarray:
     """A signal as ``(n_samples, n_channels)`` float array; accepts ``(n,)`` or ``(n, k)``."""
     arr = np.asarray(x, dtype=float)

@@ -10,7 +10,8 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-from tvist.analysis._signals import as_channels, as_time, magnitude, positive
+from tvist.analysis._signals import as_channels, magnitude, positive
+from tvist.trajectory.validation import check_time_stamps
 
 __all__ = [
     "SETTLE_BANDS_M_S2",
@@ -78,7 +79,7 @@ def settling_time(
     (``1 − cos(π f dt)`` of the peak for a ringing at ``f`` Hz: 0.13 % at 8 Hz and 500 Hz)
     is not seen.
     """
-    t = as_time(t_s)
+    t = check_time_stamps(t_s)
     level = magnitude(as_channels("signal", signal, t.size))
     band = positive("threshold", threshold)
     hold = float(hold_s)

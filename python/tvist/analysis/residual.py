@@ -17,7 +17,8 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from tvist.analysis._signals import as_channels, as_time, magnitude, positive
+from tvist.analysis._signals import as_channels, magnitude, positive
+from tvist.trajectory.validation import check_time_stamps
 
 __all__ = ["ResidualVibration", "estimate_noise_std", "residual_vibration"]
 
@@ -395,7 +396,7 @@ def residual_vibration(
     """
     from scipy.signal import find_peaks
 
-    t = as_time(t_s)
+    t = check_time_stamps(t_s)
     a = as_channels("accel", accel, t.size)
     t_stop = float(t_stop_s)
     if not math.isfinite(t_stop) or not t[0] <= t_stop < t[-1]:

@@ -16,6 +16,7 @@ import hashlib
 import json
 import os
 import warnings
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -51,6 +52,19 @@ def _is_record(value: Any) -> bool:
     return isinstance(value, dict) and isinstance(value.get("key"), str)
 
 
+def _parsed_lines(lines: list[str]) -> Iterator[tuple[int, str, Any]]:
+    """``(index, line, value)`` of every non-blank line, ``value`` its JSON or ``None`` when
+    the line is not JSON (a torn or foreign line); ``index`` counts blank lines too."""
+    for i, line in enumerate(lines):
+        if not line.strip():
+            continue
+        try:
+            value = json.loads(line)
+        except json.JSONDecodeError:
+            value = None
+        yield i, line, value
+
+
 def load_results(path: str | Path) -> list[dict]:
     """Pose records of a results file (JSON lines); a torn last line is ignored.
 
@@ -65,13 +79,7 @@ def load_results(path: str | Path) -> list[dict]:
         return []
     out = []
     lines = path.read_text(encoding="utf-8").splitlines()
-    for i, line in enumerate(lines):
-        if not line.strip():
-            continue
-        try:
-            value = json.loads(line)
-        except json.JSONDecodeError:
-            value = None
+    for i, _, value in _parsed_lines(lines):
         if _is_record(value):
             out.append(value)
         elif i == len(lines) - 1:  # interrupted while writing: that pose reruns
@@ -173,13 +181,7 @@ class ResultsStore:
             return []
         text = self.path.read_text(encoding="utf-8")
         good, bad = [], []
-        for line in text.splitlines():
-            if not line.strip():
-                continue
-            try:
-                value = json.loads(line)
-            except json.JSONDecodeError:
-                value = None
+        for _, line, value in _parsed_lines(text.splitlines()):
             (good if _is_record(value) else bad).append((line, value))
         if bad:
             quarantine = self.path.with_name(self.path.name + ".quarantine")

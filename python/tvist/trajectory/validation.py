@@ -11,7 +11,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["check_uniform_time", "validate_reference"]
+__all__ = ["check_time_stamps", "check_uniform_time", "validate_reference"]
 
 
 def as_pose(name: str, q: ArrayLike) -> np.ndarray:
@@ -149,6 +149,31 @@ def validate_reference(
     return arr
 
 
+def check_time_stamps(t_s: ArrayLike) -> np.ndarray:
+    """Return time stamps (s) as a float array after checking that they are 1-D, at least 2,
+    finite and strictly increasing.
+
+    Raises
+    ------
+    ValueError
+        Naming the first row whose stamp is not finite or not above the previous one.
+    """
+    t = np.asarray(t_s, dtype=float)
+    if t.ndim != 1 or t.size < 2:
+        raise ValueError(f"t_s must be 1-D with at least 2 samples, got shape {t.shape}")
+    bad = np.flatnonzero(~np.isfinite(t))
+    if bad.size:
+        raise ValueError(f"t_s[{bad[0]}] is {t[bad[0]]} (row {bad[0]}); time stamps must be finite")
+    not_increasing = np.flatnonzero(np.diff(t) <= 0.0)
+    if not_increasing.size:
+        row = not_increasing[0] + 1
+        raise ValueError(
+            f"t_s is not increasing at row {row}: t_s[{row}] = {t[row]!r} <= "
+            f"t_s[{row - 1}] = {t[row - 1]!r}"
+        )
+    return t
+
+
 def check_uniform_time(t_s: ArrayLike, rtol: float = 1e-3) -> float:
     """Check that time stamps are finite, increasing and evenly spaced; return the period.
 
@@ -173,20 +198,8 @@ def check_uniform_time(t_s: ArrayLike, rtol: float = 1e-3) -> float:
         Naming the first row whose stamp is not finite, or whose step from the previous row
         is not positive or differs from the median step by more than ``rtol``.
     """
-    t = np.asarray(t_s, dtype=float)
-    if t.ndim != 1 or t.size < 2:
-        raise ValueError(f"t_s must be 1-D with at least 2 samples, got shape {t.shape}")
-    bad = np.flatnonzero(~np.isfinite(t))
-    if bad.size:
-        raise ValueError(f"t_s[{bad[0]}] is {t[bad[0]]} (row {bad[0]}); time stamps must be finite")
+    t = check_time_stamps(t_s)
     step = np.diff(t)
-    not_increasing = np.flatnonzero(step <= 0.0)
-    if not_increasing.size:
-        row = not_increasing[0] + 1
-        raise ValueError(
-            f"t_s is not increasing at row {row}: t_s[{row}] = {t[row]!r} <= "
-            f"t_s[{row - 1}] = {t[row - 1]!r}"
-        )
     dt = float(np.median(step))
     uneven = np.flatnonzero(np.abs(step - dt) > rtol * dt)
     if uneven.size:

@@ -2,7 +2,7 @@
 
 #![allow(dead_code)]
 
-use tvist_core::{DhJoint, JointPlacement, Origin, RigidBody, Robot};
+use tvist_core::{DhJoint, FlexJoint, JointPlacement, LoadLaw, Origin, RigidBody, Robot};
 
 /// Joints and links of robot `name` from the project's robot-data file.
 pub fn ur_chain(name: &str) -> (Vec<DhJoint>, Vec<RigidBody>) {
@@ -22,6 +22,16 @@ pub fn ur_robot(name: &str, payload_kg: f64) -> Robot {
         RigidBody::point(payload_kg, [0.0, 0.0, 0.05]),
     )
     .expect("valid robot")
+}
+
+/// Joint `j` flexible with constant stiffness `k` (N m/rad) and damping `c` (N m s/rad).
+pub fn flex_joint(j: usize, k: f64, c: f64) -> FlexJoint {
+    FlexJoint {
+        joint: j,
+        stiffness_nm_per_rad: LoadLaw::constant(k),
+        damping_nms_per_rad: LoadLaw::constant(c),
+        damping_load_joint: j,
+    }
 }
 
 /// Deterministic pseudo-random numbers in [0, 1) (xorshift64*), for reproducible poses.
