@@ -5,6 +5,7 @@ The helper modules in ``tests/support`` are importable by name from every tier t
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import twin_server_fixture
@@ -94,3 +95,31 @@ def hpp_containers(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     programs = [f"target/cpp/hpp_containers_{s}" for s in standards]
     copies = built_programs("cpp-containers", programs, tmp_path_factory.mktemp("hpp"))
     return dict(zip(standards, copies, strict=True))
+
+
+@pytest.fixture()
+def move_csv(tmp_path: Path) -> Path:
+    """A 0.4 s min-jerk move of the first three joints of a UR5e from a mid-range pose, then
+    0.2 s of rest: rows of 6 joint angles (rad) every 2 ms, no header."""
+    t = np.arange(0.0, 0.6, 0.002)
+    s = np.clip(t / 0.4, 0.0, 1.0)
+    q = np.array([0.0, -1.6, 1.2, -1.2, 0.3, 0.0]) + np.outer(
+        s**3 * (10 - 15 * s + 6 * s**2), [0.4, 0.3, -0.3, 0, 0, 0]
+    )
+    path = tmp_path / "move.csv"
+    np.savetxt(path, q, delimiter=",")
+    return path
+
+
+@pytest.fixture()
+def paper_move_csv(tmp_path: Path) -> tuple[Path, np.ndarray]:
+    """The paper's Q1 -> Q3 double-S move every 2 ms with 0.02 s of rest before and after,
+    written with a ``q0,...,q5`` header at 12 decimals; and the angles (rad) read back from
+    that file."""
+    from tvist.trajectory import PAPER_POSES, double_s  # imported by the tests that use it
+
+    move = double_s(PAPER_POSES["Q1"], PAPER_POSES["Q3"], dt_s=0.002, t_pre_s=0.02, t_post_s=0.02)
+    path = tmp_path / "move.csv"
+    header = ",".join(f"q{j}" for j in range(6))
+    np.savetxt(path, move.q, delimiter=",", header=header, comments="", fmt="%.12f")
+    return path, np.loadtxt(path, delimiter=",", skiprows=1)

@@ -66,18 +66,6 @@ def logs(tmp_path_factory) -> dict[str, Path]:
     return {"plain": plain, "named": named}
 
 
-@pytest.fixture()
-def move_csv(tmp_path) -> Path:
-    t = np.arange(0.0, 0.6, 0.002)
-    s = np.clip(t / 0.4, 0.0, 1.0)
-    q = np.array([0.0, -1.6, 1.2, -1.2, 0.3, 0.0]) + np.outer(
-        s**3 * (10 - 15 * s + 6 * s**2), [0.4, 0.3, -0.3, 0, 0, 0]
-    )
-    path = tmp_path / "move.csv"
-    np.savetxt(path, q, delimiter=",")
-    return path
-
-
 # --------------------------------------------------------------------------- tvist shape
 
 

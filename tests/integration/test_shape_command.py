@@ -11,22 +11,13 @@ import tvist
 from tvist.cli import main
 from tvist.cli.shape import parse_modes, read_joint_csv, read_trajectory_csv
 from tvist.sim.flex import UR5E_FLEX
-from tvist.trajectory import PAPER_POSES, double_s
+from tvist.trajectory import PAPER_POSES
 from tvist.trajectory.joint_names import UR_JOINT_NAMES
 
 DT = 0.002
 # The files store 9 decimals: equal to the library's output within 5e-10 rad (rounding of
 # the stored input and output, each at most 5e-10).
 ATOL_FILE = 1.1e-9
-
-
-@pytest.fixture
-def move_csv(tmp_path):
-    traj = double_s(PAPER_POSES["Q1"], PAPER_POSES["Q3"], dt_s=DT, t_pre_s=0.02, t_post_s=0.02)
-    path = tmp_path / "move.csv"
-    header = ",".join(f"q{j}" for j in range(6))
-    np.savetxt(path, traj.q, delimiter=",", header=header, comments="", fmt="%.12f")
-    return path, np.loadtxt(path, delimiter=",", skiprows=1)
 
 
 def refused(args: list[str], match: str, capsys) -> None:
@@ -48,8 +39,8 @@ def test_parse_modes_converts_hz_to_rad_s():
         parse_modes("8")
 
 
-def test_tvist_method_equals_the_shaper_and_ends_at_the_end_pose(move_csv, tmp_path, capsys):
-    path, q = move_csv
+def test_tvist_method_equals_the_shaper_and_ends_at_the_end_pose(paper_move_csv, tmp_path, capsys):
+    path, q = paper_move_csv
     out = tmp_path / "shaped.csv"
     assert (
         main(["shape", str(path), "--out", str(out), "--modes", "8:0.2,7:0.3", "--shaper", "zvd"])
@@ -71,9 +62,9 @@ def test_tvist_method_equals_the_shaper_and_ends_at_the_end_pose(move_csv, tmp_p
 
 @pytest.mark.parametrize(("method", "zd_method"), [("modified", "modified"), ("ztdis", "ztdis")])
 def test_map_source_zero_delay_equals_zero_delay_with_the_end_pose_modes(
-    move_csv, tmp_path, method, zd_method
+    paper_move_csv, tmp_path, method, zd_method
 ):
-    path, q = move_csv
+    path, q = paper_move_csv
     out = tmp_path / "zd.csv"
     args = ["shape", str(path), "--out", str(out), "--paper-map", "--payload-kg", "5"]
     assert main([*args, "--payload-com", "0", "0", "0.05", "--method", method]) == 0
@@ -85,8 +76,8 @@ def test_map_source_zero_delay_equals_zero_delay_with_the_end_pose_modes(
     np.testing.assert_allclose(shaped, ref.Q, atol=ATOL_FILE)
 
 
-def test_map_source_fd_tvist_equals_the_map_driven_shaper(move_csv, tmp_path):
-    path, q = move_csv
+def test_map_source_fd_tvist_equals_the_map_driven_shaper(paper_move_csv, tmp_path):
+    path, q = paper_move_csv
     out = tmp_path / "map.csv"
     assert main(["shape", str(path), "--out", str(out), "--paper-map", "--payload-kg", "3"]) == 0
     shaped, _ = read_joint_csv(out)
@@ -96,9 +87,9 @@ def test_map_source_fd_tvist_equals_the_map_driven_shaper(move_csv, tmp_path):
     np.testing.assert_allclose(shaped, ref.shape(padded), atol=ATOL_FILE)
 
 
-def test_modal_map_file_fd_tvist_equals_the_modal_map_driven_shaper(move_csv, tmp_path):
+def test_modal_map_file_fd_tvist_equals_the_modal_map_driven_shaper(paper_move_csv, tmp_path):
     # --map dispatches on the file's kind: a modal map file drives the modal provider.
-    path, q = move_csv
+    path, q = paper_move_csv
     entries = [
         {
             "joint": j,

@@ -7,33 +7,21 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from ident_reference import dh_frames as reference_dh_frames
 from tvist.ident.excitation import random_excitation
 from tvist.ident.logs import Record
 from tvist.ident.preprocess import quiet_samples, standstill_length, tangential_acceleration
-from tvist.robots import params, ur5e
+from tvist.robots import ur5e
 
-UR5E = params("ur5e")
 G_UP = np.array([0.0, 0.0, 9.81])  # reading of an accelerometer at rest: reaction to gravity
 
 
 def dh_frames(q: np.ndarray) -> list[np.ndarray]:
-    """Base-frame transforms of DH frames 0..6 (standard DH), plain numpy.
-
-    ``q`` is (6,) or (n_samples, 6); each frame is (4, 4) or (n_samples, 4, 4).
+    """Base-frame transforms of the UR5e's DH frames 0..6 (the plain-numpy standard-DH
+    reference), each shaped like ``q``: (4, 4) for ``q`` of shape (6,), else (n_samples, 4, 4).
     """
     q = np.asarray(q, dtype=float)
-    batch = q.reshape(-1, 6)
-    frames = [np.broadcast_to(np.eye(4), (len(batch), 4, 4))]
-    for i, (d, a, alpha) in enumerate(zip(UR5E.d_m, UR5E.a_m, UR5E.alpha_rad, strict=True)):
-        c, s = np.cos(batch[:, i]), np.sin(batch[:, i])
-        ca, sa = np.cos(alpha), np.sin(alpha)
-        step = np.zeros((len(batch), 4, 4))
-        step[:, 0] = np.column_stack([c, -s * ca, s * sa, a * c])
-        step[:, 1] = np.column_stack([s, c * ca, -c * sa, a * s])
-        step[:, 2] = [0.0, sa, ca, d]
-        step[:, 3] = [0.0, 0.0, 0.0, 1.0]
-        frames.append(frames[-1] @ step)
-    return [f.reshape(q.shape[:-1] + (4, 4)) for f in frames]
+    return [f.reshape(q.shape[:-1] + (4, 4)) for f in reference_dh_frames(q, "ur5e")]
 
 
 class NumpyUR5e:

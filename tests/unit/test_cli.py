@@ -70,20 +70,10 @@ def test_zero_delay_command_prints_the_benchmark_of_the_library(tmp_path, capsys
     assert bench.delay_s == pytest.approx(1.0 / (2.55 * math.sqrt(1.0 - 0.04**2)), rel=1e-12)
 
 
-@pytest.fixture
-def move_file(tmp_path):
-    """A Q1 -> Q3 double-S move with 5 kg, written with a header at full precision."""
-    from tvist.trajectory import PAPER_POSES, double_s
-
-    move = double_s(PAPER_POSES["Q1"], PAPER_POSES["Q3"], dt_s=DT_S, t_pre_s=0.02, t_post_s=0.02)
-    path = tmp_path / "move.csv"
-    header = ",".join(f"q{j}" for j in range(6))
-    np.savetxt(path, move.q, delimiter=",", header=header, comments="", fmt="%.12f")
-    return path, np.loadtxt(path, delimiter=",", skiprows=1)
-
-
 @pytest.mark.parametrize("method", ["modified", "ztdis"])
-def test_shape_with_the_paper_map_and_zero_delay_equals_zero_delay(move_file, tmp_path, method):
+def test_shape_with_the_paper_map_and_zero_delay_equals_zero_delay(
+    paper_move_csv, tmp_path, method
+):
     """``tvist shape --paper-map --method (m)ztdis`` = ``zero_delay()`` with the modes of the
     end pose, and those modes are the paper map's equations (independent transcription) at
     the end pose's inertias."""
@@ -91,7 +81,7 @@ def test_shape_with_the_paper_map_and_zero_delay_equals_zero_delay(move_file, tm
     from tvist.cli import main
     from tvist.cli.shape import read_joint_csv
 
-    path, q = move_file
+    path, q = paper_move_csv
     out = tmp_path / "zd.csv"
     args = ["shape", str(path), "--out", str(out), "--paper-map", "--payload-kg", "5"]
     assert main([*args, "--payload-com", "0", "0", "0.05", "--method", method]) == 0
@@ -114,14 +104,14 @@ def test_shape_with_the_paper_map_and_zero_delay_equals_zero_delay(move_file, tm
     np.testing.assert_allclose(shaped[-1], q[-1], atol=1e-6)
 
 
-def test_run_takes_a_modal_map_file_like_shape_does(move_file, tmp_path):
+def test_run_takes_a_modal_map_file_like_shape_does(paper_move_csv, tmp_path):
     """``tvist run --map FILE`` reads either map kind (as ``tvist shape`` does): its live
     shaper for a modal map file is ``TvShaper(ModalDynamics(robot, ModalMap.load(FILE)))``,
     step for step; a paper10 file gives the paper10 provider."""
     from tvist.cli import build_parser
     from tvist.cli.live import _shaper
 
-    path, q = move_file
+    path, q = paper_move_csv
     entries = [  # the twin's base and shoulder gears, without load terms
         {
             "joint": j,
@@ -153,13 +143,13 @@ def test_run_takes_a_modal_map_file_like_shape_does(move_file, tmp_path):
         assert np.max(np.abs(got - q)) > 1e-3  # the map shaped the move (a delayed copy)
 
 
-def test_shape_with_a_map_file_equals_the_map_driven_shaper(move_file, tmp_path, capsys):
+def test_shape_with_a_map_file_equals_the_map_driven_shaper(paper_move_csv, tmp_path, capsys):
     """``tvist shape --map FILE`` = ``TvShaper(MapDynamics(robot, map))`` on the input padded
     with its last sample for the end pose's ZV delay."""
     from tvist.cli import main
     from tvist.cli.shape import read_joint_csv
 
-    path, q = move_file
+    path, q = paper_move_csv
     map_path = tmp_path / "map.json"
     tvist.DynamicMap.paper_ur5e().save(map_path)
     out = tmp_path / "fd.csv"

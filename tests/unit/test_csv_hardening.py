@@ -12,37 +12,11 @@ import warnings
 import numpy as np
 import pytest
 
+from rtde_records import make_record, read_rtde_csv
 from tvist.ident.csv_table import LogFormatError
 from tvist.ident.logs import LogWarning, Record
-from tvist.ident.logs import read_rtde_csv as read_rtde_log
 
-
-def read_rtde_csv(path, **kwargs) -> Record:
-    """The reader's format layer: these records are random numbers, not a physical log, so
-    the unit check (tested in test_log_units.py) is off."""
-    return read_rtde_log(path, check_units=False, **kwargs)
-
-
-DT_S = 0.002  # e-Series RTDE period
 ATOL_6DP = 5.01e-7  # "ur_rtde" writes 6 decimals: rounding error at most 0.5e-6
-
-
-def make_record(n: int = 20, seed: int = 0) -> Record:
-    rng = np.random.default_rng(seed)
-    t = 1000.0 + DT_S * np.arange(n)
-
-    def block(width: int) -> np.ndarray:
-        return rng.uniform(-3.0, 3.0, size=(n, width))
-
-    return Record(
-        t_s=t,
-        target_q=block(6),
-        target_qd=block(6),
-        target_qdd=block(6),
-        actual_q=block(6),
-        tool_accel=block(3),
-        actual_TCP_pose=block(6),
-    )
 
 
 def write_edited(tmp_path, rec: Record, edit, fmt: str = "ur_rtde", name: str = "log.csv"):

@@ -26,6 +26,23 @@ from tvist.ident.local_fit import (
 from tvist.ident.zoh import zoh_responses
 
 
+def _lsim_reference(
+    wn: float, zeta: float, u: np.ndarray, dt: float, delay_s: float, fine: int
+) -> list[np.ndarray]:
+    """Responses of ``1 / (s² + 2ζω s + ω²)`` and ``s / (...)`` to the held input ``u``
+    delayed by ``delay_s`` (``u[k]`` on ``[t_k, t_k+1)``, ``u[0]`` before the first sample),
+    by scipy's lsim on a ``fine`` times finer grid, at the samples of ``u``. lsim is exact
+    for a held input on its own grid."""
+    den = [1, 2 * zeta * wn, wn**2]
+    t_fine = dt / fine * np.arange(u.size * fine)
+    index = np.floor((t_fine - delay_s) / dt + 1e-9).astype(int)
+    u_fine = np.where(index < 0, u[0], u[np.clip(index, 0, u.size - 1)])
+    return [
+        signal.lsim(signal.lti(num, den), u_fine, t_fine, interp=False)[1][::fine]
+        for num in ([1], [1, 0])
+    ]
+
+
 @pytest.mark.parametrize("delay_s", [0.0, 0.0013, -0.0031, 0.0040])
 def test_zoh_responses_match_a_fine_grid_simulation(delay_s):
     """Exact sampled responses for any delay, against scipy's lsim on a 100x finer grid with
@@ -34,14 +51,8 @@ def test_zoh_responses_match_a_fine_grid_simulation(delay_s):
     rng = np.random.default_rng(2)
     u = np.repeat(rng.normal(0.0, 1.0, 40), 5)  # held values, changing every 5 samples
     wn, zeta = 2 * math.pi * 17.0, 0.07
-    den = [1, 2 * zeta * wn, wn**2]
-    t_fine = dt / fine * np.arange(u.size * fine)
-    # u(t - delay) with u[k] on [t_k, t_k+1); zero before the first sample
-    index = np.floor((t_fine - delay_s) / dt + 1e-9).astype(int)
-    u_fine = np.where(index < 0, u[0], u[np.clip(index, 0, u.size - 1)])
     ours = zoh_responses(wn, zeta, u, dt, delay_s)
-    for col, num in enumerate(([1], [1, 0])):
-        ref = signal.lsim(signal.lti(num, den), u_fine, t_fine, interp=False)[1][::fine]
+    for col, ref in enumerate(_lsim_reference(wn, zeta, u, dt, delay_s, fine)):
         np.testing.assert_allclose(ours[:, col], ref, atol=1e-9 * np.max(np.abs(ref)))
 
 
@@ -54,13 +65,8 @@ def test_zoh_responses_at_and_near_critical_damping(zeta):
     rng = np.random.default_rng(5)
     u = np.repeat(rng.normal(0.0, 1.0, 40), 5)
     wn = 2 * math.pi * 9.0
-    den = [1, 2 * zeta * wn, wn**2]
-    t_fine = dt / fine * np.arange(u.size * fine)
-    index = np.floor((t_fine - delay_s) / dt + 1e-9).astype(int)
-    u_fine = np.where(index < 0, u[0], u[np.clip(index, 0, u.size - 1)])
     ours = zoh_responses(wn, zeta, u, dt, delay_s)
-    for col, num in enumerate(([1], [1, 0])):
-        ref = signal.lsim(signal.lti(num, den), u_fine, t_fine, interp=False)[1][::fine]
+    for col, ref in enumerate(_lsim_reference(wn, zeta, u, dt, delay_s, fine)):
         np.testing.assert_allclose(ours[:, col], ref, atol=1e-9 * np.max(np.abs(ref)))
 
 

@@ -7,35 +7,14 @@ import warnings
 import numpy as np
 import pytest
 
+from rtde_records import DT_S, read_rtde_csv
+from rtde_records import make_record as make_random_record
 from tvist.ident.logs import LogWarning, Record, find_gaps
-from tvist.ident.logs import read_rtde_csv as read_rtde_log
-
-
-def read_rtde_csv(path, **kwargs) -> Record:
-    """The reader's format layer: these records are random numbers, not a physical log, so
-    the unit check (tested in test_log_units.py) is off."""
-    return read_rtde_log(path, check_units=False, **kwargs)
-
-
-DT_S = 0.002  # e-Series RTDE period
 
 
 def make_record(n: int = 50, with_pose: bool = True, seed: int = 0) -> Record:
-    rng = np.random.default_rng(seed)
-    t = 1000.0 + DT_S * np.arange(n)  # RTDE timestamps count from controller start
-
-    def block(width: int) -> np.ndarray:
-        return rng.uniform(-3.0, 3.0, size=(n, width))
-
-    return Record(
-        t_s=t,
-        target_q=block(6),
-        target_qd=block(6),
-        target_qdd=block(6),
-        actual_q=block(6),
-        tool_accel=block(3) + np.array([0.0, 0.0, 9.81]),
-        actual_TCP_pose=block(6) if with_pose else None,
-    )
+    """A random record whose accelerometer reads +g on average, as at rest."""
+    return make_random_record(n, seed, gravity=True, with_pose=with_pose)
 
 
 def assert_records_close(a: Record, b: Record, atol: float) -> None:

@@ -17,15 +17,8 @@ from hypothesis import HealthCheck, assume, event, given, settings
 from hypothesis import strategies as st
 
 import tvist
+from rtde_records import read_rtde_csv
 from tvist.ident.logs import LogFormatError, Record
-from tvist.ident.logs import read_rtde_csv as read_rtde_log
-
-
-def read_rtde_csv(path, **kwargs) -> Record:
-    """The reader's format layer: these records are random numbers, not a physical log, so
-    the unit check (tested in test_log_units.py) is off."""
-    return read_rtde_log(path, check_units=False, **kwargs)
-
 
 # Reproducible in CI: a fixed search (derandomize), no example database written to disk, no
 # per-example time limit (the machine is shared; time is not what is tested).

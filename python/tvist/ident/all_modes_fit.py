@@ -20,7 +20,7 @@ the damping projected on the undamped modes (linear in the coefficients); (3) bo
 ``ω`` and ``ζ`` with the exact damped modes (the core's model), each in units of its scatter.
 Load terms below ``drop_t`` standard errors are dropped, the weakest first (standard errors
 per parameter: the load terms of a joint no identified mode involves are not determined, and
-must not make the others' infinite, :func:`_standard_errors`).
+must not make the others' infinite: :mod:`tvist.ident.standard_errors`).
 
 **Every candidate joint stays flexible** (:func:`flexible_candidates`: base to wrist 2 on a
 UR). A joint's gear is a spring whether or not its own mode was identified, and a joint made
@@ -79,6 +79,7 @@ from scipy import optimize, stats
 
 from tvist.ident.model_modes import ModelModes, joint_laws, model_modes, undamped_frequencies
 from tvist.ident.observed_modes import HINGE_AT_FRACTION, ObservedModes, observed_modes
+from tvist.ident.standard_errors import standard_errors
 from tvist.maps.modal import ModalMap
 
 __all__ = [
@@ -140,9 +141,6 @@ MATCH_PASSES = 4
 #: Smallest relative standard errors believed of a local fit (ω, ζ), as the label-based fit.
 MIN_RELATIVE_SE = (1.0e-3, 1.0e-2)
 ROBUST_SCALE = 0.02
-#: Relative accuracy of the least-squares Jacobians (finite differences: about √ε); their
-#: singular values below this times the largest are not told from zero (standard errors).
-JACOBIAN_RTOL = 1.5e-8
 STIFFNESS_SPAN = 100.0
 MIN_LOAD_SPAN_NM = 1.0
 DAMPING_LOAD = {0: 1}
@@ -361,37 +359,17 @@ def _best_frequency_fit(
 
 
 def _standard_errors(jac: np.ndarray, residual: np.ndarray) -> np.ndarray:
-    """``√diag(σ² (JᵀJ)⁻¹)`` over the inliers (within 4 robust standard deviations), per
-    parameter.
+    """Per-parameter standard errors ``√diag(σ² (JᵀJ)⁺)`` over the inliers (within 4 robust
+    standard deviations), :func:`tvist.ident.standard_errors.standard_errors`.
 
     A parameter the data do not determine (the load terms of a joint no identified mode
-    involves, a wrist's on a UR) makes ``J`` singular; that must not make every standard
-    error infinite, which would read as every load term being weak. ``J``'s columns are scaled
-    to unit length (the parameters' units then do not matter) and its singular values floored
-    at :data:`JACOBIAN_RTOL` times the largest (the finite-difference Jacobian's accuracy):
-    a direction the data do not see gets that floor's variance, so a parameter along it has a
-    huge standard error and the others keep theirs."""
+    involves, a wrist's on a UR) makes ``J`` singular; its standard error is infinite, and
+    it must not make the others infinite, which would read as every load term being weak."""
     sigma = _robust_scale(residual)
     keep = np.abs(residual) <= 4 * sigma
     if keep.sum() > jac.shape[1]:
         jac, residual = jac[keep], residual[keep]
-    n, p = jac.shape
-    if p == 0:
-        return np.zeros(0)
-    if n < p:
-        return np.full(p, math.inf)
-    out = np.full(p, math.inf)
-    norm = np.linalg.norm(jac, axis=0)
-    seen = norm > 0
-    if not seen.any():
-        return out
-    _, sv, vt = np.linalg.svd(jac[:, seen] / norm[seen], full_matrices=False)
-    # Degrees of freedom: the residuals less the directions the data determine.
-    rank = int(np.sum(sv > JACOBIAN_RTOL * sv[0]))
-    s2 = float(residual @ residual) / max(n - rank, 1)
-    sv = np.maximum(sv, JACOBIAN_RTOL * sv[0])
-    out[seen] = np.sqrt(np.einsum("ki,k->i", vt**2, 1.0 / sv**2) * s2) / norm[seen]
-    return out
+    return standard_errors(jac, residual)
 
 
 def _candidate(obs: ObservedModes, flex: Sequence[int]) -> _Model:

@@ -162,33 +162,48 @@ def _flagged(fit: LocalFit, reason: str) -> LocalFit:
     return replace(fit, low_confidence=True, reasons=(*fit.reasons, reason))
 
 
-def _as_base_mode(
-    fit: LocalFit, mode: ModeEstimate, reasons: list[str], max_wn_rel_se: float
-) -> LocalFit:
-    """``fit`` with its mode replaced by ``mode`` of the two-mode fit."""
+def _two_mode_fields(
+    mode: ModeEstimate, reasons: list[str], max_wn_rel_se: float
+) -> dict[str, Any]:
+    """The result fields of ``mode`` of the two-mode fit (all but ``reasons`` and ``apparent``).
+
+    Appends the uncertain-frequency reason to ``reasons`` (in place) when the relative
+    standard error of ``ω_n`` exceeds ``max_wn_rel_se``; ``low_confidence`` is set from
+    ``reasons`` after that. ``k_c = 2ζω_n`` (rad/s) and ``k_d = ω_n²`` (rad²/s²).
+    """
     if mode.wn_se_rad_s > max_wn_rel_se * mode.wn_rad_s:
         reasons.append(
             f"uncertain frequency: standard error {100 * mode.wn_se_rad_s / mode.wn_rad_s:.2f}"
             " % of ω_n (two-mode fit)"
         )
+    return {
+        "wn_rad_s": mode.wn_rad_s,
+        "zeta": mode.zeta,
+        "wn_se_rad_s": mode.wn_se_rad_s,
+        "zeta_se": mode.zeta_se,
+        "k_a": mode.k_a,
+        "k_b": mode.k_b,
+        "k_c": 2.0 * mode.zeta * mode.wn_rad_s,
+        "k_d": mode.wn_rad_s**2,
+        "method": "two-mode",
+        "low_confidence": bool(reasons),
+    }
+
+
+def _as_base_mode(
+    fit: LocalFit, mode: ModeEstimate, reasons: list[str], max_wn_rel_se: float
+) -> LocalFit:
+    """``fit`` with its mode replaced by ``mode`` of the two-mode fit."""
+    fields = _two_mode_fields(mode, reasons, max_wn_rel_se)  # may append to reasons
     return replace(
         fit,
-        wn_rad_s=mode.wn_rad_s,
-        zeta=mode.zeta,
-        wn_se_rad_s=mode.wn_se_rad_s,
-        zeta_se=mode.zeta_se,
-        k_a=mode.k_a,
-        k_b=mode.k_b,
-        k_c=2.0 * mode.zeta * mode.wn_rad_s,
-        k_d=mode.wn_rad_s**2,
-        method="two-mode",
+        **fields,
         apparent={
             "wn_rad_s": fit.wn_rad_s,
             "zeta": fit.zeta,
             "low_confidence": float(fit.low_confidence),
         },
         reasons=tuple(reasons),
-        low_confidence=bool(reasons),
     )
 
 
@@ -245,23 +260,10 @@ def separated_base_mode(base: LocalFit, shoulder: LocalFit, options: FitOptions)
             ],
         )
         return entry
-    if chosen.wn_se_rad_s > options.max_wn_rel_se * chosen.wn_rad_s:
-        reasons.append(
-            f"uncertain frequency: standard error {100 * chosen.wn_se_rad_s / chosen.wn_rad_s:.2f}"
-            " % of ω_n (two-mode fit)"
-        )
+    fields = _two_mode_fields(chosen, reasons, options.max_wn_rel_se)  # may append to reasons
     entry.update(
-        wn_rad_s=chosen.wn_rad_s,
-        zeta=chosen.zeta,
-        wn_se_rad_s=chosen.wn_se_rad_s,
-        zeta_se=chosen.zeta_se,
-        k_a=chosen.k_a,
-        k_b=chosen.k_b,
-        k_c=2.0 * chosen.zeta * chosen.wn_rad_s,
-        k_d=chosen.wn_rad_s**2,
-        method="two-mode",
+        fields,
         apparent={"wn_rad_s": base.wn_rad_s, "zeta": base.zeta},
         reasons=reasons,
-        low_confidence=bool(reasons),
     )
     return entry

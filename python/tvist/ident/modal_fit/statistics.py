@@ -2,11 +2,9 @@
 coefficients with their standard errors in physical units, and relative errors of predicted
 modes against identified or true ones.
 
-:func:`_standard_errors` is near-copied by the all-modes fit
-(:func:`tvist.ident.all_modes_fit._standard_errors`), which scales the Jacobian's columns and
-floors its singular values instead of making every error infinite when one parameter is
-undetermined. They are kept apart: the two give different numbers on a rank-deficient
-Jacobian."""
+The standard errors are those of :func:`tvist.ident.standard_errors.standard_errors` (per
+parameter: infinite only for the parameters the data do not determine), over the inliers of
+a robust fit."""
 
 from __future__ import annotations
 
@@ -17,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from tvist.ident.modal_fit.model import _Term
+from tvist.ident.standard_errors import standard_errors
 
 #: Residuals beyond this many robust standard deviations are outliers in the stiffness fit's
 #: standard errors (they are down-weighted in the fit itself by the robust loss).
@@ -26,8 +25,9 @@ OUTLIER_SIGMAS = 4.0
 def _standard_errors(
     jac: np.ndarray, residual: np.ndarray, outlier_sigmas: float | None = None
 ) -> np.ndarray:
-    """``√diag(σ² (JᵀJ)⁻¹)`` with ``σ² = rᵀr / (n − p)``, the inverse through the SVD of ``J``
-    (``V S⁻² Vᵀ``; infinite where ``J`` is rank-deficient: an undeterminable parameter).
+    """Per-parameter standard errors ``√diag(σ² (JᵀJ)⁺)`` with ``σ² = rᵀr / (n − rank J)``,
+    infinite for a parameter the data do not determine
+    (:func:`tvist.ident.standard_errors.standard_errors`).
 
     With ``outlier_sigmas`` (for a fit with a robust loss), residuals beyond that many robust
     standard deviations (``1.4826 median|r|``) are left out of ``σ²`` and ``J``, as the robust
@@ -40,15 +40,7 @@ def _standard_errors(
         inlier = np.abs(residual) <= outlier_sigmas * robust_sigma
         if robust_sigma > 0 and inlier.sum() > jac.shape[1]:
             jac, residual = jac[inlier], residual[inlier]
-    n, p = jac.shape
-    if p == 0:
-        return np.zeros(0)
-    sigma2 = float(residual @ residual) / max(n - p, 1)
-    _, sv, vt = np.linalg.svd(jac, full_matrices=False)
-    if sv.size < p or sv[-1] <= 1e-12 * sv[0]:
-        return np.full(p, math.inf)
-    variance = np.einsum("ki,k->i", vt**2, 1.0 / sv**2) * sigma2
-    return np.sqrt(np.maximum(variance, 0.0))
+    return standard_errors(jac, residual)
 
 
 def _json_number(value: float) -> float | None:
