@@ -123,3 +123,33 @@ def paper_move_csv(tmp_path: Path) -> tuple[Path, np.ndarray]:
     header = ",".join(f"q{j}" for j in range(6))
     np.savetxt(path, move.q, delimiter=",", header=header, comments="", fmt="%.12f")
     return path, np.loadtxt(path, delimiter=",", skiprows=1)
+
+
+@pytest.fixture(scope="session")
+def soft_elbow_fit(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``tvist fit-map --kind modal`` (default robot, the UR5e) of the soft-elbow variant's
+    ringing records at the demo plan's poses, made once per run (:mod:`shared_fits`): a
+    folder with ``records.jsonl``, ``map.json`` and ``fit_map.json`` (exit code, printout)."""
+    from shared_fits import SOFT_ELBOW_SEED, demo_plan_poses, shared_files, write_fit
+    from tvist.sim.family import sample_variant
+    from tvist.sim.ringing_records import ringing_records
+
+    def make(folder: Path) -> None:
+        variant = sample_variant("ur5e", SOFT_ELBOW_SEED)
+        write_fit(folder, ringing_records(variant, demo_plan_poses(), seed=1))
+
+    return shared_files(tmp_path_factory, "soft_elbow", make)
+
+
+@pytest.fixture(scope="session")
+def ur10e_twin_fit(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``tvist fit-map --kind modal --robot ur10e`` of records of the UR10e twin's modes
+    (every 4th campaign pose, no payload and 5 kg, :func:`shared_fits.twin_records`), made
+    once per run: a folder with ``records.jsonl``, ``map.json`` and ``fit_map.json``."""
+    from shared_fits import shared_files, twin_records, write_fit
+
+    def make(folder: Path) -> None:
+        records = twin_records("ur10e", (0.0, 5.0), every=4, seed=5)
+        write_fit(folder, records, ["--robot", "ur10e"])
+
+    return shared_files(tmp_path_factory, "ur10e_twin", make)

@@ -6,49 +6,26 @@ joint), with identification noise, low-confidence entries and a few confident ou
 
 from __future__ import annotations
 
-import functools
 import json
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from tvist.experiments.identified import DEMO_PLAN
+from shared_fits import SOFT_ELBOW_SEED, demo_plan_poses
 from tvist.maps.modal import ModalMap
 from tvist.robots import Payload, Robot, params
 from tvist.sim.family import sample_variant
 from tvist.sim.map_truth import held_out_poses, physical_mode_errors
 from tvist.sim.ringing_records import ringing_records
 
-#: A development variant of the UR5e family with a soft elbow (0.10 x its nominal gear: an
-#: elbow-dominated mode of 20-30 Hz at folded poses) and soft wrists' neighbours, rigid links.
-SOFT_ELBOW_SEED = 14
-
-
-def _fit_poses() -> list[tuple]:
-    """The demo's reduced campaign plan (36 poses, no payload and 5 kg)."""
-    return [
-        (p.key, p.q, p.payload_kg, p.payload_com_m) for p in DEMO_PLAN.poses() if p.q is not None
-    ]
-
-
-@functools.cache
-def _records_file(tmp_dir: str) -> str:
-    variant = sample_variant("ur5e", SOFT_ELBOW_SEED)
-    records = ringing_records(variant, _fit_poses(), seed=1)
-    path = Path(tmp_dir) / "soft_elbow.jsonl"
-    path.write_text("".join(json.dumps(r) + "\n" for r in records))
-    return str(path)
-
 
 @pytest.fixture(scope="module")
-def soft_elbow_map(tmp_path_factory) -> tuple[ModalMap, str]:
-    from tvist.cli import main
-
-    tmp = tmp_path_factory.mktemp("soft_elbow")
-    out = tmp / "map.json"
-    assert main(["fit-map", _records_file(str(tmp)), "--kind", "modal", "--out", str(out)]) == 0
-    return ModalMap.load(out), str(tmp)
+def soft_elbow_map(soft_elbow_fit: Path) -> tuple[ModalMap, Path]:
+    """The fit-map output of the soft-elbow variant's records (made once per run:
+    ``soft_elbow_fit`` in conftest.py) and the folder of its records."""
+    assert json.loads((soft_elbow_fit / "fit_map.json").read_text())["code"] == 0
+    return ModalMap.load(soft_elbow_fit / "map.json"), soft_elbow_fit
 
 
 @pytest.mark.slow
@@ -90,8 +67,8 @@ def test_records_without_ringing_fall_back_to_the_labelled_modes(soft_elbow_map,
 
     # The same records as an older campaign wrote them (no ringing list, no directions):
     # the base and shoulder modes of 'modes' are used, matched by frequency alone.
-    _, tmp = soft_elbow_map
-    records = [json.loads(line) for line in Path(_records_file(tmp)).read_text().splitlines()]
+    _, folder = soft_elbow_map
+    records = [json.loads(line) for line in (folder / "records.jsonl").read_text().splitlines()]
     older = [{k: v for k, v in r.items() if k != "ringing"} for r in records]
     fit = fit_all_modes(older, "ur5e")
     n_labelled = sum(1 for r in older for m in r["modes"] if not m.get("low_confidence", False))
@@ -109,7 +86,7 @@ def test_every_eigenmode_agrees_with_the_cores_shaped_modes_where_one_joint_domi
     # energy in its joint, the core's shaped mode is that eigenmode (two solvers: 1e-4).
     modal = ModalMap(LAWS_UR5E, (0, 1, 2))
     robot = Robot(params("ur5e"), Payload(5.0, (0.0, 0.0, 0.05)))
-    q = np.array([p[1] for p in _fit_poses()])
+    q = np.array([p[1] for p in demo_plan_poses()])
     core = modal.modes_many(robot, q)
     model = model_modes(
         modal.flex_joints,
@@ -139,7 +116,7 @@ def test_a_small_fit_finds_the_soft_elbow_within_the_acceptance_floor():
     from tvist.ident.all_modes_fit import fit_all_modes, fitted_map
 
     variant = sample_variant("ur5e", SOFT_ELBOW_SEED)
-    records = ringing_records(variant, _fit_poses()[::3], seed=1)
+    records = ringing_records(variant, demo_plan_poses()[::3], seed=1)
     fit = fit_all_modes(records, "ur5e", candidate_joints=(0, 1, 2), candidate_links=())
     assert fit.statistics["flexible_joints"] == [0, 1, 2]
     modal = fitted_map(fit)
@@ -163,7 +140,7 @@ def test_noise_free_ringing_records_are_the_most_excited_true_modes():
     from tvist.sim.family import modes_of
 
     variant = sample_variant("ur5e", SOFT_ELBOW_SEED)
-    poses = _fit_poses()[::17]  # 3 poses, both payloads
+    poses = demo_plan_poses()[::17]  # 3 poses, both payloads
     quiet = dict(noise_wn=0.0, noise_zeta=0.0, noise_direction_rad=0.0)
     off = dict(low_confidence_share=0.0, outlier_share=0.0)
     records = ringing_records(variant, poses, seed=4, **quiet, **off)
@@ -236,7 +213,7 @@ def test_a_load_term_dropped_while_a_link_could_bend_is_tested_again_when_it_can
         return original(obs, model, drop_t, dropped)
 
     monkeypatch.setattr(amf, "_drop_weak_load_terms", spy)
-    records = ringing_records(nominal_variant("ur5e"), _fit_poses()[::3], seed=1)
+    records = ringing_records(nominal_variant("ur5e"), demo_plan_poses()[::3], seed=1)
     fit = amf.fit_all_modes(records, "ur5e")
     assert fit.statistics["bending_links"] == [] and len(calls) == 3  # two links made rigid
     assert [hinges for hinges, _, _ in calls] == [2, 1, 0]

@@ -255,7 +255,7 @@ def _spectrum_errors(fields: dict, variant, poses) -> np.ndarray:
 
 @pytest.mark.slow
 def test_the_fit_finds_bending_links_in_ringing_records() -> None:
-    from test_all_modes_fit import _fit_poses
+    from shared_fits import demo_plan_poses
     from tvist.ident.all_modes_fit import fit_all_modes, fitted_map
     from tvist.sim.map_truth import held_out_poses
     from tvist.sim.ringing_records import ringing_records
@@ -264,7 +264,7 @@ def test_the_fit_finds_bending_links_in_ringing_records() -> None:
     # identification noise and outliers) of family variant 0, whose upper arm and forearm
     # bend, on the demo's 36-pose plan; the fit with and without candidate link hinges.
     variant = sample_variant("ur5e", 0)
-    records = ringing_records(variant, _fit_poses(), seed=1)
+    records = ringing_records(variant, demo_plan_poses(), seed=1)
     hinged = fit_all_modes(records, "ur5e")
     joints_only = fit_all_modes(records, "ur5e", candidate_links=())
     # Both bending links are kept by the likelihood-ratio test, with standard errors.

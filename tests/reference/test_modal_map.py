@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import tvist
+from shared_fits import twin_records
 from tvist.ident.campaign import campaign_poses
 from tvist.ident.modal_fit import cross_validate, fit_modal_map
 from tvist.maps.modal import ModalMap, modal_map_from_flex
@@ -212,52 +213,9 @@ def test_dynamics_for_a_modal_map_is_its_provider_and_shapes_in_rust():
         tvist.ModalDynamics(ROBOT, {"flex_joints": ENTRIES})
 
 
-def _twin_records(robot_name: str, payloads, every: int, seed: int, noise: float = 0.004):
-    """Campaign-format records whose modes come from the full twin's eigen-analysis (six
-    flexible joints, nonlinear gears linearized at the gravity deflection, gravity stiffness,
-    exact damped modes): a more complete model than the modal map's, with noise of the size
-    of the local identification's errors (0.4 % on ω, 3 % on ζ)."""
-    rng = np.random.default_rng(seed)
-    records = []
-    for payload in payloads:
-        twin = Twin(robot_name, payload_kg=payload)
-        poses = campaign_poses(robot_name, payloads_kg=(payload,), seed=seed)[::every]
-        for p in poses:
-            if p.q is None:
-                continue
-            truth = twin.modes(p.q)
-            modes = [
-                {
-                    "joint": j,
-                    "wn_rad_s": wn * (1 + noise * rng.standard_normal()),
-                    "zeta": z * (1 + 0.03 * rng.standard_normal()),
-                }
-                for j, (wn, z) in enumerate(truth)
-            ]
-            records.append(
-                {
-                    "key": p.key,
-                    "payload_kg": payload,
-                    "payload_com_m": list(p.payload_com_m),
-                    "q": p.q.tolist(),
-                    "inertia_kg_m2": [0.0] * 6,
-                    "modes": modes,
-                    "true_modes": [
-                        {"joint": j, "wn_rad_s": wn, "zeta": z} for j, (wn, z) in enumerate(truth)
-                    ],
-                }
-            )
-    for r in records:  # the published form reads the model's inertias
-        payload = tvist.robots.Payload(r["payload_kg"], tuple(r["payload_com_m"]))
-        model = tvist.robots.Robot(tvist.robots.params(robot_name), payload)
-        r["inertia_kg_m2"] = model.joint_inertia(np.array(r["q"])).tolist()
-        r["gravity_torque_nm"] = model.gravity_torque(np.array(r["q"])).tolist()
-    return records
-
-
 @pytest.mark.slow
 def test_fit_predicts_the_full_twins_modes_on_held_out_poses():
-    records = _twin_records("ur5e", (0.0, 5.0), every=2, seed=3)
+    records = twin_records("ur5e", (0.0, 5.0), every=2, seed=3)
     cv = cross_validate(records, "ur5e", folds=4, seed=1)
     held = cv["modal"]["held_out"]["versus_true"]
     for mode in ("base", "shoulder"):
@@ -289,17 +247,15 @@ def test_prior_from_the_twins_gear_laws_is_close_to_its_modes():
 
 
 @pytest.mark.slow
-def test_fit_map_cli_writes_a_modal_map_that_shapes_a_ur10e(tmp_path, capsys):
+def test_fit_map_cli_writes_a_modal_map_that_shapes_a_ur10e(ur10e_twin_fit, tmp_path, capsys):
     from tvist.cli import main
 
-    records = _twin_records("ur10e", (0.0, 5.0), every=4, seed=5)
-    results = tmp_path / "c.jsonl"
-    results.write_text("".join(json.dumps(r) + "\n" for r in records))
-    out = tmp_path / "m.json"
-    code = main(["fit-map", str(results), "--kind", "modal", "--robot", "ur10e", "--out", str(out)])
-    assert code == 0
-    assert "joint 0 stiffness at_zero" in capsys.readouterr().out
-    modal = ModalMap.load(out)
+    # `tvist fit-map --kind modal --robot ur10e` of twin_records("ur10e", (0.0, 5.0), every=4,
+    # seed=5), run once per test run (conftest.py; test_ffi_map checks the same file in C++).
+    fit_map = json.loads((ur10e_twin_fit / "fit_map.json").read_text())
+    assert fit_map["code"] == 0
+    assert "joint 0 stiffness at_zero" in fit_map["printed"]
+    modal = ModalMap.load(ur10e_twin_fit / "map.json")
     robot = tvist.robots.ur10e(payload_kg=5.0, payload_com_m=(0.0, 0.0, 0.05))
     twin = Twin("ur10e", payload_kg=5.0)
     q = np.array([0.3, -2.0, 1.6, -1.2, 1.0, 0.0])
@@ -320,6 +276,7 @@ def test_fit_map_cli_writes_a_modal_map_that_shapes_a_ur10e(tmp_path, capsys):
 
     bad = tmp_path / "bad.jsonl"
     bad.write_text(json.dumps({"key": "x", "q": None, "error": "unreachable"}) + "\n")
+    out = tmp_path / "m.json"
     assert main(["fit-map", str(bad), "--kind", "modal", "--out", str(out)]) == 2
     assert "tvist fit-map: error:" in capsys.readouterr().err
 

@@ -77,7 +77,8 @@ from typing import Any
 import numpy as np
 from scipy import optimize, stats
 
-from tvist.ident.model_modes import ModelModes, joint_laws, model_modes, undamped_frequencies
+from tvist.ident.forward_difference import forward_difference_jacobian
+from tvist.ident.model_modes import ModelModes, _smooth_abs, model_modes, undamped_frequencies
 from tvist.ident.observed_modes import HINGE_AT_FRACTION, ObservedModes, observed_modes
 from tvist.ident.standard_errors import standard_errors
 from tvist.maps.modal import ModalMap
@@ -228,6 +229,52 @@ def _mass_ff(obs: ObservedModes, model: _Model) -> np.ndarray:
     return obs.mass_kg_m2[:, idx][:, :, idx]
 
 
+@dataclass(frozen=True)
+class _UndampedFrequencies:
+    """The undamped frequencies of a model at the poses of the fit, for many stiffness
+    parameter vectors at once: what the frequency fit evaluates, its Jacobian included.
+
+    The stiffness of each entry (column) is :func:`joint_laws`'s, with the same operations in
+    the same order, the smoothed loads computed once: the frequencies equal those of
+    :func:`undamped_frequencies` of :func:`joint_laws` of :func:`_entries` to the bit."""
+
+    flex: tuple[int, ...]
+    names: list[tuple[int, int]]
+    keys: list[int]  # (m,) the key of each entry column (a hinge's two columns share it)
+    load_nm: np.ndarray  # (n, m) gravity torque on each entry column
+    smooth_load_nm: np.ndarray  # (n, m) its smoothed absolute value |L|_s
+    mass_ff: np.ndarray  # (n, m, m)
+
+    @classmethod
+    def of(cls, obs: ObservedModes, model: _Model) -> _UndampedFrequencies:
+        # The columns in the order of _entries: a hinge's two coordinates after its key.
+        pairs = [(j, c) for j in model.flex for c in ((j, j + 1) if j in model.hinges else (j,))]
+        keys, columns = [j for j, _ in pairs], [c for _, c in pairs]
+        load = obs.gravity_torque_nm[:, columns]
+        smooth = np.column_stack([_smooth_abs(obs.gravity_torque_nm[:, c]) for c in columns])
+        return cls(model.flex, model.stiffness_names(), keys, load, smooth, _mass_ff(obs, model))
+
+    def stiffness_many(self, x_stiff: np.ndarray) -> np.ndarray:
+        """``(b, n, m)`` stiffness (N m/rad) of ``b`` parameter vectors ``(b, p)``: the
+        arithmetic of :func:`_entries` (``math.exp``, then ``k_t = k_0 a_t``) and
+        :func:`joint_laws`, per element."""
+        key = {j: i for i, j in enumerate(self.flex)}
+        laws = np.zeros((x_stiff.shape[0], 3, len(self.flex)))
+        for i, (j, t) in enumerate(self.names):
+            if t == 0:
+                laws[:, 0, key[j]] = [math.exp(v) for v in x_stiff[:, i]]
+        for i, (j, t) in enumerate(self.names):
+            if t:
+                laws[:, t, key[j]] = laws[:, 0, key[j]] * x_stiff[:, i]
+        per_column = laws[:, :, [key[j] for j in self.keys]]
+        k0, k1, k2 = (per_column[:, t, None, :] for t in range(3))
+        return k0 + k1 * self.smooth_load_nm + k2 * self.load_nm * self.load_nm
+
+    def wn_many(self, x_stiff: np.ndarray) -> np.ndarray:
+        """``(b, n, m)`` undamped frequencies (rad/s, increasing) of ``(b, p)`` parameters."""
+        return undamped_frequencies(self.mass_ff, self.stiffness_many(x_stiff))
+
+
 def _sigma(value: np.ndarray, se: np.ndarray, floor: float) -> np.ndarray:
     """Relative measurement error of each identification: its stated standard error, floored."""
     rel = se / value
@@ -247,7 +294,7 @@ def _fit_frequencies(
     obs: ObservedModes, model: _Model, x0: np.ndarray, bounds: tuple[list, list]
 ) -> _FreqFit:
     """Match-then-fit passes of the stiffness on the matched frequencies (undamped modes)."""
-    mff = _mass_ff(obs, model)
+    frequencies = _UndampedFrequencies.of(obs, model)
     sigma = _sigma(obs.wn_rad_s, obs.wn_se_rad_s, MIN_RELATIVE_SE[0])
     x = np.clip(x0, *bounds)
     assignment = np.full(obs.wn_rad_s.size, -1)
@@ -265,14 +312,21 @@ def _fit_frequencies(
             break
         rows, cols = obs.pose[used], assignment[used]
 
-        def residual(v: np.ndarray, rows=rows, cols=cols, used=used) -> np.ndarray:
-            k, _ = joint_laws(_entries(model, v), obs.gravity_torque_nm)
-            wn = undamped_frequencies(mff, k)[rows, cols]
+        def residual_many(v: np.ndarray, rows=rows, cols=cols, used=used) -> np.ndarray:
+            wn = frequencies.wn_many(v)[:, rows, cols]
             r = (wn / obs.wn_rad_s[used] - 1.0) / sigma[used]
             return np.where(np.isfinite(r), r, _INVALID / MIN_RELATIVE_SE[0])
 
+        # The forward-difference Jacobian least_squares would take (jac="2-point"), from one
+        # batched evaluation instead of one per parameter.
         res = optimize.least_squares(
-            residual, x, bounds=bounds, loss="soft_l1", f_scale=ROBUST_SCALE / 1e-3, **_LSQ
+            lambda v, f=residual_many: f(v[None, :])[0],
+            x,
+            jac=lambda v, f=residual_many: forward_difference_jacobian(f, v, bounds),
+            bounds=bounds,
+            loss="soft_l1",
+            f_scale=ROBUST_SCALE / 1e-3,
+            **_LSQ,
         )
         x = res.x
     full = np.full(obs.wn_rad_s.size, np.nan)

@@ -84,16 +84,19 @@ def joint_laws(
 
 
 def undamped_frequencies(mass_ff: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
-    """``(n, m)`` undamped natural frequencies (rad/s, increasing) of ``K φ = ω² M_ff φ``:
-    ``B = K^{-1/2} M_ff K^{-1/2}`` has eigenvalues ``1/ω²``; NaN where ``K`` is not positive."""
+    """``(..., n, m)`` undamped natural frequencies (rad/s, increasing) of ``K φ = ω² M_ff φ``
+    (``mass_ff`` ``(n, m, m)``, ``stiffness`` ``(..., n, m)``: leading dimensions for many
+    stiffness sets at once): ``B = K^{-1/2} M_ff K^{-1/2}`` has eigenvalues ``1/ω²``; NaN where
+    ``K`` is not positive. Each pose's matrix is solved alone, so a set's frequencies are the
+    same to the bit whether it comes alone or with others."""
     s = 1.0 / np.sqrt(np.where(stiffness > 0, stiffness, np.nan))
-    b = mass_ff * s[:, :, None] * s[:, None, :]
-    ok = np.all(np.isfinite(b), axis=(1, 2))
+    b = mass_ff * s[..., :, None] * s[..., None, :]
+    ok = np.all(np.isfinite(b), axis=(-2, -1))
     mu = np.full(stiffness.shape, np.nan)
     if ok.any():
         mu[ok] = np.linalg.eigvalsh(b[ok])
     with np.errstate(invalid="ignore", divide="ignore"):
-        return np.sort(1.0 / np.sqrt(np.where(mu > 0, mu, np.nan)), axis=1)
+        return np.sort(1.0 / np.sqrt(np.where(mu > 0, mu, np.nan)), axis=-1)
 
 
 def model_modes(
