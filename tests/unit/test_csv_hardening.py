@@ -15,6 +15,7 @@ import pytest
 from tvist.ident.csv_table import LogFormatError
 from tvist.ident.logs import LogWarning, Record
 from tvist.ident.logs import read_rtde_csv as read_rtde_log
+from tvist.robots import params
 
 
 def read_rtde_csv(path, **kwargs) -> Record:
@@ -23,7 +24,7 @@ def read_rtde_csv(path, **kwargs) -> Record:
     return read_rtde_log(path, check_units=False, **kwargs)
 
 
-DT_S = 0.002  # e-Series RTDE period
+DT_S = params("ur5e").control_period_s  # e-Series RTDE period (the robot data)
 ATOL_6DP = 5.01e-7  # "ur_rtde" writes 6 decimals: rounding error at most 0.5e-6
 
 

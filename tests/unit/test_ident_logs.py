@@ -9,6 +9,7 @@ import pytest
 
 from tvist.ident.logs import LogWarning, Record, find_gaps
 from tvist.ident.logs import read_rtde_csv as read_rtde_log
+from tvist.robots import params
 
 
 def read_rtde_csv(path, **kwargs) -> Record:
@@ -17,7 +18,7 @@ def read_rtde_csv(path, **kwargs) -> Record:
     return read_rtde_log(path, check_units=False, **kwargs)
 
 
-DT_S = 0.002  # e-Series RTDE period
+DT_S = params("ur5e").control_period_s  # e-Series RTDE period (the robot data)
 
 
 def make_record(n: int = 50, with_pose: bool = True, seed: int = 0) -> Record:

@@ -16,6 +16,8 @@ Conventions (also stated in the JSON file):
   robot with an ``inertia_cylinders`` block they are derived from it by
   :mod:`tvist.robots._cylinders`; the loader reads only ``inertia_kg_m2``.
 - Link side only, no rotor inertia.
+- ``control_period_s`` is the period of the robot controller's control loop (s), the default
+  sample period of everything that runs on the robot; optional (a robot file may omit it).
 """
 
 from __future__ import annotations
