@@ -14,9 +14,11 @@ import time
 
 import numpy as np
 
+from tvist.robots import params
 from tvist.sim import Twin
 
-DT_S = 0.002
+#: The twin's control period: the UR5e's (its robot data), s.
+DT_S = params("ur5e").control_period_s
 Q1 = np.array([0.0, -np.pi, 0.0, -np.pi / 2, 0.0, 0.0])
 Q2 = np.array([np.pi / 2, -np.pi, 0.0, -np.pi / 2, 0.0, 0.0])
 Q3 = np.array([np.pi / 2, -np.pi / 2, 5 * np.pi / 6, -np.pi / 2, 0.0, 0.0])

@@ -73,10 +73,13 @@ def cli_reference() -> str:
 
 
 def zero_delay_tables() -> str:
-    """The benchmark of `tvist zero-delay`, computed now."""
+    """The benchmark of `tvist zero-delay`, computed now (at its default --dt-s)."""
+    from tvist.cli.demo import ZERO_DELAY_ROBOT
     from tvist.experiments.ztdis_benchmark import format_table, run_benchmark
+    from tvist.robots import params
 
-    tables = [format_table(run_benchmark(ref)) for ref in ("min_jerk", "trapezoid")]
+    dt_s = params(ZERO_DELAY_ROBOT).control_period_s
+    tables = [format_table(run_benchmark(ref, dt_s=dt_s)) for ref in ("min_jerk", "trapezoid")]
     return "".join(f"\n{table.strip()}\n" for table in tables)  # markdown tables
 
 

@@ -30,7 +30,7 @@ for method in ("ztdis", "modified"):
     )
 print()
 
-benches = [run_benchmark(reference) for reference in ("min_jerk", "trapezoid")]
+benches = [run_benchmark(reference, dt_s=dt_s) for reference in ("min_jerk", "trapezoid")]
 for bench in benches:
     print(format_table(bench))
     print()

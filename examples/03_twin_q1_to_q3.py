@@ -15,7 +15,7 @@ from tvist.analysis import residual_vibration
 from tvist.sim import Twin
 from tvist.trajectory import PAPER_POSES, double_s
 
-DT_S = 0.002
+DT_S = tvist.robots.params("ur5e").control_period_s  # the UR5e controller's period, s
 PAYLOAD_KG, PAYLOAD_COM_M = 5.0, (0.0, 0.0, 0.05)
 
 move = double_s(PAPER_POSES["Q1"], PAPER_POSES["Q3"], dt_s=DT_S, t_pre_s=0.1, t_post_s=1.0)

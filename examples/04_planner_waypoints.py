@@ -54,12 +54,13 @@ for d in along:
 waypoints = np.array(waypoints)
 
 provider = tvist.MapDynamics(robot, tvist.DynamicMap.paper_ur5e())
-planned = shape_waypoints(times_s, waypoints, 0.002, provider).planned
+dt_s = robot.params.control_period_s  # the UR5e controller's period, s
+planned = shape_waypoints(times_s, waypoints, dt_s, provider).planned
 line = pose0[:3, 3] + np.outer([0.0, 0.3], [0.0, 1.0, 0.0])
 sag, _ = point_to_polyline_distance(robot.flange_pose_many(planned)[:, :3, 3], line)
 print(f"planned: the resampled waypoints stay within {1e3 * sag.max():.3f} mm of the line")
 for method in ("tvist", "modified"):
-    out = shape_waypoints(times_s, waypoints, 0.002, provider, method=method)
+    out = shape_waypoints(times_s, waypoints, dt_s, provider, method=method)
     dev = path_deviation(robot, out.planned, out.q)
     print(
         f"{method:>6}: {out.q.shape[0]} samples, ends {1e3 * out.added_delay_s:.0f} ms after "

@@ -22,7 +22,9 @@ BASE = 0
 q0 = PAPER_POSES["Q1"]
 
 # 1. Excite the base joint on the twin and record it like RTDE (0.05 m/s² sensor noise).
-excitation = random_excitation(q0, joint=BASE, seed=3, duration_s=4.0)
+excitation = random_excitation(
+    q0, joint=BASE, seed=3, duration_s=4.0, dt_s=tvist.robots.params("ur5e").control_period_s
+)
 twin = Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M, accel_noise_std=0.05)
 log_path = twin.run(excitation.q, noise_seed=3).to_csv("base_excitation.csv")
 

@@ -19,7 +19,7 @@ import numpy as np
 import tvist
 from tvist.trajectory import PAPER_POSES, double_s
 
-DT_S = 0.002  # 500 Hz
+DT_S = tvist.robots.params("ur5e").control_period_s  # the UR5e controller's: 2 ms, 500 Hz
 realtime = "--realtime" in sys.argv[1:]
 
 # Your map file (here: the paper's map, saved so that the loop has a file to load).

@@ -16,7 +16,7 @@ import numpy as np
 import tvist
 from tvist import cartesian
 
-DT_S = 0.002
+DT_S = tvist.robots.params("ur5e").control_period_s  # the UR5e controller's period, s
 MODES = [(2 * np.pi * 2.55, 0.04)]  # (wn_rad_s, zeta) of the payload mode
 
 robot = tvist.robots.ur5e()

@@ -153,7 +153,7 @@ def straight_line(
     q_start: ArrayLike,
     displacement_m: ArrayLike,
     duration_s: float,
-    dt_s: float = 0.002,
+    dt_s: float | None = None,
     *,
     rotation_rad: ArrayLike = (0.0, 0.0, 0.0),
     t_pre_s: float = 0.0,
@@ -168,7 +168,8 @@ def straight_line(
     displacement_m
         Translation of the flange, base frame, m, ``(3,)``.
     duration_s, dt_s, t_pre_s, t_post_s
-        Length of the move, sample period and rest before and after it, s.
+        Length of the move, sample period and rest before and after it, s; ``dt_s=None``: the
+        robot's control period (:attr:`~tvist.robots.RobotParams.control_period_s`).
     rotation_rad
         Rotation vector (base frame) from the start to the end orientation, rad; zero holds
         the orientation, otherwise it is interpolated about that axis along the path.
@@ -181,6 +182,7 @@ def straight_line(
     pose = robot.flange_pose(np.asarray(q_start, dtype=float))
     start = np.concatenate([pose[:3, 3], np.zeros(3)])
     end = start + np.concatenate([np.asarray(displacement_m, float), np.asarray(rotation_rad)])
+    dt_s = robot.params.sample_period_s(dt_s)
     traj = tvist.trajectory.min_jerk(
         start, end, duration_s, dt_s, t_pre_s=t_pre_s, t_post_s=t_post_s
     )

@@ -318,7 +318,7 @@ def run_shaped_move(
     log_path: str | Path,
     *,
     shaper=None,
-    dt_s: float = 0.002,
+    dt_s: float,
     lookahead_s: float = SERVO_LOOKAHEAD_S,
     gain: float = SERVO_GAIN,
     tail_s: float = 3.0,
@@ -337,7 +337,8 @@ def run_shaped_move(
     shaper
         A :class:`tvist.TvShaper` (reset to ``Q[0]`` here) or ``None`` to stream ``Q`` as is.
     dt_s
-        Control period (s): the controller's (0.002 on e-Series).
+        Control period (s): the controller's (the robot's ``control_period_s``, 0.002 on
+        the e-Series).
     lookahead_s, gain
         servoJ's lookahead time (s) and gain; see :data:`SERVO_LOOKAHEAD_S`, :data:`SERVO_GAIN`.
     tail_s
@@ -438,8 +439,8 @@ def _settled(k: int, n: int, q: np.ndarray, end: np.ndarray, limit: int, max_set
 
 def shaped_reference(
     Q: np.ndarray,  # noqa: N803 (the paper's Q)
-    shaper=None,
-    dt_s: float = 0.002,
+    shaper,
+    dt_s: float,
     max_settle_s: float = 5.0,
 ) -> np.ndarray:
     """The joint reference :func:`run_shaped_move` streams, computed offline, one row per

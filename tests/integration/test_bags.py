@@ -16,7 +16,8 @@ from tvist.cli import main
 from tvist.trajectory import PAPER_POSES, shape_waypoints
 from tvist.trajectory.joint_names import UR_JOINT_NAMES
 
-DT = 0.002
+#: The default --dt-s: the --robot's (ur5e) control period, s (its robot data).
+DT = tvist.robots.params("ur5e").control_period_s
 TS = get_typestore(Stores.ROS2_HUMBLE)
 JT = "trajectory_msgs/msg/JointTrajectory"
 MODES_ARG = "8:0.2,7:0.3"

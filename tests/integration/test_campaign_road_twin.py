@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tvist.experiments.motions import motion_by_name
+from tvist.experiments.motions import DT_S, motion_by_name
 from tvist.live import residual_vibration
 from twin_server_fixture import HOST, PAYLOAD_COM_M, PAYLOAD_KG, twin_server
 
@@ -90,7 +90,7 @@ def test_plan_record_identify_fit_run_on_the_twin(tmp_path) -> None:
     logs.mkdir()
     motion = motion_by_name("Q1->Q2")
     move = tmp_path / "q1q2.csv"
-    np.savetxt(move, motion.reference(0.0).q, delimiter=",", fmt="%.12f")
+    np.savetxt(move, motion.reference(0.0, DT_S).q, delimiter=",", fmt="%.12f")
     # The user covers the poses of the move the map is for, besides the plan's own (Q2 has
     # Q1's inertias: the plan takes one of the two; no workspace poses, to keep it short; one
     # pose of the 7 at 90°, where the base identification is flagged).
@@ -150,4 +150,4 @@ def test_plan_record_identify_fit_run_on_the_twin(tmp_path) -> None:
     # Every log, the excitations' and the runs', has every 2 ms sample once.
     for log in [*sorted(logs.glob("*.csv")), unshaped_log, shaped_log]:
         steps = _timestamp_steps(log)
-        np.testing.assert_allclose(steps, 0.002, atol=1e-6, err_msg=str(log))
+        np.testing.assert_allclose(steps, DT_S, atol=1e-6, err_msg=str(log))

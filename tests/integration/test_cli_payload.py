@@ -18,8 +18,12 @@ import tvist
 from tvist.cli import main
 from tvist.ident.excitation import random_excitation
 from tvist.ident.logs import PAYLOAD_COLUMNS, Record, log_payload
+from tvist.robots import params
 from tvist.sim import Twin
 from twin_server_fixture import HOST, PAYLOAD_COM_M, PAYLOAD_KG, twin_server
+
+#: The UR5e's control period, s (its robot data).
+UR5E_DT_S = params("ur5e").control_period_s
 
 Q0 = np.array([0.3, -1.7, 1.4, -1.2, 1.57, 0.0])
 #: The excited twin's payload (kg; m in the flange frame), not the twin server's.
@@ -51,7 +55,7 @@ def logs(tmp_path_factory) -> dict[str, Path]:
         payload_com_m=LOG_PAYLOAD_COM_M,
         accel_noise_std=0.05,
     )
-    record = Record.from_rtde_fields(twin.run(random_excitation(Q0, 1, seed=2).q))
+    record = Record.from_rtde_fields(twin.run(random_excitation(Q0, 1, seed=2, dt_s=UR5E_DT_S).q))
     folder = tmp_path_factory.mktemp("logs")
     plain = record.to_csv(folder / "plain.csv")
     text = plain.read_text().splitlines()

@@ -137,7 +137,7 @@ def test_modes_along_span_the_move_from_start_to_end():
     twin = Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M)
     robot = robots.ur5e(PAYLOAD_KG, PAYLOAD_COM_M)
     motion = MOTIONS[1]  # Q1 -> Q3
-    ctx = MotionContext(motion, motion.reference(0.5), twin, robot, 0.1)
+    ctx = MotionContext(motion, motion.reference(0.5, DT_S), twin, robot, 0.1)
     modes = modes_along(ctx)
     assert modes[0] == pytest.approx(np.array(twin.modes(motion.q_start)))
     assert modes[-1] == pytest.approx(np.array(twin.modes(motion.q_end)))

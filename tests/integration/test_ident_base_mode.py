@@ -14,6 +14,10 @@ import pytest
 from tvist.ident.campaign import campaign_poses
 from tvist.ident.excitation import random_excitation
 from tvist.ident.local_identification import identify_local
+from tvist.robots import params
+
+#: The UR5e's control period, s (its robot data).
+UR5E_DT_S = params("ur5e").control_period_s
 
 #: Every 5th pose of the 0 kg and 5 kg campaigns: 21 poses over all angles and radii (fixed
 #: before looking at the results).
@@ -26,7 +30,9 @@ def _identify(pose):
 
     twin = TwinRobot(seed=0)
     twin.set_payload(pose.payload_kg, pose.payload_com_m)
-    log = twin.record_excitation(random_excitation(pose.q, 0, seed=pose.seed, duration_s=4.0))
+    log = twin.record_excitation(
+        random_excitation(pose.q, 0, seed=pose.seed, duration_s=4.0, dt_s=UR5E_DT_S)
+    )
     fit = identify_local(log, 0, ur5e(pose.payload_kg, pose.payload_com_m))
     return pose.key, fit, twin.true_modes(pose.q)
 

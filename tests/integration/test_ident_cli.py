@@ -15,7 +15,11 @@ from tvist.cli import main
 from tvist.ident.campaign import load_results
 from tvist.ident.excitation import random_excitation
 from tvist.ident.logs import Record
+from tvist.robots import params
 from tvist.sim import Twin
+
+#: The UR5e's control period, s (its robot data).
+UR5E_DT_S = params("ur5e").control_period_s
 
 Q0 = np.array([0.3, -1.7, 1.4, -1.2, 1.57, 0.0])
 
@@ -24,7 +28,7 @@ Q0 = np.array([0.3, -1.7, 1.4, -1.2, 1.57, 0.0])
 def twin_log(tmp_path_factory):
     """A shoulder excitation of the twin (3 kg) written as ur_rtde and as UR client CSV."""
     twin = Twin("ur5e", payload_kg=3.0, payload_com_m=(0.0, 0.0, 0.05), accel_noise_std=0.05)
-    ex = random_excitation(Q0, 1, seed=2)
+    ex = random_excitation(Q0, 1, seed=2, dt_s=UR5E_DT_S)
     sim = twin.run(ex.q)
     record = Record.from_rtde_fields(sim)
     folder = tmp_path_factory.mktemp("logs")

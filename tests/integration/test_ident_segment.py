@@ -12,8 +12,12 @@ from tvist.cli import main
 from tvist.ident.excitation import random_excitation
 from tvist.ident.logs import Record, read_rtde_csv
 from tvist.ident.segment import excitation_segment
+from tvist.robots import params
 from tvist.sim import Twin
 from tvist.trajectory import PAPER_POSES, trapezoid
+
+#: The UR5e's control period, s (its robot data).
+UR5E_DT_S = params("ur5e").control_period_s
 
 #: The pose of the excitation, and the pose the arm comes from (the stretched Q1).
 Q_POSE = np.array([0.0, -1.9, 1.6, -1.3, -1.57, 0.4])
@@ -28,8 +32,10 @@ def _log_with_approach(
     """Approach, the excitation of ``joint`` (its 0.5 s standstill first), 2 s of rest: the
     twin (5 kg, accelerometer noise) run on it, written as ur_rtde CSV."""
     twin = Twin("ur5e", payload_kg=5.0, payload_com_m=(0.0, 0.0, 0.05), accel_noise_std=0.05)
-    approach = trapezoid(q_from, Q_POSE, APPROACH_SPEED_RAD_S, APPROACH_ACCEL_RAD_S2, t_pre_s=0.3)
-    excitation = random_excitation(Q_POSE, joint, seed=seed, duration_s=4.0)
+    approach = trapezoid(
+        q_from, Q_POSE, APPROACH_SPEED_RAD_S, APPROACH_ACCEL_RAD_S2, UR5E_DT_S, t_pre_s=0.3
+    )
+    excitation = random_excitation(Q_POSE, joint, seed=seed, duration_s=4.0, dt_s=UR5E_DT_S)
     rest = np.tile(excitation.q[-1], (1000, 1))
     q_ref = np.vstack([approach.q, excitation.q[1:], rest])
     record = Record.from_rtde_fields(twin.run(q_ref, noise_seed=seed))

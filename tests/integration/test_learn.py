@@ -17,7 +17,7 @@ import pytest
 from tvist import robots
 from tvist.experiments.experiment import run_motion
 from tvist.experiments.methods import default_methods, fd_tvist_modal
-from tvist.experiments.motions import MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
+from tvist.experiments.motions import DT_S, MOTIONS, PAYLOAD_COM_M, PAYLOAD_KG
 from tvist.ident.logs import Record
 from tvist.learn import MapLearner, observe_decay
 from tvist.learn.poses import random_poses
@@ -102,7 +102,7 @@ def test_learned_map_shaped_with_the_modes_the_rule_picks():
     robot, _, learned = _learned_on_twin_3()
     quiet_twin = Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M)
     for motion in MOTIONS:
-        k = modes_to_shape(learned, robot, motion.reference(0.0)).n_modes
+        k = modes_to_shape(learned, robot, motion.reference(0.0, DT_S)).n_modes
         by_rule = ModalMap(learned.flex_joints, metadata=learned.metadata, shaped_modes=k)
         rows = [m for m in default_methods() if m.key == "unshaped"]
         rows.append(fd_tvist_modal("by_rule", "learned, modes by the rule", by_rule))

@@ -26,10 +26,10 @@ from twin_server_fixture import HOST, twin_server
 rtde_control = pytest.importorskip("rtde_control")
 rtde_receive = pytest.importorskip("rtde_receive")
 
-DT_S = 0.002
 Q1 = np.array(PAPER_POSES["Q1"])
 ROBOT_DATA = Path(__file__).parents[2] / "crates/tvist-core/data/ur_e_series.json"
 UR5E = json.loads(ROBOT_DATA.read_text())["robots"]["ur5e"]
+DT_S = UR5E["control_period_s"]
 SPEED_LIMIT_RAD_S = np.array(UR5E["max_velocity_rad_s"])
 JOINT_LIMITS_RAD = np.array(UR5E["joint_limits_rad"])
 

@@ -9,6 +9,7 @@ import pytest
 
 from tvist import DynamicMap
 from tvist.cli import main
+from tvist.experiments.motions import DT_S
 from tvist.experiments.pick_place import (
     cell_moves,
     fastest_runnable,
@@ -67,13 +68,13 @@ def test_cycle_totals_are_sums_of_the_simulated_settle_times(quick_cycle):
     # The limit: the planned moves' own durations, from the trajectories.
     limit = 0.0
     for move in moves:
-        traj = move.reference(1.0)
+        traj = move.reference(1.0, DT_S)
         limit += traj.t_motion_end_s - traj.t_motion_start_s
     assert result.limit_s == pytest.approx(limit, abs=1e-9)
     for key in ("unshaped", "fd-tvist-map", "fixed-robust"):
         low = high = 0.0
         for move, run in zip(moves, result.moves, strict=True):
-            t0 = move.reference(0.0).t_motion_start_s
+            t0 = move.reference(0.0, DT_S).t_motion_start_s
             lo, hi = _sample_bounds(
                 run.t_s, np.linalg.norm(run.run(key).psi, axis=1), t0, accel.threshold
             )

@@ -14,7 +14,8 @@ from tvist.sim.flex import UR5E_FLEX
 from tvist.trajectory import PAPER_POSES
 from tvist.trajectory.joint_names import UR_JOINT_NAMES
 
-DT = 0.002
+#: The default --dt-s: the --robot's (ur5e) control period, s (its robot data).
+DT = tvist.robots.params("ur5e").control_period_s
 # The files store 9 decimals: equal to the library's output within 5e-10 rad (rounding of
 # the stored input and output, each at most 5e-10).
 ATOL_FILE = 1.1e-9

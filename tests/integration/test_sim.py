@@ -24,7 +24,8 @@ Q2 = np.array([np.pi / 2, -np.pi, 0.0, -np.pi / 2, 0.0, 0.0])
 Q3 = np.array([np.pi / 2, -np.pi / 2, 5 * np.pi / 6, -np.pi / 2, 0.0, 0.0])
 PAYLOAD_KG = 5.0
 PAYLOAD_COM_M = (0.0, 0.0, 0.05)
-DT_S = 0.002
+#: The UR5e twin's control period (its robot data), s.
+DT_S = robots.params("ur5e").control_period_s
 TWO_PI = 2.0 * np.pi
 
 

@@ -7,9 +7,13 @@ import numpy as np
 import pytest
 
 from tvist.ident.excitation import random_excitation, to_urscript
+from tvist.robots import params
 from tvist.sim import Twin
 from tvist.trajectory import PAPER_POSES
 from tvist.urserver.controller import TwinController
+
+#: The UR5e's control period, s (its robot data).
+UR5E_DT_S = params("ur5e").control_period_s
 
 Q_POSE = np.array([0.1, -1.8, 1.5, -1.3, -1.57, 0.0])
 
@@ -24,7 +28,7 @@ def test_controller_runs_an_exported_excitation(twin) -> None:
     order; it ends by itself. Each movej blocks until its target stands still, which the
     controller sees two ticks after the last step (velocity, then acceleration back to 0), so
     the excitation takes at most 3 ticks per move longer than its reference."""
-    excitation = random_excitation(Q_POSE, 0, seed=5, duration_s=2.0)
+    excitation = random_excitation(Q_POSE, 0, seed=5, duration_s=2.0, dt_s=UR5E_DT_S)
     controller = TwinController(twin, np.array(PAPER_POSES["Q1"]))
     program = to_urscript(excitation, approach_speed_rad_s=1.0, approach_accel_rad_s2=2.0)
     # The script ports deliver the definition and the call that follows it separately.

@@ -17,9 +17,13 @@ import time
 import numpy as np
 import pytest
 
+from tvist.robots import params
 from tvist.sim import Twin
 from tvist.trajectory import PAPER_POSES
 from twin_server_fixture import HOST, PAYLOAD_COM_M, PAYLOAD_KG, twin_server
+
+#: The twin's control period: the UR5e's (its robot data), s.
+UR5E_DT_S = params("ur5e").control_period_s
 
 rtde_control = pytest.importorskip("rtde_control")
 rtde_receive = pytest.importorskip("rtde_receive")
@@ -251,7 +255,7 @@ def _residual_rms(path) -> tuple[float, np.ndarray, np.ndarray]:
 
     record = read_rtde_csv(path)
     t, target, accel = record.t_s, record.target_q, record.tool_accel
-    assert np.allclose(np.diff(t), 0.002, atol=1e-9), "the log lost samples"
+    assert np.allclose(np.diff(t), UR5E_DT_S, atol=1e-9), "the log lost samples"
     away = np.flatnonzero(np.max(np.abs(target - target[-1]), axis=1) > 1e-7)
     t_rest = t[away[-1] + 1]
     window = (t >= t_rest) & (t < t_rest + 1.0)
@@ -270,11 +274,11 @@ def test_run_shaped_move_cuts_residual_vibration(server, twin, tmp_path) -> None
     sent: target within 1e-4 rad of Q2 and the link side at the twin's static equilibrium
     there within 1e-4 rad.
     """
-    from tvist.experiments.motions import motion_by_name
+    from tvist.experiments.motions import DT_S, motion_by_name
 
     motion = motion_by_name("Q1->Q2")
     move = tmp_path / "q1q2.csv"
-    np.savetxt(move, motion.reference(0.0).q, delimiter=",", fmt="%.12f")
+    np.savetxt(move, motion.reference(0.0, DT_S).q, delimiter=",", fmt="%.12f")
     modes = ",".join(f"{wn / (2 * np.pi):.6f}:{zeta:.6f}" for wn, zeta in twin.modes(motion.q_end))
 
     def run(name: str, *extra: str) -> tuple[float, np.ndarray, np.ndarray, str]:
@@ -381,7 +385,7 @@ def test_record_keeps_every_sample_until_interrupted(server, tmp_path) -> None:
         proc.stdout.close()
     assert proc.returncode == 0
     record = read_rtde_csv(out)
-    np.testing.assert_allclose(np.diff(record.t_s), 0.002, atol=1e-9)
+    np.testing.assert_allclose(np.diff(record.t_s), UR5E_DT_S, atol=1e-9)
     # The log has ur_rtde's 6 decimals.
     assert np.min(record.target_q[:, 0]) == pytest.approx(start[0] - 0.2, abs=1e-6)
     assert record.n_samples > 500

@@ -280,7 +280,7 @@ def test_realtime_queries_answer_in_the_registers(server, reference):
         # measured joints; the flexible arm's flange is where its links put it: 1e-9).
         assert_pose(flange, fk(reference, q), tol=1e-9)
         _, step = registers_after(26)
-        assert step[0] == 0.002
+        assert step[0] == robots.params("ur5e").control_period_s
     finally:
         commander.close()
         reader.close()

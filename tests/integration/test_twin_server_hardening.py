@@ -39,7 +39,8 @@ rtde_control = pytest.importorskip("rtde_control")
 rtde_receive = pytest.importorskip("rtde_receive")
 
 PARAMS = robots.params("ur5e")
-DT_S = 0.002
+#: The twin's control period: the UR5e's (its robot data), s.
+DT_S = robots.params("ur5e").control_period_s
 NAN = float("nan")
 #: Command ids of ur_rtde's control script.
 MOVEJ, SPEEDJ, SERVOJ, SPEED_STOP, SET_PAYLOAD, STOPJ = 1, 9, 11, 15, 17, 34
@@ -551,7 +552,7 @@ def test_a_campaign_log_has_every_package_once(server, tmp_path) -> None:
     receive = rtde_receive.RTDEReceiveInterface(HOST, 500.0, ["target_q"])
     q0 = np.array(receive.getTargetQ())
     receive.disconnect()
-    excitation = random_excitation(q0, 0, seed=3, duration_s=4.0, max_delta_rad=0.05)
+    excitation = random_excitation(q0, 0, seed=3, duration_s=4.0, dt_s=DT_S, max_delta_rad=0.05)
     robot = URRobot(HOST, log_dir=tmp_path, confirm=None)
     try:
         robot.record_excitation(excitation)

@@ -166,7 +166,7 @@ def base_excited_tool_acceleration(traj, freq_hz: float, zeta: float):
 
 
 def test_residual_vibration_of_a_double_s_move_on_a_flexible_mode():
-    traj = double_s([0.0], [np.pi / 2], t_pre_s=0.1, t_post_s=2.0)
+    traj = double_s([0.0], [np.pi / 2], DT_S, t_pre_s=0.1, t_post_s=2.0)
     freq_hz, zeta = 8.0, 0.1
     y, x = base_excited_tool_acceleration(traj, freq_hz, zeta)
     # Ground truth from the state at the stop: afterwards the input is 0, so the response is
@@ -389,7 +389,7 @@ def test_peak_rates_of_profiles():
     t = DT_S * np.arange(50)
     q = np.column_stack([0.7 * t**3, -0.2 * t**3])
     assert peak_jerk(q, DT_S) == pytest.approx(6 * 0.7, rel=1e-6)
-    traj = double_s(PAPER_POSES["Q1"], PAPER_POSES["Q3"])
+    traj = double_s(PAPER_POSES["Q1"], PAPER_POSES["Q3"], DT_S)
     # Differences of a sampled profile: velocity and acceleration to O(dt) of the limits,
     # jerk never above the 100 rad/s³ limit (a difference quotient is an average).
     assert peak_velocity(traj.q, DT_S) == pytest.approx(1.5, rel=1e-3)
@@ -397,20 +397,20 @@ def test_peak_rates_of_profiles():
     assert 99.0 < peak_jerk(traj.q, DT_S) <= 100.0 * (1 + 1e-6)
     # A trapezoid steps its acceleration: the third difference sees a / dt = 1000 rad/s³
     # spread over up to two samples.
-    trap = trapezoid(PAPER_POSES["Q1"], PAPER_POSES["Q3"], 1.5, 2.0)
+    trap = trapezoid(PAPER_POSES["Q1"], PAPER_POSES["Q3"], 1.5, 2.0, DT_S)
     assert peak_jerk(trap.q, DT_S) > 400.0
     with pytest.raises(ValueError, match="at least 4"):
         peak_jerk(q[:3], DT_S)
 
 
 def test_count_velocity_peaks_on_known_shapes():
-    traj = double_s(PAPER_POSES["Q1"], PAPER_POSES["Q3"], t_post_s=0.1)
+    traj = double_s(PAPER_POSES["Q1"], PAPER_POSES["Q3"], DT_S, t_post_s=0.1)
     np.testing.assert_array_equal(count_velocity_peaks(traj.qd), [1, 1, 1, 0, 0, 0])
     # A flat cruise with rounding ripple counts once: synthetic, and the velocity of a
     # double-S by central differences, whose plateau holds maxima of exactly equal height.
     plateau = np.concatenate([np.linspace(0, 1, 50), 1 + 1e-12 * np.sin(np.arange(200)), [0.0]])
     assert count_velocity_peaks(plateau) == 1
-    cruise = double_s([0.0], [np.pi / 2], t_post_s=0.1)
+    cruise = double_s([0.0], [np.pi / 2], DT_S, t_post_s=0.1)
     assert count_velocity_peaks(np.gradient(cruise.q[:, 0], DT_S)) == 1
     # A dip of 30 % between two maxima separates two humps; one of 2 % does not.
     x = np.linspace(0, 1, 400)
@@ -422,7 +422,7 @@ def test_count_velocity_peaks_on_known_shapes():
     two = np.exp(-(((x - 0.3) / 0.05) ** 2)) + 0.8 * np.exp(-(((x - 0.7) / 0.05) ** 2))
     assert count_velocity_peaks(two + 0.01 * np.sin(80 * x)) == 2
     # ZV shaping of a short move with a delay longer than the move: two separate humps.
-    short = double_s([0.0], [0.05], t_post_s=0.5)
+    short = double_s([0.0], [0.05], DT_S, t_post_s=0.5)
     shaper = tvist.TvShaper(tvist.ConstantModes([(2 * np.pi * 2.0, 0.0)]), dt_s=DT_S, n_dof=1)
     shaped = shaper.shape(short.q)
     assert count_velocity_peaks(np.gradient(shaped[:, 0], DT_S)) == 2

@@ -15,6 +15,7 @@ import pytest
 import scipy.linalg
 import scipy.optimize
 
+from tvist.robots import params
 from tvist.sim import Twin
 from tvist.sim.variants import variant_beams, variant_flex
 
@@ -23,7 +24,8 @@ Q1 = np.array([0.0, -np.pi, 0.0, -np.pi / 2, 0.0, 0.0])
 Q3 = np.array([np.pi / 2, -np.pi / 2, 5 * np.pi / 6, -np.pi / 2, 0.0, 0.0])
 PAYLOAD_KG = 5.0
 PAYLOAD_COM_M = (0.0, 0.0, 0.05)
-DT_S = 0.002
+#: The twin's control period: the UR5e's (its robot data), s.
+DT_S = params("ur5e").control_period_s
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,10 @@ from ident_reference import dh_frames as reference_dh_frames
 from tvist.ident.excitation import random_excitation
 from tvist.ident.logs import Record
 from tvist.ident.preprocess import quiet_samples, standstill_length, tangential_acceleration
-from tvist.robots import ur5e
+from tvist.robots import params, ur5e
+
+#: The UR5e's control period, s (its robot data).
+UR5E_DT_S = params("ur5e").control_period_s
 
 G_UP = np.array([0.0, 0.0, 9.81])  # reading of an accelerometer at rest: reaction to gravity
 
@@ -52,7 +55,7 @@ def rigid_record(joint: int, q0: np.ndarray, seed: int, tilt_offset=(0.0, 0.0, 0
     For a rotation about a fixed axis z through o, the flange acceleration is
     ``q̈ z×(p-o) + q̇² z×(z×(p-o))``; its tangential part is ``|z×(p-o)| q̈``.
     """
-    ex = random_excitation(q0, joint, seed=seed, duration_s=2.0)
+    ex = random_excitation(q0, joint, seed=seed, duration_s=2.0, dt_s=UR5E_DT_S)
     n = ex.t_s.size
     accel = np.zeros((n, 3))
     radius = np.zeros(n)
@@ -175,7 +178,7 @@ def flexible_record(joint: int, q0: np.ndarray, wn: float, zeta: float, seed: in
     ``r (2ζω s + ω²)/(s² + 2ζω s + ω²)`` (eq. 16), plus 20 dB sensor noise on every axis."""
     from ident_reference import Profile, integrate_mode
 
-    ex = random_excitation(q0, joint, seed=seed)
+    ex = random_excitation(q0, joint, seed=seed, dt_s=UR5E_DT_S)
     n = ex.t_s.size
     rng = np.random.default_rng(seed)
     radius = np.zeros(n)

@@ -107,7 +107,7 @@ def test_double_s_matches_closed_form(h):
 
 def test_paper_move_reaches_all_limits_and_ends_on_grid():
     q0, q1 = PAPER_POSES["Q1"], PAPER_POSES["Q3"]
-    traj = double_s(q0, q1)
+    traj = double_s(q0, q1, DT_S)
     h = float(np.max(np.abs(q1 - q0)))
     duration, _ = double_s_reference(h, V_MAX, A_MAX, J_MAX)
     # Snapped to the grid: the next whole sample at or after the time-optimal duration.
@@ -134,7 +134,7 @@ def test_paper_move_reaches_all_limits_and_ends_on_grid():
 
 
 def test_velocity_integrates_to_position():
-    traj = double_s(PAPER_POSES["Q1"], PAPER_POSES["Q2"])
+    traj = double_s(PAPER_POSES["Q1"], PAPER_POSES["Q2"], DT_S)
     # The trapezoid rule on qd is exact up to the third-order term dt³/12·jerk' = 0 inside a
     # phase and O(dt² · a) where a phase boundary falls between samples: 4e-6 rad at most.
     integrated = PAPER_POSES["Q1"] + np.concatenate(
@@ -145,7 +145,7 @@ def test_velocity_integrates_to_position():
 
 def test_padding_and_rest():
     q0, q1 = PAPER_POSES["Q3"], PAPER_POSES["Q1"]
-    traj = double_s(q0, q1, t_pre_s=0.1, t_post_s=0.5)
+    traj = double_s(q0, q1, DT_S, t_pre_s=0.1, t_post_s=0.5)
     n_pre = 50
     assert traj.t_motion_start_s == pytest.approx(0.1)
     np.testing.assert_array_equal(traj.q[: n_pre + 1], np.tile(q0, (n_pre + 1, 1)))
@@ -159,7 +159,7 @@ def test_padding_and_rest():
 
 def test_time_synchronization_starts_and_stops_together():
     q0, q1 = PAPER_POSES["Q1"], PAPER_POSES["Q3"]
-    traj = double_s(q0, q1, synchronization="time")
+    traj = double_s(q0, q1, DT_S, synchronization="time")
     moving = np.abs(traj.qd[:, :3]) > 0.0
     last = [int(np.flatnonzero(moving[:, j])[-1]) for j in range(3)]
     first = [int(np.flatnonzero(moving[:, j])[0]) for j in range(3)]
@@ -173,8 +173,8 @@ def test_time_synchronization_starts_and_stops_together():
 def test_zero_length_move_is_rest():
     q = PAPER_POSES["Q2"]
     for traj in (
-        double_s(q, q, t_pre_s=0.01, t_post_s=0.02),
-        trapezoid(q, q, 1.0, 1.0, t_pre_s=0.01, t_post_s=0.02),
+        double_s(q, q, DT_S, t_pre_s=0.01, t_post_s=0.02),
+        trapezoid(q, q, 1.0, 1.0, DT_S, t_pre_s=0.01, t_post_s=0.02),
     ):
         assert traj.duration_s == 0.0
         np.testing.assert_array_equal(traj.q, np.tile(q, (traj.n_samples, 1)))
@@ -185,23 +185,23 @@ def test_zero_length_move_is_rest():
 def test_trapezoid_closed_form_and_double_s_relation():
     q0, q1 = np.zeros(2), np.array([2.0, -1.0])
     v, a = 1.5, 2.0
-    traj = trapezoid(q0, q1, v, a, snap_to_grid=False)
+    traj = trapezoid(q0, q1, v, a, DT_S, snap_to_grid=False)
     assert traj.duration_s == pytest.approx(2.0 / v + v / a, abs=1e-12)
     assert np.max(np.abs(traj.qd[:, 0])) == pytest.approx(v, abs=1e-12)
     assert set(np.round(np.unique(traj.qdd[:, 0]), 12)) <= {-a, 0.0, a}
     # A double-S with acceleration ramps of length T_j lasts exactly T_j longer than the
     # trapezoid when both reach v_max and a_max (each ramp pair replaces a step by a ramp).
-    ds = double_s(q0, q1, v_max=v, a_max=a, jerk_time_s=0.02, snap_to_grid=False)
+    ds = double_s(q0, q1, DT_S, v_max=v, a_max=a, jerk_time_s=0.02, snap_to_grid=False)
     assert ds.duration_s == pytest.approx(traj.duration_s + 0.02, abs=1e-9)
     # Triangular case: T = 2 sqrt(h / a).
-    short = trapezoid(q0, np.array([0.5, 0.0]), v, a, snap_to_grid=False)
+    short = trapezoid(q0, np.array([0.5, 0.0]), v, a, DT_S, snap_to_grid=False)
     assert short.duration_s == pytest.approx(2.0 * math.sqrt(0.5 / a), abs=1e-12)
     assert np.max(short.qd[:, 0]) <= math.sqrt(0.5 * a) + 1e-12
 
 
 def test_trapezoid_snapped_to_grid_keeps_limits():
     q0, q1 = PAPER_POSES["Q1"], PAPER_POSES["Q3"]
-    traj = trapezoid(q0, q1, 1.5, 2.0)
+    traj = trapezoid(q0, q1, 1.5, 2.0, DT_S)
     assert traj.duration_s / DT_S == pytest.approx(round(traj.duration_s / DT_S), abs=1e-9)
     assert np.max(np.abs(traj.qd)) <= 1.5 + 1e-12
     assert np.max(np.abs(traj.qdd)) == pytest.approx(2.0, abs=1e-12)
@@ -219,7 +219,7 @@ def test_trapezoid_snapped_to_grid_keeps_limits():
 
 def test_trapezoid_per_joint_limits():
     q0, q1 = np.zeros(2), np.array([1.0, 1.0])
-    traj = trapezoid(q0, q1, v_max=[2.0, 0.5], a_max=[1.0, 4.0], snap_to_grid=False)
+    traj = trapezoid(q0, q1, v_max=[2.0, 0.5], a_max=[1.0, 4.0], dt_s=DT_S, snap_to_grid=False)
     # Joint 1 limits speed (0.5), joint 0 limits acceleration (1.0); both move together.
     assert np.max(traj.qd) == pytest.approx(0.5, abs=1e-12)
     assert np.max(traj.qdd) == pytest.approx(1.0, abs=1e-12)
@@ -278,25 +278,25 @@ def test_paper_poses_are_the_published_ones_and_read_only():
     ],
 )
 def test_double_s_rejects_bad_input(kwargs, message):
-    args = {"q0": [0.0, 0.0], "q1": [0.5, 1.0]} | kwargs
+    args = {"q0": [0.0, 0.0], "q1": [0.5, 1.0], "dt_s": DT_S} | kwargs
     with pytest.raises(ValueError, match=message):
         double_s(**args)
 
 
 def test_other_generators_reject_bad_input():
     with pytest.raises(ValueError, match="duration_s"):
-        min_jerk([0.0], [1.0], 0.0)
+        min_jerk([0.0], [1.0], 0.0, DT_S)
     with pytest.raises(ValueError, match=r"q0\[0\] is inf"):
-        min_jerk([np.inf], [1.0], 1.0)
+        min_jerk([np.inf], [1.0], 1.0, DT_S)
     with pytest.raises(ValueError, match="v_max"):
-        trapezoid([0.0], [1.0], -1.0, 1.0)
+        trapezoid([0.0], [1.0], -1.0, 1.0, DT_S)
     with pytest.raises(ValueError, match=r"q0\[0\] = -2 rad is outside"):
-        trapezoid([-2.0], [1.0], 1.0, 1.0, joint_limits_rad=[[-1.5, 1.5]])
+        trapezoid([-2.0], [1.0], 1.0, 1.0, DT_S, joint_limits_rad=[[-1.5, 1.5]])
 
 
 def test_limits_inside_pass():
     limits = np.array([[-np.pi, np.pi], [-2 * np.pi, 0.0], [-np.pi, np.pi]])
-    traj = double_s(PAPER_POSES["Q1"][:3], PAPER_POSES["Q3"][:3], joint_limits_rad=limits)
+    traj = double_s(PAPER_POSES["Q1"][:3], PAPER_POSES["Q3"][:3], DT_S, joint_limits_rad=limits)
     assert traj.n_dof == 3
 
 

@@ -45,7 +45,7 @@ def plant_eq1(wn: float = WN, zeta: float = ZETA):
 
 @pytest.fixture(scope="module")
 def benches():
-    return {ref: run_benchmark(ref) for ref in ("min_jerk", "trapezoid")}
+    return {ref: run_benchmark(ref, dt_s=DT) for ref in ("min_jerk", "trapezoid")}
 
 
 # --- the paper's numbers -------------------------------------------------------------------

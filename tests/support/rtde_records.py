@@ -10,8 +10,9 @@ import numpy as np
 
 from tvist.ident.logs import Record
 from tvist.ident.logs import read_rtde_csv as read_rtde_log
+from tvist.robots import params
 
-DT_S = 0.002  # e-Series RTDE period, s
+DT_S = params("ur5e").control_period_s  # e-Series RTDE period, s (the robot data)
 G_UP = np.array([0.0, 0.0, 9.81])  # reading of an accelerometer at rest, m/s²
 
 

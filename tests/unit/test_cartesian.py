@@ -11,7 +11,8 @@ from scipy.spatial.transform import Rotation
 import tvist
 from tvist import cartesian, robots
 
-DT_S = 0.002
+#: The UR5e's control period (its robot data), s.
+DT_S = robots.params("ur5e").control_period_s
 # A pose in front of the base with the flange pointing down, away from singularities.
 Q_START = np.array([math.pi, -2.0, 1.8, -1.37, -math.pi / 2, 0.0])
 MODE = (2.0 * math.pi * 2.55, 0.04)

@@ -51,7 +51,8 @@ def test_subpackages_load_on_first_access_without_heavy_imports():
 
 # ---- the commands' outputs are those of the library calls they wrap ----
 
-DT_S = 0.002
+#: The default --dt-s of the commands below: the --robot's (ur5e) control period.
+DT_S = tvist.robots.params("ur5e").control_period_s
 
 
 def test_zero_delay_command_prints_the_benchmark_of_the_library(tmp_path, capsys):
@@ -63,7 +64,7 @@ def test_zero_delay_command_prints_the_benchmark_of_the_library(tmp_path, capsys
     out = tmp_path / "zero_delay.png"
     assert main(["zero-delay", "--reference", "min_jerk", "--plot", str(out)]) == 0
     printed = capsys.readouterr().out
-    bench = run_benchmark("min_jerk")
+    bench = run_benchmark("min_jerk", dt_s=DT_S)
     assert format_table(bench) in printed
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # ZVD of the 2.55 Hz, ζ 0.04 payload: one damped period, 1 / (2.55 √(1 − 0.04²)) s.

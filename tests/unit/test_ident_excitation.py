@@ -9,6 +9,10 @@ import numpy as np
 import pytest
 
 from tvist.ident.excitation import random_excitation, to_urscript
+from tvist.robots import params
+
+#: The UR5e's control period, s (its robot data).
+UR5E_DT_S = params("ur5e").control_period_s
 
 Q0 = np.array([0.3, -1.2, 1.0, -1.5, -1.57, 0.2])
 
@@ -28,9 +32,9 @@ def trapezoid_position(t_s: np.ndarray, distance: float, v: float, a: float) -> 
 
 
 def test_same_seed_same_excitation_and_seeds_differ():
-    a = random_excitation(Q0, 0, seed=7)
-    b = random_excitation(Q0, 0, seed=7)
-    c = random_excitation(Q0, 0, seed=8)
+    a = random_excitation(Q0, 0, seed=7, dt_s=UR5E_DT_S)
+    b = random_excitation(Q0, 0, seed=7, dt_s=UR5E_DT_S)
+    c = random_excitation(Q0, 0, seed=8, dt_s=UR5E_DT_S)
     np.testing.assert_array_equal(a.q, b.q)
     assert a.moves == b.moves
     assert a.q.shape != c.q.shape or not np.array_equal(a.q, c.q)
@@ -39,7 +43,7 @@ def test_same_seed_same_excitation_and_seeds_differ():
 @pytest.mark.parametrize("seed", range(10))
 @pytest.mark.parametrize("joint", [0, 1])
 def test_moves_respect_algorithm_2_ranges(seed, joint):
-    ex = random_excitation(Q0, joint, seed=seed, dt_s=0.002)
+    ex = random_excitation(Q0, joint, seed=seed, dt_s=UR5E_DT_S)
     assert len(ex.moves) >= 3
     others = [j for j in range(6) if j != joint]
     np.testing.assert_array_equal(ex.q[:, others], np.tile(Q0[others], (ex.t_s.size, 1)))
@@ -64,7 +68,7 @@ def test_moves_respect_algorithm_2_ranges(seed, joint):
 
 
 def test_sampled_reference_matches_analytic_trapezoids():
-    ex = random_excitation(Q0, 1, seed=3)
+    ex = random_excitation(Q0, 1, seed=3, dt_s=UR5E_DT_S)
     j = ex.joint
     for m in ex.moves:
         k0 = int(round(m.t_start_s / ex.dt_s))
@@ -86,7 +90,7 @@ def test_sampled_reference_matches_analytic_trapezoids():
 
 
 def test_urscript_export_runs_the_same_moves():
-    ex = random_excitation(Q0, 0, seed=11)
+    ex = random_excitation(Q0, 0, seed=11, dt_s=UR5E_DT_S)
     text = to_urscript(ex)
     assert text.startswith("def tvist_excitation():")
     assert text.rstrip().endswith("tvist_excitation()")
@@ -116,6 +120,6 @@ def test_urscript_export_runs_the_same_moves():
     ],
 )
 def test_bad_input_is_rejected(kwargs, message):
-    args = {"q0": Q0, "joint": 0, **kwargs}
+    args = {"q0": Q0, "joint": 0, "dt_s": UR5E_DT_S, **kwargs}
     with pytest.raises(ValueError, match=message):
         random_excitation(args.pop("q0"), args.pop("joint"), **args)

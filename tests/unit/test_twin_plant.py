@@ -7,7 +7,7 @@ import pytest
 import ruckig
 from scipy.spatial.transform import Rotation
 
-from tvist import rtde_wire
+from tvist import robots, rtde_wire
 from tvist.sim import Twin
 from tvist.sim.plant import rotation_vector
 from tvist.sim.twin_plant import TwinPlant
@@ -19,7 +19,8 @@ from tvist.urserver.server import _split_program
 
 Q1 = np.array(PAPER_POSES["Q1"])
 Q2 = np.array(PAPER_POSES["Q2"])
-DT_S = 0.002
+#: The UR5e twin's control period (its robot data), s.
+DT_S = robots.params("ur5e").control_period_s
 
 
 @pytest.fixture(scope="module")

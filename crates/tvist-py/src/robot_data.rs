@@ -30,7 +30,7 @@ fn robot_file_params<'py>(py: Python<'py>, path: &str) -> PyResult<Bound<'py, Py
 
 /// A robot entry as a dict: DH chains give d_m, a_m, alpha_rad; URDF placement gives
 /// origin_xyz_m, origin_rpy_rad, axis (n, 3) and flange_xyz_m, flange_rpy_rad (the others
-/// None).
+/// None). control_period_s is None where the entry does not state it.
 fn entry_dict<'py>(py: Python<'py>, e: &robot_data::RobotEntry) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("name", &e.name)?;
@@ -94,6 +94,7 @@ fn entry_dict<'py>(py: Python<'py>, e: &robot_data::RobotEntry) -> PyResult<Boun
     )?;
     d.set_item("max_velocity_rad_s", e.max_velocity_rad_s.clone())?;
     d.set_item("max_payload_kg", e.max_payload_kg)?;
+    d.set_item("control_period_s", e.control_period_s)?;
     let cylinders = match &e.inertia_cylinders {
         Some(c) => {
             let block = PyDict::new(py);

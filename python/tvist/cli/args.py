@@ -151,18 +151,51 @@ class DeprecatedAlias(argparse.Action):
         setattr(namespace, self.dest, values)
 
 
-def add_dt_s(p: argparse.ArgumentParser, what: str = "control period") -> None:
-    """``--dt-s`` (s; ``--dt`` is its deprecated spelling)."""
+def add_dt_s(
+    p: argparse.ArgumentParser,
+    what: str = "control period",
+    default: str = "the --robot's control period (control_period_s of its robot data)",
+) -> None:
+    """``--dt-s`` (s; ``--dt`` is its deprecated spelling). Its default, ``None``, is resolved
+    by :func:`dt_s_from_args`; ``default`` says in the help what it means."""
     p.add_argument(
         "--dt-s",
         "--dt",
         dest="dt_s",
         type=float,
-        default=0.002,
+        default=None,
         action=DeprecatedAlias,
         deprecated=("--dt",),
-        help=f"{what}, s (default 0.002; --dt is a deprecated spelling)",
+        help=f"{what}, s (default: {default}; --dt is a deprecated spelling)",
     )
+
+
+def dt_s_from_args(args: argparse.Namespace, robot: str | None = None) -> float:
+    """``--dt-s``, else the control period of ``robot`` (default: ``--robot``), stored back
+    in ``args.dt_s``.
+
+    Raises
+    ------
+    ValueError
+        ``--dt-s`` is not a time > 0, or it is not given and the robot's data states no
+        control period: one line naming ``--dt-s``.
+    """
+    import math
+
+    from tvist.robots import params
+
+    if args.dt_s is None:
+        name = args.robot if robot is None else robot
+        period = params(name).control_period_s
+        if period is None:
+            raise ValueError(
+                f"the {name} has no control period in its robot data: give --dt-s S "
+                "(the controller's sample period, s)"
+            )
+        args.dt_s = period
+    if not (math.isfinite(args.dt_s) and args.dt_s > 0):
+        raise ValueError(f"--dt-s must be > 0; got {args.dt_s}")
+    return args.dt_s
 
 
 def existing_file(path: str | Path, flag: str) -> Path:

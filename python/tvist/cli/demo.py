@@ -12,6 +12,10 @@ from tvist.cli.shape import METHODS as SHAPING_METHODS
 
 __all__ = ["add_demo_command", "add_zero_delay_command", "demo_row_method"]
 
+#: The arm whose control period ``tvist zero-delay`` samples at without ``--dt-s`` (the
+#: benchmark's plant is the payload alone): the UR5e, the arm of the flexible-payload demo.
+ZERO_DELAY_ROBOT = "ur5e"
+
 
 def _cmd_demo(args: argparse.Namespace) -> int:
     if args.robot != "ur5e":
@@ -178,7 +182,7 @@ def _zero_delay_arguments(p: argparse.ArgumentParser) -> None:
         choices=["min_jerk", "trapezoid"],
         help="reference move(s) (default: both)",
     )
-    add_dt_s(p)
+    add_dt_s(p, default=f"the {ZERO_DELAY_ROBOT}'s control period, as in the flexible-payload demo")
     p.add_argument(
         "--rest-s",
         type=float,
@@ -193,11 +197,11 @@ def _zero_delay_arguments(p: argparse.ArgumentParser) -> None:
 
 def _run_zero_delay(args: argparse.Namespace) -> int:
     """Run the benchmark as described by the parsed options; print tables."""
+    from tvist.cli.args import dt_s_from_args
     from tvist.experiments.ztdis_benchmark import format_table, plot_benchmark, run_benchmark
 
-    benches = [
-        run_benchmark(ref, dt_s=args.dt_s, rest_s=tuple(args.rest_s)) for ref in args.reference
-    ]
+    dt_s = dt_s_from_args(args, ZERO_DELAY_ROBOT)
+    benches = [run_benchmark(ref, dt_s=dt_s, rest_s=tuple(args.rest_s)) for ref in args.reference]
     for bench in benches:
         print(format_table(bench))
         print()

@@ -21,7 +21,13 @@ def _shaper(args: argparse.Namespace, Q):  # noqa: N803 (the move, as elsewhere)
     for ``--unshaped``. A map's payload is ``--payload-kg`` or the controller's (printed); a
     map used outside its identified inertia range is warned here, once, before the arm moves."""
     import tvist
-    from tvist.cli.args import map_dynamics, map_from_args, payload_from_args, robot_from_args
+    from tvist.cli.args import (
+        dt_s_from_args,
+        map_dynamics,
+        map_from_args,
+        payload_from_args,
+        robot_from_args,
+    )
     from tvist.cli.shape import parse_modes
     from tvist.maps.mode_choice import set_modes_for_move
     from tvist.maps.paper10 import range_report_of
@@ -46,9 +52,10 @@ def _shaper(args: argparse.Namespace, Q):  # noqa: N803 (the move, as elsewhere)
         report = range_report_of(provider, Q)
         if report is not None:
             print(f"tvist run: warning: {report}", file=sys.stderr)
-    shaper = tvist.TvShaper(provider, dt_s=args.dt_s, n_dof=n_dof, shaper=args.shaper)
+    dt_s = dt_s_from_args(args)
+    shaper = tvist.TvShaper(provider, dt_s=dt_s, n_dof=n_dof, shaper=args.shaper)
     # A frequency-ranked modal map shapes the modes this move needs.
-    choice = set_modes_for_move(shaper, provider, Q, args.dt_s)
+    choice = set_modes_for_move(shaper, provider, Q, dt_s)
     if choice is not None:
         print(f"shaping the {choice.n_modes} lowest mode(s) of the modal map for this move")
     return shaper
@@ -120,11 +127,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
         )
     if args.learn and args.dry_run:
         return _error("run", "--learn learns from the run's log: leave out --dry-run")
-    from tvist.cli.args import existing_file, output_file
+    from tvist.cli.args import dt_s_from_args, existing_file, output_file
     from tvist.move_list import is_move_list
     from tvist.units import parse_units, to_si
 
     try:
+        dt_s_from_args(args)
         moves = is_move_list(existing_file(args.move, "move"))
         if moves:
             Q, shaped = _move_list_reference(args)
@@ -221,14 +229,13 @@ def _print_settle(log_path: Path, move_s: float) -> None:
 def _checked_reference(args: argparse.Namespace, Q, names, shaper):  # noqa: N803
     """The shaped reference ``tvist run`` would stream, after checking the file's rows and
     the shaped periods against the ``--robot`` model's units, joint limits and speed limits."""
-    import math
 
+    from tvist.cli.args import dt_s_from_args
     from tvist.live import shaped_reference
     from tvist.robots import params
     from tvist.units import check_trajectory
 
-    if not (math.isfinite(args.dt_s) and args.dt_s > 0):
-        raise ValueError(f"--dt-s must be > 0; got {args.dt_s}")
+    dt_s_from_args(args)
     robot = params(args.robot)
     if Q.shape[1] != robot.n_dof:
         raise ValueError(
@@ -256,13 +263,12 @@ def _move_list_reference(args: argparse.Namespace):
     shaped in Cartesian space with ``--modes`` (or not, ``--unshaped``), checked against the
     ``--robot`` model's limits; prints the streamed path's deviation from the commanded
     lines."""
-    from tvist.cli.args import kinematic_robot
+    from tvist.cli.args import dt_s_from_args, kinematic_robot
     from tvist.cli.shape import parse_modes
     from tvist.move_list import plan, read_move_list
     from tvist.units import check_trajectory
 
-    if not (math.isfinite(args.dt_s) and args.dt_s > 0):
-        raise ValueError(f"--dt-s must be > 0; got {args.dt_s}")
+    dt_s_from_args(args)
     if args.map or args.paper_map:
         raise ValueError(
             "a move list is shaped in Cartesian space with fixed modes: give --modes "

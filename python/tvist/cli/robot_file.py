@@ -27,6 +27,13 @@ def add_robot_file_command(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--max-payload-kg", type=float, default=0.0, help="rated payload, kg (default 0)"
     )
+    p.add_argument(
+        "--control-period-s",
+        type=float,
+        default=None,
+        help="period of the arm controller's control loop, s (URDF gives none; default: not "
+        "written, and commands run on the robot file then need --dt-s)",
+    )
     p.set_defaults(func=_cmd_robot_file)
 
 
@@ -37,7 +44,12 @@ def _cmd_robot_file(args: argparse.Namespace) -> int:
     if not str(args.out).endswith(".json"):
         raise ValueError(f"--out {args.out}: a robot file name ends in .json")
     params = urdf_params(
-        urdf, args.base_link, args.tip_link, name=args.name, max_payload_kg=args.max_payload_kg
+        urdf,
+        args.base_link,
+        args.tip_link,
+        name=args.name,
+        max_payload_kg=args.max_payload_kg,
+        control_period_s=args.control_period_s,
     )
     write_robot_file(params, args.out)
     checked = robot_file(args.out)  # read back by the core's reader, as the C API does

@@ -44,6 +44,7 @@ from tvist.cli.args import (
     add_dt_s,
     add_robot_and_payload,
     add_units,
+    dt_s_from_args,
     existing_dir,
     existing_file,
     kinematic_robot,
@@ -357,8 +358,7 @@ def _cmd_shape_bag(args: argparse.Namespace, robot, dynamics) -> int:
 def _cmd_shape(args: argparse.Namespace) -> int:
     if (args.input is None) == (args.bag is None):
         raise ValueError("give a CSV file or --bag BAG (one of them)")
-    if not (np.isfinite(args.dt_s) and args.dt_s > 0):
-        raise ValueError(f"--dt-s must be > 0; got {args.dt_s}")
+    dt_s_from_args(args)
     if args.bag is None:  # the files first, then the payload (which may come from the map)
         existing_file(args.input, "input")
         output_file(args.out, "--out")

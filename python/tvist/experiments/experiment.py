@@ -143,6 +143,7 @@ class MethodRun:
     reduction_percent: float
     peak_jerk_rad_s3: float
     spectrum: EnergySpectrum
+    dt_s: float
     details: dict[str, Any] = field(default_factory=dict)
     path_deviation_m: float = math.nan
     settle: SettleTimes | None = None
@@ -156,8 +157,8 @@ class MethodRun:
             "residual_vibration_m_s2": rv.amplitude,
             "reduction_percent": self.reduction_percent,
             "peak_jerk_rad_s3": self.peak_jerk_rad_s3,
-            "peak_velocity_rad_s": peak_velocity(self.q, DT_S),
-            "peak_acceleration_rad_s2": peak_acceleration(self.q, DT_S),
+            "peak_velocity_rad_s": peak_velocity(self.q, self.dt_s),
+            "peak_acceleration_rad_s2": peak_acceleration(self.q, self.dt_s),
             "t_stop_s": self.t_stop_s,
             "path_deviation_m": self.path_deviation_m,
             "oracle": self.method.oracle,
@@ -327,7 +328,7 @@ def run_motion(
     """
     if not methods or methods[0].key != "unshaped":
         raise ValueError("the first method must be the 'unshaped' baseline")
-    traj = motion.reference(tail_s)
+    traj = motion.reference(tail_s, robot.params.sample_period_s())
     t = np.asarray(traj.t_s)
     t_b = stop_time_s(t, traj.q, motion.q_end)
     tracks = mode_tracks(traj, twin, robot, methods)
@@ -362,6 +363,7 @@ def run_motion(
                 reduction_percent=100.0 * (1.0 - residual.amplitude / baseline_rv),
                 peak_jerk_rad_s3=peak_jerk(ref.q, traj.dt_s),
                 spectrum=residual_spectrum(psi, t, t_stop, spectrum_window_s, traj.dt_s),
+                dt_s=traj.dt_s,
                 details=ref.details,
                 path_deviation_m=path_deviation(robot, traj.q, ref.q).max_m,
                 settle=measure_settle(

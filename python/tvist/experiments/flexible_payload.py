@@ -56,7 +56,10 @@ START_POSE = (math.pi, -2.0, 1.8, -1.37, -1.5708, 0.0)
 #: ``T = 0.734 s``, which gives α = 0.4653 and α' = 0.6516 with the 2.55 Hz ZVD shaper).
 DISTANCE_M = 0.3
 MOVE_S = 0.734
-DT_S = 0.002
+#: The arm: the UR5e.
+ROBOT = "ur5e"
+#: Control period, s: the UR5e's (its robot data).
+DT_S = robots.params(ROBOT).control_period_s
 #: Rest before the move, s.
 PRE_S = 0.2
 #: Rest after the planned move, s: the ZVD delay (0.39 s) plus 3 s of decay (about two
@@ -181,7 +184,7 @@ def run_flexible_payload(
     t_s, x_planned = np.asarray(traj.t_s), np.asarray(traj.q)
     modes = [(payload.wn_rad_s, payload.zeta)]
     q_planned = cartesian.joints_from_tcp(robot, x_planned, r0, q0)
-    twin = PayloadTwin("ur5e", payload)
+    twin = PayloadTwin(ROBOT, payload)
     t_b = _stop_time_s(t_s, x_planned)
 
     runs: list[PayloadRun] = []
@@ -237,7 +240,7 @@ def run_flexible_payload(
     q_joint = np.array(joint_shaper.shape(np.ascontiguousarray(q_planned)))
     conventional = next(r for r in runs if r.key == "conventional")
     config = {
-        "robot": "ur5e",
+        "robot": ROBOT,
         "start_pose_rad": list(START_POSE),
         "payload": {
             "freq_hz": payload.freq_hz,
@@ -324,7 +327,8 @@ def findings(exp: PayloadExperiment) -> list[str]:
     conv = exp.run("conventional")
     out.append(
         (
-            "ZTDIS and modified ZTDIS end at the planned stop (within one 2 ms sample)"
+            f"ZTDIS and modified ZTDIS end at the planned stop (within one {DT_S * 1e3:g} ms "
+            "sample)"
             if not late
             else "**Not reproduced:** "
             + ", ".join(f"{r.label} ends {1e3 * r.delay_s:.0f} ms late" for r in late)

@@ -516,7 +516,7 @@ def _moves(variant, map_path: Path, robot) -> dict[str, Any]:
     from tvist.experiments.experiment import run_motion
     from tvist.experiments.measure import zv_delay_s
     from tvist.experiments.methods import default_methods, fd_tvist_modal
-    from tvist.experiments.motions import DT_S, PAYLOAD_COM_M, demo_motions, demo_payload_kg
+    from tvist.experiments.motions import PAYLOAD_COM_M, demo_motions, demo_payload_kg
     from tvist.sim.family import modes_of
 
     modal = load_map(map_path)
@@ -555,7 +555,8 @@ def _moves(variant, map_path: Path, robot) -> dict[str, Any]:
                 "end_pose_modes_hz": [w / (2 * math.pi) for w, _ in shaped_modes],
                 "delay_s": shaped.delay_s,
                 "zv_delay_s": analytic,
-                "delay_minus_zv_samples": (shaped.delay_s - analytic) / DT_S,
+                "delay_minus_zv_samples": (shaped.delay_s - analytic)
+                / robot.params.sample_period_s(),
             }
         out[motion.name] = entry
     return out

@@ -22,7 +22,8 @@ from tvist.trajectory import double_s
 
 #: Plant modes (Hz, zeta): roughly the UR5e base and shoulder modes at the stretched pose Q1.
 PLANT_MODES_HZ = ((8.0, 0.26), (6.9, 0.37))
-DT_S = 0.002
+#: Control period, s: the UR5e's (its robot data), whose modes the plant has.
+DT_S = tvist.robots.params("ur5e").control_period_s
 
 
 def mode_acceleration(t_s: np.ndarray, u: np.ndarray, freq_hz: float, zeta: float) -> np.ndarray:

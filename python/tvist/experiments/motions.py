@@ -1,5 +1,5 @@
-"""The test motions of the UR5e experiment (paper section 6.1, Table 3) on the 500 Hz grid,
-and the :class:`Motion` every experiment's moves are made of."""
+"""The test motions of the UR5e experiment (paper section 6.1, Table 3) on the UR5e's control
+grid, and the :class:`Motion` every experiment's moves are made of."""
 
 from __future__ import annotations
 
@@ -10,10 +10,14 @@ from types import MappingProxyType
 
 import numpy as np
 
+from tvist.robots import params
 from tvist.trajectory import PAPER_POSES, Trajectory, double_s
 
-#: Control period of the UR e-Series controller, s.
-DT_S = 0.002
+#: The arm of the paper's experiments.
+PAPER_ROBOT = "ur5e"
+#: Control period of the paper's experiments, s: the UR5e's (its robot data). An experiment
+#: on another arm runs at that arm's period (:func:`tvist.experiments.experiment.run_motion`).
+DT_S = params(PAPER_ROBOT).control_period_s
 #: Double-S limits of the test motions (section 6.1): speed, acceleration, acceleration ramp.
 V_MAX_RAD_S = 1.5
 A_MAX_RAD_S2 = 2.0
@@ -69,8 +73,9 @@ class Motion:
         """End pose, rad, ``(6,)``."""
         return np.array(self.poses[self.end], dtype=float)
 
-    def reference(self, tail_s: float, dt_s: float = DT_S) -> Trajectory:
-        """The unshaped double-S reference with :data:`PRE_S` rest before and ``tail_s`` after.
+    def reference(self, tail_s: float, dt_s: float) -> Trajectory:
+        """The unshaped double-S reference with :data:`PRE_S` rest before and ``tail_s`` after,
+        sampled every ``dt_s`` (s: the control period of the arm it runs on).
 
         The move is joint-space linear (phase-synchronized) and ends exactly on a sample.
         """
@@ -102,8 +107,6 @@ def motion_by_name(name: str) -> Motion:
 def demo_payload_kg(robot_name: str) -> float:
     """The test motions' payload on ``robot_name``: :data:`PAYLOAD_KG`, or the arm's rated
     payload if that is smaller (a lighter arm carries what it is rated for)."""
-    from tvist.robots import params
-
     return min(PAYLOAD_KG, params(robot_name).max_payload_kg)
 
 
@@ -119,7 +122,6 @@ def demo_poses(robot_name: str) -> Mapping[str, np.ndarray]:
     the base turned as in ``Q2``.
     """
     from tvist.ident.pose_plan import workspace_extremes
-    from tvist.robots import params
 
     p = params(robot_name)
     if p.placements is None:
@@ -140,8 +142,6 @@ def demo_poses(robot_name: str) -> Mapping[str, np.ndarray]:
 def demo_motions(robot_name: str) -> tuple[Motion, ...]:
     """The three test moves of :data:`MOTIONS` between :func:`demo_poses` of ``robot_name``,
     at the paper's double-S limits capped by the arm's slowest joint speed limit."""
-    from tvist.robots import params
-
     poses = demo_poses(robot_name)
     v_max = min(V_MAX_RAD_S, float(np.min(params(robot_name).max_velocity_rad_s)))
     return tuple(Motion(m.start, m.end, poses, v_max_rad_s=v_max) for m in MOTIONS)

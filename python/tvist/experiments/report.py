@@ -10,7 +10,6 @@ from typing import Any
 from tvist.analysis import peak_acceleration, peak_velocity
 from tvist.experiments.experiment import DemoResult, MotionRun
 from tvist.experiments.measure import damped_frequency_hz, zv_delay_s
-from tvist.experiments.motions import DT_S
 from tvist.experiments.plots import make_figures
 from tvist.experiments.report_identification import IDENTIFICATION_CAPTIONS, identification_section
 from tvist.experiments.results_json import write_json
@@ -202,10 +201,10 @@ def write_markdown(result: DemoResult, path: Path, figures: dict[str, list[Path]
                     f"{r.method.label}: α = {r.details['alpha']:.4f}, removed shaper delay "
                     f"{1e3 * r.details['shaper_delay_removed_s']:.1f} ms, truncation residue "
                     f"{r.details['tail_error_rad']:.1e} rad, peak speed "
-                    f"{peak_velocity(r.q, DT_S):.2f} rad/s and acceleration "
-                    f"{peak_acceleration(r.q, DT_S):.2f} rad/s² (planned move: "
-                    f"{peak_velocity(motion.runs[0].q, DT_S):.2f} and "
-                    f"{peak_acceleration(motion.runs[0].q, DT_S):.2f})"
+                    f"{peak_velocity(r.q, r.dt_s):.2f} rad/s and acceleration "
+                    f"{peak_acceleration(r.q, r.dt_s):.2f} rad/s² (planned move: "
+                    f"{peak_velocity(motion.runs[0].q, motion.runs[0].dt_s):.2f} and "
+                    f"{peak_acceleration(motion.runs[0].q, motion.runs[0].dt_s):.2f})"
                     for r in zd
                 )
                 + ". A residue above the 1e-9 rad rest tolerance makes the reference stop one "

@@ -14,7 +14,8 @@ from tvist.experiments.table import planned_move_s
 
 #: Recommendations rank by time to settled at this criterion (the first of CRITERIA) ...
 RANK_CRITERION = CRITERIA[0]
-#: ... rows within this much of the fastest tie (s: one 2 ms sample, the grid of the stop),
+#: ... rows within this much of the fastest tie (s: one and a half control periods of the
+#: UR5e, the grid of the stop),
 #: and the tie goes to the faster one at the stricter band (the second criterion), then to
 #: the higher reduction.
 SETTLE_TIE_S = 1.5 * DT_S

@@ -164,7 +164,7 @@ def _residual(q: np.ndarray, dt_s: float, wn_rad_s: float, zeta: float, done_s: 
 def run_benchmark(
     reference: str = "min_jerk",
     *,
-    dt_s: float = 0.002,
+    dt_s: float,
     freq_hz: float = 2.55,
     zeta: float = 0.04,
     move_s: float = 0.734,

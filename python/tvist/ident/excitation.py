@@ -29,8 +29,6 @@ __all__ = [
     "write_trajectory_csv",
 ]
 
-#: Sampling period of e-Series RTDE and of the controller, s.
-DEFAULT_DT_S = 0.002
 #: Algorithm 2's targets lie within this of the start position, rad (±10°).
 MAX_DELTA_RAD = math.pi / 18.0
 
@@ -136,7 +134,7 @@ def random_excitation(
     *,
     seed: int | np.random.Generator | None = None,
     duration_s: float = 8.0,
-    dt_s: float = DEFAULT_DT_S,
+    dt_s: float,
     standstill_s: float = 0.5,
     max_delta_rad: float = MAX_DELTA_RAD,
     speed_range_rad_s: tuple[float, float] = (0.5, 2.0),
@@ -157,7 +155,8 @@ def random_excitation(
         Moves are started while the elapsed time (after the standstill) is below this, like
         the ``while t < 8 s`` loop of Algorithm 2; the last move and its wait complete.
     dt_s
-        Sampling period of the reference, s.
+        Sampling period of the reference, s: the robot's control period
+        (:attr:`~tvist.robots.RobotParams.control_period_s`).
     standstill_s
         Initial standstill for the gravity estimate, s (> 0).
     max_delta_rad

@@ -587,15 +587,16 @@ def pose_excitations(
     """The excitations of ``joints`` (default: the base, shoulder and elbow of
     ``robot_name``, :func:`~tvist.ident.excited.default_excited_joints`; checked with
     :func:`~tvist.ident.excited.excited_joints`) at ``pose`` (Algorithm 2),
-    lowest joint first, each ``duration_s`` (s) long; each with an integer seed drawn from
-    the pose's seed (which also seeds a twin's sensor noise): joint ``j`` takes the ``j``-th
-    draw, whichever joints are excited."""
+    lowest joint first, each ``duration_s`` (s) long, sampled at the robot's control period;
+    each with an integer seed drawn from the pose's seed (which also seeds a twin's sensor
+    noise): joint ``j`` takes the ``j``-th draw, whichever joints are excited."""
     joints = excited_joints(joints, robot_name)
+    dt_s = params(robot_name).sample_period_s()
     if pose.q is None:
         raise ValueError(f"pose {pose.key} is unreachable")
     rng = np.random.default_rng(pose.seed)
     seeds = [int(rng.integers(2**63)) for _ in range(_SEED_DRAWS)]
     return [
-        random_excitation(pose.q, joint, seed=seeds[joint], duration_s=duration_s)
+        random_excitation(pose.q, joint, seed=seeds[joint], duration_s=duration_s, dt_s=dt_s)
         for joint in joints
     ]

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 import tvist
-from tvist.experiments.motions import A_MAX_RAD_S2, DT_S, JERK_TIME_S, PRE_S, V_MAX_RAD_S
+from tvist.experiments.motions import A_MAX_RAD_S2, JERK_TIME_S, PRE_S, V_MAX_RAD_S
 from tvist.maps.modal import ModalMap
 from tvist.robots import Robot
 from tvist.trajectory import double_s
@@ -32,12 +32,14 @@ def move(
     modal_map: ModalMap | None = None,
     tail_s: float = TAIL_S,
 ) -> np.ndarray:
-    """The reference ``(n_samples, 6)`` of a move at :data:`~tvist.experiments.motions.DT_S`,
-    unshaped, or shaped by the two-mode ZV FD-TVIST cascade of ``modal_map``."""
+    """The reference ``(n_samples, 6)`` of a move at the robot's control period
+    (:attr:`~tvist.robots.RobotParams.control_period_s`), unshaped, or shaped by the two-mode
+    ZV FD-TVIST cascade of ``modal_map``."""
+    dt_s = robot.params.sample_period_s()
     traj = double_s(
         q_start,
         q_end,
-        dt_s=DT_S,
+        dt_s=dt_s,
         v_max=V_MAX_RAD_S,
         a_max=A_MAX_RAD_S2,
         jerk_time_s=JERK_TIME_S,
@@ -47,7 +49,7 @@ def move(
     q = np.ascontiguousarray(traj.q)
     if modal_map is None:
         return np.array(q)
-    shaper = tvist.TvShaper(tvist.ModalDynamics(robot, modal_map), DT_S, q.shape[1], shaper="zv")
+    shaper = tvist.TvShaper(tvist.ModalDynamics(robot, modal_map), dt_s, q.shape[1], shaper="zv")
     shaper.reset(np.ascontiguousarray(q[0]))
     return np.array(shaper.shape(q))
 

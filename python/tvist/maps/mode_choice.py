@@ -349,7 +349,7 @@ def modes_to_shape(
     *,
     q_start: Sequence[float] | np.ndarray | None = None,
     q_end: Sequence[float] | np.ndarray | None = None,
-    dt_s: float = 0.002,
+    dt_s: float | None = None,
     threshold: float = DEFAULT_THRESHOLD,
 ) -> ShapingChoice:
     """How many lowest-frequency modes to shape for one move (module docs).
@@ -362,7 +362,9 @@ def modes_to_shape(
         The arm with its payload.
     trajectory
         The unshaped reference of the move; or ``q_start`` and ``q_end`` for the default
-        jerk-limited move between them (:func:`tvist.trajectory.double_s` at ``dt_s``).
+        jerk-limited move between them (:func:`tvist.trajectory.double_s` at ``dt_s``, s;
+        ``None``: the robot's control period,
+        :attr:`~tvist.robots.RobotParams.control_period_s`).
     threshold
         A mode is significant above this fraction of the unshaped total (default 1 %).
 
@@ -374,7 +376,7 @@ def modes_to_shape(
     if trajectory is None:
         if q_start is None or q_end is None:
             raise ValueError("give the move: a trajectory, or q_start and q_end")
-        trajectory = double_s(q_start, q_end, dt_s=dt_s)
+        trajectory = double_s(q_start, q_end, dt_s=robot.params.sample_period_s(dt_s))
     elif q_start is not None or q_end is not None:
         raise ValueError("give the move once: a trajectory or q_start and q_end, not both")
     if not (0.0 <= threshold < 1.0):

@@ -16,6 +16,8 @@ Conventions (also stated in the JSON file):
   robot with an ``inertia_cylinders`` block they are derived from it by
   :mod:`tvist.robots._cylinders`; the loader reads only ``inertia_kg_m2``.
 - Link side only, no rotor inertia.
+- ``control_period_s`` is the period of the robot controller's control loop (s), the default
+  sample period of everything that runs on the robot; optional (a robot file may omit it).
 """
 
 from __future__ import annotations
@@ -115,6 +117,10 @@ class RobotParams:
         Joint speed limits, ``(n,)``.
     max_payload_kg
         Rated payload.
+    control_period_s
+        Period of the robot controller's control loop, s (finite, > 0): the default sample
+        period of everything that runs on the robot (:meth:`sample_period_s`). ``None`` where
+        the data does not state it (a robot file written from a URDF without one).
     placements
         URDF joint placement (``None`` for a DH arm).
     elbow_joint
@@ -139,6 +145,7 @@ class RobotParams:
     max_payload_kg: float
     placements: JointPlacements | None = None
     elbow_joint: int | None = None
+    control_period_s: float | None = None
     n_dof: int = field(init=False)
 
     def __post_init__(self) -> None:
@@ -173,6 +180,14 @@ class RobotParams:
         if not math.isfinite(payload) or payload < 0.0:
             raise ValueError(f"{self.name}: max_payload_kg must be finite and >= 0")
         object.__setattr__(self, "max_payload_kg", payload)
+        if self.control_period_s is not None:
+            period = float(self.control_period_s)
+            if not math.isfinite(period) or period <= 0.0:
+                raise ValueError(
+                    f"{self.name}: control_period_s must be finite and > 0, "
+                    f"got {self.control_period_s!r}"
+                )
+            object.__setattr__(self, "control_period_s", period)
         elbow = elbow_by_axes(self) if self.elbow_joint is None else self.elbow_joint
         if elbow is not None:
             if isinstance(elbow, bool) or int(elbow) != elbow or not 2 <= int(elbow) < n:
@@ -182,6 +197,24 @@ class RobotParams:
                 )
             elbow = int(elbow)
         object.__setattr__(self, "elbow_joint", elbow)
+
+    def sample_period_s(self, dt_s: float | None = None) -> float:
+        """``dt_s`` if given, else this robot's :attr:`control_period_s` (s): the default of
+        every ``dt_s`` of what runs on the robot.
+
+        Raises
+        ------
+        ValueError
+            ``dt_s`` is None and the robot's data states no control period.
+        """
+        if dt_s is not None:
+            return dt_s
+        if self.control_period_s is None:
+            raise ValueError(
+                f"{self.name}: the robot data states no control period (control_period_s); "
+                "pass dt_s"
+            )
+        return self.control_period_s
 
     @property
     def inertia_tensors_kg_m2(self) -> np.ndarray:
@@ -207,6 +240,7 @@ class RobotParams:
                 joint_limits_rad=entry["joint_limits_rad"],
                 max_velocity_rad_s=entry["max_velocity_rad_s"],
                 max_payload_kg=entry["max_payload_kg"],
+                control_period_s=entry.get("control_period_s"),
             )
         except (KeyError, TypeError) as exc:
             raise ValueError(f"{name}: missing or malformed field {exc}") from None

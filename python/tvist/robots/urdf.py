@@ -98,6 +98,7 @@ def urdf_params(
     name: str | None = None,
     max_payload_kg: float = 0.0,
     elbow_joint: int | None = None,
+    control_period_s: float | None = None,
 ) -> RobotParams:
     """Parameters of the serial chain from ``base_link`` to ``tip_link`` of URDF ``path``.
 
@@ -115,6 +116,9 @@ def urdf_params(
         Index of the elbow (URDF does not name one); ``None``: the first joint after the
         shoulder whose axis is parallel to the shoulder's at ``q = 0``
         (:func:`tvist.robots.elbow_by_axes`).
+    control_period_s
+        Period of the arm controller's control loop, s (URDF does not give one); ``None``:
+        unknown, and whatever runs on the arm must be given its ``dt_s``.
 
     Raises
     ------
@@ -202,6 +206,7 @@ def urdf_params(
         max_payload_kg=max_payload_kg,
         placements=placements,
         elbow_joint=elbow_joint,
+        control_period_s=control_period_s,
     )
 
 
@@ -281,6 +286,8 @@ def robot_file_document(params: RobotParams) -> dict[str, Any]:
         "max_velocity_rad_s": rows(params.max_velocity_rad_s),
         "max_payload_kg": params.max_payload_kg,
     }
+    if params.control_period_s is not None:  # optional in the schema: written when known
+        entry["control_period_s"] = params.control_period_s
     return {
         "schema_version": 1,
         "conventions": (
@@ -289,7 +296,8 @@ def robot_file_document(params: RobotParams) -> dict[str, Any]:
             "before it, then the turn about axis; link i (mass_kg, com_m, inertia_kg_m2 = "
             "[ixx, iyy, izz, ixy, ixz, iyz] about the centre of mass) in the link frame after "
             "joint i; the flange frame's origin in the last link's frame. Gravity along -z of "
-            "the base. Link side only, no rotor inertia."
+            "the base. Link side only, no rotor inertia. control_period_s (optional): the "
+            "period of the arm controller's control loop, s."
         ),
         "robots": {params.name: entry},
     }
@@ -366,14 +374,18 @@ def dh_urdf(params: RobotParams) -> str:
 PROXIMAL_JOINTS: tuple[int, ...] = (0, 1, 2, 3)
 
 #: The arms shipped as URDF data (``urdf_data/``, provenance and license in each file):
-#: name → (file, base link, tip link, rated payload in kg, elbow joint). URDF gives no rated
-#: payload; the makers' data sheets do: Franka Research 3 3 kg, KUKA LBR iiwa 14 R820 14 kg,
-#: Kinova Gen3 (7 DOF) 4 kg at mid-range. Nor does it name the elbow: on all three joint 2
-#: turns the upper arm about its own axis and joint 3 is the elbow (the makers' "joint 4").
-SHIPPED_URDFS: dict[str, tuple[str, str, str, float, int]] = {
-    "fr3": ("fr3.urdf", "fr3_link0", "fr3_link8", 3.0, 3),
-    "iiwa14": ("iiwa14.urdf", "iiwa_link_0", "iiwa_link_ee", 14.0, 3),
-    "gen3": ("gen3.urdf", "base_link", "end_effector_link", 4.0, 3),
+#: name → (file, base link, tip link, rated payload in kg, elbow joint, control period in s).
+#: URDF gives no rated payload; the makers' data sheets do: Franka Research 3 3 kg, KUKA LBR
+#: iiwa 14 R820 14 kg, Kinova Gen3 (7 DOF) 4 kg at mid-range. Nor does it name the elbow: on
+#: all three joint 2 turns the upper arm about its own axis and joint 3 is the elbow (the
+#: makers' "joint 4"). Nor the control period; the makers' real-time interfaces do:
+#: FR3 1 ms (libfranka's 1 kHz control loop), iiwa14 1 ms (FRI, the Fast Robot Interface: its
+#: send period is configurable, 1 ms the fastest and the one used here), Gen3 1 ms (the Kortex
+#: API's 1 kHz low-level servoing).
+SHIPPED_URDFS: dict[str, tuple[str, str, str, float, int, float]] = {
+    "fr3": ("fr3.urdf", "fr3_link0", "fr3_link8", 3.0, 3, 0.001),
+    "iiwa14": ("iiwa14.urdf", "iiwa_link_0", "iiwa_link_ee", 14.0, 3, 0.001),
+    "gen3": ("gen3.urdf", "base_link", "end_effector_link", 4.0, 3, 0.001),
 }
 
 
@@ -387,11 +399,19 @@ def shipped_urdf(name: str) -> tuple[Path, str, str]:
 
 @cache
 def shipped_params(name: str) -> RobotParams:
-    """Parameters of shipped arm ``name`` (its chain and rated payload), read once;
-    :func:`tvist.robots.params` serves them under the same names."""
+    """Parameters of shipped arm ``name`` (its chain, rated payload, elbow and control
+    period), read once; :func:`tvist.robots.params` serves them under the same names."""
     path, base, tip = shipped_urdf(name)
-    *_, payload_kg, elbow = SHIPPED_URDFS[name]
+    *_, payload_kg, elbow, period_s = SHIPPED_URDFS[name]
     with warnings.catch_warnings():
         # Gen3's continuous joints get ±2π limits: stated in the module docstring.
         warnings.simplefilter("ignore")
-        return urdf_params(path, base, tip, name=name, max_payload_kg=payload_kg, elbow_joint=elbow)
+        return urdf_params(
+            path,
+            base,
+            tip,
+            name=name,
+            max_payload_kg=payload_kg,
+            elbow_joint=elbow,
+            control_period_s=period_s,
+        )

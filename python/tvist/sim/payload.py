@@ -218,9 +218,11 @@ class PayloadTwin:
             raise RuntimeError(f"no static equilibrium of the payload arm: {sol.message}")
         return sol.x
 
-    def run(self, Q_ref: np.ndarray, dt_s: float = 0.002) -> PayloadRecord:  # noqa: N803
+    def run(self, Q_ref: np.ndarray, dt_s: float | None = None) -> PayloadRecord:  # noqa: N803
         """Simulate the joint reference ``Q_ref`` ``(n_samples, n_dof)``, starting at rest in
-        equilibrium at ``Q_ref[0]``."""
+        equilibrium at ``Q_ref[0]``, one row per control period ``dt_s`` (s; ``None``: the
+        robot's :attr:`~tvist.robots.RobotParams.control_period_s`)."""
+        dt_s = self.params.sample_period_s(dt_s)
         q_ref = np.asarray(Q_ref, dtype=float)
         if q_ref.ndim != 2 or q_ref.shape[1] != self._n or not np.all(np.isfinite(q_ref)):
             raise ValueError(f"Q_ref must be a finite (n_samples, {self._n}) array")

@@ -496,7 +496,7 @@ class Twin:
     def run(
         self,
         Q_ref: np.ndarray | Sequence[Sequence[float]],  # noqa: N803 (matches the paper's Q)
-        dt_s: float = 0.002,
+        dt_s: float | None = None,
         progress: bool = False,
         *,
         initial_dq_rad: Sequence[float] | np.ndarray | None = None,
@@ -513,7 +513,8 @@ class Twin:
         Q_ref
             Joint references (rad), one row per control period, ``(n_samples, n_dof)``.
         dt_s
-            Control period (s); a whole multiple of ``physics_dt_s``.
+            Control period (s); a whole multiple of ``physics_dt_s``. ``None``: the robot's
+            (:attr:`~tvist.robots.RobotParams.control_period_s`; ValueError if it has none).
         progress
             Show a progress bar.
         initial_dq_rad, initial_qd_rad_s
@@ -540,7 +541,7 @@ class Twin:
             If the simulation blows up; nothing is returned then.
         """
         q_ref = self._check_trajectory(Q_ref)
-        dt = self._control_period(dt_s)
+        dt = self._control_period(self._params.sample_period_s(dt_s))
         self._check_speed(q_ref, dt)
         if noise_seed is not None:
             try:

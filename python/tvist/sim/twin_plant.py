@@ -55,12 +55,13 @@ class TwinPlant:
     q0
         Initial motor angles (rad), ``(n_dof,)``, within the joint limits.
     dt_s
-        Control period (s), a whole multiple of the twin's physics step.
+        Control period (s), a whole multiple of the twin's physics step. ``None``: the robot's
+        (:attr:`~tvist.robots.RobotParams.control_period_s`; ValueError if it has none).
     """
 
-    def __init__(self, twin: Twin, q0, dt_s: float = 0.002) -> None:
+    def __init__(self, twin: Twin, q0, dt_s: float | None = None) -> None:
         self._twin = twin
-        self._integrator = twin.integrator(dt_s)
+        self._integrator = twin.integrator(twin.params.sample_period_s(dt_s))
         q0 = twin.check_pose(np.asarray(q0, dtype=float), "q0")
         self._integrator.reset(twin.equilibrium_state(q0), np.zeros(twin.n_state))
         self._q_motor = q0.copy()

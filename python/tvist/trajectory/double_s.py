@@ -26,7 +26,7 @@ Synchronization = Literal["phase", "time"]
 def double_s(
     q0: ArrayLike,
     q1: ArrayLike,
-    dt_s: float = 0.002,
+    dt_s: float,
     v_max: ArrayLike = 1.5,
     a_max: ArrayLike = 2.0,
     jerk_time_s: float = 0.02,
@@ -48,7 +48,7 @@ def double_s(
     q0, q1
         Start and end pose, shape ``(n_dof,)``, rad. ``q0 == q1`` gives a move of zero length.
     dt_s
-        Sample period, s (the UR e-Series controller runs at 2 ms).
+        Sample period, s (required: a robot's is its ``control_period_s``).
     v_max, a_max
         Velocity (rad/s) and acceleration (rad/s²) limits, scalar or per joint ``(n_dof,)``.
     jerk_time_s

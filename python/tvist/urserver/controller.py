@@ -66,12 +66,13 @@ class TwinController:
     q0
         Initial joint angles (rad).
     dt_s
-        Controller tick (s), 0.002 on e-Series.
+        Controller tick (s); ``None``: the robot's control period
+        (:attr:`~tvist.robots.RobotParams.control_period_s`, 0.002 on the e-Series).
     """
 
-    def __init__(self, twin: Twin, q0, dt_s: float = 0.002) -> None:
+    def __init__(self, twin: Twin, q0, dt_s: float | None = None) -> None:
         self.twin = twin
-        self.dt_s = float(dt_s)
+        self.dt_s = float(twin.params.sample_period_s(dt_s))
         self.plant = TwinPlant(twin, q0, self.dt_s)
         params = twin.params
         self.motion = JointMotion(

@@ -56,6 +56,10 @@ pub struct RobotEntry {
     pub joint_limits_rad: Vec<[f64; 2]>,
     pub max_velocity_rad_s: Vec<f64>,
     pub max_payload_kg: f64,
+    /// Period of the robot controller's control loop, s (finite, > 0): the default sample
+    /// period of what runs on the robot. `None` where the file does not state it (a robot
+    /// file written from a URDF, which gives none).
+    pub control_period_s: Option<f64>,
     /// The optional solid-cylinder model the inertias were derived from.
     pub inertia_cylinders: Option<InertiaCylinders>,
 }
@@ -125,6 +129,7 @@ pub fn robot_entry(json: &str, name: &str) -> Result<RobotEntry, Error> {
     let max_payload_kg = field("max_payload_kg")
         .and_then(Value::as_f64)
         .ok_or_else(|| invalid(format!("{name}: max_payload_kg must be a number")))?;
+    let control_period_s = control_period(field("control_period_s"), name)?;
     let inertia_cylinders = match field("inertia_cylinders") {
         None | Some(Value::Null) => None,
         Some(block) => {
@@ -163,8 +168,23 @@ pub fn robot_entry(json: &str, name: &str) -> Result<RobotEntry, Error> {
         joint_limits_rad: rows::<2>(field("joint_limits_rad"), n, &what("joint_limits_rad"))?,
         max_velocity_rad_s: numbers(field("max_velocity_rad_s"), n, &what("max_velocity_rad_s"))?,
         max_payload_kg,
+        control_period_s,
         inertia_cylinders,
     })
+}
+
+/// The optional `control_period_s` of entry `name`: absent (or null) is `None`; present, a
+/// finite number > 0 (s).
+fn control_period(value: Option<&Value>, name: &str) -> Result<Option<f64>, Error> {
+    match value {
+        None | Some(Value::Null) => Ok(None),
+        Some(v) => match v.as_f64() {
+            Some(s) if s.is_finite() && s > 0.0 => Ok(Some(s)),
+            _ => Err(invalid(format!(
+                "{name}: control_period_s must be a finite number of seconds > 0, got {v}"
+            ))),
+        },
+    }
 }
 
 /// Names of the robots in a robot-data document (in file order).
@@ -376,6 +396,15 @@ mod tests {
         "mass_kg": [2.0], "com_m": [[0.1, 0.0, 0.0]],
         "inertia_kg_m2": [[0.01, 0.02, 0.02, 0.0, 0.0, 0.0]]}}}"#;
 
+    /// One joint with every field an entry needs, no control period.
+    const ONE_ENTRY: &str = r#"{"schema_version": 1, "robots": {"arm": {
+        "description": "one joint", "source": "test", "inertia_source": "test",
+        "dh": {"d": [0.1], "a": [0.2], "alpha": [0.5]},
+        "mass_kg": [2.0], "com_m": [[0.1, 0.0, 0.0]],
+        "inertia_kg_m2": [[0.01, 0.02, 0.02, 0.0, 0.0, 0.0]],
+        "joint_limits_rad": [[-3.0, 3.0]], "max_velocity_rad_s": [3.0],
+        "max_payload_kg": 1.0}}}"#;
+
     #[test]
     fn reads_every_field_of_an_entry() -> Result<(), Error> {
         let (joints, links) = robot_chain(ONE_JOINT, "arm")?;
@@ -472,6 +501,46 @@ mod tests {
         );
         let robot = ur_e_series("ur10e", RigidBody::NONE)?;
         assert_eq!(robot.name(), Some("ur10e"));
+        Ok(())
+    }
+
+    #[test]
+    fn every_embedded_entry_states_its_control_period() -> Result<(), Error> {
+        // The makers' specifications: the e-Series controller runs at 500 Hz, the CB-series
+        // at 125 Hz.
+        for entry in ur_e_series_entries()? {
+            let expected = if entry.name.ends_with('e') || entry.name == "ur20" {
+                0.002
+            } else {
+                0.008
+            };
+            assert_eq!(entry.control_period_s, Some(expected), "{}", entry.name);
+        }
+        Ok(())
+    }
+
+    #[test]
+    fn the_control_period_is_optional_but_must_be_a_positive_time() -> Result<(), Error> {
+        assert_eq!(robot_entry(ONE_ENTRY, "arm")?.control_period_s, None);
+        let stated = ONE_ENTRY.replace(
+            r#""max_payload_kg": 1.0"#,
+            r#""max_payload_kg": 1.0, "control_period_s": 0.001"#,
+        );
+        assert_eq!(robot_entry(&stated, "arm")?.control_period_s, Some(0.001));
+        for bad in ["0", "-0.002", "\"fast\"", "[0.002]"] {
+            let json = ONE_ENTRY.replace(
+                r#""max_payload_kg": 1.0"#,
+                &format!(r#""max_payload_kg": 1.0, "control_period_s": {bad}"#),
+            );
+            let msg = match robot_entry(&json, "arm") {
+                Ok(e) => format!("accepted as {:?}", e.control_period_s),
+                Err(e) => e.to_string(),
+            };
+            assert!(
+                msg.contains("arm: control_period_s must be"),
+                "{bad}: {msg}"
+            );
+        }
         Ok(())
     }
 
