@@ -497,7 +497,8 @@ ROWS: tuple[Row, ...] = (
         (
             ".venv/bin/tvist twin-server --payload-kg 5 --payload-com 0 0 0.05 &",
             '.venv/bin/python -c "import numpy as np; from tvist.experiments.motions import '
-            "motion_by_name; np.savetxt('q1-q2.csv', motion_by_name('Q1->Q2').reference(0.0).q, "
+            "motion_by_name; from tvist.robots import params; np.savetxt('q1-q2.csv', "
+            "motion_by_name('Q1->Q2').reference(0.0, params('ur5e').control_period_s).q, "
             "delimiter=',')\"",
             "for n in 1 2 3; do .venv/bin/tvist run q1-q2.csv --robot-ip 127.0.0.1 --unshaped "
             f"--log {LIVE}/unshaped-$n.csv; done",

@@ -7,6 +7,7 @@ import importlib.util
 import shlex
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from tvist.cli import build_parser
@@ -53,3 +54,21 @@ def test_every_readme_command_parses_and_a_shaped_move_comes_first():
     first_shaped = tool._first_shaped_run(commands)
     campaign = next(i for i, c in enumerate(commands) if c.startswith("tvist campaign"))
     assert "--paper-map" in commands[first_shaped] and first_shaped < campaign
+
+
+def test_the_quick_starts_python_lines_run(tmp_path):
+    """The ``python -c`` lines (the move files the runs read) run as written: a change of an
+    API they call fails here, not in a newcomer's first minutes."""
+    import subprocess
+    import sys
+
+    commands = _tool().quick_start_commands((ROOT / "README.md").read_text())
+    python_lines = [shlex.split(c)[1:] for c in commands if c.startswith("python -c ")]
+    assert python_lines
+    for argv in python_lines:
+        done = subprocess.run(
+            [sys.executable, *argv], cwd=tmp_path, capture_output=True, text=True, timeout=120
+        )
+        assert done.returncode == 0, done.stderr
+    move = np.loadtxt(tmp_path / "q1-q2.csv", delimiter=",")
+    assert move.ndim == 2 and move.shape[1] == 6 and len(move) > 100

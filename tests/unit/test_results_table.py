@@ -137,6 +137,7 @@ def _method_run(key: str, reduction: float, delay_s: float, settle_s: float = 2.
     from tvist.experiments.experiment import MethodRun
     from tvist.experiments.method_row import Method
     from tvist.experiments.settle import CRITERIA, SettleTimes
+    from tvist.robots import params
 
     return MethodRun(
         method=Method(key, key, build=None),
@@ -148,6 +149,7 @@ def _method_run(key: str, reduction: float, delay_s: float, settle_s: float = 2.
         reduction_percent=reduction,
         peak_jerk_rad_s3=50.0,
         spectrum=EnergySpectrum(np.zeros(2), np.zeros(2)),
+        dt_s=params("ur5e").control_period_s,
         settle=SettleTimes(move_s=1.5, times_s={c.key: settle_s for c in CRITERIA}, record_s=3.0),
     )
 

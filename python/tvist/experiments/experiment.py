@@ -125,6 +125,8 @@ class MethodRun:
         Largest third difference of the reference over all joints, rad/s³.
     spectrum
         Energy spectrum (eq. 56) of the acceleration after the stop.
+    dt_s
+        Sample period of ``q`` and ``psi``, s (the arm's control period).
     path_deviation_m
         Largest distance of the reference's flange path from the planned one, m
         (:func:`tvist.analysis.path_deviation`).
