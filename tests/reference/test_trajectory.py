@@ -328,7 +328,9 @@ def test_check_uniform_time():
         check_uniform_time(dropped)
     backwards = t.copy()
     backwards[120] = backwards[119]
-    with pytest.raises(ValueError, match="not increasing at row 120"):
+    # The stamps are printed as numbers, as the user's file has them (not np.float64(...)).
+    stamp = f"{float(backwards[120])!r}".replace(".", r"\.")
+    with pytest.raises(ValueError, match=rf"not increasing at row 120: t_s\[120\] = {stamp} <="):
         check_uniform_time(backwards)
     with_nan = t.copy()
     with_nan[3] = np.nan

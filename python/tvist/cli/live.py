@@ -447,7 +447,7 @@ def add_run_command(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser(
         "run",
-        help="run a joint trajectory CSV on a UR with servoJ at 500 Hz, shaped live",
+        help="run a joint trajectory CSV on a UR with servoJ every control period, shaped live",
         description="Move to the CSV's first row with moveJ (0.5 rad/s, unshaped), then "
         "stream the rows with servoJ, shaped live by --map/--paper-map/--modes. A file "
         "written by 'tvist shape' is shaped already: run it with --unshaped. Frequencies "
@@ -511,7 +511,10 @@ def add_record_command(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--robot-ip", required=True, help="robot (or twin server) address")
     p.add_argument("--out", required=True, help="CSV to write (ur_rtde's format)")
     p.add_argument(
-        "--frequency", type=float, default=500.0, help="RTDE output rate, Hz (default 500)"
+        "--frequency",
+        type=float,
+        default=500.0,
+        help="RTDE output rate, Hz (default 500, the e-Series' rate; CB-series: 125)",
     )
     p.add_argument("--duration", type=float, default=None, help="stop after this many s")
     p.set_defaults(func=_cmd_record)

@@ -48,9 +48,8 @@ __all__ = [
     "saturated_samples",
 ]
 
-#: Fewest samples a local fit accepts at 500 Hz (1 s; the paper logs about 8 s).
-MIN_SAMPLES = 500
-#: Shortest log a local fit accepts, s (at any rate: 125 samples at 125 Hz).
+#: Shortest log a local fit accepts, s, at any rate (500 samples at 500 Hz, 125 at 125 Hz;
+#: never fewer than 100: :func:`min_samples_for`); the paper logs about 8 s.
 MIN_DURATION_S = 1.0
 #: The searched band ends at this fraction of the sampling rate (0.8 of Nyquist).
 NYQUIST_FRACTION = 0.4
@@ -428,7 +427,7 @@ def fit_local(
     Raises
     ------
     ValueError
-        Shapes differ, non-finite values, fewer than :data:`MIN_SAMPLES` samples, no
+        Shapes differ, non-finite values, fewer samples than :func:`min_samples_for` the rate, no
         excitation, or a band that the sampling rate cannot resolve.
     """
     opts = options or FitOptions()

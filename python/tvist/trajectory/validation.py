@@ -168,8 +168,8 @@ def check_time_stamps(t_s: ArrayLike) -> np.ndarray:
     if not_increasing.size:
         row = not_increasing[0] + 1
         raise ValueError(
-            f"t_s is not increasing at row {row}: t_s[{row}] = {t[row]!r} <= "
-            f"t_s[{row - 1}] = {t[row - 1]!r}"
+            f"t_s is not increasing at row {row}: t_s[{row}] = {float(t[row])!r} <= "
+            f"t_s[{row - 1}] = {float(t[row - 1])!r}"
         )
     return t
 
