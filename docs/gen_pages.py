@@ -9,6 +9,9 @@ an earlier run, under its own heading, with the command that produced it.)
 - results/model.md: the robot model's inertias and the paper map's modes at the test poses.
 - results/{demo,flexible-payload,pick-place}.md: the report.md of each experiment in out/,
   with its figures; without one, how to produce it.
+- results/identification.md: the full twin campaign's agreement with the true modes and the
+  map forms' cross-validation (out/campaign_full.jsonl, out/campaign_full_cv.json).
+- results/arms.md: `tvist demo --robot fr3` / `iiwa14`'s tables (out/demo-ARM/).
 - benchmarks.md: the output `make bench` saved in out/bench/; without it, how to produce it.
 - quickstart.md: what the README's quick start printed and how long each step took, as
   `make quick-start` (tools/quick_start.py) recorded it in out/quick-start/run.json.
@@ -57,6 +60,12 @@ def missing(what: str, command: str) -> str:
         f"    This part of the page is made from {what}, which this checkout does not have.\n"
         f"    Run `{command}` and then `make docs` to fill it in.\n"
     )
+
+
+def _written(path: Path) -> str:
+    """Which output a generated part comes from, and when it was written."""
+    written = datetime.fromtimestamp(path.stat().st_mtime, tz=timezone.utc)
+    return f"`{path.relative_to(ROOT)}`, written {written:%Y-%m-%d %H:%M} UTC"
 
 
 def cli_reference() -> str:
@@ -140,13 +149,89 @@ def bench_outputs() -> str:
         if not path.is_file():
             parts.append(missing(f"`out/bench/{name}`", "make bench"))
             continue
-        written = datetime.fromtimestamp(path.stat().st_mtime, tz=timezone.utc)
-        parts.append(f"\n*`out/bench/{name}`, written {written:%Y-%m-%d %H:%M} UTC.*\n\n")
+        parts.append(f"\n*{_written(path)}.*\n\n")
         text = path.read_text(encoding="utf-8").strip()
         if is_markdown:  # "#10 / #14 ..." is a line of text, not a heading
             parts.append(re.sub(r"^#", r"\\#", text, flags=re.MULTILINE) + "\n")
         else:
             parts.append(f"```text\n{text}\n```\n")
+    return "".join(parts)
+
+
+#: The full campaign on the twin and its cross-validation (README results table, rows
+#: "campaign" and "cross-validation").
+CAMPAIGN = OUT / "campaign_full.jsonl"
+CAMPAIGN_COMMAND = "tvist campaign --sim --workers 2 --out out/campaign_full.jsonl"
+CROSS_VALIDATION = OUT / "campaign_full_cv.json"
+CROSS_VALIDATION_COMMAND = (
+    "python -m tvist.cli.modal_fit out/campaign_full.jsonl --folds 5 "
+    "--out out/campaign_full_cv.json"
+)
+
+
+def full_campaign() -> str:
+    """The full twin campaign's identifications against the true modes, and the two map
+    forms' cross-validation, as the campaign's and the fit's outputs hold them."""
+    import json
+
+    from tvist.ident.modal_fit.cross_validation import format_comparison
+    from tvist.ident.results_store import load_results
+    from tvist.ident.true_mode_agreement import TOLERANCE, agreement
+
+    parts = []
+    if not CAMPAIGN.is_file():
+        parts.append(missing(f"`{CAMPAIGN.relative_to(ROOT)}`", CAMPAIGN_COMMAND))
+    else:
+        records = load_results(CAMPAIGN)
+        payloads = sorted({r["payload_kg"] for r in records})
+        rows = [
+            f"\n*Generated from {_written(CAMPAIGN)}: {len(records)} poses, payloads "
+            + ", ".join(f"{p:g}" for p in payloads)
+            + " kg.*\n",
+            f"\n| joint | ω_n within {100 * TOLERANCE:g} % of the true mode | confident "
+            "(not flagged) | confident and not within |",
+            "|---|---|---|---|",
+        ]
+        for name, joint in agreement(records).items():
+            share = 100 * joint.within / joint.compared
+            rows.append(
+                f"| {name} | {joint.within}/{joint.compared} ({share:.0f} %) | "
+                f"{joint.confident} | {joint.confident_outside} |"
+            )
+        parts.append("\n".join(rows) + "\n")
+    if not CROSS_VALIDATION.is_file():
+        parts.append(missing(f"`{CROSS_VALIDATION.relative_to(ROOT)}`", CROSS_VALIDATION_COMMAND))
+    else:
+        cv = json.loads(CROSS_VALIDATION.read_text(encoding="utf-8"))
+        parts.append(
+            f"\n*Cross-validation, generated from {_written(CROSS_VALIDATION)}: "
+            f"{cv['n_poses']} poses, {cv['folds']} folds.*\n\n{format_comparison(cv)}\n"
+        )
+    return "".join(parts)
+
+
+#: The arms of `tvist demo --robot NAME` (docs/results/arms.md).
+ARMS = ("fr3", "iiwa14")
+
+
+def arm_demos() -> str:
+    """`tvist demo --robot NAME`'s table and CPU times, per arm, as it wrote them."""
+    import json
+
+    parts = []
+    for arm in ARMS:
+        folder = OUT / f"demo-{arm}"
+        table, result = folder / "table.md", folder / f"{arm}-nominal" / "result.json"
+        parts.append(f"\n### {arm}\n")
+        if not (table.is_file() and result.is_file()):
+            parts.append(missing(f"`out/demo-{arm}/`", f"tvist demo --robot {arm}"))
+            continue
+        cpu = json.loads(result.read_text(encoding="utf-8")).get("cpu_time_s") or {}
+        cpu_text = ", ".join(f"{k} {v:.0f}" for k, v in cpu.items())
+        parts.append(
+            f"\n*Generated from {_written(table)}.*\n\n"
+            f"{table.read_text(encoding='utf-8').strip()}\n\nCPU time, s: {cpu_text}.\n"
+        )
     return "".join(parts)
 
 
@@ -186,6 +271,10 @@ with mkdocs_gen_files.open("results/zero-delay.md", "a") as f:
 for page in EXPERIMENTS:
     with mkdocs_gen_files.open(f"results/{page}.md", "a") as f:
         f.write(experiment_report(page))
+with mkdocs_gen_files.open("results/identification.md", "a") as f:
+    f.write(full_campaign())
+with mkdocs_gen_files.open("results/arms.md", "a") as f:
+    f.write(arm_demos())
 with mkdocs_gen_files.open("benchmarks.md", "a") as f:
     f.write(bench_outputs())
 with mkdocs_gen_files.open("quickstart.md", "a") as f:

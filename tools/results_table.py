@@ -484,7 +484,7 @@ ROWS: tuple[Row, ...] = (
         "{iiwa14_q3_q1} % less; map within {fr3_rms} % (FR3) and {iiwa14_rms} % (iiwa14) RMS of "
         "the twins' true modes",
         "`tvist demo --robot fr3` (`--robot iiwa14`)",
-        "[arms from URDF](docs/guides/urdf.md#demo-on-the-twins)",
+        "[arms from URDF](docs/results/arms.md)",
         (".venv/bin/tvist demo --robot fr3", ".venv/bin/tvist demo --robot iiwa14"),
         arm_figures,
     ),
