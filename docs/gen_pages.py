@@ -12,6 +12,7 @@ an earlier run, under its own heading, with the command that produced it.)
 - results/identification.md: the full twin campaign's agreement with the true modes and the
   map forms' cross-validation (out/campaign_full.jsonl, out/campaign_full_cv.json).
 - results/arms.md: `tvist demo --robot fr3` / `iiwa14`'s tables (out/demo-ARM/).
+- guides/twin-server.md: the residual vibration of the live runs logged in out/live/.
 - benchmarks.md: the output `make bench` saved in out/bench/; without it, how to produce it.
 - quickstart.md: what the README's quick start printed and how long each step took, as
   `make quick-start` (tools/quick_start.py) recorded it in out/quick-start/run.json.
@@ -235,6 +236,29 @@ def arm_demos() -> str:
     return "".join(parts)
 
 
+#: The live runs of the README's live row: `tvist run ... --log out/live/STEM-N.csv`.
+LIVE = OUT / "live"
+LIVE_RUNS = {"unshaped": "unshaped", "paper-map": "the paper's map"}
+
+
+def live_runs() -> str:
+    """Residual vibration of each logged live run against the twin server."""
+    from tvist.live import residual_vibration
+
+    rows = ["| run | log | residual vibration, m/s² |", "|---|---|---|"]
+    written = []
+    for stem, label in LIVE_RUNS.items():
+        for log in sorted(LIVE.glob(f"{stem}-*.csv")):
+            rows.append(f"| {label} | `{log.name}` | {residual_vibration(log):.2e} |")
+            written.append(log)
+    if not written:
+        return missing("`out/live/*.csv`", "the commands above")
+    newest = max(written, key=lambda p: p.stat().st_mtime)
+    return f"\n*Generated from the logs in `out/live/` (newest: {_written(newest)}).*\n\n" + (
+        "\n".join(rows) + "\n"
+    )
+
+
 #: Lines of each quick-start step's output the page shows (the last ones: the results).
 QUICK_START_LINES = 6
 
@@ -275,6 +299,8 @@ with mkdocs_gen_files.open("results/identification.md", "a") as f:
     f.write(full_campaign())
 with mkdocs_gen_files.open("results/arms.md", "a") as f:
     f.write(arm_demos())
+with mkdocs_gen_files.open("guides/twin-server.md", "a") as f:
+    f.write(live_runs())
 with mkdocs_gen_files.open("benchmarks.md", "a") as f:
     f.write(bench_outputs())
 with mkdocs_gen_files.open("quickstart.md", "a") as f:

@@ -459,7 +459,7 @@ ROWS: tuple[Row, ...] = (
         "identified ω_n within 3 % of the twin's true modes, full {n_poses}-pose campaign",
         "shoulder {shoulder_within}/{shoulder_compared}, base {base_within}/{base_compared} poses",
         f"`tvist campaign --sim --workers 2 --out {CAMPAIGN}`",
-        "[identification](docs/results/identification.md)",
+        "[identification](docs/results/identification.md#full-campaign-on-the-twin)",
         (f".venv/bin/tvist campaign --sim --workers 2 --out {CAMPAIGN}",),
         campaign_figures,
     ),
@@ -468,7 +468,7 @@ ROWS: tuple[Row, ...] = (
         "map frequency error on held-out poses, base mode, RMS / max",
         "modal map {modal_rms} / {modal_max} %, published form {published_rms} / {published_max} %",
         f"`python -m tvist.cli.modal_fit {CAMPAIGN} --folds {FOLDS} --out {CROSS_VALIDATION}`",
-        "[studies](docs/results/studies.md)",
+        "[identification](docs/results/identification.md#full-campaign-on-the-twin)",
         (
             f".venv/bin/tvist campaign --sim --workers 2 --out {CAMPAIGN}",
             f".venv/bin/python -m tvist.cli.modal_fit {CAMPAIGN} --folds {FOLDS} "
