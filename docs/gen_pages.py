@@ -286,22 +286,18 @@ def quick_start_run() -> str:
     return "".join(parts)
 
 
-with mkdocs_gen_files.open("reference/cli.md", "a") as f:
-    f.write(cli_reference())
-with mkdocs_gen_files.open("results/model.md", "a") as f:
-    f.write(model_inertias())
-with mkdocs_gen_files.open("results/zero-delay.md", "a") as f:
-    f.write(zero_delay_tables())
-for page in EXPERIMENTS:
-    with mkdocs_gen_files.open(f"results/{page}.md", "a") as f:
-        f.write(experiment_report(page))
-with mkdocs_gen_files.open("results/identification.md", "a") as f:
-    f.write(full_campaign())
-with mkdocs_gen_files.open("results/arms.md", "a") as f:
-    f.write(arm_demos())
-with mkdocs_gen_files.open("guides/twin-server.md", "a") as f:
-    f.write(live_runs())
-with mkdocs_gen_files.open("benchmarks.md", "a") as f:
-    f.write(bench_outputs())
-with mkdocs_gen_files.open("quickstart.md", "a") as f:
-    f.write(quick_start_run())
+#: Page -> what is appended to it (computed when the site builds).
+APPENDED = {
+    "reference/cli.md": cli_reference,
+    "results/model.md": model_inertias,
+    "results/zero-delay.md": zero_delay_tables,
+    **{f"results/{page}.md": (lambda page=page: experiment_report(page)) for page in EXPERIMENTS},
+    "results/identification.md": full_campaign,
+    "results/arms.md": arm_demos,
+    "guides/twin-server.md": live_runs,
+    "benchmarks.md": bench_outputs,
+    "quickstart.md": quick_start_run,
+}
+for page, generate in APPENDED.items():
+    with mkdocs_gen_files.open(page, "a") as f:
+        f.write(generate())
