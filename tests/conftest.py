@@ -4,6 +4,7 @@ The helper modules in ``tests/support`` are importable by name from every tier t
 ``pythonpath`` option in pyproject.toml (set before this file is loaded)."""
 
 import faulthandler
+import signal
 import sys
 from pathlib import Path
 
@@ -98,6 +99,14 @@ def _stderr_fd(config: pytest.Config) -> int:
         return config.stash[fault_handler_stderr_fd_key]
     except (ImportError, KeyError):  # another pytest, or -p no:faulthandler
         return sys.__stderr__.fileno()
+
+
+# The Ctrl-C tests (``tvist run``, ``tvist record``) send their child processes SIGINT. A
+# process started with SIGINT ignored (a shell's background job: ``make test &``) passes the
+# ignoring on to its children, and Python then installs no KeyboardInterrupt handler in them:
+# they would never see the Ctrl-C. A handler here is reset to the default in each child.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.hookimpl(hookwrapper=True)

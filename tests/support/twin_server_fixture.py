@@ -144,7 +144,8 @@ def stop_process(
         if stream is not None:
             stream.close()
     if hung:
-        pytest.fail(f"{what} did not exit within {timeout_s:g} s of signal {sig}; killed")
+        name = signal.Signals(sig).name
+        pytest.fail(f"{what} did not exit within {timeout_s:g} s of {name}; killed")
 
 
 #: How long a line a test waits for from a child process's output may take (s).
