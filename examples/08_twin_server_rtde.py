@@ -11,8 +11,10 @@ Needs ur-rtde (``pip install 'tvist[robot]'``).
 from __future__ import annotations
 
 import os
+import select
 import subprocess
 import sys
+import threading
 import time
 
 import numpy as np
@@ -31,12 +33,16 @@ server = subprocess.Popen(
     text=True,
 )
 try:
-    for line in server.stdout:  # wait for "twin server ready on ..."
-        if "ready" in line:
-            print(line.strip())
-            break
-    else:
-        sys.exit(f"the twin server stopped before it was ready (exit code {server.wait()})")
+    deadline = time.monotonic() + 60.0  # ~2 s on an idle machine
+    line = ""
+    while "ready" not in line:  # wait for "twin server ready on ..."
+        waiting = select.select([server.stdout], [], [], max(deadline - time.monotonic(), 0.0))
+        line = server.stdout.readline() if waiting[0] else ""
+        if not line:  # it exited, or stayed silent for 60 s
+            sys.exit("the twin server did not start")
+    print(line.strip())
+    # Keep reading its log, so that the server never blocks on a full pipe.
+    threading.Thread(target=server.stdout.read, daemon=True).start()
 
     receive = rtde_receive.RTDEReceiveInterface(HOST)
     control = rtde_control.RTDEControlInterface(HOST)  # uploads ur_rtde's control script
@@ -57,4 +63,8 @@ try:
     control.disconnect()
 finally:
     server.terminate()
-    server.wait(timeout=10)
+    try:
+        server.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        server.kill()
+        server.wait()

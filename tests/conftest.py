@@ -3,6 +3,9 @@
 The helper modules in ``tests/support`` are importable by name from every tier through the
 ``pythonpath`` option in pyproject.toml (set before this file is loaded)."""
 
+import faulthandler
+import signal
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +17,7 @@ from cpp_programs import built_programs
 
 __all__ = [
     "pytest_collection_modifyitems",
+    "pytest_runtest_protocol",
     "pytest_make_collect_report",
     "pytest_runtest_makereport",
 ]
@@ -75,6 +79,47 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
             item.add_marker(getattr(pytest.mark, tier))
         if realtime or _is_network(node_id):
             item.add_marker(pytest.mark.network)
+
+
+#: A realtime test (set-up and tear-down included) still running after this long ends its
+#: process, with every thread's stack on stderr (s). pytest-timeout (1200 s, pyproject.toml)
+#: fails it first if it can: its timer is a Python thread, which never runs while a C++ call
+#: holds the interpreter, and ur_rtde's constructors do while they wait for the server (the
+#: first data package: no time limit). faulthandler's watchdog is a C thread; under xdist the
+#: controller reports the test whose worker ended ("worker crashed while running ...").
+HANG_EXIT_S = 1500
+
+
+def _stderr_fd(config: pytest.Config) -> int:
+    """The terminal's stderr for faulthandler (the one pytest's own faulthandler plugin
+    writes to), not the per-test capture, which is lost when the process ends."""
+    try:
+        from _pytest.faulthandler import fault_handler_stderr_fd_key
+
+        return config.stash[fault_handler_stderr_fd_key]
+    except (ImportError, KeyError):  # another pytest, or -p no:faulthandler
+        return sys.__stderr__.fileno()
+
+
+# The Ctrl-C tests (``tvist run``, ``tvist record``) send their child processes SIGINT. A
+# process started with SIGINT ignored (a shell's background job: ``make test &``) passes the
+# ignoring on to its children, and Python then installs no KeyboardInterrupt handler in them:
+# they would never see the Ctrl-C. A handler here is reset to the default in each child.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None):
+    """Arm :data:`HANG_EXIT_S` around each realtime test."""
+    armed = item.get_closest_marker("realtime") is not None
+    if armed:
+        faulthandler.dump_traceback_later(HANG_EXIT_S, exit=True, file=_stderr_fd(item.config))
+    try:
+        yield
+    finally:
+        if armed:
+            faulthandler.cancel_dump_traceback_later()
 
 
 @pytest.fixture(scope="session")

@@ -59,6 +59,9 @@ APPROACH_ACCEL_RAD_S2 = 0.5
 REALTIME_PRIORITY = 10
 #: The shaped reference has settled when it is this close to the end pose (rad).
 SETTLED_TOL_RAD = 1e-9
+#: How long the RTDE recorder waits for the controller (s): to connect, for a reply, for
+#: the next package of a started stream (500 Hz: 2 ms apart).
+REPLY_TIMEOUT_S = 5.0
 
 
 def read_controller_payload(host: str, port: int = 30004):
@@ -77,6 +80,33 @@ def read_controller_payload(host: str, port: int = 30004):
     with RtdeRecorder(host, None, PAYLOAD_FIELDS, frequency_hz=10.0, port=port) as recorder:
         values = recorder.latest
     return Payload(float(values["payload"]), tuple(float(v) for v in values["payload_cog"]))
+
+
+def control_interface(robot_ip: str):
+    """ur_rtde's ``RTDEControlInterface`` at ``robot_ip``, once the controller has been seen
+    to send RTDE data.
+
+    The constructor waits for its first data package with no time limit, and holds the
+    interpreter meanwhile (no Ctrl-C, no other thread): a controller that accepts the
+    connection but sends nothing would hang the caller for ever. A short recording first
+    (:class:`RtdeRecorder`, :data:`REPLY_TIMEOUT_S`) turns that into an error.
+
+    Raises
+    ------
+    ConnectionError
+        No RTDE data from ``robot_ip``, or ur_rtde could not connect (no free control
+        interface: another client holds the registers).
+    """
+    rtde_control = _rtde_control()
+    try:
+        with RtdeRecorder(robot_ip, None, ("timestamp",), frequency_hz=10.0):
+            pass
+    except (OSError, ValueError) as exc:
+        raise ConnectionError(f"{robot_ip} sends no RTDE data: {exc}") from exc
+    try:
+        return rtde_control.RTDEControlInterface(robot_ip)
+    except RuntimeError as exc:  # ur_rtde reports a failed connection as RuntimeError
+        raise ConnectionError(f"cannot take control of {robot_ip}: {exc}") from exc
 
 
 def _rtde_control():
@@ -139,7 +169,7 @@ class RtdeRecorder:
         self.n_samples = 0
         self._new_sample = threading.Condition()
         self._stop = threading.Event()
-        self._sock = socket.create_connection((host, port), timeout=5.0)
+        self._sock = socket.create_connection((host, port), timeout=REPLY_TIMEOUT_S)
         self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self._buffer = b""
         reply = self._request(rtde.REQUEST_PROTOCOL_VERSION, struct.pack(">H", 2))
@@ -178,8 +208,8 @@ class RtdeRecorder:
         self._first = threading.Event()
         self._thread = threading.Thread(target=self._run, name="rtde-recorder", daemon=True)
         self._thread.start()
-        if not self._first.wait(5.0):
-            raise OSError(f"{host}: no RTDE data within 5 s")
+        if not self._first.wait(REPLY_TIMEOUT_S):
+            raise OSError(f"{host}: no RTDE data within {REPLY_TIMEOUT_S:g} s")
 
     def _read_package(self) -> tuple[int, bytes]:
         header = self._rtde.HEADER
@@ -198,11 +228,22 @@ class RtdeRecorder:
             self._buffer += chunk
 
     def _request(self, kind: int, payload: bytes) -> bytes:
+        """Send a package and return the payload of the controller's reply of the same type
+        (other packages on the way skipped).
+
+        Raises
+        ------
+        OSError
+            If the reply has not come within :data:`REPLY_TIMEOUT_S` (each read of the socket
+            also gives up after that long without any data).
+        """
         self._sock.sendall(self._rtde.package(kind, payload))
-        while True:
+        deadline = time.monotonic() + REPLY_TIMEOUT_S
+        while time.monotonic() < deadline:
             got, reply = self._read_package()
             if got == kind:
                 return reply
+        raise OSError(f"no reply to RTDE request {kind} within {REPLY_TIMEOUT_S:g} s")
 
     def wait_newer(self, n_samples: int, timeout_s: float = 1.0) -> int:
         """Block until more than ``n_samples`` packages have arrived; the new count.
@@ -257,6 +298,9 @@ class RtdeRecorder:
                     self.n_samples += 1
                     self._new_sample.notify_all()
                 self._first.set()
+        except TimeoutError:
+            if not self._stop.is_set():
+                log.error("RTDE recording ended: no data for %g s", REPLY_TIMEOUT_S)
         except OSError:
             if not self._stop.is_set():
                 log.error("RTDE recording ended: the connection was lost")
@@ -359,17 +403,17 @@ def run_shaped_move(
     q_ref = np.asarray(Q, dtype=float)
     if q_ref.ndim != 2 or q_ref.shape[0] < 2 or not np.all(np.isfinite(q_ref)):
         raise ValueError("Q must be a finite array (n_samples >= 2, n_dof)")
-    rtde_control = _rtde_control()
+    _rtde_control()  # ImportError before anything else if ur_rtde is missing
     path = Path(log_path)
     # Real-time from before ur_rtde starts its receive thread, which inherits the policy: at
     # normal priority that thread could be kept off the CPU while the real-time servo loop
     # waits for the state it holds (servoJ reads it), and the loop would miss ticks.
     previous = _realtime_priority()
     try:
-        control = rtde_control.RTDEControlInterface(robot_ip)
-    except RuntimeError as exc:  # ur_rtde reports a failed connection as RuntimeError
+        control = control_interface(robot_ip)
+    except ConnectionError:
         _restore_priority(previous)
-        raise ConnectionError(f"cannot take control of {robot_ip}: {exc}") from exc
+        raise
     try:
         if not control.moveJ(list(q_ref[0]), APPROACH_SPEED_RAD_S, APPROACH_ACCEL_RAD_S2):
             raise RuntimeError("the robot refused the approach moveJ to the first pose")

@@ -24,7 +24,14 @@ import pytest
 
 from tvist.experiments.motions import DT_S, motion_by_name
 from tvist.live import residual_vibration
-from twin_server_fixture import HOST, PAYLOAD_COM_M, PAYLOAD_KG, twin_server
+from twin_server_fixture import (
+    HOST,
+    PAYLOAD_COM_M,
+    PAYLOAD_KG,
+    read_line,
+    stop_process,
+    twin_server,
+)
 
 pytest.importorskip("rtde_receive")
 
@@ -60,7 +67,9 @@ def _run_while_recording(program: str, log) -> None:
         text=True,
     )
     try:
-        assert record.stdout.readline().startswith("recording"), "tvist record did not start"
+        assert read_line(record, "tvist record").startswith("recording"), (
+            "tvist record did not start"
+        )
         with socket.create_connection((HOST, SCRIPT_PORT), timeout=10) as sock:
             sock.sendall(program.encode())
         for state in ("PLAYING", "STOPPED"):  # it started, then it ended
@@ -72,9 +81,7 @@ def _run_while_recording(program: str, log) -> None:
                 pytest.fail(f"{log.name}: the program never reached {state}")
         time.sleep(0.5)  # the last ringing
     finally:
-        record.send_signal(signal.SIGINT)
-        record.wait(timeout=60)
-        record.stdout.close()
+        stop_process(record, signal.SIGINT, "tvist record")
     assert record.returncode == 0
 
 

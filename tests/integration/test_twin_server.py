@@ -8,6 +8,7 @@ each test leaves no control script running. Expected values come from a separate
 from __future__ import annotations
 
 import re
+import signal
 import socket
 import struct
 import subprocess
@@ -20,7 +21,15 @@ import pytest
 from tvist.robots import params
 from tvist.sim import Twin
 from tvist.trajectory import PAPER_POSES
-from twin_server_fixture import HOST, PAYLOAD_COM_M, PAYLOAD_KG, twin_server
+from twin_server_fixture import (
+    EXIT_TIMEOUT_S,
+    HOST,
+    PAYLOAD_COM_M,
+    PAYLOAD_KG,
+    read_line,
+    stop_process,
+    twin_server,
+)
 
 #: The twin's control period: the UR5e's (its robot data), s.
 UR5E_DT_S = params("ur5e").control_period_s
@@ -202,11 +211,9 @@ def test_client_disconnect_mid_stream_holds(server) -> None:
         text=True,
     )
     try:
-        assert proc.stdout.readline().strip() == "streaming"
-        proc.kill()
+        assert read_line(proc, "the streaming client").strip() == "streaming"
     finally:
-        proc.wait()
-        proc.stdout.close()
+        stop_process(proc, signal.SIGKILL, "the streaming client")
     expected = Q1.copy()
     expected[5] += 250 * 0.0004
     receive = rtde_receive.RTDEReceiveInterface(HOST, 500.0, ["target_q", "target_qd"])
@@ -318,9 +325,8 @@ def test_run_shaped_move_cuts_residual_vibration(server, twin, tmp_path) -> None
 def test_run_interrupted_stops_the_arm(server, tmp_path) -> None:
     """Ctrl-C during ``tvist run``: servoStop then stopScript; the program ends, the arm
     comes to rest and the command reports the interruption."""
-    import signal
-
     receive = rtde_receive.RTDEReceiveInterface(HOST, 500.0, ["target_q", "target_qd"])
+    proc = None
     try:
         start = np.array(receive.getTargetQ())
         blend = np.clip(np.arange(0.0, 3.0, 0.002) / 3.0, 0.0, 1.0)
@@ -338,13 +344,19 @@ def test_run_interrupted_stops_the_arm(server, tmp_path) -> None:
             time.sleep(0.01)
         assert abs(receive.getTargetQd()[0]) >= 0.05, "the streamed move never started"
         proc.send_signal(signal.SIGINT)
-        out, _ = proc.communicate(timeout=60)
+        try:
+            out, _ = proc.communicate(timeout=EXIT_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            stop_process(proc, signal.SIGKILL, "tvist run")
+            pytest.fail(f"tvist run did not exit within {EXIT_TIMEOUT_S:g} s of Ctrl-C")
         assert proc.returncode == 130 and "interrupted" in out
         time.sleep(0.5)
         assert np.all(np.array(receive.getTargetQd()) == 0.0)
         stopped_at = np.array(receive.getTargetQ())[0]
         assert move[-1, 0] < stopped_at < start[0]  # stopped on the way
     finally:
+        if proc is not None:  # a failure above leaves it streaming: stop it as a user would
+            stop_process(proc, signal.SIGINT, "tvist run")
         receive.disconnect()
     with socket.create_connection((HOST, 29999), timeout=5) as sock:
         reader = sock.makefile("rb")
@@ -356,8 +368,6 @@ def test_run_interrupted_stops_the_arm(server, tmp_path) -> None:
 @pytest.mark.slow
 def test_record_keeps_every_sample_until_interrupted(server, tmp_path) -> None:
     """``tvist record`` writes every 2 ms sample, a moveJ included, and stops on Ctrl-C."""
-    import signal
-
     from tvist.ident import read_rtde_csv
 
     out = tmp_path / "log.csv"
@@ -371,7 +381,7 @@ def test_record_keeps_every_sample_until_interrupted(server, tmp_path) -> None:
     start = receive.getTargetQ()
     receive.disconnect()
     try:
-        assert proc.stdout.readline().startswith("recording")
+        assert read_line(proc, "tvist record").startswith("recording")
         time.sleep(0.3)
         q = list(start)
         q[0] -= 0.2
@@ -380,9 +390,7 @@ def test_record_keeps_every_sample_until_interrupted(server, tmp_path) -> None:
         time.sleep(0.3)
     finally:
         _end(control)
-        proc.send_signal(signal.SIGINT)
-        proc.wait(timeout=30)
-        proc.stdout.close()
+        stop_process(proc, signal.SIGINT, "tvist record")
     assert proc.returncode == 0
     record = read_rtde_csv(out)
     np.testing.assert_allclose(np.diff(record.t_s), UR5E_DT_S, atol=1e-9)

@@ -25,6 +25,7 @@ import pytest
 from tvist import robots
 from twin_server_fixture import (
     HOST,
+    REPLY_TIMEOUT_S,
     Commander,
     RawRtde,
     Subscriber,
@@ -606,7 +607,10 @@ def test_a_reply_never_splits_a_data_package(server) -> None:
             time.sleep(0.02)
             client.send("V", struct.pack(">H", 2))
         replies = 0
+        deadline = time.monotonic() + REPLY_TIMEOUT_S  # data packages alone never end it
         while replies < 20:
+            if time.monotonic() > deadline:
+                pytest.fail(f"{replies} of 20 replies within {REPLY_TIMEOUT_S:g} s")
             kind, body = client.read()
             assert kind in (ord("U"), ord("V")), f"stream out of step: package type {kind}"
             if kind == ord("V"):

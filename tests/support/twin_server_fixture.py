@@ -13,13 +13,16 @@ from __future__ import annotations
 import contextlib
 import os
 import select
+import signal
 import socket
 import struct
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Iterator, Sequence
+from pathlib import Path
 
 import pytest
 
@@ -58,49 +61,106 @@ def check_ports_free() -> None:
                 )
 
 
+class ServerLog:
+    """The server's output so far, as a list of lines (read from its log file at each use).
+
+    The server writes to a file, not a pipe: a pipe drained by a thread of the test process
+    fills whenever ur_rtde holds the interpreter (its constructors do not release it while
+    they wait for the server), and a full pipe blocks the server's next log line inside its
+    tick: the server would stop, and ur_rtde would wait for it for ever."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+
+    def _lines(self) -> list[str]:
+        return self.path.read_text(errors="replace").splitlines(keepends=True)
+
+    def __len__(self) -> int:
+        return len(self._lines())
+
+    def __getitem__(self, index):
+        return self._lines()[index]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._lines())
+
+
 @contextlib.contextmanager
 def twin_server(*extra: str) -> Iterator[subprocess.Popen]:
-    """A running twin server (5 kg payload); stopped (and checked alive) afterwards."""
+    """A running twin server (5 kg payload); stopped (and checked alive) afterwards. Its
+    output is in ``proc.log_lines`` (:class:`ServerLog`)."""
     check_ports_free()
     args = [sys.executable, "-m", "tvist.urserver", "--host", HOST]
     args += ["--payload-kg", str(PAYLOAD_KG)]
     args += ["--payload-com", *(str(v) for v in PAYLOAD_COM_M), *extra]
-    proc = subprocess.Popen(
-        args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1
-    )
-    try:
-        deadline = time.monotonic() + STARTUP_TIMEOUT_S
-        line = ""
-        while time.monotonic() < deadline:
-            # Wait for output without blocking past the deadline (a hung server must fail).
-            ready, _, _ = select.select([proc.stdout], [], [], deadline - time.monotonic())
-            if not ready:
-                break
-            line = proc.stdout.readline()
-            if "twin server ready" in line or not line:
-                break
-        if "twin server ready" not in line:
+    with tempfile.TemporaryDirectory(prefix="twin-server-") as folder:
+        log_path = Path(folder) / "server.log"
+        with log_path.open("wb") as log_file:
+            proc = subprocess.Popen(args, stdout=log_file, stderr=subprocess.STDOUT)
+        proc.log_lines = ServerLog(log_path)
+        try:
+            _wait_ready(proc)
+            yield proc
+            assert proc.poll() is None, "the twin server died during the tests"
+        finally:
+            stop_process(proc, signal.SIGTERM, "the twin server")
+
+
+def _wait_ready(proc: subprocess.Popen) -> None:
+    """Wait (polls 20 ms apart, :data:`STARTUP_TIMEOUT_S` at most) for the server's ready
+    line; fail with its output if it exits or stays silent."""
+    for _ in range(int(STARTUP_TIMEOUT_S / 0.02)):
+        if any("twin server ready" in line for line in proc.log_lines):
+            return
+        if proc.poll() is not None:
+            break
+        time.sleep(0.02)
+    state = "exited" if proc.poll() is not None else f"not ready after {STARTUP_TIMEOUT_S:g} s"
+    stop_process(proc, signal.SIGKILL, "the twin server")
+    pytest.fail(f"the twin server did not start ({state}): {''.join(proc.log_lines)}")
+
+
+#: How long a process gets to exit after a signal before it is killed (s): the twin server
+#: and ``tvist record``/``tvist run`` exit within a second of SIGTERM/SIGINT on an idle
+#: machine (``tvist run`` stops the arm first: servoStop, stopScript).
+EXIT_TIMEOUT_S = 60.0
+
+
+def stop_process(
+    proc: subprocess.Popen, sig: int, what: str, timeout_s: float = EXIT_TIMEOUT_S
+) -> None:
+    """Send ``sig`` to ``proc`` (if it still runs) and wait for it to exit; if it does not
+    within ``timeout_s``, kill it and fail naming ``what``. Closes its pipes."""
+    hung = False
+    if proc.poll() is None:
+        proc.send_signal(sig)
+        try:
+            proc.wait(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            hung = True
             proc.kill()
-            out = proc.stdout.read()
-            pytest.fail(f"twin server did not start: {line}{out}")
-        # Keep draining the server's log so that it never blocks on a full pipe.
-        proc.log_lines = []
-        drain = threading.Thread(
-            target=lambda: proc.log_lines.extend(iter(proc.stdout.readline, "")), daemon=True
-        )
-        drain.start()
-        yield proc
-        assert proc.poll() is None, "the twin server died during the tests"
-    finally:
-        if proc.poll() is None:
-            proc.terminate()
-            try:
-                proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
-        if proc.stdout is not None:
-            proc.stdout.close()
+            proc.wait(timeout=timeout_s)  # SIGKILL cannot be ignored
+    for stream in (proc.stdin, proc.stdout, proc.stderr):
+        if stream is not None:
+            stream.close()
+    if hung:
+        name = signal.Signals(sig).name
+        pytest.fail(f"{what} did not exit within {timeout_s:g} s of {name}; killed")
+
+
+#: How long a line a test waits for from a child process's output may take (s).
+LINE_TIMEOUT_S = 60.0
+
+
+def read_line(proc: subprocess.Popen, what: str, timeout_s: float = LINE_TIMEOUT_S) -> str:
+    """The next line of ``proc``'s stdout (a text pipe the child writes whole lines to, each
+    flushed); fail naming ``what`` if none comes within ``timeout_s`` (the child is killed)."""
+    ready, _, _ = select.select([proc.stdout], [], [], timeout_s)
+    if not ready:
+        proc.kill()
+        proc.wait(timeout=timeout_s)
+        pytest.fail(f"no line from {what} within {timeout_s:g} s")
+    return proc.stdout.readline()
 
 
 # ----------------------------------------------------------------------------- raw clients
@@ -130,6 +190,11 @@ def upload_script(host: str = HOST, float_offset: int | str = 0, int_offset: int
     program = CONTROL_SCRIPT.format(float_offset=float_offset, int_offset=int_offset)
     with socket.create_connection((host, 30002), timeout=5) as sock:
         sock.sendall(program.encode())
+
+
+#: How long a raw client waits for a reply or a data package (s); each read of the socket
+#: gives up sooner (the socket's own time-out) if nothing at all arrives.
+REPLY_TIMEOUT_S = 30.0
 
 
 class RawRtde:
@@ -163,16 +228,19 @@ class RawRtde:
             data += chunk
         return data
 
-    def request(self, kind: str, payload: bytes = b"") -> bytes:
+    def request(self, kind: str, payload: bytes = b"", timeout_s: float = REPLY_TIMEOUT_S) -> bytes:
         """Send a package and return the payload of the reply of the same type (text
-        messages on the way are kept in :attr:`messages`, data packages skipped)."""
+        messages on the way are kept in :attr:`messages`, data packages skipped); fail if
+        it has not come within ``timeout_s`` (data packages alone keep every read short)."""
         self.send(kind, payload)
-        while True:
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
             got, body = self.read()
             if got == ord(kind):
                 return body
             if got == ord("M"):
                 self.messages.append(body)
+        pytest.fail(f"no reply of type {kind!r} from the server within {timeout_s:g} s")
 
     def version(self) -> None:
         assert self.request("V", struct.pack(">H", 2)) == b"\x01"
@@ -187,14 +255,20 @@ class RawRtde:
     def start(self) -> None:
         assert self.request("S") == b"\x01"
 
-    def data(self) -> bytes:
-        """The payload of the next data package."""
-        while True:
+    def data(self, timeout_s: float = REPLY_TIMEOUT_S) -> bytes:
+        """The payload of the next data package; fail if none comes within ``timeout_s``."""
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
             kind, body = self.read()
             if kind == ord("U"):
                 return body
+        pytest.fail(f"no data package from the server within {timeout_s:g} s")
 
     def close(self) -> None:
+        """Close the connection; a thread blocked reading it returns at once (a plain close
+        from another thread would leave it blocked until the socket's time-out)."""
+        with contextlib.suppress(OSError):
+            self.sock.shutdown(socket.SHUT_RDWR)
         self.sock.close()
 
 
@@ -241,8 +315,8 @@ class Subscriber:
                 body = self.client.data()
                 values = struct.unpack(">B7d", body)
                 self.samples.append((values[1], values[2:]))
-        except (OSError, ConnectionError, struct.error):
-            return
+        except (OSError, ConnectionError, struct.error, pytest.fail.Exception):
+            return  # closed, or the stream stopped: wait_for reports the shortfall
 
     def wait_for(self, n: int, max_wait_s: float = 30.0) -> list:
         """At least ``n`` more samples than now (fails, not hangs, if they do not come)."""

@@ -4,14 +4,33 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 
 
 def _cmd_twin_server(args: argparse.Namespace) -> int:
+    from tvist.urserver.log_writer import LogWriter
+
+    # The log goes to stderr from a thread of its own: a log call inside the server never
+    # waits for the output (a full pipe would stop the server's clock).
+    to_stderr = logging.StreamHandler()
+    to_stderr.setFormatter(logging.Formatter("twin-server: %(levelname)s: %(message)s"))
+    writer = LogWriter(to_stderr)
+    code = 1
+    try:
+        code = _serve(args)
+    finally:
+        if not writer.close():
+            # The log's output is blocked (a pipe nobody reads): a normal exit would wait for
+            # it for ever (logging's shutdown flushes every handler). The server is closed.
+            os._exit(code)
+    return code
+
+
+def _serve(args: argparse.Namespace) -> int:
     from tvist.cli.args import DEFAULT_PAYLOAD_COM_M
     from tvist.urserver import PortInUse, start_twin_server
 
-    logging.basicConfig(level=logging.INFO, format="twin-server: %(levelname)s: %(message)s")
     # Client threads hand the interpreter to the 2 ms tick quickly (default 5 ms).
     sys.setswitchinterval(0.0005)
     try:

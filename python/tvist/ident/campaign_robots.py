@@ -199,13 +199,15 @@ class URRobot:
         confirm: Callable[[str], Any] | None = input,
     ) -> None:
         try:
-            import rtde_control
+            import rtde_control  # noqa: F401 (checked here: the error names the extra)
         except ImportError as exc:  # pragma: no cover - needs the optional dependency
             raise ImportError(
                 "a real robot needs ur_rtde: pip install 'tvist[robot]' (or ur-rtde)"
             ) from exc
+        from tvist.live import control_interface
+
         self.robot_name = robot_name
-        self._control = rtde_control.RTDEControlInterface(ip)
+        self._control = control_interface(ip)  # ConnectionError, never a hang, if no data
         self._ip = ip
         self._frequency_hz = float(frequency_hz)
         self._log_dir = Path(log_dir or tempfile.mkdtemp(prefix="tvist-campaign-"))

@@ -69,6 +69,10 @@ SEND_BUFFER_BYTES = 1 << 16
 DASHBOARD_MAX_LINE_BYTES = 4096
 #: Largest program a script port buffers (bytes); ur_rtde's control script is 42 kB.
 MAX_PROGRAM_BYTES = 1 << 20
+#: How long :meth:`TwinServer.close` waits for the tick and the accept loops to end (s);
+#: they end within a tick (2 ms) on an idle machine. Client threads end as their
+#: connections close, and are not waited for.
+CLOSE_TIMEOUT_S = 5.0
 #: Recipes per RTDE connection and direction: ids are one byte and 0 marks a failure.
 MAX_RECIPES = 255
 #: Variable names of one recipe setup (bytes; the limit of UR's RTDE guide).
@@ -217,17 +221,22 @@ class TwinServer:
         self._threads.append(thread)
 
     def close(self) -> None:
-        """Stop ticking and close every socket."""
+        """Stop ticking, close every socket and wait (:data:`CLOSE_TIMEOUT_S` at most) for
+        the tick and the accept loops to end; a second call does nothing more."""
         self._stop.set()
         for sock in self._listeners:
-            try:
-                sock.close()
-            except OSError:
-                pass
+            _close(sock)  # the shutdown wakes its accept loop (a close alone does not)
         with self._clients_lock:
             clients = list(self._clients)
         for conn in clients:
             _close(conn)
+        deadline = time.monotonic() + CLOSE_TIMEOUT_S
+        for thread in self._threads:
+            if thread is not threading.current_thread():
+                thread.join(max(deadline - time.monotonic(), 0.0))
+        stuck = [t.name for t in self._threads if t.is_alive()]
+        if stuck:
+            log.warning("still running %g s after close: %s", CLOSE_TIMEOUT_S, ", ".join(stuck))
 
     def serve_forever(self) -> None:
         """Block until :meth:`close` (or Ctrl-C)."""
@@ -378,8 +387,11 @@ class TwinServer:
             ok = bool(session.outputs) or bool(session.inputs)
             # First package at the next tick, then one every 1 / frequency.
             session.phase = 1.0 - session.frequency_hz * self.controller.dt_s
-            session.started = ok
+            # The reply goes out before the first data package: ur_rtde reads exactly one
+            # package as the reply, and a data package read in its place leaves it waiting
+            # for a start it never sees.
             session.send(rtde_wire.package(kind, bytes([int(ok)])))
+            session.started = ok
         elif kind == rtde_wire.CONTROL_PACKAGE_PAUSE:
             session.started = False
             session.send(rtde_wire.package(kind, b"\x01"))
