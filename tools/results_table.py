@@ -369,13 +369,17 @@ def bench_figures(root: Path) -> dict[str, Any]:
     path = root / BENCH
     if not path.is_file():
         raise MissingOutput(f"{BENCH} is missing")
+    text = path.read_text(encoding="utf-8")
     rows = [
         [cell.strip() for cell in line.strip().strip("|").split("|")]
-        for line in path.read_text(encoding="utf-8").splitlines()
+        for line in text.splitlines()
         if line.startswith("|")
     ]
     if not rows or "median ns" not in rows[0] or "case" not in rows[0]:
         raise UnusableOutput(f"{BENCH} has no table with a 'median ns' column")
+    load = re.search(r"load average (\S+) before the rounds, (\S+) after", text)
+    if load is None or "unknown" in load.groups():
+        raise UnusableOutput(f"{BENCH} does not state the load it was measured under")
     case, median = rows[0].index("case"), rows[0].index("median ns")
     by_case = {row[case]: row for row in rows[2:] if len(row) == len(rows[0])}
     out = {}
@@ -385,6 +389,8 @@ def bench_figures(root: Path) -> dict[str, Any]:
         out[label] = figure(
             float(by_case[name][median]), fixed(1), "ns", BENCH, f"median ns of '{name}'"
         )
+    for label, value in zip(("load_before", "load_after"), load.groups(), strict=True):
+        out[label] = figure(float(value), fixed(1), "", BENCH, f"1-minute {label} (header)")
     return out
 
 
@@ -510,7 +516,8 @@ ROWS: tuple[Row, ...] = (
     Row(
         "bench",
         "one control cycle, 6 DOF, two ZV modes (median)",
-        "{fixed} ns with fixed modes, {map} ns with the UR5e's inertia and the paper's map",
+        "{fixed} ns with fixed modes, {map} ns with the UR5e's inertia and the paper's map "
+        "(machine load average {load_before} before, {load_after} after)",
         "`cargo bench -p tvist-core --bench cycle` (`make bench`)",
         "[benchmarks](docs/benchmarks.md)",
         ("make bench",),

@@ -439,7 +439,9 @@ def test_live_figures_from_the_runs_logs(tmp_path):
 
 
 BENCH_OUTPUT = """\
-41 interleaved rounds of 20000 cycles per case (500 Hz, linear reads unless noted); ns per cycle
+41 interleaved rounds of 20000 cycles per case (500 Hz, linear reads unless noted); ns per cycle; \
+ratio: median over the rounds of case / reference (same round); 1-minute load average 0.31 before \
+the rounds, 1.27 after
 
 | # | case | min ns | median ns | ratio to | ratio | target |
 |---|---|---|---|---|---|---|
@@ -456,7 +458,11 @@ def test_bench_figures_from_the_saved_table(tmp_path):
     path.parent.mkdir(parents=True)
     path.write_text(BENCH_OUTPUT, encoding="utf-8")
     shown = {name: f["shown"] for name, f in rt.bench_figures(tmp_path).items()}
-    assert shown == {"fixed": "21.7", "map": "172.6"}
+    assert shown == {"fixed": "21.7", "map": "172.6", "load_before": "0.3", "load_after": "1.3"}
+    # A table that does not say how loaded the machine was is not used.
+    path.write_text(BENCH_OUTPUT.replace("1-minute load average", "load"), encoding="utf-8")
+    with pytest.raises(rt.UnusableOutput, match="load"):
+        rt.bench_figures(tmp_path)
     path.write_text(BENCH_OUTPUT.replace("TvShaper, constant modes", "renamed"), encoding="utf-8")
     with pytest.raises(rt.UnusableOutput, match="no case"):
         rt.bench_figures(tmp_path)

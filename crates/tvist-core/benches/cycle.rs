@@ -494,6 +494,7 @@ fn main() {
         black_box((case.run)());
     }
     let n_cases = cases.len();
+    let load_before = load_average();
     for round in 0..ROUNDS {
         for k in 0..n_cases {
             let case = &mut cases[(k + round) % n_cases];
@@ -509,7 +510,7 @@ fn main() {
             }
         }
     }
-    print_table(&cases);
+    print_table(&cases, load_before, load_average());
     // How far the general path of row #10 is from its hand-written floor (row #14).
     let row = |number| cases.iter().find(|c| c.number == number);
     if let (Some(general), Some(floor)) = (row(10), row(14)) {
@@ -532,10 +533,25 @@ fn measured(run: &mut Run) -> f64 {
     run()
 }
 
-fn print_table(cases: &[Case]) {
+/// The machine's 1-minute load average (`/proc/loadavg`; `None` where there is none): the
+/// table states the load it was measured under, since other processes slow every case.
+fn load_average() -> Option<f64> {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()?
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()
+}
+
+fn print_table(cases: &[Case], load_before: Option<f64>, load_after: Option<f64>) {
+    let load = |l: Option<f64>| l.map_or("unknown".to_string(), |v| format!("{v:.2}"));
     println!(
         "{ROUNDS} interleaved rounds of {STEPS} cycles per case (500 Hz, linear reads unless \
-         noted); ns per cycle; ratio: median over the rounds of case / reference (same round)\n"
+         noted); ns per cycle; ratio: median over the rounds of case / reference (same round); \
+         1-minute load average {} before the rounds, {} after\n",
+        load(load_before),
+        load(load_after)
     );
     println!("| # | case | min ns | median ns | ratio to | ratio | target |");
     println!("|---|---|---|---|---|---|---|");
