@@ -543,26 +543,40 @@ def _utc(timestamp: float) -> str:
     return datetime.fromtimestamp(timestamp, tz=timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
 
 
-def provenance(root: Path, figures: Mapping[str, Any]) -> dict[str, Any]:
+def provenance(
+    root: Path, figures: Mapping[str, Any], made_with: str | None = None
+) -> dict[str, Any]:
     """Where an entry's figures came from: its output files and when each was written; the
-    checked-out commit when every output was written after it was made (else the run's commit
-    is unknown: no output records it)."""
+    commit that made them: ``made_with`` (stated by whoever ran the commands, e.g. a
+    checkout of an earlier commit; it must be an ancestor of the checked-out commit) or else
+    the checked-out one, when every output was written after it was made (else the run's
+    commit is unknown: no output records it)."""
     # A figure's file may be a pattern (the live runs' logs): every file it names.
     files = sorted({path for f in figures.values() for path in root.glob(f["file"])})
     written = {str(p.relative_to(root)): p.stat().st_mtime for p in files}
-    head = _git(root, "rev-parse", "HEAD")
-    head_time = _git(root, "show", "-s", "--format=%ct", "HEAD")
-    after_head = head_time is not None and min(written.values()) >= float(head_time)
+    commit = _git(root, "rev-parse", made_with or "HEAD")
+    if made_with is not None and (
+        commit is None or _git(root, "merge-base", "--is-ancestor", commit, "HEAD") is None
+    ):
+        raise ValueError(f"--made-with {made_with}: not a commit of this checkout's history")
+    commit_time = _git(root, "show", "-s", "--format=%ct", commit) if commit else None
+    after = commit_time is not None and min(written.values()) >= float(commit_time)
     dirty = _git(root, "status", "--porcelain", "--untracked-files=no")
+    if made_with is not None:
+        note = "the commit the outputs were made with (stated at the update)"
+    else:
+        note = "the commit checked out when the record was updated" + (
+            " (the tree had changes)" if dirty else ""
+        )
     return {
         "source": "outputs",
         "outputs": {name: _utc(t) for name, t in written.items()},
-        "tvist_commit": head if after_head else None,
+        "tvist_commit": commit if after else None,
         "commit_note": (
-            "the commit checked out when the record was updated; every output was written "
-            "after it was made" + (" (the tree had changes)" if dirty else "")
-            if after_head
-            else "unknown: an output is older than the commit checked out at the update"
+            note + "; every output was written after it was made"
+            if after
+            else "unknown: an output is older than the commit "
+            + ("stated" if made_with else "checked out at the update")
         ),
         "updated": _utc(datetime.now(timezone.utc).timestamp()),
     }
@@ -664,9 +678,16 @@ def check(readme: str, record: Mapping[str, Any]) -> list[str]:
     return problems
 
 
-def update(root: Path, record: dict[str, Any]) -> tuple[dict[str, Any], list[str]]:
-    """The record with every row whose outputs exist read again; and one line per row on
+def update(
+    root: Path, record: dict[str, Any], made_with: Mapping[str, str] | None = None
+) -> tuple[dict[str, Any], list[str]]:
+    """The record with every row whose outputs exist read again (``made_with``: row key ->
+    the commit its outputs were made with, see :func:`provenance`); and one line per row on
     what was done."""
+    made_with = made_with or {}
+    unknown = set(made_with) - {row.key for row in ROWS}
+    if unknown:
+        raise ValueError(f"--made-with: no row {', '.join(sorted(unknown))}")
     entries = {item["key"]: item for item in record["rows"]}
     lines = []
     for row in ROWS:
@@ -675,7 +696,7 @@ def update(root: Path, record: dict[str, Any]) -> tuple[dict[str, Any], list[str
         except (MissingOutput, UnusableOutput) as exc:
             lines.append(f"{row.key}: kept the record's entry ({exc})")
             continue
-        entries[row.key] = entry(row, figures, provenance(root, figures))
+        entries[row.key] = entry(row, figures, provenance(root, figures, made_with.get(row.key)))
         lines.append(
             f"{row.key}: updated from {', '.join(entries[row.key]['provenance']['outputs'])}"
         )
@@ -700,11 +721,25 @@ def main(argv: Sequence[str] | None = None) -> int:
         action="store_true",
         help="fail if README.md's table is not the rendering of the record",
     )
+    p.add_argument(
+        "--made-with",
+        metavar="ROW=COMMIT",
+        action="append",
+        default=[],
+        help="with --update: the commit a row's outputs were made with, when it is not the "
+        "checked-out one (repeat per row)",
+    )
     args = p.parse_args(argv)
     record = load_record()
     readme = README.read_text(encoding="utf-8")
     if args.update:
-        record, lines = update(ROOT, record)
+        pairs = [item.partition("=") for item in args.made_with]
+        if any(not key or not sep or not commit for key, sep, commit in pairs):
+            p.error("--made-with takes ROW=COMMIT")
+        try:
+            record, lines = update(ROOT, record, {key: commit for key, _, commit in pairs})
+        except ValueError as exc:
+            p.error(str(exc))
         problems = figure_problems(record)
         if problems:
             print("\n".join(problems), file=sys.stderr)

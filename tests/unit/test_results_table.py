@@ -504,3 +504,28 @@ def test_modal_fit_out_is_checked_before_the_fit(tmp_path, capsys):
 
     assert main([str(tmp_path / "none.jsonl"), "--out", str(tmp_path)]) == 2
     assert "--out" in capsys.readouterr().err
+
+
+def test_made_with_names_the_commit_the_outputs_were_made_with(tmp_path):
+    import subprocess
+
+    def git(*args: str) -> str:
+        return subprocess.run(
+            ["git", "-c", "user.name=t", "-c", "user.email=t@t", *args],
+            cwd=tmp_path,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+
+    git("init", "-q")
+    git("commit", "-q", "--allow-empty", "-m", "made the outputs")
+    made = git("rev-parse", "HEAD")
+    _write_demo(tmp_path)  # written after the commit (commit times are whole seconds)
+    figures = rt.demo_figures(tmp_path)
+    source = rt.provenance(tmp_path, figures, made)
+    assert source["tvist_commit"] == made and "stated" in source["commit_note"]
+    with pytest.raises(ValueError, match="--made-with 0000000"):
+        rt.provenance(tmp_path, figures, "0000000")
+    with pytest.raises(ValueError, match="no row nonsense"):
+        rt.update(tmp_path, rt.load_record(), {"nonsense": made})
