@@ -166,6 +166,11 @@ def run(readme: Path, work: Path, until_first_shaped: bool) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
+    # Started as a background job (``make quick-start &``), this process ignores SIGINT and
+    # so would the server it starts: the Ctrl-C that stops it would be lost. A handler here
+    # is reset to the default in each child.
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     p = argparse.ArgumentParser(description=__doc__.split("\n\n", 1)[0])
     p.add_argument("--readme", type=Path, default=ROOT / "README.md")
     p.add_argument("--out", type=Path, default=ROOT / "out" / "quick-start")
