@@ -106,15 +106,15 @@ lint: $(PY)
 
 # pytest in PYTEST_WORKERS processes (pytest-xdist; default: the cores, at most 2; 0: in this
 # process), worksteal: a worker that runs out of tests takes the other's last ones. Then the
-# realtime tests apart from the CPU-bound ones (the twin server keeps real time at 500 Hz: a
-# CPU-bound test next to it makes its moves late); two of them side by side mostly wait on
-# their servers' clocks (on a loaded machine: 365 s in two workers, 589 s in one).
+# realtime tests, in one process and apart from everything else (docs/test-quality.md: the
+# twin server keeps real time at 500 Hz; beside a second worker's server and campaign, a
+# ur_rtde client crashed its process inside its own code).
 PYTEST_WORKERS ?= $(shell n=$$(nproc 2>/dev/null || echo 1); echo $$(( n < 2 ? n : 2 )))
 PYTEST_PARALLEL := -n $(PYTEST_WORKERS) --dist worksteal
 
 pytest: build
 	$(PY) -m pytest -q --durations=15 $(PYTEST_PARALLEL) -m "not realtime"
-	$(PY) -m pytest -q --durations=10 $(PYTEST_PARALLEL) -m realtime
+	$(PY) -m pytest -q --durations=10 -p no:xdist -m realtime
 
 fmt: $(PY)
 	cargo fmt --all
@@ -131,6 +131,8 @@ quick-start: build
 bench: build
 	@mkdir -p out/bench
 	set -o pipefail; cargo bench -q -p tvist-core --bench cycle | tee out/bench/cycle.txt
+	set -o pipefail; cargo bench -q -p tvist-core --bench robot_pass | tee out/bench/robot_pass.txt
+	set -o pipefail; cargo bench -q -p tvist-core --bench modal_step | tee out/bench/modal_step.txt
 	set -o pipefail; $(PY) benches/bench_shape.py | tee out/bench/bench_shape.txt
 	set -o pipefail; $(PY) benches/bench_sim.py | tee out/bench/bench_sim.txt
 

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import os
 import re
+import sys
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -31,6 +32,7 @@ import mkdocs_gen_files
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "out"
+TOOLS = ROOT / "tools"
 
 #: Experiment page -> (output folder of its command, the command that writes it).
 EXPERIMENTS = {
@@ -46,6 +48,14 @@ EXPERIMENTS = {
 #: whether the output is markdown (the cycle harness prints a table) or plain text.
 BENCH_OUTPUTS = {
     "cycle.txt": ("Rust core: one control cycle (`cargo bench -p tvist-core --bench cycle`)", True),
+    "robot_pass.txt": (
+        "Rust core: a map's rigid-body pass (`cargo bench -p tvist-core --bench robot_pass`)",
+        True,
+    ),
+    "modal_step.txt": (
+        "Rust core: the modal map's step (`cargo bench -p tvist-core --bench modal_step`)",
+        False,
+    ),
     "bench_shape.txt": ("Python: `TvShaper.shape` against numpy (`benches/bench_shape.py`)", False),
     "bench_sim.txt": ("The MuJoCo twin against real time (`benches/bench_sim.py`)", False),
 }
@@ -54,13 +64,29 @@ FIGURE_LINK = re.compile(r"\]\(([^)/:]+\.(?:png|svg))\)")
 HEADING = re.compile(r"^(#{1,5}) ", flags=re.MULTILINE)
 
 
-def missing(what: str, command: str) -> str:
+def missing(what: str, *commands: str) -> str:
     """The note a page shows when the output it is made from has not been produced."""
+    run = ", then ".join(f"`{c}`" for c in commands)
     return (
         f'\n!!! note "Not generated yet"\n'
         f"    This part of the page is made from {what}, which this checkout does not have.\n"
-        f"    Run `{command}` and then `make docs` to fill it in.\n"
+        f"    Run {run} and then `make docs` to fill it in.\n"
     )
+
+
+def results_row_commands(key: str) -> tuple[str, ...]:
+    """The commands that write the outputs of the README results table's row ``key``
+    (tools/results_table.py holds them once, for the table and for these pages)."""
+    import importlib.util
+
+    table = sys.modules.get("results_table")
+    if table is None:
+        spec = importlib.util.spec_from_file_location("results_table", TOOLS / "results_table.py")
+        table = importlib.util.module_from_spec(spec)
+        sys.modules["results_table"] = table  # its dataclasses look their module up
+        spec.loader.exec_module(table)
+    (row,) = (r for r in table.ROWS if r.key == key)
+    return row.commands
 
 
 def _written(path: Path) -> str:
@@ -162,12 +188,7 @@ def bench_outputs() -> str:
 #: The full campaign on the twin and its cross-validation (README results table, rows
 #: "campaign" and "cross-validation").
 CAMPAIGN = OUT / "campaign_full.jsonl"
-CAMPAIGN_COMMAND = "tvist campaign --sim --workers 2 --out out/campaign_full.jsonl"
 CROSS_VALIDATION = OUT / "campaign_full_cv.json"
-CROSS_VALIDATION_COMMAND = (
-    "python -m tvist.cli.modal_fit out/campaign_full.jsonl --folds 5 "
-    "--out out/campaign_full_cv.json"
-)
 
 
 def full_campaign() -> str:
@@ -181,7 +202,7 @@ def full_campaign() -> str:
 
     parts = []
     if not CAMPAIGN.is_file():
-        parts.append(missing(f"`{CAMPAIGN.relative_to(ROOT)}`", CAMPAIGN_COMMAND))
+        parts.append(missing(f"`{CAMPAIGN.relative_to(ROOT)}`", *results_row_commands("campaign")))
     else:
         records = load_results(CAMPAIGN)
         payloads = sorted({r["payload_kg"] for r in records})
@@ -201,7 +222,11 @@ def full_campaign() -> str:
             )
         parts.append("\n".join(rows) + "\n")
     if not CROSS_VALIDATION.is_file():
-        parts.append(missing(f"`{CROSS_VALIDATION.relative_to(ROOT)}`", CROSS_VALIDATION_COMMAND))
+        parts.append(
+            missing(
+                f"`{CROSS_VALIDATION.relative_to(ROOT)}`", *results_row_commands("cross-validation")
+            )
+        )
     else:
         cv = json.loads(CROSS_VALIDATION.read_text(encoding="utf-8"))
         parts.append(
@@ -252,7 +277,7 @@ def live_runs() -> str:
             rows.append(f"| {label} | `{log.name}` | {residual_vibration(log):.2e} |")
             written.append(log)
     if not written:
-        return missing("`out/live/*.csv`", "the commands above")
+        return missing("`out/live/*.csv`", *results_row_commands("live"))
     newest = max(written, key=lambda p: p.stat().st_mtime)
     return f"\n*Generated from the logs in `out/live/` (newest: {_written(newest)}).*\n\n" + (
         "\n".join(rows) + "\n"
