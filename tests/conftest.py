@@ -31,7 +31,10 @@ TIERS = ("unit", "integration", "reference")
 #: Tests outside the realtime modules that open a socket (paths relative to tests/, a file or
 #: one test's node id). Every realtime test is also ``network``: the twin server it drives
 #: listens on loopback ports.
-NETWORK = ("unit/test_twin_plant.py::test_server_names_a_taken_port",)
+NETWORK = (
+    "unit/test_twin_plant.py::test_server_names_a_taken_port",
+    "integration/test_recorder_rate.py",
+)
 
 
 def _is_realtime_module(module: object) -> bool:

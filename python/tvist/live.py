@@ -134,7 +134,9 @@ class RtdeRecorder:
     fields
         RTDE output variables (scalars or vectors of doubles).
     frequency_hz
-        Output rate asked of the controller (e-Series: up to 500 Hz).
+        Output rate asked of the controller, Hz; None: the controller's own rate, from the
+        version it reports (e-Series 500 Hz, CB-series 125 Hz:
+        :func:`tvist.rtde_wire.output_rate_hz`).
     port
         RTDE port.
     optional_fields
@@ -154,7 +156,7 @@ class RtdeRecorder:
         host: str,
         path: str | Path,
         fields: Sequence[str] = LOG_FIELDS,
-        frequency_hz: float = 500.0,
+        frequency_hz: float | None = None,
         port: int = 30004,
         optional_fields: Sequence[str] = (),
     ) -> None:
@@ -175,6 +177,11 @@ class RtdeRecorder:
         reply = self._request(rtde.REQUEST_PROTOCOL_VERSION, struct.pack(">H", 2))
         if reply[:1] != b"\x01":
             raise ValueError(f"{host}: the controller refused RTDE protocol version 2")
+        if frequency_hz is None:
+            version = self._request(rtde.GET_URCONTROL_VERSION, b"")
+            if len(version) < 4:
+                raise ValueError(f"{host}: the controller's version reply is malformed")
+            frequency_hz = rtde.output_rate_hz(struct.unpack(">I", version[:4])[0])
         fields = [*fields, *optional_fields]
         for _ in range(2):  # the second setup leaves out the optional fields not provided
             names = ",".join(fields).encode()
@@ -192,7 +199,7 @@ class RtdeRecorder:
                 f" at {frequency_hz:g} Hz"
             )
         self.fields = tuple(fields)
-        self._frequency_hz = float(frequency_hz)
+        self.frequency_hz = float(frequency_hz)  # Hz, as asked of the controller
         self._recipe = rtde.Recipe(reply[0], list(fields), types)
         self._columns = []
         for name, kind in zip(fields, types, strict=True):
@@ -273,7 +280,7 @@ class RtdeRecorder:
         """
         with self._new_sample:
             count = self.n_samples
-        target = count + math.ceil(seconds * self._frequency_hz - 1e-9)
+        target = count + math.ceil(seconds * self.frequency_hz - 1e-9)
         while count < target:
             count = self.wait_newer(count, timeout_s)
 
@@ -555,18 +562,20 @@ def record(
     robot_ip: str,
     out: str | Path,
     *,
-    frequency_hz: float = 500.0,
+    frequency_hz: float | None = None,
     duration_s: float | None = None,
     stop: threading.Event | None = None,
     fields: Sequence[str] = LOG_FIELDS,
-    on_start: Callable[[], object] | None = None,
+    on_start: Callable[[RtdeRecorder], object] | None = None,
     optional_fields: Sequence[str] = PAYLOAD_FIELDS,
 ) -> Path:
     """Record RTDE ``fields`` (and ``optional_fields`` the controller provides: by default
     the payload, so the log names it) to ``out`` until ``duration_s`` passes, ``stop`` is set
     or Ctrl-C.
 
-    ``on_start`` is called once the first sample has arrived.
+    ``frequency_hz`` is the output rate asked of the controller (None: the controller's own,
+    :class:`RtdeRecorder`); ``on_start`` is called with the recorder once the first sample
+    has arrived.
 
     Every data package is written as it arrives (:class:`RtdeRecorder`); stopping closes the
     file after the last one, so an interrupt loses nothing that was received.
@@ -575,7 +584,7 @@ def record(
     deadline = None if duration_s is None else time.monotonic() + duration_s
     recorder = RtdeRecorder(robot_ip, out, fields, frequency_hz, optional_fields=optional_fields)
     if on_start is not None:
-        on_start()
+        on_start(recorder)
     try:
         while not stop.is_set():
             if deadline is not None and time.monotonic() >= deadline:

@@ -23,6 +23,17 @@ CONTROL_PACKAGE_PAUSE = ord("P")
 
 #: The protocol version both ends speak (ur_rtde and UR's own client ask for it).
 PROTOCOL_VERSION = 2
+#: Major software version of the CB-series controllers (CB3: 3.x); the e-Series runs 5.x.
+CB_SERIES_MAJOR_VERSION = 3
+
+
+def output_rate_hz(controller_major_version: int) -> float:
+    """The highest RTDE output rate of a controller (Hz), from the major version its
+    ``GET_URCONTROL_VERSION`` reply names: 125 on the CB-series (3.x), 500 on the e-Series
+    (5.x) and later (the rule ur_rtde follows too)."""
+    return 125.0 if controller_major_version <= CB_SERIES_MAJOR_VERSION else 500.0
+
+
 HEADER = struct.Struct(">HB")
 #: Largest package a client may send (the size field is 16 bits).
 MAX_PACKAGE_BYTES = 65535

@@ -406,8 +406,12 @@ def _cmd_record(args: argparse.Namespace) -> int:
     from tvist.cli.args import output_file
     from tvist.live import record
 
-    def started() -> None:
-        print(f"recording {args.robot_ip} to {args.out}; Ctrl-C stops", flush=True)
+    def started(recorder) -> None:
+        print(
+            f"recording {args.robot_ip} at {recorder.frequency_hz:g} Hz to {args.out}; "
+            "Ctrl-C stops",
+            flush=True,
+        )
 
     try:
         output_file(args.out, "--out")
@@ -513,8 +517,9 @@ def add_record_command(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--frequency",
         type=float,
-        default=500.0,
-        help="RTDE output rate, Hz (default 500, the e-Series' rate; CB-series: 125)",
+        default=None,
+        help="RTDE output rate, Hz (default: the controller's, from the version it reports: "
+        "500 on the e-Series, 125 on the CB-series)",
     )
     p.add_argument("--duration", type=float, default=None, help="stop after this many s")
     p.set_defaults(func=_cmd_record)

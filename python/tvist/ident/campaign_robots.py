@@ -183,7 +183,8 @@ class URRobot:
         Folder for the RTDE logs (kept for inspection; see :func:`new_run_folder`); default
         a temporary folder.
     frequency_hz
-        RTDE recording frequency (e-Series: 500 Hz).
+        RTDE recording frequency, Hz; None: the controller's own rate (e-Series 500 Hz,
+        CB-series 125 Hz; :class:`tvist.live.RtdeRecorder`).
     confirm
         Called with a message before each payload change (e.g. ``input``); None to skip.
         End of input (``EOFError``: no terminal to answer) is a ``ValueError``.
@@ -195,7 +196,7 @@ class URRobot:
         robot_name: str = "ur5e",
         *,
         log_dir: str | Path | None = None,
-        frequency_hz: float = 500.0,
+        frequency_hz: float | None = None,
         confirm: Callable[[str], Any] | None = input,
     ) -> None:
         try:
@@ -209,7 +210,7 @@ class URRobot:
         self.robot_name = robot_name
         self._control = control_interface(ip)  # ConnectionError, never a hang, if no data
         self._ip = ip
-        self._frequency_hz = float(frequency_hz)
+        self._frequency_hz = frequency_hz
         self._log_dir = Path(log_dir or tempfile.mkdtemp(prefix="tvist-campaign-"))
         self._log_dir.mkdir(parents=True, exist_ok=True)
         self._confirm = confirm
