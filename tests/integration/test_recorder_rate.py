@@ -3,9 +3,9 @@ controller (software 3.x) publishes at most 125 Hz and refuses a 500 Hz recipe, 
 (5.x) publishes 500 Hz.
 
 The controller here is a scripted peer on a loopback socket, written from UR's RTDE guide
-with ``struct`` alone (not tvist's wire module): it answers the protocol and version
-requests, refuses an output recipe above its rate (recipe id 0, as a controller does),
-and then streams data packages of one DOUBLE, the controller time."""
+(``tests/support/rtde_packages.py``, not tvist's wire module): it answers the protocol and
+version requests, refuses an output recipe above its rate (recipe id 0, as a controller
+does), and then streams data packages of one DOUBLE, the controller time."""
 
 from __future__ import annotations
 
@@ -15,30 +15,11 @@ import threading
 
 import pytest
 
+from rtde_packages import package, read_package
+
 #: (version reply, highest output rate in Hz) of the two controller generations.
 CB3 = ((3, 15, 8, 106339), 125.0)
 E_SERIES = ((5, 11, 8, 0), 500.0)
-
-
-def _package(kind: str, payload: bytes) -> bytes:
-    return struct.pack(">HB", 3 + len(payload), ord(kind)) + payload
-
-
-def _read_package(conn: socket.socket) -> tuple[str, bytes] | None:
-    header = b""
-    while len(header) < 3:
-        chunk = conn.recv(3 - len(header))
-        if not chunk:
-            return None
-        header += chunk
-    size, kind = struct.unpack(">HB", header)
-    payload = b""
-    while len(payload) < size - 3:
-        chunk = conn.recv(size - 3 - len(payload))
-        if not chunk:
-            return None
-        payload += chunk
-    return chr(kind), payload
 
 
 class ScriptedController:
@@ -60,24 +41,25 @@ class ScriptedController:
         conn.settimeout(5.0)
         try:
             while not self._stop.is_set():
-                got = _read_package(conn)
-                if got is None:
+                try:
+                    code, payload = read_package(conn)
+                except ConnectionError:
                     return
-                kind, payload = got
+                kind = chr(code)
                 if kind == "V":
-                    conn.sendall(_package("V", b"\x01"))
+                    conn.sendall(package("V", b"\x01"))
                 elif kind == "v":
                     self.version_asked = True
-                    conn.sendall(_package("v", struct.pack(">IIII", *self.version)))
+                    conn.sendall(package("v", struct.pack(">IIII", *self.version)))
                 elif kind == "O":
                     rate = struct.unpack(">d", payload[:8])[0]
                     self.asked_hz.append(rate)
                     names = payload[8:].decode().split(",")
                     recipe = 1 if rate <= self.max_rate_hz else 0
                     types = ",".join("DOUBLE" for _ in names)
-                    conn.sendall(_package("O", bytes([recipe]) + types.encode()))
+                    conn.sendall(package("O", bytes([recipe]) + types.encode()))
                 elif kind == "S":
-                    conn.sendall(_package("S", b"\x01"))
+                    conn.sendall(package("S", b"\x01"))
                     self._stream(conn, 1.0 / self.asked_hz[-1])
                     return
         finally:
@@ -88,7 +70,7 @@ class ScriptedController:
         while not self._stop.wait(0.001):
             k += 1
             try:
-                conn.sendall(_package("U", b"\x01" + struct.pack(">d", k * period_s)))
+                conn.sendall(package("U", b"\x01" + struct.pack(">d", k * period_s)))
             except OSError:
                 return
 

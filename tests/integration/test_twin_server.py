@@ -18,6 +18,7 @@ import time
 import numpy as np
 import pytest
 
+from rtde_packages import package, read_package
 from tvist.robots import params
 from tvist.sim import Twin
 from tvist.trajectory import PAPER_POSES
@@ -63,25 +64,8 @@ def _end(control) -> None:
 
 def _rtde_request(sock: socket.socket, kind: str, payload: bytes) -> tuple[int, bytes]:
     """Send one RTDE package and read the next reply package ``(type, payload)``."""
-    sock.sendall(struct.pack(">HB", 3 + len(payload), ord(kind)) + payload)
-    return _rtde_read(sock)
-
-
-def _rtde_read(sock: socket.socket) -> tuple[int, bytes]:
-    header = b""
-    while len(header) < 3:
-        chunk = sock.recv(3 - len(header))
-        if not chunk:
-            raise ConnectionError("closed")
-        header += chunk
-    size, kind = struct.unpack(">HB", header)
-    body = b""
-    while len(body) < size - 3:
-        chunk = sock.recv(size - 3 - len(body))
-        if not chunk:
-            raise ConnectionError("closed")
-        body += chunk
-    return kind, body
+    sock.sendall(package(kind, payload))
+    return read_package(sock)
 
 
 def test_receive_interface_reads_joints_and_accelerometer(server, twin) -> None:
@@ -142,10 +126,10 @@ def test_malformed_packages_do_not_crash_the_server(server) -> None:
         # A header whose size is below the header's own: the stream is lost, the server
         # says so and closes this connection.
         sock.sendall(b"\x00\x01U")
-        kind, _ = _rtde_read(sock)
+        kind, _ = read_package(sock)
         assert kind == ord("M")
         with pytest.raises(ConnectionError):
-            _rtde_read(sock)
+            read_package(sock)
     with socket.create_connection((HOST, 29999), timeout=5) as sock:
         sock.sendall(b"\xff\xfe not a command\n")
         reader = sock.makefile("rb")

@@ -26,6 +26,8 @@ from pathlib import Path
 
 import pytest
 
+import rtde_packages
+
 UR_PORTS = (30004, 29999, 30001, 30002, 30003)
 
 
@@ -211,22 +213,11 @@ class RawRtde:
         self.messages: list[bytes] = []  # text messages received (payloads)
 
     def send(self, kind: int | str, payload: bytes = b"") -> None:
-        kind = ord(kind) if isinstance(kind, str) else kind
-        self.sock.sendall(struct.pack(">HB", 3 + len(payload), kind) + payload)
+        self.sock.sendall(rtde_packages.package(kind, payload))
 
     def read(self) -> tuple[int, bytes]:
         """The next package ``(type, payload)``; ConnectionError if the server closed."""
-        size, kind = struct.unpack(">HB", self._exact(3))
-        return kind, self._exact(size - 3)
-
-    def _exact(self, n: int) -> bytes:
-        data = b""
-        while len(data) < n:
-            chunk = self.sock.recv(n - len(data))
-            if not chunk:
-                raise ConnectionError("the server closed the connection")
-            data += chunk
-        return data
+        return rtde_packages.read_package(self.sock)
 
     def request(self, kind: str, payload: bytes = b"", timeout_s: float = REPLY_TIMEOUT_S) -> bytes:
         """Send a package and return the payload of the reply of the same type (text
