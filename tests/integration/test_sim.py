@@ -381,7 +381,7 @@ def test_divergence_is_detected_and_names_the_time() -> None:
         ({"payload_com_m": (0.0, float("inf"), 0.0)}, "com_m"),
         ({"physics_dt_s": 0.001}, "physics_dt_s"),
         ({"accel_noise_std": -0.1}, "accel_noise_std"),
-        ({"robot_name": "ur3e", "payload_kg": 1.0}, "no default FlexParams"),
+        ({"robot_name": "ur3e", "payload_kg": 1.0}, "has no twin of robot"),
     ],
 )
 def test_bad_twin_arguments_raise_value_error(kwargs: dict, message: str) -> None:

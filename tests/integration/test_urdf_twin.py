@@ -3,6 +3,9 @@ eigen-analysis, the campaign and modal fit on one of them, and the demo moves' p
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -140,8 +143,18 @@ def test_demo_for_an_arm_without_a_default_twin_is_refused_in_one_line(capsys, t
 
     assert main(["demo", "--robot", "gen3", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip()
-    assert (
-        err.startswith("tvist demo: error: --robot gen3: no default FlexParams") and "\n" not in err
-    )
+    assert err.startswith("tvist demo: error: --robot gen3: tvist has no twin of robot")
+    assert "\n" not in err
     assert main(["demo", "--robot", "ur6e", "--out", str(tmp_path)]) == 2
     assert "unknown robot 'ur6e'" in capsys.readouterr().err
+
+
+def test_twin_server_for_an_arm_without_a_twin_is_refused_in_one_line():
+    # Refused before any port is bound (the time-out only ends a server that did start).
+    cli = [sys.executable, "-m", "tvist.cli", "twin-server", "--robot", "ur5"]
+    cli += ["--host", "127.0.0.1"]
+    done = subprocess.run(cli, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2
+    err = done.stderr.strip()
+    assert err.startswith("tvist twin-server: error: --robot ur5: tvist has no twin of robot")
+    assert "\n" not in err and "ur5e" in err

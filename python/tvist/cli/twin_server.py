@@ -29,6 +29,7 @@ def _cmd_twin_server(args: argparse.Namespace) -> int:
 
 def _serve(args: argparse.Namespace) -> int:
     from tvist.cli.args import DEFAULT_PAYLOAD_COM_M
+    from tvist.sim.flex import NoTwinError
     from tvist.urserver import PortInUse, start_twin_server
 
     # Client threads hand the interpreter to the 2 ms tick quickly (default 5 ms).
@@ -44,6 +45,9 @@ def _serve(args: argparse.Namespace) -> int:
         )
     except PortInUse as exc:
         print(f"tvist twin-server: error: {exc}", file=sys.stderr)
+        return 2
+    except NoTwinError as exc:
+        print(f"tvist twin-server: error: --robot {args.robot}: {exc}", file=sys.stderr)
         return 2
     except ValueError as exc:
         print(f"tvist twin-server: error: {exc}", file=sys.stderr)

@@ -359,19 +359,24 @@ _DEFAULTS: dict[str, FlexParams] = {
 }
 
 
+class NoTwinError(ValueError):
+    """A robot tvist has no twin of (no default :class:`FlexParams`)."""
+
+
 def default_flex(robot_name: str) -> FlexParams:
     """The default :class:`FlexParams` of ``robot_name``.
 
     Raises
     ------
-    ValueError
-        If no default is defined for that robot; pass ``flex=FlexParams(...)`` explicitly.
+    NoTwinError
+        If no default is defined for that robot (a ``ValueError``); pass
+        ``flex=FlexParams(...)`` explicitly.
     """
     try:
         return _DEFAULTS[robot_name]
     except KeyError:
         known = ", ".join(_DEFAULTS)
-        raise ValueError(
-            f"no default FlexParams for robot {robot_name!r} (defaults exist for: {known}); "
-            "pass flex=FlexParams(...)"
+        raise NoTwinError(
+            f"tvist has no twin of robot {robot_name!r}: its joint flexibility has no default "
+            f"(twins: {known}; in Python, pass flex=FlexParams(...))"
         ) from None
