@@ -196,9 +196,10 @@ def full_campaign() -> str:
     forms' cross-validation, as the campaign's and the fit's outputs hold them."""
     import json
 
+    from tvist.ident.campaign_robots import TRUE_MODES_MAX_HZ
     from tvist.ident.modal_fit.cross_validation import format_comparison
     from tvist.ident.results_store import load_results
-    from tvist.ident.true_mode_agreement import TOLERANCE, agreement
+    from tvist.ident.true_mode_agreement import TOLERANCE, agreement, ringing_agreement
 
     parts = []
     if not CAMPAIGN.is_file():
@@ -220,6 +221,15 @@ def full_campaign() -> str:
                 f"| {name} | {joint.within}/{joint.compared} ({share:.0f} %) | "
                 f"{joint.confident} | {joint.confident_outside} |"
             )
+        ringing = ringing_agreement(records, TRUE_MODES_MAX_HZ)
+        rows.append(
+            f"\nEvery mode the logs show (the records' `ringing` lists): {ringing.modes}, of "
+            f"which {ringing.confident} confident. The records list the twin's true modes up "
+            f"to {TRUE_MODES_MAX_HZ:g} Hz: of the {ringing.compared} confident modes they can "
+            f"judge, {ringing.outside} lie more than {100 * TOLERANCE:g} % from every true "
+            f"mode; {ringing.above_band} lie too near or above {TRUE_MODES_MAX_HZ:g} Hz to be "
+            "judged (on the UR5e twin the stiff elbow's mode, which the elbow log shows)."
+        )
         parts.append("\n".join(rows) + "\n")
     if not CROSS_VALIDATION.is_file():
         parts.append(

@@ -2,7 +2,15 @@
 
 from __future__ import annotations
 
-from tvist.ident.true_mode_agreement import JointAgreement, agreement, within_tolerance
+import math
+
+from tvist.ident.true_mode_agreement import (
+    JointAgreement,
+    RingingAgreement,
+    agreement,
+    ringing_agreement,
+    within_tolerance,
+)
 
 
 def _record(base_hz: float, base_true_hz: float, *, flagged: bool = False) -> dict:
@@ -42,3 +50,29 @@ def test_a_joint_without_identification_is_left_out():
     record["modes"] = [m for m in record["modes"] if m["joint"] != 0]
     record["modes"].append({"joint": 0, "reason": "no ringing above noise"})  # no wn_rad_s
     assert set(agreement([record])) == {"shoulder"}
+
+
+def _ringing(hz: float, *, flagged: bool = False) -> dict:
+    return {"wn_rad_s": 2 * math.pi * hz, "low_confidence": flagged}
+
+
+def test_ringing_modes_above_the_band_of_true_modes_are_not_counted_wrong():
+    # True modes listed up to 60 Hz: 8 and 20 Hz. A confident 63 Hz mode (the stiff elbow's,
+    # which the record does not list) cannot be judged, nor can 58.5 Hz (a true mode at
+    # 60.2 Hz would be within 3 % of it and is not listed); 58.2 Hz can (58.2 * 1.03 <= 60)
+    # and is wrong, as is 20.7 Hz (3.5 % off).
+    record = {
+        "true_modes": [{"freq_hz": 8.0}, {"freq_hz": 20.0}],
+        "ringing": [
+            _ringing(8.1),
+            _ringing(20.7),
+            _ringing(58.2),
+            _ringing(58.5),
+            _ringing(63.0),
+            _ringing(30.0, flagged=True),
+        ],
+    }
+    robot = {"ringing": [_ringing(40.0)]}  # a real robot's record: no truth, left out
+    assert ringing_agreement([record, robot], band_hz=60.0) == RingingAgreement(
+        modes=6, confident=5, compared=3, outside=2, above_band=2
+    )

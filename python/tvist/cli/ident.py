@@ -142,21 +142,22 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
 
 def _ringing_summary(records: list[dict]) -> str:
     """One line on the records' ``ringing`` modes; on the twin, how many confident ones are
-    more than 3 % from every true mode."""
+    more than 3 % from every true mode
+    (:func:`tvist.ident.true_mode_agreement.ringing_agreement`)."""
+    from tvist.ident.campaign_robots import TRUE_MODES_MAX_HZ
+    from tvist.ident.true_mode_agreement import TOLERANCE, ringing_agreement
+
     modes = [m for r in records for m in r.get("ringing") or ()]
     confident = [m for m in modes if not m.get("low_confidence", True)]
     line = f"  ringing: {len(modes)} modes in the logs, {len(confident)} confident"
-    truth = [r for r in records if r.get("true_modes") and r.get("ringing")]
-    if truth:
-        off = 0
-        for r in truth:
-            true_hz = [m["freq_hz"] for m in r["true_modes"] if "freq_hz" in m]
-            for m in r["ringing"]:
-                if m.get("low_confidence", True) or not true_hz:
-                    continue
-                f = m["wn_rad_s"] / (2 * math.pi)
-                off += min(abs(f / t - 1.0) for t in true_hz) > 0.03
-        line += f"; {off} of them more than 3 % from every true mode below 60 Hz"
+    truth = ringing_agreement(records, TRUE_MODES_MAX_HZ)
+    if truth.modes:
+        line += (
+            f"; of the {truth.compared} confident ones the twin's true modes up to "
+            f"{TRUE_MODES_MAX_HZ:g} Hz can judge, {truth.outside} more than "
+            f"{100 * TOLERANCE:g} % from every true mode ({truth.above_band} too near or above "
+            f"{TRUE_MODES_MAX_HZ:g} Hz to judge)"
+        )
     return line
 
 
