@@ -172,51 +172,58 @@ class RtdeRecorder:
         self._new_sample = threading.Condition()
         self._stop = threading.Event()
         self._sock = socket.create_connection((host, port), timeout=REPLY_TIMEOUT_S)
-        self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        self._buffer = b""
-        reply = self._request(rtde.REQUEST_PROTOCOL_VERSION, struct.pack(">H", 2))
-        if reply[:1] != b"\x01":
-            raise ValueError(f"{host}: the controller refused RTDE protocol version 2")
-        if frequency_hz is None:
-            version = self._request(rtde.GET_URCONTROL_VERSION, b"")
-            if len(version) < 4:
-                raise ValueError(f"{host}: the controller's version reply is malformed")
-            frequency_hz = rtde.output_rate_hz(struct.unpack(">I", version[:4])[0])
-        fields = [*fields, *optional_fields]
-        for _ in range(2):  # the second setup leaves out the optional fields not provided
-            names = ",".join(fields).encode()
-            reply = self._request(
-                rtde.CONTROL_PACKAGE_SETUP_OUTPUTS, struct.pack(">d", frequency_hz) + names
-            )
-            types = reply[1:].decode().split(",")
-            unknown = [f for f, t in zip(fields, types, strict=False) if t == "NOT_FOUND"]
-            if not unknown or not set(unknown) <= set(optional_fields):
-                break
-            fields = [f for f in fields if f not in unknown]
-        if unknown or reply[0] == 0:
-            raise ValueError(
-                f"{host}: the controller does not provide {', '.join(unknown) or 'these fields'}"
-                f" at {frequency_hz:g} Hz"
-            )
-        self.fields = tuple(fields)
-        self.frequency_hz = float(frequency_hz)  # Hz, as asked of the controller
-        self._recipe = rtde.Recipe(reply[0], list(fields), types)
-        self._columns = []
-        for name, kind in zip(fields, types, strict=True):
-            width = rtde.TYPE_WIDTHS.get(kind, 0)
-            self._columns += [name] if width == 0 else [f"{name}_{i}" for i in range(width)]
         self._file = None
-        if self.path is not None:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._file = self.path.open("w")
-            self._file.write(",".join(self._columns) + "\n")
-        if self._request(rtde.CONTROL_PACKAGE_START, b"")[:1] != b"\x01":
-            raise ValueError(f"{host}: the controller refused to start the output stream")
-        self._first = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="rtde-recorder", daemon=True)
-        self._thread.start()
-        if not self._first.wait(REPLY_TIMEOUT_S):
-            raise OSError(f"{host}: no RTDE data within {REPLY_TIMEOUT_S:g} s")
+        self._thread: threading.Thread | None = None
+        try:
+            self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            self._buffer = b""
+            reply = self._request(rtde.REQUEST_PROTOCOL_VERSION, struct.pack(">H", 2))
+            if reply[:1] != b"\x01":
+                raise ValueError(f"{host}: the controller refused RTDE protocol version 2")
+            if frequency_hz is None:
+                version = self._request(rtde.GET_URCONTROL_VERSION, b"")
+                if len(version) < 4:
+                    raise ValueError(f"{host}: the controller's version reply is malformed")
+                frequency_hz = rtde.output_rate_hz(struct.unpack(">I", version[:4])[0])
+            fields = [*fields, *optional_fields]
+            for _ in range(2):  # the second setup leaves out the optional fields not provided
+                names = ",".join(fields).encode()
+                reply = self._request(
+                    rtde.CONTROL_PACKAGE_SETUP_OUTPUTS, struct.pack(">d", frequency_hz) + names
+                )
+                types = reply[1:].decode().split(",")
+                unknown = [f for f, t in zip(fields, types, strict=False) if t == "NOT_FOUND"]
+                if not unknown or not set(unknown) <= set(optional_fields):
+                    break
+                fields = [f for f in fields if f not in unknown]
+            if unknown or reply[0] == 0:
+                missing = ", ".join(unknown) or "these fields"
+                raise ValueError(
+                    f"{host}: the controller does not provide {missing} at {frequency_hz:g} Hz"
+                )
+            self.fields = tuple(fields)
+            self.frequency_hz = float(frequency_hz)  # Hz, as asked of the controller
+            self._recipe = rtde.Recipe(reply[0], list(fields), types)
+            self._columns = []
+            for name, kind in zip(fields, types, strict=True):
+                width = rtde.TYPE_WIDTHS.get(kind, 0)
+                self._columns += [name] if width == 0 else [f"{name}_{i}" for i in range(width)]
+            if self._request(rtde.CONTROL_PACKAGE_START, b"")[:1] != b"\x01":
+                raise ValueError(f"{host}: the controller refused to start the output stream")
+            # Opened once the stream is granted (a refused recording leaves no file); packages
+            # that arrive meanwhile wait in the socket for the thread.
+            if self.path is not None:
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                self._file = self.path.open("w")
+                self._file.write(",".join(self._columns) + "\n")
+            self._first = threading.Event()
+            self._thread = threading.Thread(target=self._run, name="rtde-recorder", daemon=True)
+            self._thread.start()
+            if not self._first.wait(REPLY_TIMEOUT_S):
+                raise OSError(f"{host}: no RTDE data within {REPLY_TIMEOUT_S:g} s")
+        except BaseException:  # nothing left open: the socket, the file, the thread
+            self.stop()
+            raise
 
     def _read_package(self) -> tuple[int, bytes]:
         header = self._rtde.HEADER
@@ -319,7 +326,8 @@ class RtdeRecorder:
             self._sock.shutdown(2)
         except OSError:
             pass
-        self._thread.join(timeout=5.0)
+        if self._thread is not None:
+            self._thread.join(timeout=5.0)
         self._sock.close()
         if self._file is not None:
             self._file.close()

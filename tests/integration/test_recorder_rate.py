@@ -26,8 +26,11 @@ class ScriptedController:
     """One RTDE client served on a loopback port; ``asked_hz`` is the rate of each output
     setup it was asked for, ``version_asked`` whether the client asked its version."""
 
-    def __init__(self, version: tuple[int, ...], max_rate_hz: float) -> None:
-        self.version, self.max_rate_hz = version, max_rate_hz
+    def __init__(
+        self, version: tuple[int, ...], max_rate_hz: float, *, refuse_start: bool = False
+    ) -> None:
+        self.version, self.max_rate_hz, self.refuse_start = version, max_rate_hz, refuse_start
+        self.closed_by_client = threading.Event()
         self.asked_hz: list[float] = []
         self.version_asked = False
         self._listener = socket.create_server(("127.0.0.1", 0))
@@ -44,6 +47,7 @@ class ScriptedController:
                 try:
                     code, payload = read_package(conn)
                 except ConnectionError:
+                    self.closed_by_client.set()
                     return
                 kind = chr(code)
                 if kind == "V":
@@ -58,6 +62,8 @@ class ScriptedController:
                     recipe = 1 if rate <= self.max_rate_hz else 0
                     types = ",".join("DOUBLE" for _ in names)
                     conn.sendall(package("O", bytes([recipe]) + types.encode()))
+                elif kind == "S" and self.refuse_start:
+                    conn.sendall(package("S", b"\x00"))
                 elif kind == "S":
                     conn.sendall(package("S", b"\x01"))
                     self._stream(conn, 1.0 / self.asked_hz[-1])
@@ -110,3 +116,24 @@ def test_a_rate_given_is_asked_as_is_and_a_cb3_refuses_500_hz(tmp_path) -> None:
         controller.close()
     assert not controller.version_asked
     assert controller.asked_hz == [500.0]
+
+
+def test_a_refused_start_leaves_no_file_and_no_connection(tmp_path) -> None:
+    """The controller grants the recipe but refuses to start: the recorder raises, writes no
+    CSV (not even a header) and closes its connection before raising."""
+    from tvist.live import RtdeRecorder
+
+    controller = ScriptedController(*E_SERIES, refuse_start=True)
+    recorder = None
+    try:
+        with pytest.raises(ValueError, match="refused to start"):
+            recorder = RtdeRecorder(
+                "127.0.0.1", tmp_path / "log.csv", ["timestamp"], port=controller.port
+            )
+        # The recorder is still referenced by the traceback here: only an explicit close
+        # ends the connection now.
+        assert controller.closed_by_client.wait(2.0)
+    finally:
+        controller.close()
+    assert recorder is None
+    assert not (tmp_path / "log.csv").exists()
