@@ -40,8 +40,8 @@ SCRIPT_PORTS = (30001, 30002, 30003)
 #: Controller version reported over RTDE (an e-Series, PolyScope 5.11).
 CONTROLLER_VERSION = (5, 11, 8, 0)
 POLYSCOPE_VERSION = "5.11.8.0"
-#: Publishing is capped at the controller rate (e-Series: 500 Hz).
-MAX_FREQUENCY_HZ = 500.0
+#: Publishing is capped at the rate of the controller the server reports (e-Series: 500 Hz).
+MAX_FREQUENCY_HZ = rtde_wire.output_rate_hz(CONTROLLER_VERSION[0])
 #: FIFO priority of the tick thread where the OS allows it (Linux, privileged); the RTDE
 #: readers run just below it.
 TICK_PRIORITY = 20
@@ -412,9 +412,8 @@ class TwinServer:
         types = [variables.OUTPUTS.get(n, "NOT_FOUND") for n in names]
         valid = bool(names) and "NOT_FOUND" not in types and 0.0 < frequency <= MAX_FREQUENCY_HZ
         if not 0.0 < frequency <= MAX_FREQUENCY_HZ:
-            session.send(
-                rtde_wire.text_message(f"output frequency {frequency:g} Hz not in (0, 500] Hz")
-            )
+            refusal = f"output frequency {frequency:g} Hz not in (0, {MAX_FREQUENCY_HZ:g}] Hz"
+            session.send(rtde_wire.text_message(refusal))
         recipe_id = len(session.outputs) + 1 if valid else 0
         if valid:
             session.outputs.append(rtde_wire.Recipe(recipe_id, names, types))
