@@ -203,6 +203,24 @@ def test_recipes_past_the_one_byte_id_are_refused_and_publishing_goes_on(
     assert_serves_clients()
 
 
+def test_an_output_rate_above_the_reported_controllers_is_refused_with_the_cap(server) -> None:
+    """The server reports an e-Series controller (RTDE ``v`` 5.x), whose outputs go at
+    500 Hz at most (UR's RTDE guide; a CB3 125 Hz): 500 Hz is granted, 501 Hz refused with
+    a failed reply (id 0) and a text message naming the cap, and the connection stays
+    usable. The cap here is typed from the guide for the version the client is told."""
+    client = RawRtde()
+    try:
+        client.version()
+        major = struct.unpack(">4I", client.request("v"))[0]
+        assert major == 5
+        cap = 500.0
+        assert client.setup_outputs(["timestamp"], frequency_hz=cap + 1.0)[0] == 0
+        assert any(b"not in (0, 500] Hz" in m for m in client.messages), client.messages
+        assert client.setup_outputs(["timestamp"], frequency_hz=cap)[0] == 1
+    finally:
+        client.close()
+
+
 def test_a_setup_whose_reply_exceeds_a_package_is_refused_not_dropped(server) -> None:
     """30,000 unknown names (a 60 kB request) would make a 300 kB reply: the setup is
     refused with a failed reply (id 0) and the connection stays usable."""
