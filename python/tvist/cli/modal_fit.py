@@ -89,6 +89,9 @@ def fit_modal_command(records: Sequence[Mapping[str, Any]], args: argparse.Names
     )
     for test in stats["joint_tests"]:
         verdict = "made rigid" if test.get("made_rigid") else "flexible"
+        if "refit_chi2" in test:
+            before, after = test["refit_chi2"]
+            verdict = f"better without it: refitted from there (χ² {before:.1f} -> {after:.1f})"
         print(
             f"    {_what(test)}: χ² gain {test['chi2_gain']:.1f} on {test['dof']} "
             f"parameter(s), p = {test['p_value']:.2g}: {verdict}"
