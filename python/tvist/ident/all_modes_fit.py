@@ -141,11 +141,11 @@ JOINT_P = 1e-3
 #: and the starts of the hinge left out there, as multiples of its start stiffness (stiff:
 #: the nested model's solution is where the hinge is rigid).
 MAX_NESTED_REPAIRS = 3
+NESTED_HINGE_STARTS = (4.0, 25.0)
 #: How much better (truncated χ², the joint test's units) a nested fit must be to show a
 #: local optimum: separate least-squares runs differ by a fraction of a unit (a stiff hinge
 #: is not quite rigid), and the test rejects rigidity only at a gain of 10.8.
 NESTED_TOLERANCE = 1.0
-NESTED_HINGE_STARTS = (4.0, 25.0)
 #: Starts of the joints other than base and shoulder, as multiples of the shoulder's
 #: stiffness (elbow) and as the frequency (Hz) of their own mode (wrists).
 ELBOW_STARTS = (0.5, 1.0, 2.0, 5.0)
@@ -550,7 +550,8 @@ def _select_links(
 
 def _what(obs: ObservedModes, key: int) -> str:
     """``"link l"`` or ``"joint j"`` of a column key."""
-    return " ".join(map(str, next(iter(_name(obs, key).items()))))
+    ((kind, index),) = _name(obs, key).items()
+    return f"{kind} {index}"
 
 
 def _refit_from_nested(
