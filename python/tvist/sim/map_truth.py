@@ -104,9 +104,12 @@ def ranked_mode_errors(
     n_modes: int,
     *,
     max_freq_hz: float = 60.0,
+    damping: bool = False,
 ) -> np.ndarray:
     """``(n_modes, n_poses)`` relative frequency errors by frequency rank (module docstring)
-    of the ``n_modes`` lowest modes of the map with flexible joints ``entries``."""
+    of the ``n_modes`` lowest modes of the map with flexible joints ``entries``; with
+    ``damping``, the errors of their damping ratios instead (``ζ_map − ζ_true``, absolute)
+    of the same pairs."""
     from tvist.ident.all_modes_fit import D_TOL, F_TOL, GATE
 
     out = np.full((n_modes, len(poses)), np.nan)
@@ -123,5 +126,7 @@ def ranked_mode_errors(
         rows, cols = optimize.linear_sum_assignment(np.nan_to_num(cost, nan=1e6))
         for r, c in zip(rows, cols, strict=True):
             if cost[r, c] <= GATE:
-                out[r, p] = wn[r] / f_true[c] - 1.0
+                out[r, p] = (
+                    model.zeta[0, r] - truth[c].zeta if damping else wn[r] / f_true[c] - 1.0
+                )
     return out
