@@ -126,7 +126,5 @@ def ranked_mode_errors(
         rows, cols = optimize.linear_sum_assignment(np.nan_to_num(cost, nan=1e6))
         for r, c in zip(rows, cols, strict=True):
             if cost[r, c] <= GATE:
-                out[r, p] = (
-                    model.zeta[0, r] - truth[c].zeta if damping else wn[r] / f_true[c] - 1.0
-                )
+                out[r, p] = model.zeta[0, r] - truth[c].zeta if damping else wn[r] / f_true[c] - 1.0
     return out
