@@ -34,15 +34,20 @@ off). A joint whose mode the campaign never identified keeps a stiffness the dat
 loosely (within a factor :data:`STIFFNESS_SPAN` of its start); its mode is not shaped unless
 identified (:mod:`tvist.ident.shaped_modes`).
 
-**Every flexible joint is damped**, and every link hinge: a gear damps whether or not
-its own mode rang, and a joint left undamped makes every mode it takes part in too lightly
-damped, which a ZV shaper turns into residual vibration (on development variant 0 of
+**Which joints are damped** is decided by the damping ratios. Base and shoulder and any
+joint or hinge that dominates at least :data:`MIN_DOMINATED_FOR_LOAD_LAW` identified modes
+carry a damper with its load law (the joint's ``v_0 + v_1|L| + v_2 L²``). Every other
+flexible coordinate gets a constant damper if it lowers the damping fit's truncated χ² by
+more than the same likelihood-ratio test as a link's (:func:`_select_dampers`): a gear damps
+whether or not its own mode rang, and a joint left undamped makes the modes it takes part in
+too light, which a ZV shaper turns into residual vibration (on development variant 0 of
 :mod:`tvist.sim.family`, dampers at base and shoulder only left the elbow-involved mode at
-the demo's Q3, 14.8 Hz with ζ 0.060, at ζ 0.014, and Q1→Q3 kept 87.6 % of its reduction;
-with every joint damped 99.6 %). Both damping fits bound every damper at zero, so one
-the data do not support stays there. Load terms (the joint's
-``v_0 + v_1|L| + v_2 L²``) only for base and shoulder and a joint dominating at least
-:data:`MIN_DOMINATED_FOR_LOAD_LAW` identified modes.
+the demo's Q3, 14.8 Hz with ζ 0.060, at ζ 0.014, and Q1→Q3 kept 87.6 % of its reduction).
+Not every joint is damped by default: a damper the data barely determine trades against the
+stiffnesses in the joint refinement (on the default twin's demo campaign, dampers at every
+joint put wrist 1 at 380 times critical and the shaped modes' errors from 0.2 / 0.5 % to
+1.1 / 1.7 % RMS held out). A constant damper is also bounded at :data:`MAX_OWN_ZETA` of
+critical for its coordinate alone (:func:`_damping_caps`).
 
 **Which links bend** is decided by the data: a candidate link's hinge is made stiff (removed)
 when the evidence for its bending is weak: the truncated χ² of the frequency fit (each
@@ -172,6 +177,10 @@ MIN_LOAD_SPAN_NM = 1.0
 #: mode rang at fewer poses has a constant damper only (its load terms would not be
 #: determined).
 MIN_DOMINATED_FOR_LOAD_LAW = 5
+#: Largest damping ratio a constant-only damper may give its own coordinate at its smallest
+#: inertia (:func:`_damping_caps`): the family's joint modes span ζ 0.03-0.64, no real gear
+#: is overdamped.
+MAX_OWN_ZETA = 0.9
 DAMPING_LOAD = {0: 1}
 _LSQ = {"x_scale": "jac", "xtol": 1e-10, "ftol": 1e-10, "gtol": 1e-10, "max_nfev": 200}
 _INVALID = 10.0
@@ -591,8 +600,17 @@ def _refit_from_nested(
 def _fit_damping(
     obs: ObservedModes, model: _Model, x_stiff: np.ndarray, assignment: np.ndarray
 ) -> np.ndarray:
-    """Damping coefficients by NNLS on the matched ζ (damping projected on undamped modes):
-    each column is the model's ζ with one unit coefficient."""
+    """Damping coefficients of ``model.damped`` (:func:`_damping_fit`)."""
+    return _damping_fit(obs, model, x_stiff, assignment)[0]
+
+
+def _damping_fit(
+    obs: ObservedModes, model: _Model, x_stiff: np.ndarray, assignment: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Damping coefficients by bounded linear least squares on the matched ζ (damping
+    projected on undamped modes; at least 0, at most :func:`_damping_caps`), and the
+    relative ζ residuals of the matched modes: each column is the model's ζ with one unit
+    coefficient."""
     used = assignment >= 0
     columns = []
     for name in model.damping_names():
@@ -609,8 +627,68 @@ def _fit_damping(
     ok = np.all(np.isfinite(a), axis=1)
     scale = np.linalg.norm(a[ok], axis=0)
     scale[scale == 0] = 1.0
-    x, _ = optimize.nnls(a[ok] / scale, np.ones(int(ok.sum())))
-    return x / scale
+    cap = _damping_caps(obs, model, x_stiff) * scale
+    fit = optimize.lsq_linear(a[ok] / scale, np.ones(int(ok.sum())), bounds=(0.0, cap))
+    return fit.x / scale, fit.fun
+
+
+def _select_dampers(
+    obs: ObservedModes,
+    model: _Model,
+    x_stiff: np.ndarray,
+    assignment: np.ndarray,
+    base: Sequence[int],
+) -> list[dict[str, Any]]:
+    """Sets ``model.damped``: ``base``, then, one at a time and the strongest first, each
+    other flexible coordinate whose constant damper lowers the damping fit's truncated χ²
+    (relative ζ residuals in units of the ``base`` fit's robust scatter, each term capped at
+    :data:`GATE`) by more than the ``1 − JOINT_P`` quantile of χ² with one degree of freedom.
+    Returns the tests (``key``: a column, ``chi2_gain``, ``kept``)."""
+
+    def chi2(damped: Sequence[int], scale: float) -> tuple[float, float]:
+        model.damped = tuple(j for j in model.flex if j in damped)
+        r = _damping_fit(obs, model, x_stiff, assignment)[1]
+        return float(np.sum(np.minimum((r / scale) ** 2, GATE))), _robust_scale(r)
+
+    chosen = list(base)
+    _, scale = chi2(chosen, 1.0)
+    current, _ = chi2(chosen, scale)
+    threshold = float(stats.chi2.isf(JOINT_P, 1))
+    tests: list[dict[str, Any]] = []
+    while True:
+        gains = {j: current - chi2([*chosen, j], scale)[0] for j in model.flex if j not in chosen}
+        if not gains:
+            break
+        best = max(gains, key=lambda j: gains[j])
+        kept = gains[best] > threshold
+        tests.append({"key": best, "chi2_gain": gains[best], "kept": kept})
+        if not kept:
+            break
+        chosen.append(best)
+        current -= gains[best]
+    model.damped = tuple(j for j in model.flex if j in chosen)
+    return tests
+
+
+def _damping_caps(obs: ObservedModes, model: _Model, x_stiff: np.ndarray) -> np.ndarray:
+    """Upper bound of each damping coefficient (``model.damping_names()`` order), N m s/rad:
+    for a damper with a constant term only (a joint that dominates few identified modes, or
+    a hinge) the value at which its coordinate alone, at the smallest inertia it has over
+    the poses, would be damped at :data:`MAX_OWN_ZETA` (``c = 2 ζ √(k J)``); unbounded for
+    the others. Such a damper is weakly determined: unbounded, it can take an overdamped
+    value that shifts its neighbours' modes (with a damper at every joint, on the default
+    twin's demo campaign wrist 1's went to 1.4e5 N m s/rad, 380 times critical)."""
+    names = model.stiffness_names()
+    k0 = {j: math.exp(v) for (j, t), v in zip(names, x_stiff, strict=True) if t == 0}
+    caps = []
+    for j, _ in model.damping_names():
+        if model.damp_terms[j] != [0]:
+            caps.append(np.inf)
+            continue
+        coords = [j, j + 1] if j in model.hinges else [j]
+        inertia = min(float(np.min(obs.mass_kg_m2[:, c, c])) for c in coords)
+        caps.append(2.0 * MAX_OWN_ZETA * math.sqrt(k0[j] * inertia))
+    return np.array(caps)
 
 
 def _refine(
@@ -639,7 +717,7 @@ def _refine(
         )
 
     lo, hi = _stiffness_bounds(model, start)
-    lo, hi = lo + [0.0] * x_damp.size, hi + [np.inf] * x_damp.size
+    lo, hi = lo + [0.0] * x_damp.size, hi + list(_damping_caps(obs, model, x_stiff))
     x = np.clip(np.concatenate([x_stiff, x_damp]), lo, hi)
     ew, ez = relative(x)
     scale_w, scale_z = _robust_scale(ew / sw), _robust_scale(ez / sz)
@@ -745,8 +823,8 @@ def fit_all_modes(
     columns = [obs.column(j) for j in candidates] + list(_hinge_keys(obs))
     model, fit, start, joint_tests, dropped = _select_links(obs, sorted(columns), drop_t)
 
-    # A damper at every flexible joint and hinge; a damping load law only where the data
-    # can carry one (module docstring, "Every flexible joint is damped").
+    # Dampers: base and shoulder and any joint or hinge dominating identified modes, then
+    # the others the damping ratios show (module docstring, "Which joints are damped").
     modes = model_modes(_entries(model, fit.x), obs.mass_kg_m2, obs.gravity_torque_nm, obs.jacobian)
     used = fit.assignment >= 0
     dominant = modes.dominant_joint()[obs.pose[used], fit.assignment[used]]
@@ -755,12 +833,12 @@ def fit_all_modes(
     def dominates(j: int) -> int:
         return int(np.sum(np.isin(dominant, [j, j + 1] if j in model.hinges else [j])))
 
-    model.damped = tuple(model.flex)
+    base = [j for j in model.flex if j in always or dominates(j) >= MIN_DOMINATED_FOR_LOAD_LAW]
     for j in model.flex:
         spans = np.ptp(np.abs(obs.gravity_torque_nm[:, model.damping_load.get(j, j)]))
-        with_load = j in always or (dominates(j) >= MIN_DOMINATED_FOR_LOAD_LAW)
-        with_load = with_load and j not in model.hinges
-        model.damp_terms[j] = [0, 1, 2] if with_load and spans > MIN_LOAD_SPAN_NM else [0]
+        with_load = j in base and j not in model.hinges and spans > MIN_LOAD_SPAN_NM
+        model.damp_terms[j] = [0, 1, 2] if with_load else [0]
+    damper_tests = _select_dampers(obs, model, fit.x, fit.assignment, base)
     x_damp = _fit_damping(obs, model, fit.x, fit.assignment)
     x_stiff, assignment = fit.x, fit.assignment
     for _ in range(MATCH_PASSES):
@@ -807,6 +885,10 @@ def fit_all_modes(
             _name(obs, j).get("joint") for j in model.damped if j not in model.hinges
         ],
         "joint_tests": joint_tests,
+        "damper_tests": [
+            {**_name(obs, t["key"]), "chi2_gain": t["chi2_gain"], "kept": t["kept"]}
+            for t in damper_tests
+        ],
         "joint_test_level": JOINT_P,
         "dropped": dropped,
         "coefficients": coefficients,
