@@ -85,6 +85,41 @@ def test_cover_poses_are_added_only_where_they_extend_the_range():
     assert np.all(inertia[:, COVERED] >= lo) and np.all(inertia[:, COVERED] <= hi)
 
 
+def test_at_poses_are_identified_even_where_they_lie_within_the_range():
+    """``--at`` poses are where the user's moves stop: each is identified with every payload,
+    also where the plan's range already holds its inertias (Q3 in the default plan, which
+    ``--cover`` leaves out, as the test above shows)."""
+    given = np.array([PAPER_POSES["Q3"], PAPER_POSES["Q1"]])
+    poses = plan_poses("ur5e", payloads_kg=(0.0, 5.0), every=8, at_q=given)
+    at = {p.key: p for p in poses if "-A" in p.key}
+    assert sorted(at) == ["m0kg-A0", "m0kg-A1", "m5kg-A0", "m5kg-A1"]
+    for key, p in at.items():
+        np.testing.assert_array_equal(p.q, given[int(key[-1])])
+    covered = plan_poses("ur5e", payloads_kg=(5.0,), every=8, cover_q=given[:1])
+    assert not [p for p in covered if "-C" in p.key]
+    assert len(poses) == len(plan_poses("ur5e", payloads_kg=(0.0, 5.0), every=8)) + 4
+
+
+def test_plan_command_identifies_at_a_seven_joint_arms_poses(tmp_path, capsys):
+    """``--at`` on an arm of 7 joints: rows of 7 angles (a row of 6 is refused naming the
+    count the robot needs)."""
+    from tvist.experiments.motions import demo_poses
+
+    rows = list(demo_poses("fr3").values())
+    at = tmp_path / "stops.csv"
+    at.write_text("\n".join(",".join(f"{v:.6f}" for v in r) for r in rows) + "\n")
+    out = tmp_path / "plan"
+    args = ["plan", "--robot", "fr3", "--every", "0", "--at", str(at), "--payloads", "0", "3"]
+    assert main([*args, "--duration", "1", "--out", str(out)]) == 0
+    keys = sorted(p["key"] for p in json.loads((out / "plan.json").read_text())["poses"])
+    assert keys == sorted(f"m{m}kg-A{i}" for m in (0, 3) for i in range(3))
+    assert "6 poses at the --at poses" in capsys.readouterr().out
+    at.write_text("0,0,0,-1.5,0,1.5\n")
+    assert main([*args, "--out", str(tmp_path / "refused")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "--at" in err and "line 1 has 6 values" in err and "is 7" in err, err
+
+
 def test_plan_command_covers_a_poses_file_with_a_header(tmp_path, capsys):
     cover = tmp_path / "moves.csv"
     rows = [PAPER_POSES["Q1"], PAPER_POSES["Q3"], [0.0, -2.356, 1.047, -1.571, 0.0, 0.0]]
@@ -110,13 +145,14 @@ def test_plan_command_covers_a_poses_file_with_a_header(tmp_path, capsys):
         ("0,-3.14,0,-1.57,0,0\n0,-90,150,-90,0,0\n", "look like degrees"),
     ],
 )
-def test_bad_cover_files_are_one_line_errors(content, message, tmp_path, capsys):
+@pytest.mark.parametrize("flag", ["--cover", "--at"])
+def test_bad_poses_files_are_one_line_errors(content, message, flag, tmp_path, capsys):
     cover = tmp_path / "moves.csv"
     cover.write_text(content)
     out = tmp_path / "plan"
-    assert main(["plan", "--every", "0", "--cover", str(cover), "--out", str(out)]) == 2
+    assert main(["plan", "--every", "0", flag, str(cover), "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and "--cover" in err and message in err, err
+    assert len(err.splitlines()) == 1 and err.count(flag) == 1 and message in err, err
     assert not out.exists()
 
 

@@ -22,7 +22,7 @@ __all__ = [
 
 def add_plan_options(p: argparse.ArgumentParser) -> None:
     """``--robot``, ``--payloads``, ``--payload-com``, ``--every``, ``--seed``, ``--cover``,
-    ``--no-workspace-cover``, ``--duration``, ``--excite``: which poses and excitations a
+    ``--at``, ``--no-workspace-cover``, ``--duration``, ``--excite``: which poses and excitations a
     campaign runs."""
     p.add_argument("--robot", default="ur5e", help="robot model (default ur5e)")
     p.add_argument(
@@ -46,7 +46,7 @@ def add_plan_options(p: argparse.ArgumentParser) -> None:
         default=1,
         help="keep every N-th of Algorithm 1's poses (52 per payload, counted over all "
         "payloads), plus the poses that cover the inertias of the workspace (0: none of "
-        "these, only poses covering the --cover poses; default 1)",
+        "these, only the --at poses and poses covering the --cover poses; default 1)",
     )
     p.add_argument(
         "--seed", type=int, default=0, help="seed of wrists, excitations, noise (default 0)"
@@ -57,6 +57,12 @@ def add_plan_options(p: argparse.ArgumentParser) -> None:
         help="poses your moves will pass through (a CSV: 6 comma-separated joint angles, rad, "
         "per row; header optional): the plan adds poses until their inertias lie within the "
         "plan's, with every payload",
+    )
+    p.add_argument(
+        "--at",
+        metavar="POSES.csv",
+        help="poses where your moves stop (a CSV like --cover's): each is identified too, "
+        "with every payload, so the map is measured where what it shapes rings",
     )
     p.add_argument(
         "--no-workspace-cover",
@@ -117,35 +123,33 @@ def checked_plan(args: argparse.Namespace, require_fittable: bool = True) -> lis
     Raises
     ------
     ValueError
-        ``--every`` below 1, a bad ``--cover`` file, or (with ``require_fittable``) a plan
-        the map fit cannot succeed on, with the reason and the flags that change it.
+        ``--every`` below 1, a bad ``--cover`` or ``--at`` file, or (with
+        ``require_fittable``) a plan the map fit cannot succeed on, with the reason and the
+        flags that change it.
     """
     from tvist.ident.pose_plan import plan_poses, plan_shortfall
 
-    if args.every < 0 or (args.every == 0 and not args.cover):
-        raise ValueError(f"--every {args.every}: give 1 or more (0 only with --cover)")
+    if args.every < 0 or (args.every == 0 and not (args.cover or args.at)):
+        raise ValueError(f"--every {args.every}: give 1 or more (0 only with --cover or --at)")
     if not (math.isfinite(args.duration) and args.duration > 0):
         raise ValueError(f"--duration {args.duration}: give a length > 0 s")
-    cover_q = _read_poses(args.cover) if args.cover else None
-    try:
-        poses = plan_poses(
-            args.robot,
-            payloads_kg=args.payloads,
-            payload_com_m=args.payload_com,
-            every=args.every,
-            seed=args.seed,
-            cover_q=cover_q,
-            cover_workspace=not args.no_workspace_cover,
-        )
-    except ValueError as exc:
-        if cover_q is None:
-            raise
-        raise ValueError(f"--cover {args.cover}: {exc}") from None
+    cover_q = _read_poses(args.cover, "--cover", args.robot) if args.cover else None
+    at_q = _read_poses(args.at, "--at", args.robot) if args.at else None
+    poses = plan_poses(
+        args.robot,
+        payloads_kg=args.payloads,
+        payload_com_m=args.payload_com,
+        every=args.every,
+        seed=args.seed,
+        cover_q=cover_q,
+        cover_workspace=not args.no_workspace_cover,
+        at_q=at_q,
+    )
     shortfall = plan_shortfall(poses) if require_fittable else None
     if shortfall:
         raise ValueError(
             f"this plan cannot give a map: {shortfall} (lower --every, or add poses with "
-            "--cover or payloads with --payloads)"
+            "--cover or --at or payloads with --payloads)"
         )
     return poses
 
@@ -160,23 +164,30 @@ def coverage_text(poses: list, args: argparse.Namespace) -> str:
     else:
         workspace = sum("-W" in p.key for p in poses)
         text = f"{workspace} poses added so that {joints} cover the workspace's"
+    if args.at:
+        text += f"; {sum('-A' in p.key for p in poses)} poses at the --at poses"
     if args.cover:
         given = sum("-C" in p.key for p in poses)
         text += f"; {given} of the --cover poses (the others lie within the plan's range)"
     return text
 
 
-def _read_poses(path: str) -> np.ndarray:
-    """``--cover``: one pose per row, its 6 joint angles in rad, comma-separated, an optional
-    header line (a first line that does not start with a number). Refused on one line naming
-    the row: a value that is not a number, a row of another length; the angles' unit and the
-    joint limits are checked with the plan (:func:`tvist.ident.pose_plan.cover_poses`)."""
-    lines = existing_file(path, "--cover").read_text(errors="replace").splitlines()
+def _read_poses(path: str, flag: str, robot_name: str) -> np.ndarray:
+    """The poses file of ``flag`` (``--cover``, ``--at``): one pose per row, the robot's
+    joint angles in rad, comma-separated, an optional header line (a first line that does not
+    start with a number). Refused on one line naming the flag, the file and the row: a value
+    that is not a number, a row of another length, angles that are not a pose of the robot
+    in rad (:func:`tvist.ident.pose_plan.check_user_poses`)."""
+    from tvist.ident.pose_plan import check_user_poses
+    from tvist.robots import params
+
+    n_dof = params(robot_name).n_dof
+    lines = existing_file(path, flag).read_text(errors="replace").splitlines()
     rows = [(n, line) for n, line in enumerate(lines, start=1) if line.strip()]
     if rows and rows[0][1].lstrip()[:1] not in "0123456789+-.":
         rows = rows[1:]  # a header
     if not rows:
-        raise ValueError(f"--cover {path}: no poses (one pose per row: 6 joint angles, rad)")
+        raise ValueError(f"{flag} {path}: no poses (one pose per row: {n_dof} joint angles, rad)")
     q = []
     for n, line in rows:
         cells = [c.strip() for c in line.split(",")]
@@ -185,15 +196,18 @@ def _read_poses(path: str) -> np.ndarray:
         except ValueError:
             bad = next(c for c in cells if not _is_number(c))
             raise ValueError(
-                f"--cover {path}: line {n}: {bad[:20]!r} is not a number (6 comma-separated "
-                "joint angles, rad, per row)"
+                f"{flag} {path}: line {n}: {bad[:20]!r} is not a number ({n_dof} "
+                "comma-separated joint angles, rad, per row)"
             ) from None
-        if len(cells) != 6:
+        if len(cells) != n_dof:
             raise ValueError(
-                f"--cover {path}: line {n} has {len(cells)} values: a pose is 6 "
-                "comma-separated joint angles (rad)"
+                f"{flag} {path}: line {n} has {len(cells)} values: a pose of the {robot_name} "
+                f"is {n_dof} comma-separated joint angles (rad)"
             )
-    return np.array(q, dtype=float)
+    try:
+        return check_user_poses(robot_name, np.array(q, dtype=float))
+    except ValueError as exc:
+        raise ValueError(f"{flag} {path}: {exc}") from None
 
 
 def _is_number(text: str) -> bool:
@@ -254,7 +268,7 @@ def add_plan_command(sub: argparse._SubParsersAction) -> None:
         "plan",
         help="write a campaign plan: poses, excitation programs (URScript, CSV), time",
         description="Choose the campaign poses (paper Algorithm 1, every --every-th, plus "
-        "--cover poses) payload by payload, check that the map fit can succeed on them, and "
+        "--at and --cover poses) payload by payload, check that the map fit can succeed on them, and "
         "write each excitation (of the --excite joints) (Algorithm 2) as a URScript program and as "
         "a trajectory CSV, with plan.json listing them in order.",
     )

@@ -4,8 +4,10 @@ family (:mod:`tvist.sim.family`) after another, each measured as a user would me
 Per variant ``family:<robot>:<seed>``:
 
 1. **Campaign logs**: the plan (:func:`tvist.ident.pose_plan.plan_poses`, which covers the
-   workspace's inertias) run on the variant's twin, the base, shoulder and elbow excitation of
-   each pose (:func:`~tvist.ident.excited.default_excited_joints`) written as ur_rtde CSV logs
+   workspace's inertias and, as a user gives the poses where their moves stop with ``tvist
+   campaign --at``, identifies at the demo's move poses) run on the variant's twin, the
+   base, shoulder and elbow excitation of each pose
+   (:func:`~tvist.ident.excited.default_excited_joints`) written as ur_rtde CSV logs
    (``<pose>_joint<j>.csv``, one folder per payload; a rerun keeps the logs already written).
 2. **Through the CLI** (subprocesses, as a user types them): ``tvist identify`` of each
    payload's logs, then ``tvist fit-map --kind modal``.
@@ -115,6 +117,9 @@ class HarnessSettings:
         the robot's base, shoulder and elbow,
         :func:`~tvist.ident.excited.default_excited_joints`). The logs
         folder is shared by reruns: give another ``--out`` for other joints.
+    at_move_poses
+        Whether the plan identifies at the demo's move poses ``Q1``-``Q3`` too (``tvist
+        campaign --at``, as a user gives the poses where their moves stop; every payload).
     """
 
     robot: str = "ur5e"
@@ -130,25 +135,27 @@ class HarnessSettings:
     accel_noise_std_m_s2: float = 0.05
     plan_seed: int = 0
     excited_joints: tuple[int, ...] | None = None
+    at_move_poses: bool = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "excited_joints", checked_joints(self.excited_joints, self.robot))
 
     def plan(self) -> list:
         """The campaign poses (payloads above the robot's rated one are left out)."""
-        from tvist.experiments.motions import PAYLOAD_COM_M
+        from tvist.experiments.motions import PAYLOAD_COM_M, demo_poses
         from tvist.ident.pose_plan import plan_poses
         from tvist.robots import params
 
         rated = params(self.robot).max_payload_kg
         payloads = tuple(min(m, rated) for m in self.payloads_kg)
-
+        at_q = np.array(list(demo_poses(self.robot).values())) if self.at_move_poses else None
         return plan_poses(
             self.robot,
             payloads_kg=tuple(dict.fromkeys(payloads)),
             payload_com_m=PAYLOAD_COM_M,
             every=self.every,
             seed=self.plan_seed,
+            at_q=at_q,
         )
 
 
@@ -722,6 +729,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="joints excited at every pose (default: base, shoulder and the robot's elbow, "
         "0,1,2 on a UR, 0,1,3 on an FR3 or iiwa14)",
     )
+    p.add_argument(
+        "--no-at-move-poses",
+        action="store_true",
+        help="do not identify at the demo's move poses Q1-Q3 (tvist campaign --at)",
+    )
     args = p.parse_args(argv)
     try:
         seeds = parse_seeds(args.seeds)
@@ -739,6 +751,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         every=args.every,
         duration_s=args.duration,
         excited_joints=joints,
+        at_move_poses=not args.no_at_move_poses,
     )
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -11,7 +11,9 @@ A plan (:func:`plan_poses`) is every ``every``-th of these poses, plus the poses
 its range of joint-axis inertias over the whole workspace (:func:`workspace_poses`) and over
 the poses the user gives (:func:`cover_poses`), added until every one of those lies within
 the plan's range (:func:`covering_poses`; a map is identified only over the inertias of its
-poses, :mod:`tvist.maps.paper10`), in the order that changes the payload least
+poses, :mod:`tvist.maps.paper10`), and the poses where the user's moves stop
+(:func:`at_poses`), each identified whether or not it extends the range, in the order that
+changes the payload least
 (:func:`campaign_order`); :func:`plan_shortfall` says why the map fit could not succeed on it,
 before anything moves. Each pose's excitations (:func:`pose_excitations`, of the base, the
 shoulder and the robot's elbow by default, :func:`~tvist.ident.excited.default_excited_joints`)
@@ -45,6 +47,8 @@ __all__ = [
     "CampaignPose",
     "campaign_order",
     "campaign_poses",
+    "check_user_poses",
+    "at_poses",
     "cover_poses",
     "covered_joints",
     "covering_poses",
@@ -98,6 +102,8 @@ WORKSPACE_STREAM = 2_000_000
 _COVERING_STREAM = 3_000_000
 #: Stream of the random plan poses of a URDF-placed arm (the pose seeds: ``[seed, row]``).
 _RANDOM_PLAN_STREAM = 5_000_000
+#: Seed stream of the ``at_q`` poses (``[seed, _AT_STREAM + row]``).
+_AT_STREAM = 7_000_000
 #: A pose whose inertias lie less than this (relative) outside the plan's range counts as
 #: covered: angles written with 6 decimals move an inertia by ~1e-8, and a paper10 map's soft
 #: clamp bends the inertia it reads by up to 0.9 % near a bound anyway (:mod:`tvist.maps.paper10`).
@@ -299,8 +305,43 @@ def cover_poses(
     Raises
     ------
     ValueError
-        A row that is not 6 finite joint angles, looks like degrees or leaves the robot's
-        joint limits (naming the row; :func:`tvist.units.check_trajectory`).
+        A row that is not a pose of the robot in rad (:func:`check_user_poses`).
+    """
+    q_rows = check_user_poses(robot_name, q_rows)
+    return _given_poses(robot_name, q_rows, payloads_kg, payload_com_m, seed, "C", 1_000_000)
+
+
+def at_poses(
+    robot_name: str,
+    q_rows: np.ndarray,
+    *,
+    payloads_kg: Sequence[float] = PAPER_PAYLOADS_KG,
+    payload_com_m: Sequence[float] = (0.0, 0.0, 0.05),
+    seed: int = 0,
+) -> list[CampaignPose]:
+    """The poses ``q_rows`` ``(n, 6)`` (rad) where the user's moves stop, each with every
+    payload; keys ``m{payload}kg-A{row}``. A plan identifies every one of them (where
+    :func:`cover_poses` only extend its range): what rings after a stop is the arm's modes
+    at that pose, and a map identified there is measured, not interpolated, where it
+    matters most.
+
+    Raises
+    ------
+    ValueError
+        A row that is not a pose of the robot in rad (:func:`check_user_poses`).
+    """
+    q_rows = check_user_poses(robot_name, q_rows)
+    return _given_poses(robot_name, q_rows, payloads_kg, payload_com_m, seed, "A", _AT_STREAM)
+
+
+def check_user_poses(robot_name: str, q_rows: np.ndarray) -> np.ndarray:
+    """``q_rows`` as an ``(n, n_dof)`` float array of poses of the robot, rad.
+
+    Raises
+    ------
+    ValueError
+        A row that is not ``n_dof`` finite joint angles, looks like degrees or leaves the
+        robot's joint limits (naming the row; :func:`tvist.units.check_trajectory`).
     """
     from tvist.units import check_trajectory
 
@@ -314,7 +355,7 @@ def cover_poses(
     check_trajectory(
         q_rows, None, robot.params, row_label=lambda i: f"row {i + 1}", what="the poses"
     )
-    return _given_poses(robot_name, q_rows, payloads_kg, payload_com_m, seed, "C", 1_000_000)
+    return q_rows
 
 
 def _given_poses(
@@ -494,6 +535,7 @@ def plan_poses(
     cover_q: np.ndarray | None = None,
     cover_workspace: bool = True,
     workspace_samples: int = WORKSPACE_SAMPLES,
+    at_q: np.ndarray | None = None,
 ) -> list[CampaignPose]:
     """A campaign plan, in :func:`campaign_order`.
 
@@ -501,16 +543,17 @@ def plan_poses(
     the smallest and largest inertias of :func:`covered_joints` (:func:`workspace_extremes`
     from ``workspace_samples`` random poses, keys ``m{payload}kg-W{i}``) that extend the
     plan's range over the whole workspace (:func:`covering_poses`; not with
-    ``cover_workspace=False``); ``every = 0`` takes none of these. Then the user's
-    ``cover_q`` poses (:func:`cover_poses`, keys ``m{payload}kg-C{row}``) that extend the
-    range over theirs: afterwards the inertias of every workspace pose and every ``cover_q``
-    pose lie within the plan's, payload by payload.
+    ``cover_workspace=False``); ``every = 0`` takes none of these. Then every ``at_q``
+    pose, where the user's moves stop (:func:`at_poses`, keys ``m{payload}kg-A{row}``), and
+    the user's ``cover_q`` poses (:func:`cover_poses`, keys ``m{payload}kg-C{row}``) that
+    extend the range over theirs: afterwards the inertias of every workspace pose and every
+    ``cover_q`` pose lie within the plan's, payload by payload.
 
     Raises
     ------
     ValueError
-        ``every < 0``, or a ``cover_q`` row that is not a pose of the robot in rad
-        (:func:`cover_poses`).
+        ``every < 0``, or an ``at_q`` or ``cover_q`` row that is not a pose of the robot in
+        rad (:func:`check_user_poses`).
     """
     if every < 0:
         raise ValueError(f"every must be >= 0, got {every}")
@@ -539,6 +582,10 @@ def plan_poses(
                 stream=_COVERING_STREAM,
             )
         poses += covering_poses(robot_name, poses, workspace)
+    if at_q is not None:
+        poses += at_poses(
+            robot_name, at_q, payloads_kg=payloads_kg, payload_com_m=payload_com_m, seed=seed
+        )
     if cover_q is not None:
         given = cover_poses(
             robot_name, cover_q, payloads_kg=payloads_kg, payload_com_m=payload_com_m, seed=seed
