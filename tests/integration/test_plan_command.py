@@ -11,10 +11,10 @@ from tvist.cli import main
 from tvist.cli.shape import read_trajectory_csv
 from tvist.ident.pose_plan import (
     campaign_poses,
-    cover_poses,
     plan_poses,
     plan_shortfall,
     pose_excitations,
+    user_poses,
 )
 from tvist.robots import Robot, params
 from tvist.trajectory import PAPER_POSES
@@ -183,5 +183,5 @@ def test_poses_at_one_radius_with_one_payload_are_refused():
     such plan; the check stands for any list of poses.)"""
     q = np.tile(PAPER_POSES["Q2"], (6, 1))
     q[:, 0] = np.linspace(-1.0, 1.0, 6)
-    reason = plan_shortfall(cover_poses("ur5e", q, payloads_kg=[5.0]))
+    reason = plan_shortfall(user_poses("ur5e", q, "cover", payloads_kg=[5.0]))
     assert "from the shoulder axis with 5 kg" in reason and "two radii or payloads" in reason

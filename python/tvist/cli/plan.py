@@ -268,9 +268,9 @@ def add_plan_command(sub: argparse._SubParsersAction) -> None:
         "plan",
         help="write a campaign plan: poses, excitation programs (URScript, CSV), time",
         description="Choose the campaign poses (paper Algorithm 1, every --every-th, plus "
-        "--at and --cover poses) payload by payload, check that the map fit can succeed on them, and "
-        "write each excitation (of the --excite joints) (Algorithm 2) as a URScript program and as "
-        "a trajectory CSV, with plan.json listing them in order.",
+        "--at and --cover poses) payload by payload, check that the map fit can succeed on "
+        "them, and write each excitation (of the --excite joints) (Algorithm 2) as a URScript "
+        "program and as a trajectory CSV, with plan.json listing them in order.",
     )
     add_plan_options(p)
     p.add_argument("--out", default="out/plan", help="folder to write (default out/plan)")

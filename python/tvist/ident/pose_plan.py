@@ -9,10 +9,10 @@ flange position and Jacobian.
 
 A plan (:func:`plan_poses`) is every ``every``-th of these poses, plus the poses that extend
 its range of joint-axis inertias over the whole workspace (:func:`workspace_poses`) and over
-the poses the user gives (:func:`cover_poses`), added until every one of those lies within
+the poses the user gives (:func:`user_poses`), added until every one of those lies within
 the plan's range (:func:`covering_poses`; a map is identified only over the inertias of its
 poses, :mod:`tvist.maps.paper10`), and the poses where the user's moves stop
-(:func:`at_poses`), each identified whether or not it extends the range, in the order that
+(:func:`user_poses`), each identified whether or not it extends the range, in the order that
 changes the payload least
 (:func:`campaign_order`); :func:`plan_shortfall` says why the map fit could not succeed on it,
 before anything moves. Each pose's excitations (:func:`pose_excitations`, of the base, the
@@ -44,12 +44,11 @@ __all__ = [
     "PAPER_ANGLES_RAD",
     "PAPER_PAYLOADS_KG",
     "PAPER_RADII_M",
+    "USER_POSE_ROLES",
     "CampaignPose",
     "campaign_order",
     "campaign_poses",
     "check_user_poses",
-    "at_poses",
-    "cover_poses",
     "covered_joints",
     "covering_poses",
     "plan_poses",
@@ -57,6 +56,7 @@ __all__ = [
     "plane_coordinates",
     "pose_excitations",
     "solve_plane_ik",
+    "user_poses",
     "workspace_extremes",
     "workspace_poses",
     "workspace_ranges",
@@ -102,8 +102,9 @@ WORKSPACE_STREAM = 2_000_000
 _COVERING_STREAM = 3_000_000
 #: Stream of the random plan poses of a URDF-placed arm (the pose seeds: ``[seed, row]``).
 _RANDOM_PLAN_STREAM = 5_000_000
-#: Seed stream of the ``at_q`` poses (``[seed, _AT_STREAM + row]``).
-_AT_STREAM = 7_000_000
+#: The roles of the user's poses in a plan (:func:`user_poses`): key letter and seed stream
+#: (``[seed, stream + row]``).
+USER_POSE_ROLES = {"cover": ("C", 1_000_000), "at": ("A", 7_000_000)}
 #: A pose whose inertias lie less than this (relative) outside the plan's range counts as
 #: covered: angles written with 6 decimals move an inertia by ~1e-8, and a paper10 map's soft
 #: clamp bends the inertia it reads by up to 0.9 % near a bound anyway (:mod:`tvist.maps.paper10`).
@@ -291,47 +292,33 @@ def campaign_poses(
 # --------------------------------------------------------------------------- plans
 
 
-def cover_poses(
+def user_poses(
     robot_name: str,
     q_rows: np.ndarray,
+    role: str,
     *,
     payloads_kg: Sequence[float] = PAPER_PAYLOADS_KG,
     payload_com_m: Sequence[float] = (0.0, 0.0, 0.05),
     seed: int = 0,
 ) -> list[CampaignPose]:
-    """The user's poses ``q_rows`` ``(n, 6)`` (rad), each with every payload; keys
-    ``m{payload}kg-C{row}``.
+    """The user's poses ``q_rows`` ``(n, n_dof)`` (rad), each with every payload, in their
+    ``role`` in a plan (:data:`USER_POSE_ROLES`): ``"cover"``, poses the moves pass through,
+    of which a plan takes those that extend its range (keys ``m{payload}kg-C{row}``);
+    ``"at"``, poses where the moves stop, every one identified (keys ``m{payload}kg-A{row}``):
+    what rings after a stop is the arm's modes at that pose, and a map identified there is
+    measured, not interpolated, where it matters most.
 
     Raises
     ------
     ValueError
-        A row that is not a pose of the robot in rad (:func:`check_user_poses`).
+        An unknown ``role``, or a row that is not a pose of the robot in rad
+        (:func:`check_user_poses`).
     """
+    if role not in USER_POSE_ROLES:
+        raise ValueError(f"role {role!r}: give one of {', '.join(USER_POSE_ROLES)}")
+    key, stream = USER_POSE_ROLES[role]
     q_rows = check_user_poses(robot_name, q_rows)
-    return _given_poses(robot_name, q_rows, payloads_kg, payload_com_m, seed, "C", 1_000_000)
-
-
-def at_poses(
-    robot_name: str,
-    q_rows: np.ndarray,
-    *,
-    payloads_kg: Sequence[float] = PAPER_PAYLOADS_KG,
-    payload_com_m: Sequence[float] = (0.0, 0.0, 0.05),
-    seed: int = 0,
-) -> list[CampaignPose]:
-    """The poses ``q_rows`` ``(n, 6)`` (rad) where the user's moves stop, each with every
-    payload; keys ``m{payload}kg-A{row}``. A plan identifies every one of them (where
-    :func:`cover_poses` only extend its range): what rings after a stop is the arm's modes
-    at that pose, and a map identified there is measured, not interpolated, where it
-    matters most.
-
-    Raises
-    ------
-    ValueError
-        A row that is not a pose of the robot in rad (:func:`check_user_poses`).
-    """
-    q_rows = check_user_poses(robot_name, q_rows)
-    return _given_poses(robot_name, q_rows, payloads_kg, payload_com_m, seed, "A", _AT_STREAM)
+    return _given_poses(robot_name, q_rows, payloads_kg, payload_com_m, seed, key, stream)
 
 
 def check_user_poses(robot_name: str, q_rows: np.ndarray) -> np.ndarray:
@@ -544,8 +531,8 @@ def plan_poses(
     from ``workspace_samples`` random poses, keys ``m{payload}kg-W{i}``) that extend the
     plan's range over the whole workspace (:func:`covering_poses`; not with
     ``cover_workspace=False``); ``every = 0`` takes none of these. Then every ``at_q``
-    pose, where the user's moves stop (:func:`at_poses`, keys ``m{payload}kg-A{row}``), and
-    the user's ``cover_q`` poses (:func:`cover_poses`, keys ``m{payload}kg-C{row}``) that
+    pose, where the user's moves stop (:func:`user_poses`, keys ``m{payload}kg-A{row}``), and
+    the user's ``cover_q`` poses (:func:`user_poses`, keys ``m{payload}kg-C{row}``) that
     extend the range over theirs: afterwards the inertias of every workspace pose and every
     ``cover_q`` pose lie within the plan's, payload by payload.
 
@@ -582,15 +569,12 @@ def plan_poses(
                 stream=_COVERING_STREAM,
             )
         poses += covering_poses(robot_name, poses, workspace)
+    given = {"payloads_kg": payloads_kg, "payload_com_m": payload_com_m, "seed": seed}
     if at_q is not None:
-        poses += at_poses(
-            robot_name, at_q, payloads_kg=payloads_kg, payload_com_m=payload_com_m, seed=seed
-        )
+        poses += user_poses(robot_name, at_q, "at", **given)
     if cover_q is not None:
-        given = cover_poses(
-            robot_name, cover_q, payloads_kg=payloads_kg, payload_com_m=payload_com_m, seed=seed
-        )
-        poses += covering_poses(robot_name, poses, given)
+        cover = user_poses(robot_name, cover_q, "cover", **given)
+        poses += covering_poses(robot_name, poses, cover)
     return campaign_order(poses)
 
 
