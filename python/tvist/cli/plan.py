@@ -155,8 +155,12 @@ def checked_plan(args: argparse.Namespace, require_fittable: bool = True) -> lis
 
 
 def coverage_text(poses: list, args: argparse.Namespace) -> str:
-    """What the plan added to cover inertias: workspace poses and ``--cover`` poses."""
-    from tvist.ident.pose_plan import covered_joints
+    """What the plan added to cover inertias: workspace poses, ``--at`` and ``--cover``
+    poses (counted by their keys' role letters, :data:`~tvist.ident.pose_plan.USER_POSE_ROLES`)."""
+    from tvist.ident.pose_plan import USER_POSE_ROLES, covered_joints
+
+    def count(role: str) -> int:
+        return sum(f"-{USER_POSE_ROLES[role][0]}" in p.key for p in poses)
 
     joints = ", ".join(f"J_{j}" for j in covered_joints(args.robot))
     if args.no_workspace_cover or args.every == 0:
@@ -165,10 +169,9 @@ def coverage_text(poses: list, args: argparse.Namespace) -> str:
         workspace = sum("-W" in p.key for p in poses)
         text = f"{workspace} poses added so that {joints} cover the workspace's"
     if args.at:
-        text += f"; {sum('-A' in p.key for p in poses)} poses at the --at poses"
+        text += f"; {count('at')} poses at the --at poses"
     if args.cover:
-        given = sum("-C" in p.key for p in poses)
-        text += f"; {given} of the --cover poses (the others lie within the plan's range)"
+        text += f"; {count('cover')} of the --cover poses (the others lie within the plan's range)"
     return text
 
 
