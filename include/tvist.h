@@ -53,8 +53,8 @@ typedef enum TvistError {
     /* A request beyond a setup limit (TVIST_MAX_DOF channels, TVIST_MAX_MODES modes,
      * TVIST_MAX_DELAY_LINE_BYTES of delay lines): refused before anything is allocated. */
     TVIST_ERR_TOO_LARGE = -10,
-    /* tvist_shaper_set_map or tvist_shaper_set_shaped_modes on a shaper mid-move (its delay
-     * lines not at rest on the input). */
+    /* tvist_shaper_set_map, tvist_shaper_set_shaped_modes or tvist_shaper_hold_modes_at on a
+     * shaper mid-move (its delay lines not at rest on the input). */
     TVIST_ERR_MID_MOVE = -11
 } TvistError;
 
@@ -180,6 +180,19 @@ int32_t tvist_shaper_set_map(TvistShaper *shaper, const char *map_json_path);
  * map or n_modes out of range; the shaper is unchanged on every error.
  */
 int32_t tvist_shaper_set_shaped_modes(TvistShaper *shaper, size_t n_modes);
+
+/*
+ * Shapes from the next move on with the modes the shaper's map gives at the pose q (n_dof
+ * doubles, rad), held constant instead of followed cycle by cycle; q NULL follows the pose of
+ * every cycle again. For a move whose time-varying shaping leaves more ringing than its stop
+ * pose's modes do: pass the move's end pose. tvist_shaper_set_map and
+ * tvist_shaper_set_shaped_modes also end a hold. A setup call: never from the control loop.
+ * Only between moves, as tvist_shaper_set_map. TVIST_ERR_MID_MOVE mid-move,
+ * TVIST_ERR_DIMENSION_MISMATCH for another n_dof, TVIST_ERR_INVALID_PARAMETER for a shaper
+ * not driven by a map or a pose where the map gives an invalid mode; the shaper is unchanged
+ * on every error.
+ */
+int32_t tvist_shaper_hold_modes_at(TvistShaper *shaper, const double *q, size_t n_dof);
 
 /*
  * One control cycle: shapes q_in into q_out (n_dof doubles each; they may be the same array).

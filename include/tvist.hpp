@@ -145,6 +145,14 @@ public:
         return tvist_shaper_set_shaped_modes(handle_, n_modes);
     }
 
+    /* Holds the modes the map gives at the pose q (n_dof() doubles) from the next move on;
+     * nullptr follows the pose again (tvist_shaper_hold_modes_at): TVIST_OK, or
+     * TVIST_ERR_MID_MOVE / TVIST_ERR_INVALID_PARAMETER with the shaper unchanged. A setup
+     * call: not from the control loop. */
+    int32_t hold_modes_at(const double *q) noexcept {
+        return tvist_shaper_hold_modes_at(handle_, q, n_dof());
+    }
+
     /* At rest at q0 (n_dof() doubles). */
     int32_t reset(const double *q0) noexcept { return tvist_shaper_reset(handle_, q0, n_dof()); }
 

@@ -356,10 +356,103 @@ def test_set_modes_for_move_shapes_the_modes_each_move_needs():
             assert choice is not None and choice.n_modes == want, (a, b)
             shaper.shape(move.q)
             assert len(shaper.current_modes) == want
+            # On these moves following the pose leaves no more than holding the end pose's
+            # modes would (within the 1 % threshold): the shaper follows, as published.
+            following, holding = choice.predicted
+            assert not choice.hold_end_pose and shaper.held_pose is None, (a, b)
+            assert following - holding <= choice.threshold, (a, b)
     named = tvist.ModalDynamics(ROBOT, _map(mode_joints=[0, 1]))
     shaper = tvist.TvShaper(named, DT_S, 6)
     assert set_modes_for_move(shaper, named, move) is None
     assert len(shaper.max_delay_s) == 2
+
+
+def test_a_held_shaper_shapes_as_its_end_poses_constant_modes():
+    # hold_modes_at(q): the modes the map gives at q, held; a fresh_copy shapes as a new
+    # shaper in the same setup; the calls are refused where they cannot apply.
+    modal = _map(shaped_modes=2)
+    provider = tvist.ModalDynamics(ROBOT, modal)
+    move = tvist.trajectory.double_s(PAPER_POSES["Q3"], PAPER_POSES["Q1"], DT_S)
+    q = np.ascontiguousarray(move.q)
+    end = q[-1]
+    held = tvist.TvShaper(provider, DT_S, 6)
+    held.set_shaped_modes(2)
+    fresh = held.fresh_copy()
+    np.testing.assert_array_equal(fresh.shape(q), tvist.TvShaper(provider, DT_S, 6).shape(q))
+    held.hold_modes_at(end)
+    assert held.held_pose == pytest.approx(end.tolist(), abs=0.0)
+    constant = tvist.TvShaper(tvist.ConstantModes(modal.modes(ROBOT, end)), DT_S, 6)
+    out = held.fresh_copy().shape(q)
+    np.testing.assert_array_equal(out, constant.shape(q))
+    np.testing.assert_array_equal(held.shape(q), out)
+    following = tvist.TvShaper(provider, DT_S, 6).shape(q)
+    assert np.abs(out - following).max() > 1e-5  # the modes do change along this move
+    with pytest.raises(ValueError, match="mid-move"):
+        held.hold_modes_at(None)
+    held.reset(end)
+    held.hold_modes_at(None)
+    assert held.held_pose is None
+    with pytest.raises(ValueError, match="6"):
+        held.hold_modes_at(end[:4])
+    with pytest.raises(TypeError, match="MapDynamics or ModalDynamics"):
+        constant.hold_modes_at(end)
+    callable_shaper = tvist.TvShaper(lambda q: [(60.0, 0.05)], DT_S, 6, max_delay_s=0.1)
+    with pytest.raises(TypeError, match="callable"):
+        callable_shaper.fresh_copy()
+
+
+def _shaped_reference(shaper, move):
+    """``move`` shaped by ``shaper``, held at its end until the shaper has settled, as a
+    trajectory with velocities and accelerations by central differences."""
+    q = np.ascontiguousarray(move.q)
+    tail = int(np.ceil(sum(shaper.max_delay_s) / DT_S)) + 3
+    shaped = shaper.shape(np.vstack([q, np.repeat(q[-1:], tail, axis=0)]))
+    qd = np.gradient(shaped, DT_S, axis=0)
+    qdd = np.gradient(qd, DT_S, axis=0)
+    last = int(np.flatnonzero(np.any(np.diff(shaped, axis=0) != 0.0, axis=1))[-1]) + 1
+    t = np.arange(len(shaped)) * DT_S
+    return tvist.trajectory.Trajectory(
+        t_s=t,
+        q=shaped,
+        qd=qd,
+        qdd=qdd,
+        dt_s=DT_S,
+        t_motion_start_s=0.0,
+        t_motion_end_s=float(t[last]),
+    ), last
+
+
+@pytest.mark.slow
+def test_holding_the_stop_poses_modes_where_the_map_predicts_less_ringing_leaves_less():
+    # A move whose modes change fast as it stops (found among random moves of this map: 4 in
+    # 800 are predicted to leave 1 % more following the pose than holding): the map's exact
+    # integration predicts 2.29 % of the unshaped ringing left when the shaper follows the
+    # pose and 0.455 % when it holds the stop pose's modes, so set_modes_for_move holds them.
+    # The reference integrates the continuously varying flexible model (DOP853, Coriolis
+    # from pinocchio) driven by each shaped reference: 2.286 % and 0.453 % (measured), within
+    # 1e-3 of the unshaped total of the predictions (the unshaped test's tolerance), and
+    # holding leaves less by more than the 1 % threshold.
+    from tvist.maps import set_modes_for_move
+
+    start = np.array([1.1459411379328572, -2.8519678355713105, -1.3704491937645207, -1.57, 0, 0])
+    stop = np.array([1.300340828370354, -1.3358774008086642, 0.05912414891915008, -1.57, 0, 0])
+    move = tvist.trajectory.double_s(start, stop, DT_S)
+    provider = tvist.ModalDynamics(ROBOT, _map(shaped_modes=3))
+    shaper = tvist.TvShaper(provider, DT_S, 6)
+    choice = set_modes_for_move(shaper, provider, move)
+    assert choice.hold_end_pose and shaper.held_pose == pytest.approx(stop.tolist(), abs=0.0)
+    following = tvist.TvShaper(provider, DT_S, 6)
+    following.set_shaped_modes(choice.n_modes)
+    total = _reference_residuals(move, int(round(move.t_motion_end_s / DT_S)))
+    unshaped = float(np.sum(total[1] ** 2 * total[0]))
+    assert unshaped == pytest.approx(choice.total_m_s2, rel=1e-3)
+    left = []
+    for each in (following, shaper.fresh_copy()):
+        reference, end = _shaped_reference(each, move)
+        amp, wn = _reference_residuals(reference, end)
+        left.append(float(np.sum(wn**2 * amp)) / unshaped)
+    np.testing.assert_allclose(left, choice.predicted, atol=1e-3)
+    assert left[0] - left[1] > choice.threshold
 
 
 def test_tracked_evaluation_along_a_move_is_continuous():

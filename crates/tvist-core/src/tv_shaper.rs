@@ -516,4 +516,27 @@ impl<C: Dynamics> TvShaper<Provider<C>> {
         let config = self.config.clone();
         self.replace_dynamics(next, &config)
     }
+
+    /// Shapes from now on with the modes the shaper's map gives at `pose` (the robot's
+    /// joints, rad), held constant instead of followed cycle by cycle; `None` follows the
+    /// pose of every cycle again ([`crate::RobotModes::holding_at`]). For a move whose
+    /// time-varying shaping the map predicts to leave more ringing than its stop pose's modes
+    /// do (`tvist.maps.set_modes_for_move`): pass the move's end pose. [`Self::set_shaped_modes`]
+    /// also ends a hold. Between moves only, as [`Self::replace_dynamics`]; the shaper is
+    /// unchanged on every error: mid-move, a provider other than a map, a pose of the wrong
+    /// length or one where the map gives an invalid mode.
+    pub fn hold_modes_at(&mut self, pose: Option<&[f64]>) -> Result<(), Error> {
+        self.check_at_rest("hold the modes at a pose")?;
+        let next =
+            match &self.dynamics {
+                Provider::Modal(modal) => Provider::Modal(Box::new(modal.holding_at(pose)?)),
+                Provider::Map(map) => Provider::Map(Box::new(map.holding_at(pose)?)),
+                _ => return Err(Error::InvalidParameter(
+                    "the modes are held at a pose on a shaper driven by a map (dynamic or modal)"
+                        .into(),
+                )),
+            };
+        let config = self.config.clone();
+        self.replace_dynamics(next, &config)
+    }
 }

@@ -8,8 +8,8 @@ mod alloc_support;
 
 use alloc_support::{allocations_in, the_counter_sees_this_thread_only};
 use tvist_core::{
-    FlexJoint, LinkHinge, LoadLaw, ModalDynamics, ModalMap, Mode, ModeTrack, ShapedModes,
-    ShaperKind,
+    Dynamics, FlexJoint, LinkHinge, LoadLaw, ModalDynamics, ModalMap, Mode, ModeTrack, ShapedModes,
+    ShaperKind, Status, TvShaper, TvShaperConfig,
 };
 
 fn ur5e_like_map() -> ModalMap {
@@ -119,6 +119,7 @@ fn modal_map_provider_and_shaper_never_allocate() {
     ] {
         let provider = ModalDynamics::new(robot, map.clone()).expect("valid map");
         let lowest = provider.shaping_lowest(3).expect("valid");
+        let held = provider.holding_at(Some(&poses[0])).expect("valid pose");
         alloc_support::assert_robot_provider_never_allocates(
             provider,
             ShaperKind::Zv,
@@ -131,5 +132,35 @@ fn modal_map_provider_and_shaper_never_allocate() {
             &poses,
             "ModalDynamics (3 lowest modes)",
         );
+        assert_held_provider_and_shaper_never_allocate(held, &poses);
     }
+}
+
+/// Held at a pose: the pose is taken out and put back every call, never copied; the shaper
+/// designs its filters once and runs them held.
+fn assert_held_provider_and_shaper_never_allocate(mut held: ModalDynamics, poses: &[Vec<f64>]) {
+    let mut modes = vec![Mode::new(0.0, 0.0); held.n_modes()];
+    let n = allocations_in(|| {
+        for q in poses {
+            held.modes(q, &mut modes);
+        }
+        held.restart();
+        held.modes(&poses[1], &mut modes);
+    });
+    assert_eq!(n, 0, "held ModalDynamics::modes allocated {n} times");
+    let config = TvShaperConfig::new(0.002, 6, ShaperKind::Zv);
+    let mut shaper = TvShaper::new(held, &config).expect("valid config");
+    let mut out = [0.0; 6];
+    let mut statuses = Status::OK;
+    let n = allocations_in(|| {
+        for q in poses {
+            statuses |= shaper.step(q, &mut out);
+        }
+    });
+    assert_eq!(
+        n, 0,
+        "TvShaper<held ModalDynamics>::step allocated {n} times"
+    );
+    // The random poses jump, the held modes do not: no slew limit binds.
+    assert!(!statuses.contains(Status::MODE_SLEW_LIMITED));
 }

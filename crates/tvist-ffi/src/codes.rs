@@ -33,8 +33,8 @@ pub const TVIST_ERR_ROBOT_MISMATCH: i32 = -9;
 /// A request beyond a setup limit (`TVIST_MAX_DOF` channels, `TVIST_MAX_MODES` modes,
 /// `TVIST_MAX_DELAY_LINE_BYTES` of delay lines): refused before anything is allocated.
 pub const TVIST_ERR_TOO_LARGE: i32 = -10;
-/// `tvist_shaper_set_map` or `tvist_shaper_set_shaped_modes` on a shaper mid-move (its delay
-/// lines not at rest on the input).
+/// `tvist_shaper_set_map`, `tvist_shaper_set_shaped_modes` or `tvist_shaper_hold_modes_at` on
+/// a shaper mid-move (its delay lines not at rest on the input).
 pub const TVIST_ERR_MID_MOVE: i32 = -11;
 
 /// Every error code with its C name, for the header-consistency test and documentation.

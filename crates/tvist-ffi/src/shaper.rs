@@ -660,6 +660,74 @@ pub unsafe extern "C" fn tvist_shaper_set_shaped_modes(
     })
 }
 
+/// Shapes from the next move on with the modes the shaper's map gives at the pose `q`
+/// (`n_dof` doubles, the robot's joints in rad), held constant instead of followed cycle by
+/// cycle; `q` null follows the pose of every cycle again. For a move whose time-varying
+/// shaping leaves more ringing than the modes of its stop pose do: pass the move's end pose
+/// (the Python toolbox's `set_modes_for_move` predicts which). `tvist_shaper_set_map` and
+/// `tvist_shaper_set_shaped_modes` also end a hold. A setup call (it builds a new provider and
+/// delay lines); never call it from the control loop.
+///
+/// Only between moves, as `tvist_shaper_set_map`. Returns `TVIST_OK`; `TVIST_ERR_MID_MOVE`
+/// mid-move; `TVIST_ERR_DIMENSION_MISMATCH` for `n_dof` other than the handle's (nothing
+/// read); `TVIST_ERR_INVALID_PARAMETER` for a shaper not driven by a map or a pose where the
+/// map gives an invalid mode; `TVIST_ERR_NULL`. On every error the shaper is unchanged and
+/// the reason is in `tvist_last_error_message`.
+///
+/// # Safety
+/// `shaper` comes from a constructor and is not freed; `q` is null or readable for `n_dof`
+/// doubles.
+#[no_mangle]
+pub unsafe extern "C" fn tvist_shaper_hold_modes_at(
+    shaper: *mut TvistShaper,
+    q: *const f64,
+    n_dof: usize,
+) -> i32 {
+    guard(TVIST_ERR_INTERNAL, || {
+        if !usable(shaper) || (!q.is_null() && !usable(q)) {
+            return fail(
+                TVIST_ERR_NULL,
+                "shaper must be non-null (and aligned), q aligned",
+            );
+        }
+        // SAFETY: a live handle from a constructor (caller), used by this thread only.
+        let handle = unsafe { &mut *shaper };
+        if !matches!(
+            handle.shaper.dynamics(),
+            Provider::Map(_) | Provider::Modal(_)
+        ) {
+            return fail(
+                TVIST_ERR_INVALID_PARAMETER,
+                "this shaper is not driven by a map; tvist_shaper_hold_modes_at holds the modes \
+                 of a shaper from a map file",
+            );
+        }
+        let pose = if q.is_null() {
+            None
+        } else {
+            if n_dof != handle.n_dof() {
+                return fail(
+                    TVIST_ERR_DIMENSION_MISMATCH,
+                    format!("the pose has {n_dof} joints, the shaper {}", handle.n_dof()),
+                );
+            }
+            // SAFETY: `q` is readable for `n_dof` doubles (caller).
+            Some(unsafe { core::slice::from_raw_parts(q, n_dof) })
+        };
+        if !handle.shaper.is_at_rest() {
+            return fail(
+                TVIST_ERR_MID_MOVE,
+                "the shaper is mid-move (its delay lines are not at rest on the input); call \
+                 tvist_shaper_hold_modes_at between moves",
+            );
+        }
+        match handle.shaper.hold_modes_at(pose) {
+            Ok(()) => TVIST_OK,
+            Err(e) => fail_with(&e),
+        }
+    })
+}
+
 /// One control cycle: shapes `q_in` into `q_out` (each `n_dof` doubles; they may be the same
 /// array). Allocation-free and lock-free.
 ///

@@ -757,3 +757,115 @@ fn set_shaped_modes_mid_move_or_out_of_range_is_refused_with_the_shaper_unchange
         TVIST_ERR_NULL
     );
 }
+
+impl Handle {
+    fn hold_modes_at(&mut self, q: Option<&[f64]>) -> i32 {
+        let (ptr, n) = q.map_or((ptr::null(), 6), |q| (q.as_ptr(), q.len()));
+        // SAFETY: live handle; `ptr` null or readable for `n` doubles.
+        unsafe { tvist::tvist_shaper_hold_modes_at(self.0, ptr, n) }
+    }
+}
+
+#[test]
+fn modes_held_at_the_end_pose_shape_the_next_move_as_those_constant_modes() {
+    let named = three_joint_file("hold", ShapedModes::ByJoint(vec![0, 1]));
+    let (code, mut h) = new_map("ur5e", &named, "zv", None);
+    assert_eq!(code, TVIST_OK, "{}", last_error());
+    run(&mut h, &a_move(300 + SETTLE_SAMPLES));
+    // The modes the map gives at Q1, where the move back stops.
+    let robot = ur_e_series("ur5e", RigidBody::point(PAYLOAD_KG, PAYLOAD_COM_M)).expect("robot");
+    let mut provider = ModalDynamics::new(robot, three_joint_map(ShapedModes::ByJoint(vec![0, 1])))
+        .expect("provider");
+    let mut modes = vec![Mode::new(0.0, 0.0); 2];
+    assert!(provider.modes(&Q1, &mut modes).is_ok());
+    let wn: Vec<f64> = modes.iter().map(|m| m.wn_rad_s).collect();
+    let zeta: Vec<f64> = modes.iter().map(|m| m.zeta).collect();
+    let mut out = ptr::dangling_mut::<TvistShaper>();
+    let zv = c("zv");
+    // SAFETY: two readable mode arrays of 2, a NUL-terminated name, a writable `out`.
+    let code = unsafe {
+        tvist_shaper_new_constant(
+            wn.as_ptr(),
+            zeta.as_ptr(),
+            2,
+            DT_S,
+            6,
+            zv.as_ptr(),
+            &mut out,
+        )
+    };
+    assert_eq!(code, TVIST_OK, "{}", last_error());
+    let mut constant = Handle(out);
+    assert_eq!(h.hold_modes_at(Some(&Q1)), TVIST_OK, "{}", last_error());
+    let back = a_move_back(600 + SETTLE_SAMPLES);
+    // SAFETY: live handle, 6 readable doubles.
+    assert_eq!(
+        unsafe { tvist_shaper_reset(constant.0, move_end().as_ptr(), 6) },
+        TVIST_OK
+    );
+    let held = run(&mut h, &back);
+    // Held modes are those constant modes: the same filters from the same rest, to the bit.
+    assert!(
+        held == run(&mut constant, &back),
+        "held modes differ from the constant modes"
+    );
+    // Following the pose again shapes as a new shaper from the file (the call puts the shaper
+    // at rest on its input exactly as a new one starts), and not as the held modes did.
+    run(&mut h, &a_move(300 + SETTLE_SAMPLES));
+    assert_eq!(h.hold_modes_at(None), TVIST_OK, "{}", last_error());
+    let (_, mut following) = new_map("ur5e", &named, "zv", None);
+    let followed = run(&mut following, &back);
+    assert!(
+        run(&mut h, &back) == followed,
+        "released hold differs from a new shaper"
+    );
+    assert!(
+        held != followed,
+        "holding changed nothing on a move whose modes change"
+    );
+}
+
+#[test]
+fn a_hold_mid_move_of_the_wrong_length_or_without_a_map_is_refused() {
+    let named = three_joint_file("hold-bad", ShapedModes::ByJoint(vec![0, 1]));
+    let (_, mut h) = new_map("ur5e", &named, "zv", None);
+    let samples = a_move(300);
+    run(&mut h, &samples[..150]);
+    assert_eq!(h.hold_modes_at(Some(&Q1)), TVIST_ERR_MID_MOVE);
+    assert!(last_error().contains("mid-move"), "{}", last_error());
+    run(&mut h, &a_move(300 + SETTLE_SAMPLES)[150..]);
+    assert_eq!(
+        h.hold_modes_at(Some(&Q1[..4])),
+        tvist::TVIST_ERR_DIMENSION_MISMATCH
+    );
+    let (wn, zeta, zv) = ([60.0], [0.05], c("zv"));
+    let mut out = ptr::dangling_mut::<TvistShaper>();
+    // SAFETY: as above.
+    let code = unsafe {
+        tvist_shaper_new_constant(
+            wn.as_ptr(),
+            zeta.as_ptr(),
+            1,
+            DT_S,
+            6,
+            zv.as_ptr(),
+            &mut out,
+        )
+    };
+    assert_eq!(code, TVIST_OK);
+    let mut constant = Handle(out);
+    assert_eq!(
+        constant.hold_modes_at(Some(&Q1)),
+        TVIST_ERR_INVALID_PARAMETER
+    );
+    assert!(
+        last_error().contains("not driven by a map"),
+        "{}",
+        last_error()
+    );
+    // SAFETY: a null handle is checked before use.
+    assert_eq!(
+        unsafe { tvist::tvist_shaper_hold_modes_at(ptr::null_mut(), Q1.as_ptr(), 6) },
+        TVIST_ERR_NULL
+    );
+}

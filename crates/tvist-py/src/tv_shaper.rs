@@ -275,6 +275,71 @@ impl PyTvShaper {
         self.inner.set_shaped_modes(n_modes).map_err(value_error)
     }
 
+    /// Shapes with the modes the shaper's map gives at `q` (the robot's joints, rad), held
+    /// constant, from the next move on; `q=None` follows the pose of every cycle again.
+    /// `set_shaped_modes` and `set_map` also end a hold. For a move whose time-varying
+    /// shaping leaves more ringing than its end pose's modes would (see
+    /// `tvist.maps.set_modes_for_move`): pass the move's end pose. Between moves only, as
+    /// `set_map` (a setup call). Raises `ValueError` mid-move, for a pose of the wrong length
+    /// or one where the map gives an invalid mode (the shaper unchanged), `TypeError` for a
+    /// shaper not driven by `MapDynamics` or `ModalDynamics`.
+    #[pyo3(signature = (q=None))]
+    fn hold_modes_at(&mut self, q: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
+        if !matches!(self.inner.dynamics(), Provider::Map(_) | Provider::Modal(_)) {
+            return Err(PyTypeError::new_err(
+                "hold_modes_at holds the modes of a shaper driven by MapDynamics or \
+                 ModalDynamics",
+            ));
+        }
+        let pose = match q {
+            Some(q) => {
+                let q: PyArrayLike1<'_, f64, AllowTypeChange> =
+                    convert::real_input(q, "q")?.extract()?;
+                let q: Vec<f64> = q.as_array().iter().copied().collect();
+                convert::check_start_pose(&q, self.inner.n_dof())?;
+                Some(q)
+            }
+            None => None,
+        };
+        self.inner
+            .hold_modes_at(pose.as_deref())
+            .map_err(value_error)
+    }
+
+    /// The pose whose modes the shaper holds (`hold_modes_at`), or `None`.
+    #[getter]
+    fn held_pose(&self) -> Option<Vec<f64>> {
+        match self.inner.dynamics() {
+            Provider::Map(d) => d.held_pose().map(<[f64]>::to_vec),
+            Provider::Modal(d) => d.held_pose().map(<[f64]>::to_vec),
+            _ => None,
+        }
+    }
+
+    /// A new shaper with this one's configuration and provider as they are now (map, shaped
+    /// modes, hold), not yet started: to try a move without touching this shaper's state.
+    /// Raises `TypeError` for a shaper driven by a Python callable.
+    fn fresh_copy(&self) -> PyResult<Self> {
+        let provider = match self.inner.dynamics() {
+            Provider::Constant(c) => Provider::Constant(c.clone()),
+            Provider::Map(d) => Provider::Map(d.clone()),
+            Provider::Modal(d) => Provider::Modal(d.clone()),
+            Provider::Callback(_) => {
+                return Err(PyTypeError::new_err(
+                    "fresh_copy copies a shaper driven by a tvist provider, not a callable",
+                ))
+            }
+        };
+        let mut inner = core::TvShaper::new(provider, &self.config).map_err(value_error)?;
+        inner.clear();
+        Ok(PyTvShaper {
+            inner,
+            config: self.config.clone(),
+            last_status: Status::OK,
+            counts: StatusCounter::default(),
+        })
+    }
+
     /// Puts the filter at rest at q0, or (None) forgets history so the next sample starts it.
     /// Accepts what `step` accepts (any 1-D array-like of numbers, any memory layout).
     #[pyo3(signature = (q0=None))]

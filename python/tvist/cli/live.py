@@ -58,6 +58,13 @@ def _shaper(args: argparse.Namespace, Q):  # noqa: N803 (the move, as elsewhere)
     choice = set_modes_for_move(shaper, provider, Q, dt_s)
     if choice is not None:
         print(f"shaping the {choice.n_modes} lowest mode(s) of the modal map for this move")
+        if choice.hold_end_pose:
+            following, holding = choice.predicted
+            print(
+                "holding the stop pose's modes over this move: the map predicts "
+                f"{100 * holding:.1f} % of the ringing left, against {100 * following:.1f} % "
+                "following the pose"
+            )
     return shaper
 
 

@@ -44,7 +44,8 @@ def _run_tv_shaper(
     shaper: Any, ctx: MotionContext, provider_name: str, provider: Any = None
 ) -> Reference:
     """Shapes the motion with ``shaper``; with ``provider`` (the shaper's) a frequency-ranked
-    modal map shapes the modes this move needs (:func:`tvist.maps.set_modes_for_move`)."""
+    modal map shapes the modes this move needs, following the pose or holding the stop's
+    modes (:func:`tvist.maps.set_modes_for_move`)."""
     from tvist.maps import set_modes_for_move
 
     q = np.ascontiguousarray(ctx.trajectory.q)
@@ -70,6 +71,8 @@ def _run_tv_shaper(
             "delay_at_end_pose_s": float(shaper.delay_s),
             # The modes shaped at the end pose (the shaper is at rest there): their delay.
             "end_modes": [(float(w), float(z)) for w, z in shaper.current_modes],
+            # The stop pose's modes held over the move (set_modes_for_move) or followed.
+            "held_at_end_pose": shaper.held_pose is not None,
             "status_counts": counts,
         },
     )

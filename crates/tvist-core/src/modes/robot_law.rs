@@ -84,6 +84,9 @@ pub struct RobotModes<L: ModeLaw> {
     /// The law's state carried from cycle to cycle ([`ModeLaw::Track`]).
     track: L::Track,
     last: LastCall,
+    /// A pose (robot joints, rad) whose modes every cycle gives instead of those at the
+    /// cycle's pose ([`Self::holding_at`]); `None`: the cycle's pose.
+    held: Option<Vec<f64>>,
 }
 
 impl<L: ModeLaw> RobotModes<L> {
@@ -143,6 +146,7 @@ impl<L: ModeLaw> RobotModes<L> {
             slowest: vec![Mode::new(f64::INFINITY, 0.0); law.n_modes()],
             last: LastCall::new(n, law.n_modes()),
             track: L::Track::default(),
+            held: None,
             robot,
             law,
         };
@@ -192,19 +196,60 @@ impl<L: ModeLaw> RobotModes<L> {
         &self.slowest
     }
 
+    /// The same provider giving, every cycle, the modes at `pose` (the robot's joints, rad):
+    /// constant modes for a move whose shaping should not follow the pose (e.g. the modes
+    /// at where it stops, [`crate::TvShaper::hold_modes_at`]). `None`: the pose of each cycle
+    /// again. A setup call (it copies the provider); refused for a pose of the wrong length or
+    /// one where the law gives an invalid mode.
+    pub fn holding_at(&self, pose: Option<&[f64]>) -> Result<RobotModes<L>, Error>
+    where
+        L: Clone,
+    {
+        let mut next = self.clone();
+        next.held = None;
+        next.restart();
+        let Some(pose) = pose else {
+            return Ok(next);
+        };
+        if pose.len() != self.robot.n_dof() {
+            return Err(Error::DimensionMismatch {
+                what: "joints of the pose to hold the modes at",
+                expected: self.robot.n_dof(),
+                got: pose.len(),
+            });
+        }
+        let mut modes = vec![Mode::new(f64::NAN, f64::NAN); self.law.n_modes()];
+        let status = next.modes(pose, &mut modes);
+        if let Some((m, mode)) = modes.iter().enumerate().find(|(_, m)| !m.is_valid()) {
+            return Err(Error::InvalidParameter(self.law.invalid_mode_message(
+                m,
+                pose,
+                &next.inertia,
+                *mode,
+            )));
+        }
+        if !status.is_ok() {
+            return Err(Error::InvalidParameter(format!(
+                "the modes at the pose to hold could not be evaluated (status {status:?})"
+            )));
+        }
+        next.held = Some(pose.to_vec());
+        Ok(next)
+    }
+
+    /// The pose whose modes every cycle gives ([`Self::holding_at`]), if any.
+    pub fn held_pose(&self) -> Option<&[f64]> {
+        self.held.as_deref()
+    }
+
     /// What the latest [`Dynamics::modes`] call read of the robot (see the aliases'
     /// `last_inertia` and `last_mass_matrix`).
     pub(crate) fn last_evaluation(&self) -> &[f64] {
         &self.inertia
     }
-}
 
-impl<L: ModeLaw> Dynamics for RobotModes<L> {
-    fn n_modes(&self) -> usize {
-        self.law.n_modes()
-    }
-
-    fn modes(&mut self, q: &[f64], out: &mut [Mode]) -> Status {
+    /// The modes at `q` (the body of [`Dynamics::modes`], for the cycle's or the held pose).
+    fn modes_at(&mut self, q: &[f64], out: &mut [Mode]) -> Status {
         if let Some(status) = self.last.repeat(q, out) {
             return status;
         }
@@ -244,6 +289,25 @@ impl<L: ModeLaw> Dynamics for RobotModes<L> {
         self.last.record(q, out, status);
         status
     }
+}
+
+impl<L: ModeLaw> Dynamics for RobotModes<L> {
+    fn n_modes(&self) -> usize {
+        self.law.n_modes()
+    }
+
+    fn modes(&mut self, q: &[f64], out: &mut [Mode]) -> Status {
+        // A held pose is evaluated once and then repeated (`last`); taken out and put back,
+        // not copied, so that this stays allocation-free.
+        match self.held.take() {
+            None => self.modes_at(q, out),
+            Some(pose) => {
+                let status = self.modes_at(&pose, out);
+                self.held = Some(pose);
+                status
+            }
+        }
+    }
 
     /// Lowest `ω_n` (sampled minimum, lowered to the law's analytic bound) paired with the
     /// highest sampled `ζ`. Pairing the two extremes gives the longest shaper a sampled pose
@@ -260,6 +324,11 @@ impl<L: ModeLaw> Dynamics for RobotModes<L> {
     fn restart(&mut self) {
         self.track = L::Track::default();
         self.last.valid = false;
+    }
+
+    /// Held at a pose ([`RobotModes::holding_at`]): the same valid modes every call.
+    fn modes_are_constant(&self) -> bool {
+        self.held.is_some()
     }
 }
 
