@@ -422,6 +422,48 @@ def _shaped_reference(shaper, move):
     ), last
 
 
+#: A move of the UR5e-like map whose modes change fast as it stops (see below).
+FAST_STOP = (
+    np.array([1.1459411379328572, -2.8519678355713105, -1.3704491937645207, -1.57, 0, 0]),
+    np.array([1.300340828370354, -1.3358774008086642, 0.05912414891915008, -1.57, 0, 0]),
+)
+
+
+def test_a_stop_inside_is_a_run_of_min_rest_samples_unchanged_samples():
+    from tvist.maps.mode_choice import _stops_inside
+    from tvist.units import MIN_REST_SAMPLES
+
+    def reference(still: int) -> np.ndarray:
+        ramp = np.linspace(0.0, 1.0, 20)
+        # At rest before and after (never a stop inside), ramps with `still` samples between.
+        parts = [np.zeros(30), ramp, np.ones(still), 1.0 + ramp, np.full(30, 2.0)]
+        return np.column_stack([np.concatenate(parts), np.zeros(sum(map(len, parts)))])
+
+    # The ramps' shared end sample is unchanged once more: `still` equal samples make a run
+    # of still + 1 unchanged steps.
+    assert not _stops_inside(reference(MIN_REST_SAMPLES - 2))
+    assert _stops_inside(reference(MIN_REST_SAMPLES - 1))
+    assert not _stops_inside(np.zeros((40, 6)))
+
+
+def test_a_reference_that_stops_inside_follows_the_pose():
+    # Two moves in one reference: holding the last stop's modes would mistune the first stop,
+    # which the prediction (at the last stop only) does not see; so the shaper follows.
+    from tvist.maps import set_modes_for_move
+
+    provider = tvist.ModalDynamics(ROBOT, _map(shaped_modes=3))
+    start, stop = FAST_STOP
+    last = tvist.trajectory.double_s(start, stop, DT_S).q
+    first = tvist.trajectory.double_s(PAPER_POSES["Q1"], start, DT_S).q
+    for rest, held in ((0, True), (50, False)):
+        q = np.vstack([first, np.repeat(first[-1:], rest, axis=0), last])
+        shaper = tvist.TvShaper(provider, DT_S, 6)
+        choice = set_modes_for_move(shaper, provider, q, DT_S)
+        assert choice.hold_end_pose is held, rest
+        assert (shaper.held_pose is not None) is held, rest
+        assert (choice.predicted is not None) is held, rest
+
+
 @pytest.mark.slow
 def test_holding_the_stop_poses_modes_where_the_map_predicts_less_ringing_leaves_less():
     # A move whose modes change fast as it stops (found among random moves of this map: 4 in
@@ -434,13 +476,12 @@ def test_holding_the_stop_poses_modes_where_the_map_predicts_less_ringing_leaves
     # holding leaves less by more than the 1 % threshold.
     from tvist.maps import set_modes_for_move
 
-    start = np.array([1.1459411379328572, -2.8519678355713105, -1.3704491937645207, -1.57, 0, 0])
-    stop = np.array([1.300340828370354, -1.3358774008086642, 0.05912414891915008, -1.57, 0, 0])
-    move = tvist.trajectory.double_s(start, stop, DT_S)
+    move = tvist.trajectory.double_s(*FAST_STOP, DT_S)
     provider = tvist.ModalDynamics(ROBOT, _map(shaped_modes=3))
     shaper = tvist.TvShaper(provider, DT_S, 6)
     choice = set_modes_for_move(shaper, provider, move)
-    assert choice.hold_end_pose and shaper.held_pose == pytest.approx(stop.tolist(), abs=0.0)
+    assert choice.hold_end_pose
+    assert shaper.held_pose == pytest.approx(FAST_STOP[1].tolist(), abs=0.0)
     following = tvist.TvShaper(provider, DT_S, 6)
     following.set_shaped_modes(choice.n_modes)
     total = _reference_residuals(move, int(round(move.t_motion_end_s / DT_S)))

@@ -70,7 +70,8 @@ residual at the stop is summed over the modes as above. The stop pose's modes ar
 (``TvShaper.hold_modes_at``) where following the pose is predicted to leave more than
 ``threshold`` of the unshaped total beyond what holding leaves; otherwise the shaper follows
 the pose, as the published method does. Both shape the same ``K`` modes, so the delay at the
-stop is the same.
+stop is the same. A reference that stops inside (several moves in one file) follows the pose:
+holding one stop's modes would mistune the others.
 """
 
 from __future__ import annotations
@@ -501,17 +502,36 @@ def set_modes_for_move(
     choice = modes_to_shape(modal, provider.robot, move)
     k = min(choice.n_modes, modal.shaped_modes)
     shaper.set_shaped_modes(k)
+    total = choice.total_m_s2
+    if total <= 0 or _stops_inside(move.q):
+        # Nothing rings, or one stop's modes would mistune the others: follow the pose.
+        return dataclasses.replace(choice, n_modes=k)
     end_pose = np.ascontiguousarray(move.q[-1])
     following = _predicted_residual(shaper.fresh_copy(), modal, provider.robot, move)
     trial = shaper.fresh_copy()
     trial.hold_modes_at(end_pose)
     holding = _predicted_residual(trial, modal, provider.robot, move)
-    total = choice.total_m_s2
-    hold = total > 0 and following - holding > choice.threshold * total
+    hold = following - holding > choice.threshold * total
     if hold:
         shaper.hold_modes_at(end_pose)
-    predicted = (following / total, holding / total) if total > 0 else (0.0, 0.0)
+    predicted = (following / total, holding / total)
     return dataclasses.replace(choice, n_modes=k, hold_end_pose=hold, predicted=predicted)
+
+
+def _stops_inside(q: np.ndarray) -> bool:
+    """True if the reference ``q`` ``(n_samples, n_dof)`` stands still for
+    :data:`~tvist.units.MIN_REST_SAMPLES` samples or more between its first and last change:
+    several moves, each stopping at its own pose."""
+    from tvist.units import MIN_REST_SAMPLES
+
+    moving = np.any(np.diff(q, axis=0) != 0.0, axis=1)
+    changes = np.flatnonzero(moving)
+    if changes.size == 0:
+        return False
+    inside = moving[changes[0] : changes[-1] + 1]
+    still = np.flatnonzero(np.diff(np.concatenate([[1], inside.astype(int), [1]])))
+    runs = still[1::2] - still[::2]  # lengths of the runs of unchanged samples
+    return bool(runs.size) and int(runs.max()) >= MIN_REST_SAMPLES
 
 
 def _predicted_residual(shaper: Any, modal_map: ModalMap, robot: Robot, move: Trajectory) -> float:
