@@ -215,7 +215,7 @@ def test_modes_to_shape_predicts_the_residuals_of_a_direct_simulation(poses, exp
 
 def test_the_stacked_matrix_exponential_equals_scipys():
     # Stacks of random matrices from far below to far above the scaling threshold (norms
-    # 0.01-40, so 0-7 squarings), and the zero matrix: within 1e-12 of the largest entry of
+    # 0.01-40, 0 to 8 squarings), and the zero matrix: within 1e-12 of the largest entry of
     # scipy's Padé exponential of each (measured: 4e-16, and 3e-13 at norm 40, where
     # squaring amplifies rounding).
     from tvist.maps.mode_choice import _expm_many
