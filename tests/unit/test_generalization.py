@@ -144,11 +144,12 @@ def test_wrong_confident_counts_unflagged_fits_far_from_every_true_mode():
 
 
 def _result(name: str, worst_max: float) -> dict:
-    def move(reduction: float, ceiling: float, shaped: int, off: float) -> dict:
+    def move(reduction: float, ceiling: float, shaped: int, off: float, held=False) -> dict:
         return {
             "identified": {
                 "reduction_percent": reduction,
                 "modes_shaped": shaped,
+                "held_at_end_pose": held,
                 "delay_minus_zv_samples": off,
             },
             "ceiling": {"reduction_percent": ceiling},
@@ -165,7 +166,7 @@ def _result(name: str, worst_max: float) -> dict:
         "moves": {
             "Q1->Q2": move(99.61, 100.0, 2, 0.2),
             "Q1->Q3": move(96.1, 99.9, 3, -0.7),
-            "Q3->Q1": move(99.7, 99.6, 2, 0.1),
+            "Q3->Q1": move(99.7, 99.6, 2, 0.1, held=True),
         },
         "wrong_confident": {"count": 3},
     }
@@ -191,7 +192,7 @@ def test_table_has_a_row_per_variant():
         "joint 0: 1.00 / 7.90; joint 1: 2.50 / 3.00",
         "99.61 (100.00)",
         "96.10 (99.90)",
-        "99.70 (99.60)",
+        "99.70 held (99.60)",
         "2/3",
         "0.70",
         "3",

@@ -21,8 +21,9 @@ Per variant ``family:<robot>:<seed>``:
    mode not taken by an earlier slot that stores the largest share of its strain energy in
    the slot's joint.
 4. **The demo's three moves** (:func:`tvist.experiments.motions.demo_motions` of the robot) on the
-   variant's twin: unshaped, shaped with the identified map (the demo's modal row, time
-   varying), the identified map's modes at the end pose held over the move, and the ceiling:
+   variant's twin: unshaped, shaped with the identified map (the demo's modal row: time
+   varying, or its stop's modes held where the map predicts less ringing so, marked "held"
+   in the table), the identified map's modes at the end pose held over the move, and the ceiling:
    ZV on every true mode below :data:`TRUE_MODE_MAX_HZ` at the end pose; residual vibration
    reduction of each, the shaped move's delay against ZV's analytic delay of the modes it
    shapes.
@@ -319,6 +320,8 @@ def table_markdown(results: Sequence[Mapping[str, Any]]) -> str:
             move = r["moves"][name]
             identified = move["identified"]
             tv = "refused" if "error" in identified else _cell(identified["reduction_percent"], 2)
+            if identified.get("held_at_end_pose"):
+                tv += " held"  # the stop pose's modes held over the move
             end_pose = move.get("end_pose_map")
             fixed = (
                 ""
@@ -559,6 +562,8 @@ def _moves(variant, map_path: Path, robot) -> dict[str, Any]:
             entry["identified"] = {
                 "reduction_percent": shaped.reduction_percent,
                 "modes_shaped": len(shaped_modes),
+                # The stop pose's modes held over the move (set_modes_for_move), not followed.
+                "held_at_end_pose": bool(shaped.details.get("held_at_end_pose", False)),
                 "end_pose_modes_hz": [w / (2 * math.pi) for w, _ in shaped_modes],
                 "delay_s": shaped.delay_s,
                 "zv_delay_s": analytic,

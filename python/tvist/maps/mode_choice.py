@@ -61,7 +61,7 @@ worth its delay).
 
 **Following the pose or holding the stop's modes** (:func:`set_modes_for_move`). The
 time-varying shaper designs each cycle's filters for the modes where the arm is. Where the
-modes change fast in a move's final deceleration (a close pair veering at the stop), the
+modes change fast in a move's final deceleration (two modes veering near the stop), the
 ringing left after the stop can exceed what the stop pose's modes, held over the move, leave:
 on a variant arm a move kept 92.8 % with the modes followed and 99.5 % with them held. The
 same exact integration predicts both: the move is shaped offline both ways
