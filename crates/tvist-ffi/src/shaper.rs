@@ -137,6 +137,18 @@ impl TvistShaper {
     }
 }
 
+/// `TVIST_ERR_MID_MOVE` for the setup call `call` on a shaper whose delay lines are not at
+/// rest on its input, with the message saying to call it between moves.
+fn mid_move(call: &str) -> i32 {
+    fail(
+        TVIST_ERR_MID_MOVE,
+        format!(
+            "the shaper is mid-move (its delay lines are not at rest on the input); call {call} \
+             between moves"
+        ),
+    )
+}
+
 /// True if `ptr` is non-null and aligned for `T`.
 fn usable<T>(ptr: *const T) -> bool {
     !ptr.is_null() && ptr.is_aligned()
@@ -593,11 +605,7 @@ pub unsafe extern "C" fn tvist_shaper_set_map(
             );
         };
         if !handle.shaper.is_at_rest() {
-            return fail(
-                TVIST_ERR_MID_MOVE,
-                "the shaper is mid-move (its delay lines are not at rest on the input); call \
-                 tvist_shaper_set_map between moves",
-            );
+            return mid_move("tvist_shaper_set_map");
         }
         // SAFETY: non-null and NUL-terminated (caller).
         let Some(path) = (unsafe { c_str(map_json_path) }) else {
@@ -647,11 +655,7 @@ pub unsafe extern "C" fn tvist_shaper_set_shaped_modes(
             );
         }
         if !handle.shaper.is_at_rest() {
-            return fail(
-                TVIST_ERR_MID_MOVE,
-                "the shaper is mid-move (its delay lines are not at rest on the input); call \
-                 tvist_shaper_set_shaped_modes between moves",
-            );
+            return mid_move("tvist_shaper_set_shaped_modes");
         }
         match handle.shaper.set_shaped_modes(n_modes) {
             Ok(()) => TVIST_OK,
@@ -715,11 +719,7 @@ pub unsafe extern "C" fn tvist_shaper_hold_modes_at(
             Some(unsafe { core::slice::from_raw_parts(q, n_dof) })
         };
         if !handle.shaper.is_at_rest() {
-            return fail(
-                TVIST_ERR_MID_MOVE,
-                "the shaper is mid-move (its delay lines are not at rest on the input); call \
-                 tvist_shaper_hold_modes_at between moves",
-            );
+            return mid_move("tvist_shaper_hold_modes_at");
         }
         match handle.shaper.hold_modes_at(pose) {
             Ok(()) => TVIST_OK,

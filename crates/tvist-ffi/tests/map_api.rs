@@ -599,24 +599,7 @@ fn an_invalid_map_file_is_refused_with_the_shaper_unchanged() {
 #[test]
 fn set_map_needs_a_map_driven_shaper_and_valid_pointers() {
     let map = TempMap::of_robot("kind-map", "ur5e");
-    let modes = [(2.0 * PI * 3.0, 0.05)];
-    let (wn, zeta): (Vec<f64>, Vec<f64>) = modes.iter().copied().unzip();
-    let shaper = c("zv");
-    let mut out = ptr::null_mut();
-    // SAFETY: arrays of one mode, a NUL-terminated name, a writable `out`.
-    let code = unsafe {
-        tvist_shaper_new_constant(
-            wn.as_ptr(),
-            zeta.as_ptr(),
-            1,
-            DT_S,
-            6,
-            shaper.as_ptr(),
-            &mut out,
-        )
-    };
-    assert_eq!(code, TVIST_OK);
-    let mut constant = Handle(out);
+    let mut constant = constant_zv(&[Mode::new(2.0 * PI * 3.0, 0.05)]);
     assert_eq!(constant.set_map(&map), TVIST_ERR_INVALID_PARAMETER);
     assert!(last_error().contains("constant modes"), "{}", last_error());
     // The paper's built-in map is a map too: replaced before its first step (not started).
@@ -758,6 +741,28 @@ fn set_shaped_modes_mid_move_or_out_of_range_is_refused_with_the_shaper_unchange
     );
 }
 
+/// A ZV shaper of 6 joints on the constant `modes`.
+fn constant_zv(modes: &[Mode]) -> Handle {
+    let wn: Vec<f64> = modes.iter().map(|m| m.wn_rad_s).collect();
+    let zeta: Vec<f64> = modes.iter().map(|m| m.zeta).collect();
+    let (zv, mut out) = (c("zv"), ptr::dangling_mut::<TvistShaper>());
+    // SAFETY: two readable mode arrays of `modes.len()`, a NUL-terminated name, a writable
+    // `out`.
+    let code = unsafe {
+        tvist_shaper_new_constant(
+            wn.as_ptr(),
+            zeta.as_ptr(),
+            modes.len(),
+            DT_S,
+            6,
+            zv.as_ptr(),
+            &mut out,
+        )
+    };
+    assert_eq!(code, TVIST_OK, "{}", last_error());
+    Handle(out)
+}
+
 impl Handle {
     fn hold_modes_at(&mut self, q: Option<&[f64]>) -> i32 {
         let (ptr, n) = q.map_or((ptr::null(), 6), |q| (q.as_ptr(), q.len()));
@@ -778,24 +783,7 @@ fn modes_held_at_the_end_pose_shape_the_next_move_as_those_constant_modes() {
         .expect("provider");
     let mut modes = vec![Mode::new(0.0, 0.0); 2];
     assert!(provider.modes(&Q1, &mut modes).is_ok());
-    let wn: Vec<f64> = modes.iter().map(|m| m.wn_rad_s).collect();
-    let zeta: Vec<f64> = modes.iter().map(|m| m.zeta).collect();
-    let mut out = ptr::dangling_mut::<TvistShaper>();
-    let zv = c("zv");
-    // SAFETY: two readable mode arrays of 2, a NUL-terminated name, a writable `out`.
-    let code = unsafe {
-        tvist_shaper_new_constant(
-            wn.as_ptr(),
-            zeta.as_ptr(),
-            2,
-            DT_S,
-            6,
-            zv.as_ptr(),
-            &mut out,
-        )
-    };
-    assert_eq!(code, TVIST_OK, "{}", last_error());
-    let mut constant = Handle(out);
+    let mut constant = constant_zv(&modes);
     assert_eq!(h.hold_modes_at(Some(&Q1)), TVIST_OK, "{}", last_error());
     let back = a_move_back(600 + SETTLE_SAMPLES);
     // SAFETY: live handle, 6 readable doubles.
@@ -838,22 +826,7 @@ fn a_hold_mid_move_of_the_wrong_length_or_without_a_map_is_refused() {
         h.hold_modes_at(Some(&Q1[..4])),
         tvist::TVIST_ERR_DIMENSION_MISMATCH
     );
-    let (wn, zeta, zv) = ([60.0], [0.05], c("zv"));
-    let mut out = ptr::dangling_mut::<TvistShaper>();
-    // SAFETY: as above.
-    let code = unsafe {
-        tvist_shaper_new_constant(
-            wn.as_ptr(),
-            zeta.as_ptr(),
-            1,
-            DT_S,
-            6,
-            zv.as_ptr(),
-            &mut out,
-        )
-    };
-    assert_eq!(code, TVIST_OK);
-    let mut constant = Handle(out);
+    let mut constant = constant_zv(&[Mode::new(60.0, 0.05)]);
     assert_eq!(
         constant.hold_modes_at(Some(&Q1)),
         TVIST_ERR_INVALID_PARAMETER
