@@ -8,7 +8,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tvist.ident.shaped_modes import MIN_RANK_SHARE, shaping_field, with_coverage
+from tvist.ident.shaped_modes import (
+    MIN_IDENTIFIED_POSES,
+    MIN_IDENTIFIED_SHARE,
+    MIN_RANK_SHARE,
+    identified_often_enough,
+    identified_where_it_rings,
+    shaping_field,
+    with_coverage,
+)
 
 
 def _report(ranks: dict[str, str], shaped: set[str], participation=None) -> list[dict]:
@@ -114,6 +122,42 @@ def test_half_of_the_poses_is_enough():
     # A rank held by a shaped mode at exactly half the poses is shaped too.
     tie = {"A": "111111", "B": "222333", "C": "333222"}
     assert shaping_field(_report(tie, {"A", "B"})) == {"shaped_modes": 3}
+
+
+def _poses(n: int, *spans: tuple[int, int]) -> np.ndarray:
+    """``n`` per-pose flags, set on each ``(start, stop)`` span."""
+    flags = np.zeros(n, dtype=bool)
+    for start, stop in spans:
+        flags[start:stop] = True
+    return flags
+
+
+def test_a_mode_is_judged_by_the_poses_where_it_can_ring():
+    """A mode that rings at the flange only at folded poses can only be identified there:
+    ``family:ur5e:3``'s elbow mode, identified at 5 of 30 poses, takes part (participation
+    5 % or more) at 16 of them. 5 of the 16 is shaped; the same 5 identifications of a mode
+    that takes part at all 30 are not (17 %, below 20 %), nor are 2 identifications of a
+    mode that rings at 4 poses (half of them, but below 3 poses)."""
+    assert (MIN_IDENTIFIED_SHARE, MIN_IDENTIFIED_POSES) == (0.2, 3)
+    identified = _poses(30, (0, 5))
+    folded = _poses(30, (0, 16))
+    assert identified_where_it_rings(identified, folded) == 5 / 16
+    assert identified_often_enough(identified, folded)
+    assert not identified_often_enough(identified, np.ones(30, dtype=bool))
+    assert not identified_often_enough(_poses(30, (0, 2)), _poses(30, (0, 4)))
+    assert identified_often_enough(_poses(30, (0, 3)), _poses(30, (0, 4)))
+
+
+def test_identifications_where_the_model_sees_no_participation_still_count_as_poses():
+    """The poses where a mode can ring are those where the model gives it 5 % of the
+    flange's vibration *or* where it was identified: 3 identifications outside the 20 poses
+    the model names are 3 of 23 (13 %), not 3 of 20; exactly 20 % (6 of 30) is enough."""
+    outside = _poses(30, (0, 3))
+    named = _poses(30, (10, 30))
+    assert identified_where_it_rings(outside, named) == 3 / 23
+    assert not identified_often_enough(outside, named)
+    assert identified_often_enough(_poses(30, (0, 6)), np.ones(30, dtype=bool))
+    assert identified_where_it_rings(np.zeros(30, dtype=bool), np.zeros(30, dtype=bool)) == 0.0
 
 
 def test_a_map_with_no_shaped_mode_is_refused():

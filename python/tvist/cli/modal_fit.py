@@ -111,7 +111,8 @@ def fit_modal_command(records: Sequence[Mapping[str, Any]], args: argparse.Names
             f"    {m.get('name', _what(m))}: {f[0]:.1f} / {f[1]:.1f} / {f[2]:.1f} Hz, "
             f"participation median {100 * m['flange_participation'][0]:.0f} %, max "
             f"{100 * m['flange_participation'][1]:.0f} %, identified at "
-            f"{100 * m['identified_at_poses']:.0f} % of the poses: "
+            f"{100 * m['identified_at_poses']:.0f} % of the poses "
+            f"({100 * m['identified_where_it_rings']:.0f} % of those where it rings): "
             f"{'shaped' if m['shaped'] else 'not shaped'}{_coverage(m)}"
         )
     shaped = (
