@@ -13,6 +13,8 @@ e.g. a strain-wave gear, whose tangent stiffness can triple at rated torque) and
 law ``s_c(j) c_j(L)``. A joint is loaded if its gravity torque varies by more than
 :data:`MIN_LOAD_SPAN_NM` over the workspace (not the base, whose axis is vertical). Joints
 that no observed mode depends on keep their prior values: the estimator's prior holds them.
+A map's bending links (``link_hinges``) are kept as the prior has them, with the hinged arm
+in every evaluation: their stiffness is not learned.
 
 **Prior.** A modal map is the prior as it is. A paper10 map (the paper's published map) is
 first converted into the modal map whose laws fit its modes along the paper's test motions
@@ -294,11 +296,6 @@ class MapLearner:
             modal_map = self.converted.map
         if not isinstance(modal_map, ModalMap):
             raise ValueError("modal_map: the learner refines a modal map or a paper10 map")
-        if modal_map.link_hinges:
-            raise ValueError(
-                "modal_map: the learner refines the joints of a modal map with rigid links, "
-                "not one with link_hinges (bending links)"
-            )
         self.robot = robot
         self.prior = modal_map
         self.prior_log_sigma = prior_log_sigma
@@ -350,7 +347,9 @@ class MapLearner:
             if j in self.mode_joints:
                 scale_c = math.exp(theta[n_flex + self.mode_joints.index(j)])
                 entry["damping_nms_per_rad"] = [v * scale_c for v in entry["damping_nms_per_rad"]]
-        return ModalMap(entries, self.mode_joints, self.prior.metadata)
+        return ModalMap(
+            entries, self.mode_joints, self.prior.metadata, link_hinges=self.prior.link_hinges
+        )
 
     def _modes(self, theta: np.ndarray, q: np.ndarray, robot: Robot | None = None) -> np.ndarray:
         return self.map_at(theta).modes_many(robot or self.robot, q[None, :])[0]
@@ -358,8 +357,13 @@ class MapLearner:
     def _all_modes(
         self, theta: np.ndarray, q: np.ndarray, robot: Robot | None = None
     ) -> np.ndarray:
-        """Natural frequencies (rad/s) of every eigenmode of the map at ``theta``, pose ``q``."""
-        every = ModalMap(self.map_at(theta).flex_joints, shaped_modes=len(self.flex_joints))
+        """Natural frequencies (rad/s) of the map's eigenmodes at ``theta``, pose ``q``: as many
+        of the lowest as it has flexible joints (with bending links, of the hinged arm)."""
+        every = ModalMap(
+            self.map_at(theta).flex_joints,
+            shaped_modes=len(self.flex_joints),
+            link_hinges=self.prior.link_hinges,
+        )
         return every.modes_many(robot or self.robot, q[None, :])[0, :, 0]
 
     @property
@@ -807,7 +811,12 @@ class MapLearner:
         meta = dict(self.prior.metadata)
         meta["learned"] = self.provenance()
         meta["source"] = f"learned from {len(self.history)} logs; prior: {meta.get('source')}"
-        return ModalMap(self._map.flex_joints, metadata=meta, **self._shaping)
+        return ModalMap(
+            self._map.flex_joints,
+            metadata=meta,
+            link_hinges=self.prior.link_hinges,
+            **self._shaping,
+        )
 
 
 def _observed_mode_joints(modal_map: ModalMap) -> list[int]:
@@ -818,7 +827,7 @@ def _observed_mode_joints(modal_map: ModalMap) -> list[int]:
     if modal_map.mode_joints is not None:
         return [int(j) for j in modal_map.mode_joints]
     report = (modal_map.metadata.get("fit_statistics") or {}).get("physical_modes") or []
-    shaped = [int(m["joint"]) for m in report if m.get("shaped")]
+    shaped = [int(m["joint"]) for m in report if m.get("shaped") and "joint" in m]
     flex = [int(f["joint"]) for f in modal_map.flex_joints]
     joints = [j for j in shaped if j in flex] or [j for j in (0, 1) if j in flex]
     if not joints:
