@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from modal_rows import reductions
 from tvist import robots
 from tvist.experiments.experiment import run_motion
 from tvist.experiments.methods import default_methods, fd_tvist_modal
@@ -78,13 +79,8 @@ def test_learned_map_reaches_99_percent_on_the_demo_moves():
     robot, wrong, learned = _learned_on_twin_3()
     quiet_twin = Twin("ur5e", payload_kg=PAYLOAD_KG, payload_com_m=PAYLOAD_COM_M)
     for motion in MOTIONS:
-        rows = [m for m in default_methods() if m.key == "unshaped"]
-        rows += [
-            fd_tvist_modal("wrong", "wrong", wrong),
-            fd_tvist_modal("learned", "learned", learned),
-        ]
-        run = run_motion(motion, rows, quiet_twin, robot, with_slow_down=False)
-        wrong_pct, learned_pct = (r.reduction_percent for r in run.runs[1:])
+        found = reductions(motion, {"wrong": wrong, "learned": learned}, quiet_twin, robot)
+        wrong_pct, learned_pct = found["wrong"], found["learned"]
         # Measured: the wrong map 98.6 / 96.0 / 97.6 %, the learned map (base and shoulder
         # by joint) 99.41 / 98.58 / 98.90 %. The floor asked of a learned map, 99 %, holds on
         # Q1->Q2. Q1->Q3 has a third mode at Q3 that two shaped modes leave (the twin's exact

@@ -12,8 +12,7 @@ import numpy as np
 import pytest
 
 import tvist
-from tvist.experiments.experiment import run_motion
-from tvist.experiments.methods import default_methods, fd_tvist_modal
+from modal_rows import reductions
 from tvist.experiments.motions import PAYLOAD_COM_M, demo_motions
 from tvist.ident.results_store import load_results
 from tvist.learn import MapLearner
@@ -55,13 +54,8 @@ def test_a_map_with_bending_links_identified_on_another_arm_is_learned_from_ordi
     # 5 points, and no move loses more than one point (the 99 % is not reached).
     quiet = variant.twin(PAYLOAD_KG, PAYLOAD_COM_M)
     for motion in demo_motions("ur5e"):
-        rows = [m for m in default_methods() if m.key == "unshaped"]
-        rows += [
-            fd_tvist_modal("prior", "prior", prior),
-            fd_tvist_modal("learned", "learned", learned),
-        ]
-        run = run_motion(motion, rows, quiet, robot, with_slow_down=False)
-        from_prior, from_learned = (r.reduction_percent for r in run.runs[1:])
+        found = reductions(motion, {"prior": prior, "learned": learned}, quiet, robot)
+        from_prior, from_learned = found["prior"], found["learned"]
         assert from_learned >= from_prior - 1.0, (motion.name, from_prior, from_learned)
         if motion.name == "Q3->Q1":
             assert from_learned >= from_prior + 5.0, (from_prior, from_learned)
