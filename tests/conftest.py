@@ -201,3 +201,17 @@ def ur10e_twin_fit(tmp_path_factory: pytest.TempPathFactory) -> Path:
         write_fit(folder, records, ["--robot", "ur10e"])
 
     return shared_files(tmp_path_factory, "ur10e_twin", make)
+
+
+@pytest.fixture(scope="session")
+def family_9_fit(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``tvist fit-map --kind modal`` of ``family:ur5e:9``'s identified pose records
+    (:data:`shared_fits.FAMILY_9_CAMPAIGN`), made once per run: a folder with
+    ``records.jsonl``, ``map.json`` and ``fit_map.json`` (exit code, printout)."""
+    from shared_fits import FAMILY_9_CAMPAIGN, shared_files, write_fit
+    from tvist.ident.results_store import load_results
+
+    def make(folder: Path) -> None:
+        write_fit(folder, load_results(FAMILY_9_CAMPAIGN))
+
+    return shared_files(tmp_path_factory, "family_9", make)

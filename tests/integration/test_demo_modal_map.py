@@ -12,22 +12,19 @@ three moves."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
 
+from shared_fits import DEMO_CAMPAIGN
 from tvist.experiments import default_methods, run_experiment
 from tvist.experiments.motions import DT_S
 from tvist.ident.results_store import load_results
-
-CAMPAIGN = Path(__file__).resolve().parents[1] / "data" / "demo_campaign.jsonl"
 
 
 @pytest.mark.slow
 def test_the_demo_campaigns_modal_map_shapes_every_demo_move_to_99_percent(tmp_path) -> None:
     from tvist.experiments.modal_rows import identify_modal_map
 
-    records = load_results(CAMPAIGN)
+    records = load_results(DEMO_CAMPAIGN)
     assert len(records) == 36
     row, summary = identify_modal_map(records, tmp_path)
     assert row is not None, summary

@@ -1,12 +1,10 @@
 """The learner refines a modal map with bending links (``link_hinges``, what ``tvist fit-map``
 gives an arm whose links bend), here one identified on another arm: ``family:ur5e:9``'s
-identified pose records (``tests/data/family_ur5e_9_campaign.jsonl``, see
-``test_shaped_where_it_rings.py``), learned from 20 ordinary moves on ``family:ur5e:4``'s
-MuJoCo twin, whose links bend too, with accelerometer noise."""
+identified pose records fitted by ``tvist fit-map`` (the ``family_9_fit`` fixture), learned
+from 20 ordinary moves on ``family:ur5e:4``'s MuJoCo twin, whose links bend too, with
+accelerometer noise."""
 
 from __future__ import annotations
-
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,12 +12,11 @@ import pytest
 import tvist
 from modal_rows import reductions
 from tvist.experiments.motions import PAYLOAD_COM_M, demo_motions
-from tvist.ident.results_store import load_results
 from tvist.learn import MapLearner
 from tvist.learn.poses import random_poses
 from tvist.learn.twin_moves import ordinary_moves
+from tvist.maps import ModalMap
 
-CAMPAIGN = Path(__file__).resolve().parents[1] / "data" / "family_ur5e_9_campaign.jsonl"
 #: The arm learned on: another development variant with bending links.
 ARM_SEED = 4
 PAYLOAD_KG = 5.0
@@ -27,11 +24,12 @@ NOISE = 0.05
 
 
 @pytest.mark.slow
-def test_a_map_with_bending_links_identified_on_another_arm_is_learned_from_ordinary_moves():
-    from tvist.ident.all_modes_fit import fit_all_modes, fitted_map
+def test_a_map_with_bending_links_identified_on_another_arm_is_learned_from_ordinary_moves(
+    family_9_fit,
+):
     from tvist.sim.family import sample_variant
 
-    prior = fitted_map(fit_all_modes(load_results(CAMPAIGN), "ur5e"))
+    prior = ModalMap.load(family_9_fit / "map.json")
     assert len(prior.link_hinges) == 2
     variant = sample_variant("ur5e", ARM_SEED)
     assert variant.beams is not None

@@ -27,6 +27,16 @@ from tvist.experiments.identified import DEMO_PLAN
 from tvist.ident.campaign import campaign_poses
 from tvist.sim import Twin
 
+#: Campaign records kept in the repository (``tests/data``): pose records as ``tvist identify``
+#: wrote them from MuJoCo logs in ur_rtde CSV form. ``DEMO_CAMPAIGN`` is ``make demo``'s
+#: ``out/demo/campaign.jsonl`` (36 poses of the default twin); ``FAMILY_9_CAMPAIGN`` the
+#: generalization harness's ``ur5e-9/poses.jsonl`` (``family:ur5e:9``, 30 poses).
+DATA = Path(__file__).resolve().parents[1] / "data"
+DEMO_CAMPAIGN = DATA / "demo_campaign.jsonl"
+FAMILY_9_CAMPAIGN = DATA / "family_ur5e_9_campaign.jsonl"
+#: The variant those records come from.
+FAMILY_9_SEED = 9
+
 #: A development variant of the UR5e family with a soft elbow (0.10 x its nominal gear: an
 #: elbow-dominated mode of 20-30 Hz at folded poses) and soft wrists' neighbours, rigid links.
 SOFT_ELBOW_SEED = 14

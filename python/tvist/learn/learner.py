@@ -347,9 +347,12 @@ class MapLearner:
             if j in self.mode_joints:
                 scale_c = math.exp(theta[n_flex + self.mode_joints.index(j)])
                 entry["damping_nms_per_rad"] = [v * scale_c for v in entry["damping_nms_per_rad"]]
-        return ModalMap(
-            entries, self.mode_joints, self.prior.metadata, link_hinges=self.prior.link_hinges
-        )
+        return self._with_prior_hinges(entries, self.mode_joints, self.prior.metadata)
+
+    def _with_prior_hinges(self, flex_joints: list, *args: Any, **kwargs: Any) -> ModalMap:
+        """A :class:`ModalMap` of ``flex_joints`` (other arguments as its own) with the prior's
+        bending links, which the learner keeps as they are."""
+        return ModalMap(flex_joints, *args, link_hinges=self.prior.link_hinges, **kwargs)
 
     def _modes(self, theta: np.ndarray, q: np.ndarray, robot: Robot | None = None) -> np.ndarray:
         return self.map_at(theta).modes_many(robot or self.robot, q[None, :])[0]
@@ -359,10 +362,8 @@ class MapLearner:
     ) -> np.ndarray:
         """Natural frequencies (rad/s) of the map's eigenmodes at ``theta``, pose ``q``: as many
         of the lowest as it has flexible joints (with bending links, of the hinged arm)."""
-        every = ModalMap(
-            self.map_at(theta).flex_joints,
-            shaped_modes=len(self.flex_joints),
-            link_hinges=self.prior.link_hinges,
+        every = self._with_prior_hinges(
+            self.map_at(theta).flex_joints, shaped_modes=len(self.flex_joints)
         )
         return every.modes_many(robot or self.robot, q[None, :])[0, :, 0]
 
@@ -811,12 +812,7 @@ class MapLearner:
         meta = dict(self.prior.metadata)
         meta["learned"] = self.provenance()
         meta["source"] = f"learned from {len(self.history)} logs; prior: {meta.get('source')}"
-        return ModalMap(
-            self._map.flex_joints,
-            metadata=meta,
-            link_hinges=self.prior.link_hinges,
-            **self._shaping,
-        )
+        return self._with_prior_hinges(self._map.flex_joints, metadata=meta, **self._shaping)
 
 
 def _observed_mode_joints(modal_map: ModalMap) -> list[int]:
