@@ -5,7 +5,9 @@ DH kinematics, ur_rtde CSV writer) and more exact than the multi-mode estimator 
 does not assume:
 
 - each mode ``i`` is its own spring-damper ``ë_i + 2ζ_i ω_i ė_i + ω_i² e_i = -q̈(t)``,
-  integrated exactly from every off-grid switch of the profile;
+  integrated exactly from every off-grid switch of the profile; a mode whose spring stiffens
+  with deflection (a strain-wave gear, :class:`TrueRinging` ``stiffening``) by DOP853 at a
+  relative tolerance of 1e-11;
 - the flange acceleration (base frame) is the rigid arm's (tangential ``q̈ z×(p-o)`` and
   centripetal ``q̇² z×(z×(p-o))`` at the motor angle) plus ``Σ_i g_i d_i(t) ë_i(t)``: mode ``i``
   moves the flange along ``d_i`` (unit, base frame at the pose), turned with the excited joint
@@ -29,16 +31,61 @@ import numpy as np
 from ident_reference import G_UP, dh_frames, integrate_mode, random_profile, write_ur_rtde_csv
 
 
+#: A stiffening mode's deflection is "rated" where it carries this acceleration of the joint
+#: (rad/s²): about a UR5e base gear's rated torque over a stretched arm's inertia.
+RATED_ACCEL_RAD_S2 = 25.0
+
+
 @dataclass(frozen=True)
 class TrueRinging:
-    """A mode of the generator: natural frequency (Hz), damping ratio, flange direction at
-    the pose (unit, base frame) and gain ``g`` (m/s² of flange acceleration per m/s² of
-    modal deflection acceleration)."""
+    """A mode of the generator: natural frequency (Hz, small signal), damping ratio, flange
+    direction at the pose (unit, base frame), gain ``g`` (m/s² of flange acceleration per
+    m/s² of modal deflection acceleration) and ``stiffening``: the factor by which the
+    spring's tangent stiffness has grown at the deflection carrying
+    :data:`RATED_ACCEL_RAD_S2` (1: a linear spring; a strain-wave gear 2-3)."""
 
     freq_hz: float
     zeta: float
     direction: tuple[float, float, float]
     gain: float
+    stiffening: float = 1.0
+
+
+def integrate_stiffening_mode(
+    profile, wn: float, zeta: float, stiffening: float, t_out: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Deflection ``e`` and its rate at ``t_out`` for the hardening spring ``ë + 2ζω ė +
+    ω² (e + κ e³) = -q̈(t)``, ``κ = (stiffening − 1) / (3 e_r²)``, ``e_r = a_r / ω²``
+    (tangent stiffness ``ω² (1 + 3 κ e²)``): DOP853 at 1e-11 relative tolerance, restarted
+    at every switch of the profile (the forcing is constant between switches)."""
+    from scipy.integrate import solve_ivp
+
+    e_r = RATED_ACCEL_RAD_S2 / wn**2
+    kappa = (stiffening - 1.0) / (3.0 * e_r**2)
+    origin = min(profile.times[0], t_out[0])
+    switches, samples = profile.times - origin, t_out - origin
+    _, _, u_after = profile.sample(profile.times)
+    bounds = [0.0, *switches, max(samples[-1], switches[-1]) + 1e-9]
+    forcing = [0.0, *u_after]
+    out = np.zeros((t_out.size, 2))
+    x = np.zeros(2)
+    for k in range(len(bounds) - 1):
+        lo, hi, u = bounds[k], bounds[k + 1], float(forcing[k])
+        if hi <= lo:
+            continue
+
+        def rhs(_t, s, u=u):
+            e, v = s
+            return [v, -u - 2.0 * zeta * wn * v - wn**2 * (e + kappa * e**3)]
+
+        sol = solve_ivp(
+            rhs, (lo, hi), x, method="DOP853", rtol=1e-11, atol=1e-14, dense_output=True
+        )
+        inside = (samples >= lo) & (samples < hi)
+        if inside.any():
+            out[inside] = sol.sol(samples[inside]).T
+        x = sol.y[:, -1]
+    return out[:, 0], out[:, 1]
 
 
 def _rotate(v: np.ndarray, axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
@@ -87,8 +134,13 @@ def generate_ringing_log(
     for mode in [*modes, None]:
         freq, zeta = (fast_hz, fast_zeta) if mode is None else (mode.freq_hz, mode.zeta)
         wn = 2.0 * math.pi * freq
-        e, e_dot = integrate_mode(profile, wn, zeta, t_sensor)
-        e_ddot = -qdd_s - 2.0 * zeta * wn * e_dot - wn**2 * e
+        if mode is None or mode.stiffening == 1.0:
+            e, e_dot = integrate_mode(profile, wn, zeta, t_sensor)
+            e_ddot = -qdd_s - 2.0 * zeta * wn * e_dot - wn**2 * e
+        else:
+            e, e_dot = integrate_stiffening_mode(profile, wn, zeta, mode.stiffening, t_sensor)
+            kappa = (mode.stiffening - 1.0) / (3.0 * (RATED_ACCEL_RAD_S2 / wn**2) ** 2)
+            e_ddot = -qdd_s - 2.0 * zeta * wn * e_dot - wn**2 * (e + kappa * e**3)
         if mode is None:
             a_base += e_ddot[:, None] * remainder
             continue

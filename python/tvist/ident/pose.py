@@ -55,7 +55,7 @@ from tvist.ident.local_fit import FitOptions, LocalFit
 from tvist.ident.local_identification import identify_local
 from tvist.ident.logs import Record, is_uniform, resample_uniform
 from tvist.ident.preprocess import quiet_samples
-from tvist.ident.ringing import RingingMode, ringing_from_log
+from tvist.ident.ringing import RingingMode, at_rest_reason, ringing_from_log
 
 __all__ = [
     "IDENTIFIED_JOINTS",
@@ -531,7 +531,9 @@ def _linked(
       (same direction at the flange) at a frequency the standard errors do not allow
       (:func:`_seen_resolved_elsewhere`);
     - it differs from the nearest one by more than the standard errors allow (as between two
-      logs, :func:`cross_check_logs`).
+      logs, :func:`cross_check_logs`);
+    - the log's free decays ring at another frequency in the nearest one's mode: the entry is
+      not the arm at rest (:func:`~tvist.ident.ringing.at_rest_reason`).
 
     The other doubts of the ``ringing`` entry (merged neighbours alone, a disagreement
     between two logs without a resolved same-direction partner, jumps across poses) are
@@ -558,7 +560,10 @@ def _linked(
         elsewhere = _seen_resolved_elsewhere(fit, joint, mode, ringing)
         distance = abs(math.log(mode.wn_rad_s / fit.wn_rad_s))
         combined = math.hypot(_relative_se(mode), fit.wn_se_rad_s / fit.wn_rad_s)
-        if any(r.startswith("uncertain frequency") for r in mode.reasons):
+        at_rest = at_rest_reason(fit.wn_rad_s, fit.wn_se_rad_s, mode)
+        if at_rest is not None:
+            reason = at_rest
+        elif any(r.startswith("uncertain frequency") for r in mode.reasons):
             why = next(r for r in mode.reasons if r.startswith("uncertain frequency"))
             reason = f"the multi-mode fit of the same log doubts it ({mode.fn_hz:.2f} Hz: {why})"
         elif elsewhere is not None:

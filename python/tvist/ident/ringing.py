@@ -50,6 +50,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from scipy import optimize
 
+from tvist.ident.free_decay import decay_windows, fit_free_decays
 from tvist.ident.zoh import least_squares_fit, shifted, zoh_responses
 
 if TYPE_CHECKING:
@@ -82,6 +83,17 @@ ORDER_SHIFT_SE = 2.0
 ORDER_SHIFT_FLOOR = 0.01
 #: Starts refined per added mode (the best by their residual before refinement).
 N_REFINED = 3
+#: A mode whose whole-log fit rings faster than its free decays (the arm at rest) by more than
+#: this many combined standard errors and :data:`AT_REST_FLOOR` (relative) is not the arm at
+#: rest (:func:`at_rest_reason`). The floor is half the 3 % that makes an identification
+#: wrong: the twin's gears (25 % stiffer at rated torque) stay inside it.
+AT_REST_SE = 3.0
+AT_REST_FLOOR = 0.015
+#: Such a mode takes its frequency and damping at rest where their fit resolves the frequency
+#: within this (relative standard error) and the mode is otherwise confident; else it is
+#: flagged with a reason that starts with :data:`AT_REST_REASON`.
+AT_REST_MAX_SE = 0.01
+AT_REST_REASON = "not the arm at rest"
 #: A mode's energy over the residual energy below which it is "below noise" (dB), and below
 #: which it is "weak" (dB): as the local fit's ``min_ringing_snr_db`` / ``min_confident_snr_db``.
 BELOW_NOISE_DB = -10.0
@@ -108,6 +120,12 @@ class RingingMode:
         Whether any check failed, and which.
     tangent_share
         Share of the mode's ringing energy along the excited joint's tangent (0-1).
+    wn_at_rest_rad_s, wn_at_rest_se_rad_s
+        Natural frequency of the same mode in the log's free decays after its stops, and its
+        standard error, rad/s (:func:`checked_at_rest`; NaN where there are none).
+    wn_whole_log_rad_s
+        The whole log's frequency where the mode took its frequency and damping at rest
+        instead (:func:`checked_at_rest`), else NaN.
     """
 
     log_joint: int
@@ -120,6 +138,9 @@ class RingingMode:
     low_confidence: bool = False
     reasons: tuple[str, ...] = field(default_factory=tuple)
     tangent_share: float = float("nan")
+    wn_at_rest_rad_s: float = float("nan")
+    wn_at_rest_se_rad_s: float = float("nan")
+    wn_whole_log_rad_s: float = float("nan")
 
     @property
     def fn_hz(self) -> float:
@@ -145,6 +166,9 @@ class RingingMode:
             "low_confidence": bool(self.low_confidence),
             "reasons": list(self.reasons),
             "tangent_share": float(self.tangent_share),
+            "wn_at_rest_rad_s": float(self.wn_at_rest_rad_s),
+            "wn_at_rest_se_rad_s": float(self.wn_at_rest_se_rad_s),
+            "wn_whole_log_rad_s": float(self.wn_whole_log_rad_s),
         }
 
     @classmethod
@@ -161,6 +185,9 @@ class RingingMode:
             low_confidence=bool(data.get("low_confidence", False)),
             reasons=tuple(data.get("reasons", ())),
             tangent_share=float(data.get("tangent_share", math.nan)),
+            wn_at_rest_rad_s=float(data.get("wn_at_rest_rad_s", math.nan)),
+            wn_at_rest_se_rad_s=float(data.get("wn_at_rest_se_rad_s", math.nan)),
+            wn_whole_log_rad_s=float(data.get("wn_whole_log_rad_s", math.nan)),
         )
 
 
@@ -580,4 +607,61 @@ def ringing_from_log(
                 tangent_share=tangent_share,
             )
         )
-    return flag_unresolved_neighbours(out)
+    windows = [(b, e) for b, e in decay_windows(u, dt, lag=lag) if bool(np.all(mask[b:e]))]
+    return flag_unresolved_neighbours(checked_at_rest(out, channels, dt, windows))
+
+
+def checked_at_rest(
+    modes: list[RingingMode], channels: np.ndarray, dt_s: float, windows: list[tuple[int, int]]
+) -> list[RingingMode]:
+    """``modes`` with their frequencies at rest: the free decays of the same log
+    (:func:`~tvist.ident.free_decay.fit_free_decays`, all of ``modes`` fitted together).
+    Where a mode's whole-log frequency is not the one at rest (:func:`at_rest_reason`), it
+    takes the frequency and damping at rest if that fit resolves them
+    (:data:`AT_REST_MAX_SE`) and the mode is otherwise confident, keeping the whole log's
+    frequency in ``wn_whole_log_rad_s``; else it is flagged.
+
+    Only a whole log *faster* than the free decays counts: a gear stiffens under load, it
+    does not soften. The other way round was seen only where the free-decay fit is the one in
+    doubt (two true modes merged in both fits, elbow logs 2-4 % apart either way on the
+    family's variants)."""
+    fit = fit_free_decays(channels, dt_s, windows, [(m.wn_rad_s, m.zeta) for m in modes])
+    if fit is None:
+        return modes
+    out = []
+    for i, mode in enumerate(modes):
+        wn, se = fit.wn_rad_s[i], fit.wn_se_rad_s[i]
+        mode = replace(mode, wn_at_rest_rad_s=wn, wn_at_rest_se_rad_s=se)
+        reason = at_rest_reason(mode.wn_rad_s, mode.wn_se_rad_s, mode)
+        if reason is not None and not mode.low_confidence and se <= AT_REST_MAX_SE * wn:
+            mode = replace(
+                mode,
+                wn_rad_s=wn,
+                wn_se_rad_s=se,
+                zeta=fit.zeta[i],
+                zeta_se=fit.zeta_se[i],
+                wn_whole_log_rad_s=mode.wn_rad_s,
+            )
+        elif reason is not None:
+            mode = mode.flagged(reason)
+        out.append(mode)
+    return out
+
+
+def at_rest_reason(wn_rad_s: float, wn_se_rad_s: float, mode: RingingMode) -> str | None:
+    """Why a frequency ``wn_rad_s`` (its standard error ``wn_se_rad_s``) fitted to a whole
+    log is not the arm's at rest, or ``None``: it is higher than ``mode``'s free decays by
+    more than :data:`AT_REST_SE` combined standard errors and :data:`AT_REST_FLOOR`
+    (relative)."""
+    at_rest, se = mode.wn_at_rest_rad_s, mode.wn_at_rest_se_rad_s
+    if not (math.isfinite(at_rest) and math.isfinite(se) and at_rest > 0):
+        return None
+    shift = math.log(wn_rad_s / at_rest)
+    combined = math.hypot(wn_se_rad_s / wn_rad_s, se / at_rest)
+    if not shift > max(AT_REST_SE * combined, AT_REST_FLOOR):
+        return None
+    return (
+        f"{AT_REST_REASON}: its free decays after the stops ring at "
+        f"{at_rest / (2 * math.pi):.2f} Hz, the whole log {100 * (math.exp(shift) - 1):.1f} % "
+        "higher (a gear stiffer under the moves' torque)"
+    )
