@@ -156,3 +156,31 @@ def test_a_linear_gear_is_not_flagged(tmp_path, seed):
     entry = record.modes[0]
     assert not entry.low_confidence, entry.reasons
     assert abs(entry.fn_hz / 8.3 - 1) < 0.01, entry.fn_hz
+
+
+def test_a_ringing_entry_round_trips_through_strict_json():
+    """Frequencies at rest that are missing (no decay window) or infinite (a fit at its bound)
+    are written as null, never as NaN or Infinity, and read back as missing."""
+    import json
+
+    from tvist.ident.ringing import RingingMode
+
+    mode = RingingMode(0, 52.0, 0.1, 0.2, 0.01, 3.0, (1.0, 0.0, 0.0))
+    for at_rest, se, whole in ((math.nan, math.nan, math.nan), (51.0, math.inf, 53.0)):
+        entry = mode.__class__(
+            **{
+                **mode.__dict__,
+                "wn_at_rest_rad_s": at_rest,
+                "wn_at_rest_se_rad_s": se,
+                "wn_whole_log_rad_s": whole,
+            }
+        )
+        text = json.dumps(entry.to_dict(), allow_nan=False)
+        back = RingingMode.from_dict(json.loads(text))
+        for name, value in (
+            ("wn_at_rest_rad_s", at_rest),
+            ("wn_at_rest_se_rad_s", se),
+            ("wn_whole_log_rad_s", whole),
+        ):
+            got = getattr(back, name)
+            assert got == value if math.isfinite(value) else math.isnan(got), (name, got)

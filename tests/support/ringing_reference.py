@@ -30,7 +30,6 @@ import numpy as np
 
 from ident_reference import G_UP, dh_frames, integrate_mode, random_profile, write_ur_rtde_csv
 
-
 #: A stiffening mode's deflection is "rated" where it carries this acceleration of the joint
 #: (rad/s²): about a UR5e base gear's rated torque over a stretched arm's inertia.
 RATED_ACCEL_RAD_S2 = 25.0

@@ -137,10 +137,10 @@ class RingingMode:
     flange_direction: tuple[float, float, float] | None
     low_confidence: bool = False
     reasons: tuple[str, ...] = field(default_factory=tuple)
-    tangent_share: float = float("nan")
-    wn_at_rest_rad_s: float = float("nan")
-    wn_at_rest_se_rad_s: float = float("nan")
-    wn_whole_log_rad_s: float = float("nan")
+    tangent_share: float = math.nan
+    wn_at_rest_rad_s: float = math.nan
+    wn_at_rest_se_rad_s: float = math.nan
+    wn_whole_log_rad_s: float = math.nan
 
     @property
     def fn_hz(self) -> float:
@@ -153,22 +153,23 @@ class RingingMode:
         return replace(self, low_confidence=True, reasons=(*self.reasons, reason))
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready; a missing or infinite number is null, never NaN (strict JSON)."""
         return {
             "log_joint": int(self.log_joint),
             "wn_rad_s": float(self.wn_rad_s),
             "zeta": float(self.zeta),
-            "wn_se_rad_s": float(self.wn_se_rad_s),
-            "zeta_se": float(self.zeta_se),
-            "amplitude_m_s2": float(self.amplitude_m_s2),
+            "wn_se_rad_s": _finite_or_none(self.wn_se_rad_s),
+            "zeta_se": _finite_or_none(self.zeta_se),
+            "amplitude_m_s2": _finite_or_none(self.amplitude_m_s2),
             "flange_direction": None
             if self.flange_direction is None
             else [float(v) for v in self.flange_direction],
             "low_confidence": bool(self.low_confidence),
             "reasons": list(self.reasons),
-            "tangent_share": float(self.tangent_share),
-            "wn_at_rest_rad_s": float(self.wn_at_rest_rad_s),
-            "wn_at_rest_se_rad_s": float(self.wn_at_rest_se_rad_s),
-            "wn_whole_log_rad_s": float(self.wn_whole_log_rad_s),
+            "tangent_share": _finite_or_none(self.tangent_share),
+            "wn_at_rest_rad_s": _finite_or_none(self.wn_at_rest_rad_s),
+            "wn_at_rest_se_rad_s": _finite_or_none(self.wn_at_rest_se_rad_s),
+            "wn_whole_log_rad_s": _finite_or_none(self.wn_whole_log_rad_s),
         }
 
     @classmethod
@@ -178,17 +179,25 @@ class RingingMode:
             log_joint=int(data["log_joint"]),
             wn_rad_s=float(data["wn_rad_s"]),
             zeta=float(data["zeta"]),
-            wn_se_rad_s=float(data.get("wn_se_rad_s", math.nan)),
-            zeta_se=float(data.get("zeta_se", math.nan)),
-            amplitude_m_s2=float(data.get("amplitude_m_s2", math.nan)),
+            wn_se_rad_s=_float_or_nan(data.get("wn_se_rad_s")),
+            zeta_se=_float_or_nan(data.get("zeta_se")),
+            amplitude_m_s2=_float_or_nan(data.get("amplitude_m_s2")),
             flange_direction=None if direction is None else tuple(float(v) for v in direction),  # type: ignore[arg-type]
             low_confidence=bool(data.get("low_confidence", False)),
             reasons=tuple(data.get("reasons", ())),
-            tangent_share=float(data.get("tangent_share", math.nan)),
-            wn_at_rest_rad_s=float(data.get("wn_at_rest_rad_s", math.nan)),
-            wn_at_rest_se_rad_s=float(data.get("wn_at_rest_se_rad_s", math.nan)),
-            wn_whole_log_rad_s=float(data.get("wn_whole_log_rad_s", math.nan)),
+            tangent_share=_float_or_nan(data.get("tangent_share")),
+            wn_at_rest_rad_s=_float_or_nan(data.get("wn_at_rest_rad_s")),
+            wn_at_rest_se_rad_s=_float_or_nan(data.get("wn_at_rest_se_rad_s")),
+            wn_whole_log_rad_s=_float_or_nan(data.get("wn_whole_log_rad_s")),
         )
+
+
+def _finite_or_none(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+def _float_or_nan(value: Any) -> float:
+    return math.nan if value is None else float(value)
 
 
 class _Problem:
