@@ -85,14 +85,11 @@ ORDER_SHIFT_FLOOR = 0.01
 N_REFINED = 3
 #: A mode whose whole-log fit rings faster than its free decays (the arm at rest) by more than
 #: this many combined standard errors and :data:`AT_REST_FLOOR` (relative) is not the arm at
-#: rest (:func:`at_rest_reason`). The floor is half the 3 % that makes an identification
-#: wrong: the twin's gears (25 % stiffer at rated torque) stay inside it.
+#: rest (:func:`at_rest_reason`) and is flagged with a reason that starts with
+#: :data:`AT_REST_REASON`. The floor is half the 3 % that makes an identification wrong: the
+#: twin's gears (25 % stiffer at rated torque) stay inside it.
 AT_REST_SE = 3.0
 AT_REST_FLOOR = 0.015
-#: Such a mode takes its frequency and damping at rest where their fit resolves the frequency
-#: within this (relative standard error) and the mode is otherwise confident; else it is
-#: flagged with a reason that starts with :data:`AT_REST_REASON`.
-AT_REST_MAX_SE = 0.01
 AT_REST_REASON = "not the arm at rest"
 #: A mode's energy over the residual energy below which it is "below noise" (dB), and below
 #: which it is "weak" (dB): as the local fit's ``min_ringing_snr_db`` / ``min_confident_snr_db``.
@@ -123,9 +120,6 @@ class RingingMode:
     wn_at_rest_rad_s, wn_at_rest_se_rad_s
         Natural frequency of the same mode in the log's free decays after its stops, and its
         standard error, rad/s (:func:`checked_at_rest`; NaN where there are none).
-    wn_whole_log_rad_s
-        The whole log's frequency where the mode took its frequency and damping at rest
-        instead (:func:`checked_at_rest`), else NaN.
     """
 
     log_joint: int
@@ -140,7 +134,6 @@ class RingingMode:
     tangent_share: float = math.nan
     wn_at_rest_rad_s: float = math.nan
     wn_at_rest_se_rad_s: float = math.nan
-    wn_whole_log_rad_s: float = math.nan
 
     @property
     def fn_hz(self) -> float:
@@ -169,7 +162,6 @@ class RingingMode:
             "tangent_share": _finite_or_none(self.tangent_share),
             "wn_at_rest_rad_s": _finite_or_none(self.wn_at_rest_rad_s),
             "wn_at_rest_se_rad_s": _finite_or_none(self.wn_at_rest_se_rad_s),
-            "wn_whole_log_rad_s": _finite_or_none(self.wn_whole_log_rad_s),
         }
 
     @classmethod
@@ -188,7 +180,6 @@ class RingingMode:
             tangent_share=_float_or_nan(data.get("tangent_share")),
             wn_at_rest_rad_s=_float_or_nan(data.get("wn_at_rest_rad_s")),
             wn_at_rest_se_rad_s=_float_or_nan(data.get("wn_at_rest_se_rad_s")),
-            wn_whole_log_rad_s=_float_or_nan(data.get("wn_whole_log_rad_s")),
         )
 
 
@@ -624,36 +615,24 @@ def checked_at_rest(
     modes: list[RingingMode], channels: np.ndarray, dt_s: float, windows: list[tuple[int, int]]
 ) -> list[RingingMode]:
     """``modes`` with their frequencies at rest: the free decays of the same log
-    (:func:`~tvist.ident.free_decay.fit_free_decays`, all of ``modes`` fitted together).
-    Where a mode's whole-log frequency is not the one at rest (:func:`at_rest_reason`), it
-    takes the frequency and damping at rest if that fit resolves them
-    (:data:`AT_REST_MAX_SE`) and the mode is otherwise confident, keeping the whole log's
-    frequency in ``wn_whole_log_rad_s``; else it is flagged.
+    (:func:`~tvist.ident.free_decay.fit_free_decays`, all of ``modes`` fitted together);
+    each one flagged where its whole-log frequency is not the one at rest
+    (:func:`at_rest_reason`).
 
     Only a whole log *faster* than the free decays counts: a gear stiffens under load, it
     does not soften. The other way round was seen only where the free-decay fit is the one in
     doubt (two true modes merged in both fits, elbow logs 2-4 % apart either way on the
-    family's variants)."""
+    family's variants). Flagged, not replaced by the frequency at rest: on the family's
+    development seeds that lost as many wrong entries and kept the maps closer to the truth
+    (a free-decay fit also merges close modes, differently)."""
     fit = fit_free_decays(channels, dt_s, windows, [(m.wn_rad_s, m.zeta) for m in modes])
     if fit is None:
         return modes
     out = []
-    for i, mode in enumerate(modes):
-        wn, se = fit.wn_rad_s[i], fit.wn_se_rad_s[i]
+    for mode, wn, se in zip(modes, fit.wn_rad_s, fit.wn_se_rad_s, strict=True):
         mode = replace(mode, wn_at_rest_rad_s=wn, wn_at_rest_se_rad_s=se)
         reason = at_rest_reason(mode.wn_rad_s, mode.wn_se_rad_s, mode)
-        if reason is not None and not mode.low_confidence and se <= AT_REST_MAX_SE * wn:
-            mode = replace(
-                mode,
-                wn_rad_s=wn,
-                wn_se_rad_s=se,
-                zeta=fit.zeta[i],
-                zeta_se=fit.zeta_se[i],
-                wn_whole_log_rad_s=mode.wn_rad_s,
-            )
-        elif reason is not None:
-            mode = mode.flagged(reason)
-        out.append(mode)
+        out.append(mode if reason is None else mode.flagged(reason))
     return out
 
 
