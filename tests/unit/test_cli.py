@@ -169,3 +169,31 @@ def test_shape_with_a_map_file_equals_the_map_driven_shaper(paper_move_csv, tmp_
     assert shaped.shape[0] - q.shape[0] == math.ceil(delay_s / DT_S - 1e-9) + 1
     np.testing.assert_allclose(shaped[-1], q[-1], atol=5e-10)
     assert f"(+{(shaped.shape[0] - q.shape[0]) * DT_S * 1e3:.0f} ms)" in capsys.readouterr().out
+
+
+def test_identify_summary_counts_modes_that_rang_faster_while_moving():
+    """``tvist identify``'s ringing line: confident modes, and the ones flagged for ringing
+    faster while their joint moved than at rest, with the median excess (here +4 % and +6 %:
+    +5 %); without such flags the line says nothing of it."""
+    from tvist.cli.ident import _ringing_summary
+    from tvist.ident.ringing import AT_REST_REASON
+
+    def entry(wn, at_rest, flagged):
+        reasons = [f"{AT_REST_REASON}: …"] if flagged else []
+        return {
+            "wn_rad_s": wn,
+            "wn_at_rest_rad_s": at_rest,
+            "low_confidence": flagged,
+            "reasons": reasons,
+        }
+
+    records = [
+        {"ringing": [entry(52.0, 50.0, True), entry(80.0, 80.1, False)]},
+        {"ringing": [entry(53.0, 50.0, True)]},
+    ]
+    line = _ringing_summary(records)
+    assert "3 modes in the logs, 1 confident" in line
+    assert "2 flagged for ringing faster while the joint moved than at rest" in line
+    assert "(median +5.0 %)" in line
+    quiet = _ringing_summary([{"ringing": [entry(80.0, 80.1, False)]}])
+    assert "faster" not in quiet

@@ -141,15 +141,30 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
 
 
 def _ringing_summary(records: list[dict]) -> str:
-    """One line on the records' ``ringing`` modes; on the twin, how many confident ones are
-    more than 3 % from every true mode
+    """One line on the records' ``ringing`` modes: how many are confident, how many rang
+    faster while their joint moved than at rest (:func:`tvist.ident.ringing.checked_at_rest`);
+    on the twin, how many confident ones are more than 3 % from every true mode
     (:func:`tvist.ident.true_mode_agreement.ringing_agreement`)."""
+    import statistics
+
     from tvist.ident.campaign_robots import TRUE_MODES_MAX_HZ
+    from tvist.ident.ringing import AT_REST_REASON
     from tvist.ident.true_mode_agreement import TOLERANCE, ringing_agreement
 
     modes = [m for r in records for m in r.get("ringing") or ()]
     confident = [m for m in modes if not m.get("low_confidence", True)]
     line = f"  ringing: {len(modes)} modes in the logs, {len(confident)} confident"
+    stiffer = [
+        m["wn_rad_s"] / m["wn_at_rest_rad_s"] - 1.0
+        for m in modes
+        if any(r.startswith(AT_REST_REASON) for r in m.get("reasons", ()))
+    ]
+    if stiffer:
+        line += (
+            f"; {len(stiffer)} flagged for ringing faster while the joint moved than at rest "
+            f"after its stops (median {100 * statistics.median(stiffer):+.1f} %), as a gear that "
+            "stiffens under load does"
+        )
     truth = ringing_agreement(records, TRUE_MODES_MAX_HZ)
     if truth.modes:
         line += (
