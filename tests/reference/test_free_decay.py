@@ -169,3 +169,25 @@ def test_a_ringing_entry_round_trips_through_strict_json():
         for name, value in (("wn_at_rest_rad_s", at_rest), ("wn_at_rest_se_rad_s", se)):
             got = getattr(back, name)
             assert got == value if math.isfinite(value) else math.isnan(got), (name, got)
+
+
+def test_only_a_whole_log_faster_than_at_rest_beyond_its_errors_is_not_the_arm_at_rest():
+    """5 % faster than at rest, errors 0.2 %: flagged, the frequency at rest quoted; 5 %
+    slower: not (a gear does not soften under load); 1 % faster: under the 1.5 % floor;
+    4 % faster with 2 % standard errors: within 3 combined errors; no frequency at rest:
+    nothing to say."""
+    from tvist.ident.ringing import RingingMode, at_rest_reason
+
+    def mode(at_rest, se):
+        return RingingMode(
+            0, 60.0, 0.1, 0.1, 0.01, 1.0, None, wn_at_rest_rad_s=at_rest, wn_at_rest_se_rad_s=se
+        )
+
+    reason = at_rest_reason(63.0, 0.12, mode(60.0, 0.12))
+    assert reason is not None and reason.startswith(AT_REST_REASON)
+    assert _at_rest_hz([reason]) == pytest.approx(60.0 / (2 * math.pi), abs=0.006)
+    assert at_rest_reason(57.0, 0.12, mode(60.0, 0.12)) is None
+    assert at_rest_reason(60.6, 0.06, mode(60.0, 0.06)) is None
+    assert at_rest_reason(62.4, 1.25, mode(60.0, 1.2)) is None
+    assert at_rest_reason(63.0, 0.12, mode(math.nan, math.nan)) is None
+    assert at_rest_reason(63.0, 0.12, mode(60.0, math.inf)) is None

@@ -42,6 +42,8 @@ SKIP_SAMPLES = 2
 MIN_WINDOW_SAMPLES = 25
 #: The reference has stopped where its acceleration is below this (rad/s²).
 STILL_RAD_S2 = 1e-9
+#: Each frequency is searched within this of its start in ``ln ω`` (a factor 1.35 either way).
+LN_WN_RANGE = 0.3
 
 
 @dataclass(frozen=True)
@@ -134,8 +136,8 @@ def fit_free_decays(
     if n_used < 2 * (n_linear + n_free):
         return None
     theta0 = np.array([v for w, z in start for v in (math.log(w), min(max(z, 1e-3), 0.95))])
-    lower = np.array([v for w, _ in start for v in (math.log(w) - 0.3, 1e-4)])
-    upper = np.array([v for w, _ in start for v in (math.log(w) + 0.3, 0.99)])
+    lower = np.array([v for w, _ in start for v in (math.log(w) - LN_WN_RANGE, 1e-4)])
+    upper = np.array([v for w, _ in start for v in (math.log(w) + LN_WN_RANGE, 0.99)])
     result = optimize.least_squares(
         _residual, theta0, bounds=(lower, upper), args=(y, windows, dt_s), x_scale="jac"
     )
@@ -146,7 +148,7 @@ def fit_free_decays(
     except np.linalg.LinAlgError:
         variances = np.full(theta0.size, math.inf)
     se_log, zeta_se = np.sqrt(variances[0::2]), np.sqrt(variances[1::2])
-    # A frequency stopped at its bound (±35 % of its start) is not an estimate.
+    # A frequency stopped at the bound of its search is not an estimate.
     at_bound = (result.x[0::2] <= lower[0::2] + 1e-6) | (result.x[0::2] >= upper[0::2] - 1e-6)
     se_log = np.where(at_bound, math.inf, se_log)
     wn = np.exp(result.x[0::2])

@@ -532,8 +532,9 @@ def _linked(
       (:func:`_seen_resolved_elsewhere`);
     - it differs from the nearest one by more than the standard errors allow (as between two
       logs, :func:`cross_check_logs`);
-    - the log's free decays ring at another frequency in the nearest one's mode: the entry is
-      not the arm at rest (:func:`~tvist.ident.ringing.at_rest_reason`).
+    - the nearest one's free decays ring slower than the entry by more than the standard
+      errors allow: the entry is not the arm at rest
+      (:func:`~tvist.ident.ringing.at_rest_reason`).
 
     The other doubts of the ``ringing`` entry (merged neighbours alone, a disagreement
     between two logs without a resolved same-direction partner, jumps across poses) are
