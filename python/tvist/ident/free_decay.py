@@ -52,18 +52,14 @@ class FreeDecayFit:
 
     Attributes
     ----------
-    wn_rad_s, zeta, wn_se_rad_s, zeta_se
-        Per mode: natural frequency (rad/s), damping ratio and their standard errors (the
-        frequency's infinite where it stopped at the bound of the search).
-    windows
-        The decay windows used, ``(start, stop)`` sample indices.
+    wn_rad_s, zeta, wn_se_rad_s
+        Per mode: natural frequency (rad/s), damping ratio and the frequency's standard error
+        (rad/s; infinite where it stopped at the bound of the search).
     """
 
     wn_rad_s: tuple[float, ...]
     zeta: tuple[float, ...]
     wn_se_rad_s: tuple[float, ...]
-    zeta_se: tuple[float, ...]
-    windows: tuple[tuple[int, int], ...]
 
 
 def decay_windows(
@@ -147,7 +143,7 @@ def fit_free_decays(
         variances = np.clip(np.diag(np.linalg.inv(jac.T @ jac) * sigma2), 0.0, None)
     except np.linalg.LinAlgError:
         variances = np.full(theta0.size, math.inf)
-    se_log, zeta_se = np.sqrt(variances[0::2]), np.sqrt(variances[1::2])
+    se_log = np.sqrt(variances[0::2])
     # A frequency stopped at the bound of its search is not an estimate.
     at_bound = (result.x[0::2] <= lower[0::2] + 1e-6) | (result.x[0::2] >= upper[0::2] - 1e-6)
     se_log = np.where(at_bound, math.inf, se_log)
@@ -156,6 +152,4 @@ def fit_free_decays(
         wn_rad_s=tuple(float(v) for v in wn),
         zeta=tuple(float(v) for v in result.x[1::2]),
         wn_se_rad_s=tuple(float(v) for v in wn * se_log),
-        zeta_se=tuple(float(v) for v in zeta_se),
-        windows=tuple(windows),
     )
