@@ -183,3 +183,29 @@ def test_fit_map_prints_where_a_mode_is_not_where_its_shaping_wants_it():
     assert "at 75 % of the poses" in lines["joint 0"] and "up to 17 %" in lines["joint 0"]
     assert "at 25 % of the poses" in lines["joint 2"] and "extrapolated" in lines["joint 2"]
     assert lines["joint 1"] == lines["joint 3"] == ""
+
+
+def test_shares_that_sum_to_one_only_up_to_rounding_count_as_every_pose():
+    """A mode at ranks 1, 2 and 3 at 17, 10 and 3 of 30 poses: its shares (each a count / 30)
+    sum to 0.9999999999999999 in floating point. With ``K = 3`` it is among the shaped lowest
+    at every pose, with no participation left outside, and ``tvist fit-map`` says nothing of
+    it; a mode never among them is at exactly none. (A campaign's records once made the
+    first a shaped mode "among the shaped lowest at 100 % of the poses" with no participation
+    outside, and ``tvist fit-map`` stopped on a ``TypeError``.)"""
+    from tvist.cli.modal_fit import _coverage
+
+    shares = [17 / 30, 10 / 30, 3 / 30, 0.0]
+    assert sum(shares) != 1.0  # the rounding this test is about
+    common = {"frequency_rank": 3, "participation_by_rank": [1.0, 1.0, 1.0, 0.0]}
+    base = {"name": "A", "rank_share": shares, "shaped": True, **common}
+    above = {
+        "name": "B",
+        "rank_share": [0.0, 0.0, 0.0, 1.0],
+        "participation_by_rank": [0.0, 0.0, 0.0, 0.3],
+        "frequency_rank": 4,
+        "shaped": False,
+    }
+    a, b = with_coverage([base, above], 3)
+    assert a["among_shaped_at_poses"] == 1.0 and a["participation_outside"] is None
+    assert b["among_shaped_at_poses"] == 0.0 and b["participation_outside"] == 0.3
+    assert _coverage(a) == "" and _coverage(b) == ""

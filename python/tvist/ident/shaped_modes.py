@@ -221,10 +221,14 @@ def with_coverage(report: list[dict[str, Any]], k: int) -> list[dict[str, Any]]:
     for m in report:
         above = zip(m["participation_by_rank"][k:], m["rank_share"][k:], strict=True)
         left = [p for p, share in above if share > 0]
+        inside = [share for share in m["rank_share"][:k] if share > 0]
+        # Exactly 1 where the mode is never above the K lowest and exactly 0 where it is never
+        # among them: a sum of the shares (each a count / n) can miss either by a rounding.
+        among = 0.0 if not inside else 1.0 if not left else float(sum(inside))
         out.append(
             {
                 **m,
-                "among_shaped_at_poses": float(sum(m["rank_share"][:k])),
+                "among_shaped_at_poses": among,
                 "participation_outside": max(left) if left else None,
             }
         )
