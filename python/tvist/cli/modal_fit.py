@@ -60,7 +60,7 @@ def fit_modal_command(records: Sequence[Mapping[str, Any]], args: argparse.Names
     ``select_folds``)."""
     if args.select_folds is not None:
         return _labelled_fit(records, args)
-    from tvist.ident.all_modes_fit import fit_all_modes, fitted_map
+    from tvist.ident.all_modes_fit import fit_all_modes, fitted_map, unmatched_warning
 
     try:
         fit = fit_all_modes(records, args.robot, include_low_confidence=args.include_low_confidence)
@@ -82,6 +82,9 @@ def fit_modal_command(records: Sequence[Mapping[str, Any]], args: argparse.Names
         f"(frequency error {100 * stats['frequency_error_matched']['rms']:.2f} % RMS, damping "
         f"ratio {100 * stats['damping_error_matched']['rms']:.1f} % RMS)"
     )
+    doubt = unmatched_warning(stats)
+    if doubt is not None:
+        print(f"tvist fit-map: warning: {args.results}: {doubt}", file=sys.stderr)
     level = stats["joint_test_level"]
     print(
         f"  flexible joints {stats['flexible_joints']}, bending links "
