@@ -22,6 +22,7 @@ __all__ = [
     "MAX_MAP_FILE_BYTES",
     "MAX_MODES",
     "MAX_ZETA_RATE_PER_S",
+    "REST_TOLERANCE",
     "SHAPERS",
     "ConstantModes",
     "DynamicMap",
@@ -84,6 +85,11 @@ MAX_MAP_FILE_BYTES: int = _core.MAX_MAP_FILE_BYTES
 #: approached at this rate and reported as ``Status.MODE_SLEW_LIMITED``.
 MAX_LN_WN_RATE_PER_S: float = _core.MAX_LN_WN_RATE_PER_S
 MAX_ZETA_RATE_PER_S: float = _core.MAX_ZETA_RATE_PER_S
+#: Largest distance (rad or m) of a shaper's delay lines and output from its held input at
+#: which it counts as at rest (``TvShaper.is_at_rest``): far above rounding, far below any
+#: encoder's resolution. A shaper at rest may toggle the last bits of its output; a change of
+#: a shaped reference this small is not motion.
+REST_TOLERANCE: float = _core.REST_TOLERANCE
 
 
 def shaper(

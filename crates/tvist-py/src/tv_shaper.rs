@@ -414,7 +414,8 @@ impl PyTvShaper {
     }
 }
 
-/// Registers the class of this module and the shaper's limits on how fast modes may change.
+/// Registers the class of this module, the shaper's limits on how fast modes may change and
+/// the distance from its input within which it counts as at rest.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyTvShaper>()?;
     m.add(
@@ -422,5 +423,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
         core::tv_shaper::MAX_LN_WN_RATE_PER_S,
     )?;
     m.add("MAX_ZETA_RATE_PER_S", core::tv_shaper::MAX_ZETA_RATE_PER_S)?;
+    m.add("REST_TOLERANCE", core::tv_shaper::REST_TOLERANCE)?;
     Ok(())
 }
