@@ -168,7 +168,7 @@ ELBOW_STARTS = (0.5, 1.0, 2.0, 5.0)
 WRIST_START_HZ = 60.0
 #: Quantile over the poses of the base's and the shoulder's start values ``ω² M_jj`` (each a
 #: lower bound of the joint's stiffness, :func:`_start`). Not the largest: one log whose
-#: lowest modes were all flagged lifts it (a shoulder log's lowest confident mode at 38 Hz,
+#: lowest modes were all flagged lifts it (a base log's lowest confident mode at 38 Hz,
 #: 3.1 times the fit, on development variant 5 of :mod:`tvist.sim.family`). Over variants
 #: 0-9 the median was 0.29-0.80 of the fitted base stiffness and this quantile 0.51-1.17.
 START_QUANTILE = 0.75
