@@ -11,6 +11,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from tvist import REST_TOLERANCE
 from tvist.analysis import EnergySpectrum, ResidualVibration, energy_spectrum, residual_vibration
 from tvist.sim import GRAVITY_M_S2, SimRecord
 
@@ -21,7 +22,8 @@ from tvist.sim import GRAVITY_M_S2, SimRecord
 #: (jerk 100 rad/s³) is still ~1e-8 rad away one sample before its end, so the stop is found
 #: to the sample. The zero-delay references keep a truncation residue of a few 1e-9 rad at
 #: their last sample (``tail_error``), so by this measure they stop one sample after ``T``.
-STOP_TOL_RAD = 1e-9
+#: The shaper's own rest tolerance, so that a stop here is where the shaper is at rest.
+STOP_TOL_RAD = REST_TOLERANCE
 
 
 def stop_time_s(
