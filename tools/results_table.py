@@ -328,6 +328,71 @@ def arm_figures(root: Path) -> dict[str, Any]:
     return out
 
 
+#: The held-out variants of the UR5e family (seeds 1000-1019), run once.
+UNSEEN = "out/generalization-heldout"
+UNSEEN_SEEDS = "1000-1019"
+UNSEEN_COMMAND = (
+    f".venv/bin/python -m tvist.experiments.generalization --robot ur5e --seeds {UNSEEN_SEEDS} "
+    f"--workers 2 --out {UNSEEN}"
+)
+
+
+def unseen_figures(root: Path) -> dict[str, Any]:
+    """The generalization harness on the held-out variants: the floor's summary
+    (:func:`tvist.experiments.generalization.floor_summary`) and, per variant, the largest
+    RMS frequency error of its map's shaped modes (median and range over the variants)."""
+    import statistics
+
+    from tvist.experiments.generalization import (
+        FLOOR,
+        WRONG_TOLERANCE,
+        floor_summary,
+        parse_seeds,
+    )
+
+    results, largest = [], []
+    for seed in parse_seeds(UNSEEN_SEEDS):
+        name = f"{UNSEEN}/ur5e-{seed}/result.json"
+        doc = _read_json(root, name)
+        results.append(doc)
+        if "error" not in doc:
+            rms = [float(m["rms_percent"]) for m in _dig(doc, ("map_vs_truth", "modes"), name)]
+            largest.append(max(rms, key=lambda x: math.inf if math.isnan(x) else x))
+    summary = floor_summary(results)
+    files = f"{UNSEEN}/ur5e-*/result.json"
+    out = {
+        key: figure(float(summary[key]), general, unit, files, f"floor_summary(results).{key}")
+        for key, unit in (
+            ("variants", ""),
+            ("moves", ""),
+            ("moves_at_floor", ""),
+            ("meeting_every_line", ""),
+            ("wrong_confident", ""),
+        )
+    }
+    out["least"] = figure(
+        summary["least_reduction_percent"],
+        fixed(2),
+        "%",
+        files,
+        "floor_summary(results).least_reduction_percent",
+    )
+    # The limits the counts are made against, as the harness holds them.
+    module = "tvist.experiments.generalization"
+    out["floor"] = figure(FLOOR.reduction_percent, general, "%", files, f"{module}.FLOOR")
+    out["tolerance"] = figure(
+        100 * WRONG_TOLERANCE, general, "%", files, f"{module}.WRONG_TOLERANCE × 100"
+    )
+    key = "largest rms_percent of map_vs_truth.modes per variant"
+    out["rms_median"] = figure(
+        statistics.median(largest), fixed(1), "%", files, f"median of the {key}"
+    )
+    out["rms_range"] = figure(
+        [min(largest), max(largest)], fixed(1), "%", files, f"min, max of the {key}"
+    )
+    return out
+
+
 #: The live runs' RTDE logs (``tvist run ... --log``), three repeats each.
 LIVE = "out/live"
 
@@ -494,6 +559,21 @@ ROWS: tuple[Row, ...] = (
         "[arms from URDF](docs/results/arms.md)",
         (".venv/bin/tvist demo --robot fr3", ".venv/bin/tvist demo --robot iiwa14"),
         arm_figures,
+    ),
+    Row(
+        "unseen-arms",
+        "arms tvist has not seen: {variants} held-out variants of the UR5e family (seeds "
+        f"{UNSEEN_SEEDS}), each identified from its own ur_rtde CSV logs through the CLI, the "
+        "three moves shaped with its map",
+        "{moves_at_floor} of {moves} moves {floor} % less or more (least {least} %); "
+        "{meeting_every_line} of {variants} variants meet every line of the floor; largest map "
+        "error of a shaped mode {rms_median} % RMS (median over the variants; {rms_range} %); "
+        "{wrong_confident} confident identifications more than {tolerance} % from every true "
+        "mode",
+        f"`python -m tvist.experiments.generalization --seeds {UNSEEN_SEEDS}`",
+        "[on arms tvist has not seen](#on-arms-tvist-has-not-seen)",
+        (UNSEEN_COMMAND,),
+        unseen_figures,
     ),
     Row(
         "live",

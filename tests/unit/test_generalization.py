@@ -11,6 +11,9 @@ import pytest
 
 from tvist.experiments.generalization import (
     EVALUATION_POSES,
+    FLOOR,
+    floor_misses,
+    floor_summary,
     frequency_errors,
     main,
     matching_true_modes,
@@ -181,10 +184,10 @@ def test_table_has_a_row_per_variant():
         ]
     )
     lines = table.strip().splitlines()
-    assert len(lines) == 2 + 3
-    header = [c.strip() for c in lines[0].strip("|").split("|")]
-    assert len(header) == 8 and all(
-        len(line.split("|")) == len(lines[0].split("|")) for line in lines
+    rows = lines[: 2 + 3]
+    header = [c.strip() for c in rows[0].strip("|").split("|")]
+    assert len(header) == 9 and all(
+        len(line.split("|")) == len(rows[0].split("|")) for line in rows
     )
     row0 = [c.strip() for c in lines[2].strip("|").split("|")]
     assert row0 == [
@@ -196,7 +199,50 @@ def test_table_has_a_row_per_variant():
         "2/3",
         "0.70",
         "3",
+        "Q1->Q3 96.10 %; 3 wrong & confident",
     ]
     row1 = [c.strip() for c in lines[3].strip("|").split("|")]
     assert row1[1] == "joint 0: 1.00 / 1.50; joint 1: 2.50 / 3.00"
     assert "failed: boom" in lines[4]
+    # 9 moves, 3 of them the failed variant's; 4 of the other 6 at 99 % or more.
+    assert lines[-1] == (
+        "Moves at 99 % or more: 4 of 9 (least 96.10 %); variants meeting every line of the "
+        "floor: 0 of 3."
+    )
+
+
+def test_the_floor_names_every_line_a_variant_misses():
+    good = _result("a", 7.9)
+    good["moves"]["Q1->Q3"]["identified"]["reduction_percent"] = 99.0  # the floor itself
+    good["wrong_confident"]["count"] = 0
+    assert floor_misses(good) == []
+    assert floor_summary([good])["meeting_every_line"] == 1
+
+    bad = _result("b", 8.01)
+    bad["map_vs_truth"]["modes"].append(
+        {"name": "mode 3", "rms_percent": math.nan, "max_percent": math.nan}
+    )
+    bad["map_vs_truth"]["modes"][1]["rms_percent"] = 3.01
+    bad["moves"]["Q3->Q1"]["identified"]["delay_minus_zv_samples"] = -1.04
+    bad["moves"]["Q1->Q2"]["identified"] = {"error": "over the speed limit", "modes_shaped": 2}
+    assert floor_misses(bad) == [
+        "joint 0 max 8.01 %",
+        "joint 1 RMS 3.01 %",
+        "mode 3 not compared (no true mode)",
+        "Q1->Q2 refused",
+        "Q1->Q3 96.10 %",
+        "Q3->Q1 delay -1.04 samples from ZV's",
+        "3 wrong & confident",
+    ]
+    assert floor_misses({"variant": "c", "error": "boom"}) == ["failed"]
+    summary = floor_summary([good, bad, {"variant": "c", "error": "boom"}])
+    assert summary == {
+        "variants": 3,
+        "meeting_every_line": 1,
+        "moves": 9,
+        "moves_at_floor": 4,  # good's three, bad's Q3->Q1 (99.7 %)
+        "least_reduction_percent": 96.1,
+        "wrong_confident": 3,
+        "failed": 1,
+    }
+    assert FLOOR.reduction_percent == 99.0 and FLOOR.map_rms_percent == 3.0

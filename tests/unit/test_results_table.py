@@ -400,6 +400,40 @@ def test_arm_figures_from_the_variant_results(tmp_path):
         rt.arm_figures(tmp_path)
 
 
+def test_unseen_figures_from_the_held_out_variants_results(tmp_path):
+    from tvist.experiments.generalization import RESULT_FILE, parse_seeds
+
+    seeds = parse_seeds(rt.UNSEEN_SEEDS)
+    for i, seed in enumerate(seeds):
+        folder = tmp_path / rt.UNSEEN / f"ur5e-{seed}"
+        folder.mkdir(parents=True)
+        # Q1->Q2 at 97.5 + i / 10, Q1->Q3 one point and Q3->Q1 two points above: at 99 % or
+        # more on 5, 15 and 20 variants. Largest RMS error 1.274 % except on the first (4 %).
+        result = _arm_result("ur5e", 97.5 + i / 10)
+        if i == 0:
+            result["map_vs_truth"]["modes"][1]["rms_percent"] = 4.0
+        if i == 1:
+            result["wrong_confident"]["count"] = 2
+        (folder / RESULT_FILE).write_text(json.dumps(result) + "\n", encoding="utf-8")
+    figures = rt.unseen_figures(tmp_path)
+    shown = {key: f["shown"] for key, f in figures.items()}
+    assert shown == {
+        "variants": "20",
+        "moves": "60",
+        "moves_at_floor": "40",
+        "meeting_every_line": "5",
+        "wrong_confident": "2",
+        "least": "97.50",
+        "rms_median": "1.3",
+        "rms_range": "1.3 – 4.0",
+        "floor": "99",
+        "tolerance": "3",
+    }
+    (tmp_path / rt.UNSEEN / f"ur5e-{seeds[-1]}" / RESULT_FILE).unlink()
+    with pytest.raises(rt.MissingOutput, match=f"ur5e-{seeds[-1]}"):
+        rt.unseen_figures(tmp_path)
+
+
 def _write_log(path: Path, deviation_m_s2: float) -> None:
     """A move that stops at 0.5 s, then ``deviation_m_s2`` on the accelerometer's x for 1 s
     and rest: residual vibration (RMS over 1 s after the stop) ``deviation_m_s2``."""
